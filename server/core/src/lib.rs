@@ -1,0 +1,21 @@
+//! seaarms-core: the pure simulation core of the seaarms training simulator.
+//!
+//! No I/O, no clock, no async: kinematics, manipulability, (later) dynamics, hydraulics,
+//! grasp and control, as free functions over a fixed [`model::Model`] and preallocated data.
+//!
+//! # Layout
+//! * [`model`]: robots as data — a joint is a fixed transform plus an axis; DH loaders.
+//! * [`robots`]: the built-in model files (JSON text; parsed by the caller).
+//! * [`kinematics`]: forward kinematics of every frame, geometric Jacobian.
+//! * [`ik`]: Magnum closed-form IK (Lim eqs 3.10–3.19) and damped-least-squares IK.
+//! * [`manipulability`]: ellipsoid measures, JLM, dual-arm ellipsoid, velocity polytopes.
+
+pub mod error;
+
+pub mod kinematics;
+pub mod manipulability;
+pub mod model;
+pub mod robots;
+
+pub use error::Error;
+pub use model::{Joint, JointKind, Model, ModelSpec};

@@ -1,0 +1,16 @@
+//! Manipulability: ellipsoid measures, joint-limit measure, dual-arm ellipsoid, polytopes.
+//!
+//! * [`measures`]: SVD, rank, Yoshikawa, condition number, isotropy, Hong, force measures,
+//!   velocity and force ellipsoids, SVD subspaces, task rows (Lim §2.4, §3.5; Jun §2).
+//! * [`jlm`]: joint-limit measure and gradient (Jun eqs 11–16).
+//! * [`dual`]: dual-arm ellipsoid (Lim eq. 3.68).
+//! * [`polytope`]: velocity polytopes, single and dual (Kilic §3.2).
+
+pub mod dual;
+pub mod jlm;
+pub mod measures;
+pub mod polytope;
+
+pub use dual::{dual_measures, dual_shape_matrix};
+pub use jlm::{jlm, jlm_gradient};
+pub use measures::{Ellipsoid, FullSvd, Measures, Subspaces, full_svd, measures, select_rows, subspaces};

@@ -1,0 +1,1 @@
+//! Velocity polytopes (Kilic §3.2). Filled in by the polytope work.

@@ -11,6 +11,7 @@
 //! * [`manipulability`]: ellipsoid measures, JLM, dual-arm ellipsoid, velocity polytopes.
 
 pub mod error;
+pub mod ik;
 
 pub mod kinematics;
 pub mod manipulability;

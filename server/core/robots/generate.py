@@ -1,0 +1,96 @@
+import json, math
+r = math.radians
+def j(kind="revolute", a=0.0, alpha=0.0, d=0.0, theta=0.0, lim=None, vel=None, name=None, twist=None):
+    o = {}
+    if name: o["name"] = name
+    o["type"] = kind; o["a"] = a; o["alpha"] = r(alpha); o["d"] = d; o["theta"] = r(theta)
+    if twist: o["twist_axis"] = twist
+    if lim: o["limits"] = [r(lim[0]), r(lim[1])]
+    if vel: o["max_velocity"] = r(vel)
+    return o
+L = dict(l1=0.10, l2=0.56, l3=0.50, l4=0.12, l5=0.10, l6=0.12)
+models = {
+ "magnum": {
+  "name": "magnum",
+  "source": "Lim 2005, Table 3-1 and eqs 3.1-3.9 (DH, link 5 twist about Y); joint ranges and nominal speeds from Table 1-1",
+  "dh": "standard",
+  "joints": [
+    j(a=L["l1"], alpha=90, lim=(-25, 25), vel=20, name="swing"),
+    j(a=L["l2"], alpha=0, lim=(0, 90), vel=20, name="shoulder"),
+    j(a=L["l3"], alpha=0, lim=(-135, -5), vel=30, name="elbow"),
+    j(a=L["l4"], alpha=-90, lim=(-10, 105), vel=30, name="pitch"),
+    j(a=L["l5"], alpha=90, twist="y", lim=(-60, 60), vel=30, name="yaw"),
+    j(d=L["l6"], vel=150, name="rotate"),
+  ],
+  "notes": "The thesis prints no link lengths. Chosen: l1=0.10 (swing axis to shoulder), l2=0.56 (shoulder to elbow, cf. the comparable Oberon 7 arm's 0.556 m), l3=0.50 (elbow to pitch), l4=0.12 (pitch to yaw), l5=0.10 (yaw to rotate), l6=0.12 (rotate to jaw centre) m: total 1.50 m = the Table 1-1 reach. Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg) placed by a grid search so that every point of the case-study workspace (X 0.9-1.4 m, Z 0-0.5 m, Y 0) is reachable with 5 deg of margin: swing -25..25, shoulder 0..90 (upper arm from horizontal to vertical), elbow -135..-5 (never fully straight, so the elbow singularity stays outside the range), pitch -10..105, yaw -60..60 deg; rotate is continuous (no limits).",
+ },
+ "orion": {
+  "name": "orion",
+  "source": "Jun, Lee, Kim 2008, Table 1 (ORION 7P, standard DH, joint limits); the 'q_i (deg)' column is the twist alpha",
+  "dh": "standard",
+  "joints": [
+    j(a=0.0711, alpha=90, lim=(-60, 60), vel=30),
+    j(a=0.5664, alpha=0, lim=(-30, 90), vel=30),
+    j(a=0.1346, alpha=90, lim=(-90, 30), vel=30),
+    j(d=0.5004, alpha=-90, lim=(-135, 135), vel=60),
+    j(alpha=90, lim=(-30, 90), vel=60),
+    j(d=0.4089, alpha=0, lim=(-180, 180), vel=60),
+  ],
+  "notes": "Joint 3's '+90' offset of Table 1 is not applied: with it omitted the paper's example posture gives TMM 0.41 and JLM 0.09 (seeds README). Velocity limits are not in the paper: 30 deg/s (arm) and 60 deg/s (wrist) assumed.",
+ },
+ "rx90": {
+  "name": "rx90",
+  "source": "Staubli RX90 lab report (Ecole Centrale de Nantes), part II: Khalil-Kleinfinger modified DH, D3 = RL4 = 0.45 m",
+  "dh": "modified",
+  "joints": [
+    j(alpha=0, lim=(-160, 160), vel=236),
+    j(alpha=90, lim=(-137.5, 137.5), vel=200),
+    j(a=0.45, alpha=0, lim=(-142.5, 142.5), vel=286),
+    j(alpha=-90, d=0.45, lim=(-270, 270), vel=401),
+    j(alpha=90, lim=(-105, 120), vel=320),
+    j(alpha=-90, lim=(-270, 270), vel=580),
+  ],
+  "notes": "Limits and speeds are not in the report: representative Staubli RX90 catalogue values, for the joint-limit measure and polytopes only.",
+ },
+ "puma560": {
+  "name": "puma560",
+  "source": "PUMA 560 standard DH as in Corke, 'A robotics toolbox for MATLAB' (1996) after Armstrong et al. (1986); Kilic 2005 uses this arm but prints no table",
+  "dh": "standard",
+  "joints": [
+    j(alpha=90, lim=(-160, 160), vel=80),
+    j(a=0.4318, lim=(-45, 225), vel=80),
+    j(a=0.0203, d=0.15005, alpha=-90, lim=(-225, 45), vel=80),
+    j(d=0.4318, alpha=90, lim=(-110, 170), vel=150),
+    j(alpha=-90, lim=(-100, 100), vel=150),
+    j(lim=(-266, 266), vel=150),
+  ],
+  "notes": "Limits from Corke's toolbox model; velocity limits assumed (80 deg/s arm, 150 deg/s wrist).",
+ },
+ "pa10": {
+  "name": "pa10",
+  "source": "Mitsubishi PA-10 (7 DOF) standard DH as commonly published (d = 0.317, 0.45, 0.48, 0.07 m); Kilic 2005 uses this arm but prints no table",
+  "dh": "standard",
+  "joints": [
+    j(d=0.317, alpha=-90, lim=(-177, 177), vel=57),
+    j(alpha=90, lim=(-94, 94), vel=57),
+    j(d=0.45, alpha=-90, lim=(-174, 174), vel=114),
+    j(alpha=90, lim=(-137, 137), vel=114),
+    j(d=0.48, alpha=-90, lim=(-255, 255), vel=360),
+    j(alpha=90, lim=(-165, 165), vel=360),
+    j(d=0.07, lim=(-255, 255), vel=360),
+  ],
+  "notes": "Limits and speeds as commonly quoted for the PA-10 (S1/S2 57 deg/s, S3/E1 114 deg/s, E2/W1/W2 360 deg/s).",
+ },
+ "planar2r": {
+  "name": "planar2r",
+  "source": "Lim 2005 section 2.4.2 (planar RR arm, l1 = l2 = 1)",
+  "dh": "standard",
+  "joints": [j(a=1.0), j(a=1.0)],
+  "notes": "Unit velocity limits; no position limits.",
+ },
+}
+for n, m in models.items():
+    for jj in m["joints"]:
+        if "max_velocity" not in jj: jj["max_velocity"] = 1.0
+    json.dump(m, open(f"/work/main/server/core/robots/{n}.json", "w"), indent=2)
+    open(f"/work/main/server/core/robots/{n}.json", "a").write("\n")

@@ -4,12 +4,14 @@
 //! grasp and control, as free functions over a fixed [`model::Model`] and preallocated data.
 //!
 //! # Layout
+//! * [`analysis`]: one-call analysis of a posture (what the HTTP API returns).
 //! * [`model`]: robots as data — a joint is a fixed transform plus an axis; DH loaders.
 //! * [`robots`]: the built-in model files (JSON text; parsed by the caller).
 //! * [`kinematics`]: forward kinematics of every frame, geometric Jacobian.
 //! * [`ik`]: Magnum closed-form IK (Lim eqs 3.10–3.19) and damped-least-squares IK.
 //! * [`manipulability`]: ellipsoid measures, JLM, dual-arm ellipsoid, velocity polytopes.
 
+pub mod analysis;
 pub mod error;
 pub mod ik;
 

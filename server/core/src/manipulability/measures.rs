@@ -18,6 +18,12 @@ pub struct FullSvd {
 
 /// Computes the full SVD of `j` (m×n).
 pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
+    svd_with(j, true)
+}
+
+/// SVD of `j`; when `want_v` is false, `v` is left empty (0×0), which saves the null-space
+/// completion when only the measures are needed.
+pub fn svd_with(j: &DMatrix<f64>, want_v: bool) -> Result<FullSvd, Error> {
     let (m, n) = j.shape();
     if m == 0 || n == 0 {
         return Err(Error::SizeMismatch { what: "jacobian", input: 0, required: 1 });
@@ -25,29 +31,31 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
     if j.iter().any(|v| !v.is_finite()) {
         return Err(Error::NonFinite { what: "jacobian", index: 0 });
     }
-    let svd = SVD::try_new(j.clone(), true, true, f64::EPSILON, 200).ok_or(Error::NotConverged {
+    let svd = SVD::try_new(j.clone(), true, want_v, f64::EPSILON, 200).ok_or(Error::NotConverged {
         what: "svd",
         iterations: 200,
         residual: f64::NAN,
     })?;
-    let (Some(u), Some(v_t)) = (svd.u, svd.v_t) else {
+    let Some(u) = svd.u else {
         return Err(Error::NotConverged { what: "svd", iterations: 0, residual: f64::NAN });
     };
     let k = svd.singular_values.len();
     let mut order: Vec<usize> = (0..k).collect();
     order.sort_by(|&a, &b| svd.singular_values[b].total_cmp(&svd.singular_values[a]));
     let mut u_sorted = DMatrix::zeros(m, k);
-    let mut v_sorted = DMatrix::zeros(n, k);
+    let mut v_sorted = DMatrix::zeros(if want_v { n } else { 0 }, if want_v { k } else { 0 });
     let mut sigma = DVector::zeros(m);
     for (dst, &src) in order.iter().enumerate() {
         u_sorted.set_column(dst, &u.column(src));
-        v_sorted.set_column(dst, &v_t.row(src).transpose());
+        if let Some(v_t) = &svd.v_t {
+            v_sorted.set_column(dst, &v_t.row(src).transpose());
+        }
         sigma[dst] = svd.singular_values[src].max(0.0);
     }
     Ok(FullSvd {
         u: complete_basis(&u_sorted),
         sigma,
-        v: complete_basis(&v_sorted),
+        v: if want_v { complete_basis(&v_sorted) } else { v_sorted },
     })
 }
 
@@ -166,9 +174,14 @@ impl Measures {
 
 /// Measures of a Jacobian (any m×n, e.g. a row selection), with the default rank tolerance.
 pub fn measures(j: &DMatrix<f64>) -> Result<Measures, Error> {
-    let svd = full_svd(j)?;
-    let tol = default_tolerance(j.nrows(), j.ncols(), svd.sigma[0]);
-    Ok(Measures::from_spectrum(svd.sigma.as_slice(), &svd.u, tol))
+    let svd = svd_with(j, false)?;
+    Ok(measures_from_svd(&svd, j.ncols()))
+}
+
+/// Measures from an SVD already computed of an m×`n` Jacobian.
+pub fn measures_from_svd(svd: &FullSvd, n: usize) -> Measures {
+    let tol = default_tolerance(svd.sigma.len(), n, svd.sigma[0]);
+    Measures::from_spectrum(svd.sigma.as_slice(), &svd.u, tol)
 }
 
 /// The rows of `j` listed in `rows` (Jun eq. 9: the task-oriented Jacobian).
@@ -209,18 +222,22 @@ pub struct Subspaces {
 
 /// Splits the SVD of `j` into its subspaces with the default rank tolerance.
 pub fn subspaces(j: &DMatrix<f64>) -> Result<Subspaces, Error> {
-    let svd = full_svd(j)?;
-    let (m, n) = j.shape();
+    Ok(subspaces_from_svd(&full_svd(j)?))
+}
+
+/// Subspaces from a full SVD (with `v`).
+pub fn subspaces_from_svd(svd: &FullSvd) -> Subspaces {
+    let (m, n) = (svd.u.nrows(), svd.v.nrows());
     let tol = default_tolerance(m, n, svd.sigma[0]);
     let rank = svd.sigma.iter().take(m.min(n)).filter(|&&s| s > tol).count();
     let cols = |mat: &DMatrix<f64>, range: std::ops::Range<usize>| -> Vec<Vec<f64>> {
         range.map(|i| mat.column(i).iter().copied().collect()).collect()
     };
-    Ok(Subspaces {
+    Subspaces {
         rank,
         null_space: cols(&svd.v, rank..n),
         generating: cols(&svd.v, 0..rank),
         range: cols(&svd.u, 0..rank),
         unreachable: cols(&svd.u, rank..m),
-    })
+    }
 }

@@ -8,7 +8,7 @@ use nalgebra::{DMatrix, Rotation3, Vector3};
 use proptest::prelude::*;
 use seaarms_core::kinematics::jacobian_at;
 use seaarms_core::manipulability::measures::ellipsoid_volume_coefficient;
-use seaarms_core::manipulability::{dual_measures, jlm, jlm_gradient, measures, select_rows};
+use seaarms_core::manipulability::{dual_measures, jlm, jlm_gradient, measures, select_rows, svd_with};
 
 proptest! {
     /// Lim eq. 2.27: w = l1·l2·|sin q2|; §2.4.2: λ₁,₂ = [3 + 2C2 ± √(5 + 12C2 + 8C2²)]/2 for l1 = l2 = 1.
@@ -56,6 +56,18 @@ proptest! {
         for (s, u) in m.singular_values.iter().zip(&m.ellipsoid.axes) {
             let u = nalgebra::DVector::from_column_slice(u);
             prop_assert!((&jjt * &u - &u * (s * s)).norm() < 1e-9);
+        }
+    }
+
+    /// The eigen route (σ = √λ(JJᵀ)) used by `measures` agrees with a full SVD of J.
+    #[test]
+    fn eigen_route_agrees_with_the_svd(vals in proptest::collection::vec(-2.0f64..2.0, 6 * 9), rows in 1usize..=6, extra in 0usize..=3) {
+        let cols = rows + extra;
+        let j = DMatrix::from_fn(rows, cols, |r, c| vals[r * 9 + c]);
+        let by_eig = measures(&j).unwrap();
+        let svd = svd_with(&j, false).unwrap();
+        for (a, b) in by_eig.singular_values.iter().zip(svd.sigma.iter()) {
+            prop_assert!((a - b).abs() < 1e-7 * (1.0 + svd.sigma[0]), "{:?} vs {}", by_eig.singular_values, svd.sigma);
         }
     }
 

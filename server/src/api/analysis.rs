@@ -1,0 +1,258 @@
+//! `POST /api/analysis` (one arm) and `POST /api/analysis/dual` (two arms, Lim eq. 3.68).
+
+use axum::Json;
+use axum::extract::State;
+use nalgebra::{DMatrix, Matrix3};
+use seaarms_core::analysis::{TRANSLATIONAL_ROWS, analyze};
+use seaarms_core::kinematics::jacobian_at;
+use seaarms_core::manipulability::{dual_measures, measures};
+use seaarms_core::model::Model;
+use serde::{Deserialize, Serialize};
+use serde_json::Value;
+
+use super::wire::{MeasuresOut, PoseOut, rows};
+use crate::app::AppState;
+use crate::error::ApiError;
+use crate::json::ApiJson;
+
+/// Largest |q| accepted (rad or m): anything larger is a client error, not a posture.
+pub const MAX_ABS_Q: f64 = 1.0e4;
+
+/// Body of `POST /api/analysis`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisRequest {
+    /// Built-in name or inline model.
+    pub robot: Value,
+    /// Joint values (rad / m), one per joint.
+    pub q: Vec<f64>,
+    /// Task rows of the 6×n Jacobian (0..6: vx vy vz wx wy wz), for Jun's TOMM.
+    #[serde(default)]
+    pub rows: Option<Vec<usize>>,
+    /// Also compute the translational velocity polytope.
+    #[serde(default)]
+    pub polytope: bool,
+}
+
+/// Measures of every row selection.
+#[derive(Debug, Serialize)]
+pub struct MeasureSet {
+    /// All six rows.
+    pub full: MeasuresOut,
+    /// vx vy vz (Lim eq. 3.62).
+    pub translational: MeasuresOut,
+    /// wx wy wz (Lim eq. 3.63).
+    pub rotational: MeasuresOut,
+    /// The requested task rows (Jun eq. 4).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub task: Option<MeasuresOut>,
+}
+
+/// Response of `POST /api/analysis`.
+#[derive(Debug, Serialize)]
+pub struct AnalysisResponse {
+    /// Model name.
+    pub robot: String,
+    /// End-effector pose (tool point; flange orientation), base frame.
+    pub pose: PoseOut,
+    /// Joint frames after their motion (z = joint axis), base frame.
+    pub joint_frames: Vec<PoseOut>,
+    /// 6×n, base frame, rows vx vy vz wx wy wz, reference point = tool point.
+    pub jacobian: Vec<Vec<f64>>,
+    /// 6×n, end-effector frame.
+    pub jacobian_end_effector: Vec<Vec<f64>>,
+    /// Measures.
+    pub measures: MeasureSet,
+    /// Joint-limit measure (Jun eq. 16).
+    pub jlm: f64,
+    /// ∂JLM/∂q.
+    pub jlm_gradient: Vec<f64>,
+    /// Orthonormal basis of the null space of the full Jacobian.
+    pub null_space: Vec<Vec<f64>>,
+    /// The other SVD subspaces (RX90 report part VI).
+    pub subspaces: SubspacesOut,
+    /// Translational velocity polytope, when asked.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub polytope: Option<PolytopeOut>,
+}
+
+/// SVD subspaces.
+#[derive(Debug, Serialize)]
+pub struct SubspacesOut {
+    /// Rank used.
+    pub rank: usize,
+    /// Joint velocities that generate end-effector motion.
+    pub generating: Vec<Vec<f64>>,
+    /// Achievable end-effector velocities.
+    pub range: Vec<Vec<f64>>,
+    /// End-effector velocities that cannot be generated.
+    pub unreachable: Vec<Vec<f64>>,
+}
+
+/// A velocity polytope.
+#[derive(Debug, Serialize)]
+pub struct PolytopeOut {
+    /// Hull vertices (m/s).
+    pub vertices: Vec<[f64; 3]>,
+    /// Outward triangles, indices into `vertices`.
+    pub facets: Vec<[usize; 3]>,
+    /// Volume (m³/s³).
+    pub volume: f64,
+    /// Kilic's cone-cell index (eq. 1.55, d_n = n!).
+    pub w_p: f64,
+}
+
+fn check_q(model: &Model, q: &[f64]) -> Result<(), ApiError> {
+    model.check_q(q)?;
+    if let Some(i) = q.iter().position(|v| v.abs() > MAX_ABS_Q) {
+        return Err(ApiError::bad_request(format!("q[{i}] = {} is out of range (|q| ≤ {MAX_ABS_Q})", q[i])));
+    }
+    Ok(())
+}
+
+fn polytope_of(model: &Model, jt: &DMatrix<f64>) -> Result<PolytopeOut, ApiError> {
+    let p = seaarms_core::manipulability::polytope::velocity_polytope(jt, &model.max_velocities())?;
+    Ok(PolytopeOut { vertices: p.vertices, facets: p.facets, volume: p.volume, w_p: p.w_p })
+}
+
+/// Handler of `POST /api/analysis`.
+pub async fn single(State(state): State<AppState>, ApiJson(req): ApiJson<AnalysisRequest>) -> Result<Json<AnalysisResponse>, ApiError> {
+    let model = state.robots.resolve(&req.robot)?;
+    check_q(&model, &req.q)?;
+    let a = analyze(&model, &req.q, req.rows.as_deref())?;
+    let polytope = if req.polytope { Some(polytope_of(&model, &a.jacobian.select_rows(&TRANSLATIONAL_ROWS))?) } else { None };
+    Ok(Json(AnalysisResponse {
+        robot: model.name.clone(),
+        pose: (&a.pose).into(),
+        joint_frames: a.joint_frames.iter().map(PoseOut::from).collect(),
+        jacobian: rows(&a.jacobian),
+        jacobian_end_effector: rows(&a.jacobian_end_effector),
+        measures: MeasureSet {
+            full: (&a.full).into(),
+            translational: (&a.translational).into(),
+            rotational: (&a.rotational).into(),
+            task: a.task.as_ref().map(MeasuresOut::from),
+        },
+        jlm: a.jlm,
+        jlm_gradient: a.jlm_gradient,
+        null_space: a.subspaces.null_space,
+        subspaces: SubspacesOut {
+            rank: a.subspaces.rank,
+            generating: a.subspaces.generating,
+            range: a.subspaces.range,
+            unreachable: a.subspaces.unreachable,
+        },
+        polytope,
+    }))
+}
+
+/// Where an arm's base sits in the common (world) frame.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BaseIn {
+    /// [x, y, z] (m).
+    pub position: [f64; 3],
+    /// Row-major 3×3 rotation matrix (identity when omitted).
+    #[serde(default)]
+    pub rotation: Option<[[f64; 3]; 3]>,
+}
+
+/// One arm of a dual request.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArmIn {
+    /// Built-in name or inline model.
+    pub robot: Value,
+    /// Joint values.
+    pub q: Vec<f64>,
+    /// Base pose in the common frame (identity when omitted).
+    #[serde(default)]
+    pub base: Option<BaseIn>,
+}
+
+/// Body of `POST /api/analysis/dual`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DualRequest {
+    /// Exactly two arms.
+    pub arms: Vec<ArmIn>,
+    /// Also compute the dual velocity polytope.
+    #[serde(default)]
+    pub polytope: bool,
+}
+
+/// Response of `POST /api/analysis/dual`.
+#[derive(Debug, Serialize)]
+pub struct DualResponse {
+    /// Dual-arm translational ellipsoid ẋᵀ[(J₁J₁ᵀ)⁻¹ + (J₂J₂ᵀ)⁻¹]ẋ = 1 (Lim eq. 3.68), common frame.
+    pub translational: MeasuresOut,
+    /// Each arm's translational measures, common frame.
+    pub arms: Vec<DualArmOut>,
+    /// Intersection of the two arms' translational velocity polytopes, when asked.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub polytope: Option<PolytopeOut>,
+}
+
+/// One arm in a dual response.
+#[derive(Debug, Serialize)]
+pub struct DualArmOut {
+    /// Model name.
+    pub robot: String,
+    /// End-effector pose in the common frame.
+    pub pose: PoseOut,
+    /// Translational measures in the common frame.
+    pub translational: MeasuresOut,
+}
+
+fn base_rotation(base: &Option<BaseIn>, arm: usize) -> Result<(Matrix3<f64>, [f64; 3]), ApiError> {
+    let Some(b) = base else { return Ok((Matrix3::identity(), [0.0; 3])) };
+    let bad = |what: &str| ApiError::bad_request(format!("arms[{arm}].base: {what}"));
+    if b.position.iter().any(|v| !v.is_finite() || v.abs() > 1.0e3) {
+        return Err(bad("position must be finite and within ±1000 m"));
+    }
+    let r = match b.rotation {
+        Some(rr) => Matrix3::from_fn(|i, j| rr[i][j]),
+        None => Matrix3::identity(),
+    };
+    if r.iter().any(|v| !v.is_finite()) {
+        return Err(bad("rotation must be finite"));
+    }
+    if (r.transpose() * r - Matrix3::identity()).abs().max() > 1e-6 || (r.determinant() - 1.0).abs() > 1e-6 {
+        return Err(bad("rotation must be a proper rotation matrix (RᵀR = I, det R = 1, to 1e-6)"));
+    }
+    Ok((r, b.position))
+}
+
+/// Handler of `POST /api/analysis/dual`.
+pub async fn dual(State(state): State<AppState>, ApiJson(req): ApiJson<DualRequest>) -> Result<Json<DualResponse>, ApiError> {
+    if req.arms.len() != 2 {
+        return Err(ApiError::bad_request(format!("`arms` must hold exactly 2 arms, got {}", req.arms.len())));
+    }
+    let mut world_j = Vec::with_capacity(2);
+    let mut arms = Vec::with_capacity(2);
+    let mut qmax = Vec::with_capacity(2);
+    for (i, arm) in req.arms.iter().enumerate() {
+        let model = state.robots.resolve(&arm.robot)?;
+        check_q(&model, &arm.q).map_err(|e| ApiError { error: format!("arms[{i}]: {}", e.error), ..e })?;
+        let (r, p) = base_rotation(&arm.base, i)?;
+        let jt = jacobian_at(&model, &arm.q).select_rows(&TRANSLATIONAL_ROWS);
+        let rd = DMatrix::from_column_slice(3, 3, r.as_slice());
+        let jw = &rd * jt;
+        let local = seaarms_core::kinematics::end_effector_pose(&model, &arm.q);
+        let base = nalgebra::Isometry3::from_parts(
+            nalgebra::Translation3::new(p[0], p[1], p[2]),
+            nalgebra::UnitQuaternion::from_matrix(&r),
+        );
+        arms.push(DualArmOut { robot: model.name.clone(), pose: (&(base * local)).into(), translational: (&measures(&jw)?).into() });
+        qmax.push(model.max_velocities());
+        world_j.push(jw);
+    }
+    let dual = dual_measures(&world_j[0], &world_j[1])?;
+    let polytope = if req.polytope {
+        let p = seaarms_core::manipulability::polytope::dual_velocity_polytope(&world_j[0], &qmax[0], &world_j[1], &qmax[1])?;
+        Some(PolytopeOut { vertices: p.vertices, facets: p.facets, volume: p.volume, w_p: p.w_p })
+    } else {
+        None
+    };
+    Ok(Json(DualResponse { translational: (&dual).into(), arms, polytope }))
+}

@@ -1,0 +1,6 @@
+//! HTTP API handlers, one module per concern; wire types live beside their handlers and are
+//! never the core's internal structs.
+
+pub mod analysis;
+pub mod robots;
+pub mod wire;

@@ -1,0 +1,91 @@
+//! JSON shapes shared by several routes (measures, ellipsoids, poses, polytopes).
+//! Infinite values are `null`, never NaN.
+
+use nalgebra::{DMatrix, Isometry3, Matrix3};
+use seaarms_core::manipulability::{Ellipsoid, Measures};
+use serde::Serialize;
+
+/// A pose: position (m) and 3×3 rotation matrix (rows), base frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct PoseOut {
+    /// [x, y, z] (m).
+    pub position: [f64; 3],
+    /// Row-major 3×3 rotation.
+    pub rotation: [[f64; 3]; 3],
+}
+
+impl From<&Isometry3<f64>> for PoseOut {
+    fn from(t: &Isometry3<f64>) -> PoseOut {
+        let r: Matrix3<f64> = t.rotation.to_rotation_matrix().into_inner();
+        let p = t.translation.vector;
+        PoseOut {
+            position: [p.x, p.y, p.z],
+            rotation: [
+                [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+                [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+                [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+            ],
+        }
+    }
+}
+
+/// A matrix as a list of rows.
+pub fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    (0..m.nrows()).map(|r| m.row(r).iter().copied().collect()).collect()
+}
+
+/// An ellipsoid: radii (null = infinite), unit axes (one per radius), volume.
+#[derive(Debug, Clone, Serialize)]
+pub struct EllipsoidOut {
+    /// Semi-axis lengths.
+    pub radii: Vec<Option<f64>>,
+    /// Unit principal directions.
+    pub axes: Vec<Vec<f64>>,
+    /// c_m·Πradii (Lim eq. 2.18); null when infinite.
+    pub volume: Option<f64>,
+}
+
+impl From<&Ellipsoid> for EllipsoidOut {
+    fn from(e: &Ellipsoid) -> EllipsoidOut {
+        EllipsoidOut { radii: e.radii.clone(), axes: e.axes.clone(), volume: e.volume }
+    }
+}
+
+/// The measures of one Jacobian (or row selection).
+#[derive(Debug, Clone, Serialize)]
+pub struct MeasuresOut {
+    /// σ₁ ≥ … ≥ σ_m.
+    pub singular_values: Vec<f64>,
+    /// Numerical rank.
+    pub rank: usize,
+    /// √det(JJᵀ).
+    pub yoshikawa: f64,
+    /// σmax/σmin; null at a singularity.
+    pub condition_number: Option<f64>,
+    /// σmin/σmax.
+    pub isotropy: f64,
+    /// Yoshikawa × isotropy (Lim eq. 4.1).
+    pub hong: f64,
+    /// √det((JJᵀ)⁻¹) (Jun eq. 7); null at a singularity.
+    pub force_manipulability: Option<f64>,
+    /// Velocity ellipsoid.
+    pub ellipsoid: EllipsoidOut,
+    /// Force ellipsoid (Jun eq. 8, corrected).
+    pub force_ellipsoid: EllipsoidOut,
+}
+
+impl From<&Measures> for MeasuresOut {
+    fn from(m: &Measures) -> MeasuresOut {
+        MeasuresOut {
+            singular_values: m.singular_values.clone(),
+            rank: m.rank,
+            yoshikawa: m.yoshikawa,
+            condition_number: m.condition_number,
+            isotropy: m.isotropy,
+            hong: m.hong,
+            force_manipulability: m.force_manipulability,
+            ellipsoid: (&m.ellipsoid).into(),
+            force_ellipsoid: (&m.force_ellipsoid).into(),
+        }
+    }
+}

@@ -14,3 +14,4 @@ pub mod polytope;
 pub use dual::{dual_measures, dual_shape_matrix};
 pub use jlm::{jlm, jlm_gradient};
 pub use measures::{Ellipsoid, FullSvd, Measures, Subspaces, full_svd, measures, select_rows, subspaces};
+pub use polytope::{Polytope, convex_hull, dual_velocity_polytope, velocity_polytope};

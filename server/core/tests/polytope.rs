@@ -1,6 +1,8 @@
 //! Velocity polytopes (Kilic §3.2): hull invariants, zonotope volume closed form, cone-cell
 //! index, dual-arm intersection, degenerate inputs, and real robots.
 
+#![allow(clippy::unwrap_used)] // Tests may unwrap (STYLE: `unwrap_used` outside tests).
+
 mod common;
 
 use nalgebra::{DMatrix, Matrix3, Vector3};

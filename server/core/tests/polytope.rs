@@ -332,6 +332,48 @@ proptest! {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// Integer generators in {−1, 0, 1}³ (many zero, repeated, parallel and coplanar columns,
+    /// the hard cases for facet enumeration): the volume still matches the zonotope closed
+    /// form, or the input is reported flat; never a panic or a numerical failure.
+    #[test]
+    fn lattice_generators_match_closed_form(
+        v in prop::collection::vec(-1i8..=1, 9..=27),
+        q in prop::collection::vec(prop::sample::select(vec![0.0, 0.5, 1.0, 2.0]), 9),
+    ) {
+        let n = v.len() / 3;
+        let j = DMatrix::from_fn(3, n, |r, c| f64::from(v[3 * c + r]));
+        let qmax = &q[..n];
+        let expected = zonotope_volume(&generators(&j, qmax));
+        match velocity_polytope(&j, qmax) {
+            Ok(p) => {
+                prop_assert!(close(p.volume, expected, 1e-9), "{} vs {}", p.volume, expected);
+                check_mesh(&p);
+            }
+            Err(e) => {
+                prop_assert!(matches!(e, Error::Degenerate { .. }), "{e}");
+                prop_assert!(expected == 0.0, "flat reported but closed form is {expected}");
+            }
+        }
+    }
+
+    /// Nearly flat arms (third row scaled by 10⁻⁶): still a valid thin hull with the closed-
+    /// form volume, and the dual polytope with a full arm stays inside both.
+    #[test]
+    fn nearly_flat_polytopes_stay_valid((j, qmax) in jacobian_and_bounds(), t in 1e-7f64..1e-5) {
+        let mut j = j;
+        j.row_mut(2).scale_mut(t);
+        let p = velocity_polytope(&j, &qmax).unwrap();
+        let expected = zonotope_volume(&generators(&j, &qmax));
+        prop_assert!(close(p.volume, expected, 1e-6), "{} vs {}", p.volume, expected);
+        check_mesh(&p);
+        let both = dual_velocity_polytope(&j, &qmax, &DMatrix::identity(3, 3), &[1.0; 3]).unwrap();
+        prop_assert!(both.volume <= p.volume * (1.0 + 1e-6));
+    }
+}
+
+proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
     /// Intersection properties: P ∩ P = P; P ∩ sP = P for s ≥ 1; vol(P₁ ∩ P₂) ≤ min; points

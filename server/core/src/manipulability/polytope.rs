@@ -444,14 +444,16 @@ type Mesh = (Vec<Vector3<f64>>, Vec<[usize; 3]>);
 /// Quickhull of `pts` without spurious corners: returns the corners (a subset of `pts`) and
 /// outward triangles indexing them.
 ///
-/// Quickhull adds the farthest outside point at each step, which can be a point on an edge or
-/// face of the final hull (e.g. a zonotope's edge midpoint). Such a point is no corner: the
-/// normals of its facets span fewer than 3 directions. Those points are dropped and the
-/// remaining corners hulled again (rarely more than once).
+/// Quickhull adds the farthest outside point at each step, which can end up on an edge or in
+/// a face of the final hull (e.g. a zonotope's edge midpoint). Such points are no corners:
+/// they are dropped (see [`corner_flags`]) and the remaining corners hulled again (rarely
+/// more than once).
 fn quickhull(pts: &[Vector3<f64>]) -> Result<Mesh, Error> {
+    let scale = pts.iter().map(|p| p.amax()).fold(0.0, f64::max);
+    let eps = HULL_TOL * scale;
     let (mut verts, mut facets) = quickhull_raw(pts)?;
     for _ in 0..4 {
-        let keep = corner_flags(&verts, &facets);
+        let keep = corner_flags(&verts, &facets, eps);
         if keep.iter().all(|&k| k) {
             break;
         }
@@ -466,39 +468,51 @@ fn quickhull(pts: &[Vector3<f64>]) -> Result<Mesh, Error> {
     Ok((verts, facets))
 }
 
-/// For each vertex of a closed mesh: whether it is a true corner, i.e. the unit normals of
-/// its facets span 3 dimensions (beyond [`GEN_TOL`]).
-fn corner_flags(verts: &[Vector3<f64>], facets: &[[usize; 3]]) -> Vec<bool> {
-    let normals: Vec<Vector3<f64>> = facets
-        .iter()
-        .map(|f| {
-            (verts[f[1]] - verts[f[0]])
-                .cross(&(verts[f[2]] - verts[f[0]]))
-                .normalize()
-        })
-        .collect();
-    let mut around: Vec<Vec<usize>> = vec![Vec::new(); verts.len()];
-    for (i, f) in facets.iter().enumerate() {
-        for &v in f {
-            around[v].push(i);
+/// For each vertex of a closed convex mesh: whether it is a true corner. A vertex is not
+/// one when, within `eps` (a length), it lies in the plane of all its neighbours (inside a
+/// flat face) or strictly between two of its neighbours on their segment (inside an edge).
+fn corner_flags(verts: &[Vector3<f64>], facets: &[[usize; 3]], eps: f64) -> Vec<bool> {
+    let mut star: Vec<Vec<usize>> = vec![Vec::new(); verts.len()];
+    for f in facets {
+        for k in 0..3 {
+            let (v, w) = (f[k], f[(k + 1) % 3]);
+            if !star[v].contains(&w) {
+                star[v].push(w);
+            }
+            if !star[w].contains(&v) {
+                star[w].push(v);
+            }
         }
     }
-    around
-        .iter()
-        .map(|fs| {
-            let Some(&first) = fs.first() else {
-                return false;
-            };
-            let n0 = normals[first];
-            let mut best = (0.0, Vector3::zeros());
-            for &f in fs {
-                let c = n0.cross(&normals[f]);
-                let len = c.norm();
-                if len > best.0 {
-                    best = (len, c / len);
+    star.iter()
+        .enumerate()
+        .map(|(i, nbrs)| {
+            let v = verts[i];
+            // Inside a face: every neighbour in the plane of v and its first two neighbours.
+            if let [a, b, ..] = nbrs[..] {
+                let n = (verts[a] - v).cross(&(verts[b] - v));
+                let len = n.norm();
+                if len > 0.0
+                    && nbrs
+                        .iter()
+                        .all(|&w| (n.dot(&(verts[w] - v)) / len).abs() <= eps)
+                {
+                    return false;
                 }
             }
-            best.0 > GEN_TOL && fs.iter().any(|&f| best.1.dot(&normals[f]).abs() > GEN_TOL)
+            // Inside an edge: on the segment between two neighbours.
+            for (x, &a) in nbrs.iter().enumerate() {
+                for &b in &nbrs[x + 1..] {
+                    let ab = verts[b] - verts[a];
+                    let av = v - verts[a];
+                    let l2 = ab.norm_squared();
+                    let t = av.dot(&ab);
+                    if t > 0.0 && t < l2 && av.cross(&ab).norm() <= eps * l2.sqrt() {
+                        return false;
+                    }
+                }
+            }
+            true
         })
         .collect()
 }

@@ -374,6 +374,40 @@ proptest! {
 }
 
 proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// Kilic eqs 1.51–1.55 with d₃ = 3!: when the origin is inside, the cone cells from the
+    /// origin to the facets tile the polytope, so w_p equals the volume — here for
+    /// asymmetric hulls of random points around a small cube containing the origin.
+    #[test]
+    fn w_p_equals_volume_when_origin_inside(
+        pts in prop::collection::vec(prop::array::uniform3(-4.0f64..6.0), 0..60),
+    ) {
+        let mut pts = pts;
+        for i in 0..8 {
+            let c = |b: usize| if i >> b & 1 == 1 { 0.1 } else { -0.1 };
+            pts.push([c(0), c(1), c(2)]);
+        }
+        let p = convex_hull(&pts).unwrap();
+        prop_assert!(inside(&p, &Vector3::zeros(), 0.0));
+        prop_assert!(close(p.w_p, p.volume, 1e-9), "w_p {} vs volume {}", p.w_p, p.volume);
+    }
+
+    /// Scaling J by s scales every corner by s and the volume by s³ (homogeneity of
+    /// P = {J q̇}), from 10⁻⁶ to 10⁶: the tolerances are relative.
+    #[test]
+    fn velocity_polytope_is_scale_invariant((j, qmax) in jacobian_and_bounds(), e in -6i32..=6) {
+        let s = 10f64.powi(e);
+        let p = velocity_polytope(&j, &qmax).unwrap();
+        let ps = velocity_polytope(&(&j * s), &qmax).unwrap();
+        prop_assert_eq!(p.vertices.len(), ps.vertices.len());
+        prop_assert!(close(ps.volume, p.volume * s.powi(3), 1e-9));
+        let q = dual_velocity_polytope(&(&j * s), &qmax, &(&j * s), &qmax).unwrap();
+        prop_assert!(close(q.volume, ps.volume, 1e-9));
+    }
+}
+
+proptest! {
     #![proptest_config(ProptestConfig::with_cases(64))]
 
     /// Intersection properties: P ∩ P = P; P ∩ sP = P for s ≥ 1; vol(P₁ ∩ P₂) ≤ min; points
@@ -499,6 +533,23 @@ fn degenerate_inputs_give_errors_not_panics() {
         convex_hull(&flat),
         Err(Error::Degenerate { dimension: 2, .. })
     ));
+    // Magnitudes whose products overflow or underflow f64: an error or a finite result.
+    for s in [1e200, 1e-200, f64::MAX, f64::MIN_POSITIVE] {
+        let j = matrix(
+            3,
+            4,
+            &[1.0, 0.2, 0.0, 0.5, 0.0, 1.0, 0.3, -0.5, 0.1, 0.0, 1.0, 0.5],
+        ) * s;
+        for r in [
+            velocity_polytope(&j, &[1.0; 4]),
+            dual_velocity_polytope(&j, &[1.0; 4], &j, &[1.0; 4]),
+        ] {
+            if let Ok(p) = r {
+                assert!(p.volume.is_finite() && p.w_p.is_finite());
+                assert!(p.vertices.iter().flatten().all(|x| x.is_finite()));
+            }
+        }
+    }
     // A flat arm makes the dual polytope flat.
     let flat_j = matrix(3, 3, &[1.0, 0.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0]);
     assert!(matches!(

@@ -51,7 +51,7 @@ pub struct Polytope {
 
 /// Relative tolerance of the hull: points closer than this times the largest absolute
 /// coordinate to a facet plane count as on it.
-const HULL_TOL: f64 = 1e-10;
+const HULL_TOL: f64 = 1e-12;
 /// Relative tolerance for generators: a generator shorter than this times the longest one is
 /// dropped; two generators whose sine of angle is below it are parallel; a generator whose
 /// out-of-plane component is below it times its length lies in that plane.
@@ -59,7 +59,7 @@ const GEN_TOL: f64 = 1e-9;
 
 /// Convex hull of 3-D points (quickhull).
 ///
-/// Points within 10⁻¹⁰ × (largest absolute coordinate) of the hull are treated as on it and
+/// Points within 10⁻¹² × (largest absolute coordinate) of the hull are treated as on it and
 /// are not corners; duplicates and coplanar points are therefore harmless. Every corner of
 /// the result is one of the inputs. `volume` is the signed-tetrahedron sum (divergence
 /// theorem) and `w_p` the cone-cell index about the origin (see [`Polytope::w_p`]).

@@ -358,18 +358,30 @@ proptest! {
         }
     }
 
-    /// Nearly flat arms (third row scaled by 10⁻⁶): still a valid thin hull with the closed-
-    /// form volume, and the dual polytope with a full arm stays inside both.
+    /// Nearly flat arms (third row scaled by 10⁻⁷…10⁻⁵): a valid thin hull with the closed-
+    /// form volume (to the hull tolerance: surface × 10⁻¹² relative), and the dual polytope
+    /// with a full arm no larger; or, if the arm is flat to the generator tolerance (10⁻⁹
+    /// relative out-of-plane), a `Degenerate` error.
     #[test]
     fn nearly_flat_polytopes_stay_valid((j, qmax) in jacobian_and_bounds(), t in 1e-7f64..1e-5) {
         let mut j = j;
         j.row_mut(2).scale_mut(t);
-        let p = velocity_polytope(&j, &qmax).unwrap();
-        let expected = zonotope_volume(&generators(&j, &qmax));
-        prop_assert!(close(p.volume, expected, 1e-6), "{} vs {}", p.volume, expected);
-        check_mesh(&p);
-        let both = dual_velocity_polytope(&j, &qmax, &DMatrix::identity(3, 3), &[1.0; 3]).unwrap();
-        prop_assert!(both.volume <= p.volume * (1.0 + 1e-6));
+        let g = generators(&j, &qmax);
+        let expected = zonotope_volume(&g);
+        let size: f64 = g.iter().map(|g| g.norm()).sum();
+        match velocity_polytope(&j, &qmax) {
+            Ok(p) => {
+                prop_assert!(close(p.volume, expected, 1e-5), "{} vs {}", p.volume, expected);
+                check_mesh(&p);
+                let both =
+                    dual_velocity_polytope(&j, &qmax, &DMatrix::identity(3, 3), &[1.0; 3]).unwrap();
+                prop_assert!(both.volume <= p.volume * (1.0 + 1e-6));
+            }
+            Err(e) => {
+                prop_assert!(matches!(e, Error::Degenerate { .. }), "{e}");
+                prop_assert!(expected <= 1e-6 * size.powi(3), "flat reported, volume {expected}");
+            }
+        }
     }
 }
 

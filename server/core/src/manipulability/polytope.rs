@@ -52,6 +52,8 @@ pub struct Polytope {
 /// Relative tolerance of the hull: points closer than this times the largest absolute
 /// coordinate to a facet plane count as on it.
 const HULL_TOL: f64 = 1e-12;
+/// Relative distance below which two points are one (duplicates are merged before hulling).
+const MERGE_TOL: f64 = 1e-10;
 /// Relative tolerance for generators: a generator shorter than this times the longest one is
 /// dropped; two generators whose sine of angle is below it are parallel; a generator whose
 /// out-of-plane component is below it times its length lies in that plane.
@@ -59,9 +61,10 @@ const GEN_TOL: f64 = 1e-9;
 
 /// Convex hull of 3-D points (quickhull).
 ///
-/// Points within 10⁻¹² × (largest absolute coordinate) of the hull are treated as on it and
-/// are not corners; duplicates and coplanar points are therefore harmless. Every corner of
-/// the result is one of the inputs. `volume` is the signed-tetrahedron sum (divergence
+/// With s the largest absolute coordinate: points closer than 10⁻¹⁰·s to each other are one
+/// (the first in x order is kept), points within 10⁻¹²·s of the hull count as on it, and
+/// points inside an edge or a face of the hull are not corners; duplicate, collinear and
+/// coplanar points are therefore harmless. Every corner of the result is one of the inputs. `volume` is the signed-tetrahedron sum (divergence
 /// theorem) and `w_p` the cone-cell index about the origin (see [`Polytope::w_p`]).
 ///
 /// # Errors
@@ -438,6 +441,27 @@ struct Face {
     stamp: u32,
 }
 
+/// One representative of every cluster of points closer than `delta` to each other (the first
+/// in x order), so that near-duplicates (e.g. one corner computed from several planes) never
+/// form tiny, ill-conditioned facets.
+fn distinct(pts: &[Vector3<f64>], delta: f64) -> Vec<Vector3<f64>> {
+    let mut order: Vec<usize> = (0..pts.len()).collect();
+    order.sort_by(|&a, &b| pts[a].x.total_cmp(&pts[b].x));
+    let mut kept: Vec<Vector3<f64>> = Vec::with_capacity(pts.len());
+    for i in order {
+        let p = pts[i];
+        let near = kept
+            .iter()
+            .rev()
+            .take_while(|q| q.x >= p.x - delta)
+            .any(|q| (p - q).norm() <= delta);
+        if !near {
+            kept.push(p);
+        }
+    }
+    kept
+}
+
 /// A hull as corners and outward triangles indexing them.
 type Mesh = (Vec<Vector3<f64>>, Vec<[usize; 3]>);
 
@@ -451,7 +475,7 @@ type Mesh = (Vec<Vector3<f64>>, Vec<[usize; 3]>);
 fn quickhull(pts: &[Vector3<f64>]) -> Result<Mesh, Error> {
     let scale = pts.iter().map(|p| p.amax()).fold(0.0, f64::max);
     let eps = HULL_TOL * scale;
-    let (mut verts, mut facets) = quickhull_raw(pts)?;
+    let (mut verts, mut facets) = quickhull_raw(&distinct(pts, MERGE_TOL * scale))?;
     for _ in 0..4 {
         let keep = corner_flags(&verts, &facets, eps);
         if keep.iter().all(|&k| k) {

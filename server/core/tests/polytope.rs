@@ -359,7 +359,7 @@ proptest! {
     }
 
     /// Nearly flat arms (third row scaled by 10⁻⁷…10⁻⁵): a valid thin hull with the closed-
-    /// form volume (to the hull tolerance: surface × 10⁻¹² relative), and the dual polytope
+    /// form volume (to the hull tolerance), and the dual polytope
     /// with a full arm no larger; or, if the arm is flat to the generator tolerance (10⁻⁹
     /// relative out-of-plane), a `Degenerate` error.
     #[test]
@@ -371,7 +371,13 @@ proptest! {
         let size: f64 = g.iter().map(|g| g.norm()).sum();
         match velocity_polytope(&j, &qmax) {
             Ok(p) => {
-                prop_assert!(close(p.volume, expected, 1e-5), "{} vs {}", p.volume, expected);
+                // Points within 10⁻¹²·scale of the hull are dropped: the volume error is at
+                // most about surface × that, tiny against size³ but not against a thin volume.
+                let err = (p.volume - expected).abs();
+                prop_assert!(
+                    err <= 1e-6 * expected || err <= 1e-10 * size.powi(3),
+                    "{} vs {}", p.volume, expected
+                );
                 check_mesh(&p);
                 let both =
                     dual_velocity_polytope(&j, &qmax, &DMatrix::identity(3, 3), &[1.0; 3]).unwrap();

@@ -14,8 +14,8 @@
 //!   Kilic's Minkowski-sum pseudo-code (§3.2.1) would keep after removing interior vertices,
 //!   without enumerating 2ⁿ sums.
 //! * [`dual_velocity_polytope`]: the intersection of two arms' polytopes as a halfspace
-//!   intersection by polar duality (every facet plane n·x = d with d > 0 becomes the point
-//!   n/d; each facet of the hull of those points is a vertex of the intersection), then hulled.
+//!   intersection: one polytope is clipped by every facet plane of the other (polygon faces,
+//!   Sutherland–Hodgman per face plus a cap per plane), then the corners are hulled.
 //!
 //! Every result is a [`Polytope`]: vertices, outward triangles (three.js order), volume and
 //! Kilic's cone-cell index w_p.
@@ -119,8 +119,9 @@ pub fn velocity_polytope(j: &DMatrix<f64>, qdot_max: &[f64]) -> Result<Polytope,
 /// `j1` (3×n₁) and `j2` (3×n₂) are translational Jacobian rows already expressed in one
 /// common frame (rotate them first); `qmax1`, `qmax2` their joint-rate bounds, as for
 /// [`velocity_polytope`]. Both polytopes are symmetric about the origin, so the origin is
-/// inside the intersection. The intersection is computed as the halfspace intersection of
-/// all facet planes of both hulls, by polar duality, and then hulled.
+/// inside the intersection. The intersection is computed by clipping arm 1's polytope with
+/// every facet plane of arm 2's (a halfspace intersection), and then hulled; its corners are
+/// within 10⁻¹² × (largest coordinate) of both polytopes.
 ///
 /// # Errors
 /// As [`velocity_polytope`] for either arm (m must be 3 for both). A flat arm polytope
@@ -141,7 +142,7 @@ pub fn dual_velocity_polytope(
     }
     let p1 = velocity_polytope(j1, qmax1)?;
     let p2 = velocity_polytope(j2, qmax2)?;
-    intersect_origin_centred(&[&p1, &p2])
+    intersect(&p1, &p2)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -347,49 +348,119 @@ fn zonogon_polytope(gens: &[Vector3<f64>]) -> Result<Polytope, Error> {
 }
 
 // ---------------------------------------------------------------------------------------
-// Intersection by polar duality
+// Intersection by clipping
 // ---------------------------------------------------------------------------------------
 
-/// Intersection of polytopes that each contain the origin strictly inside.
+/// P₁ ∩ P₂ by clipping P₁ with every facet plane of P₂ (halfspace n·x ≤ d, unit outward n).
 ///
-/// Each facet plane n·x = d (unit outward n, d > 0) is the polar point n/d; the hull of all
-/// polar points has one facet m·y = e (e > 0) per corner x = m/e of the intersection
-/// (redundant planes fall inside the polar hull). The corners are then hulled again.
-fn intersect_origin_centred(parts: &[&Polytope]) -> Result<Polytope, Error> {
-    let mut polar: Vec<Vector3<f64>> = Vec::new();
-    for p in parts {
-        let vs: Vec<Vector3<f64>> = p.vertices.iter().map(|v| Vector3::from(*v)).collect();
-        let scale = vs.iter().map(|v| v.amax()).fold(0.0, f64::max);
-        for f in &p.facets {
-            let nrm = (vs[f[1]] - vs[f[0]]).cross(&(vs[f[2]] - vs[f[0]]));
-            let len = nrm.norm();
-            let d = nrm.dot(&vs[f[0]]) / len;
-            if len.is_nan() || len <= 0.0 || d.is_nan() || d <= HULL_TOL * scale {
-                // The origin is on (or outside) this facet plane: the intersection is flat.
-                return Err(Error::Degenerate {
-                    what: "polytope intersection",
-                    dimension: 2,
-                });
-            }
-            polar.push(nrm / (len * d));
+/// P₁ is kept as polygon faces; each plane clips every face (Sutherland–Hodgman) and closes
+/// the cut with a cap polygon. Every new corner lies on an edge of the current polytope, so the
+/// result never leaves P₁, and it is within the hull tolerance of every plane of P₂. Planes
+/// that cut nothing (every corner within the tolerance) are skipped: P ∩ P = P exactly.
+fn intersect(p1: &Polytope, p2: &Polytope) -> Result<Polytope, Error> {
+    let v1: Vec<Vector3<f64>> = p1.vertices.iter().map(|v| Vector3::from(*v)).collect();
+    let v2: Vec<Vector3<f64>> = p2.vertices.iter().map(|v| Vector3::from(*v)).collect();
+    let scale = v1.iter().chain(&v2).map(|v| v.amax()).fold(0.0, f64::max);
+    let eps = HULL_TOL * scale;
+    let mut faces: Vec<Vec<Vector3<f64>>> = p1
+        .facets
+        .iter()
+        .map(|f| vec![v1[f[0]], v1[f[1]], v1[f[2]]])
+        .collect();
+    let mut next: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(faces.len() + 8);
+    let mut cap: Vec<Vector3<f64>> = Vec::new();
+    for f in &p2.facets {
+        let (a, b, c) = (v2[f[0]], v2[f[1]], v2[f[2]]);
+        let n = (b - a).cross(&(c - a));
+        let len = n.norm();
+        if len.is_nan() || len <= 0.0 {
+            continue;
         }
-    }
-    let (pv, pf) = quickhull(&polar)?;
-    let mut corners: Vec<Vector3<f64>> = Vec::with_capacity(pf.len());
-    for f in &pf {
-        let nrm = (pv[f[1]] - pv[f[0]]).cross(&(pv[f[2]] - pv[f[0]]));
-        let nrm = nrm / nrm.norm();
-        let e = nrm.dot(&pv[f[0]]);
-        if e.is_nan() || e <= 0.0 || !nrm.iter().all(|x| x.is_finite()) {
-            return Err(Error::Numerical {
+        let n = n / len;
+        let d = n.dot(&a);
+        let dist = |x: &Vector3<f64>| n.dot(x) - d;
+        if faces.iter().flatten().all(|x| dist(x) <= eps) {
+            continue;
+        }
+        next.clear();
+        cap.clear();
+        for face in &faces {
+            let mut out: Vec<Vector3<f64>> = Vec::with_capacity(face.len() + 1);
+            let mut prev = face[face.len() - 1];
+            let mut prev_d = dist(&prev);
+            for &cur in face {
+                let cur_d = dist(&cur);
+                match (prev_d <= eps, cur_d <= eps) {
+                    (true, true) => out.push(cur),
+                    (true, false) => out.push(cut(prev, prev_d, cur, cur_d)),
+                    (false, true) => {
+                        out.push(cut(cur, cur_d, prev, prev_d));
+                        out.push(cur);
+                    }
+                    (false, false) => {}
+                }
+                prev = cur;
+                prev_d = cur_d;
+            }
+            cap.extend(out.iter().filter(|x| dist(x).abs() <= eps));
+            if out.len() >= 3 {
+                next.push(out);
+            }
+        }
+        let cap_face = order_around(&cap, &n, eps);
+        if cap_face.len() >= 3 {
+            next.push(cap_face);
+        }
+        std::mem::swap(&mut faces, &mut next);
+        if faces.is_empty() {
+            return Err(Error::Degenerate {
                 what: "polytope intersection",
-                reason: "the polar hull does not contain the origin".into(),
+                dimension: 0,
             });
         }
-        corners.push(nrm / e);
     }
+    let corners: Vec<Vector3<f64>> = faces.into_iter().flatten().collect();
     let (verts, facets) = quickhull(&corners)?;
     Ok(polytope_from_mesh(verts, facets))
+}
+
+/// The point where segment `inside` → `outside` crosses the plane, from their signed distances
+/// (`di` ≤ tolerance < `dout`); always computed from the inside end, so the two faces sharing
+/// the edge get the same point.
+fn cut(inside: Vector3<f64>, di: f64, outside: Vector3<f64>, dout: f64) -> Vector3<f64> {
+    let t = (di / (di - dout)).clamp(0.0, 1.0);
+    inside + (outside - inside) * t
+}
+
+/// Distinct points of a planar convex set, ordered counter-clockwise about `n` (seen from
+/// the side `n` points to).
+fn order_around(pts: &[Vector3<f64>], n: &Vector3<f64>, eps: f64) -> Vec<Vector3<f64>> {
+    let mut uniq: Vec<Vector3<f64>> = Vec::with_capacity(pts.len());
+    for p in pts {
+        if !uniq.iter().any(|q| (p - q).norm() <= eps) {
+            uniq.push(*p);
+        }
+    }
+    if uniq.len() < 3 {
+        return uniq;
+    }
+    let centre: Vector3<f64> = uniq.iter().sum::<Vector3<f64>>() / uniq.len() as f64;
+    let u = if n.x.abs() < 0.9 {
+        n.cross(&Vector3::x())
+    } else {
+        n.cross(&Vector3::y())
+    }
+    .normalize();
+    let v = n.cross(&u);
+    let mut keyed: Vec<(f64, Vector3<f64>)> = uniq
+        .into_iter()
+        .map(|p| {
+            let r = p - centre;
+            (r.dot(&v).atan2(r.dot(&u)), p)
+        })
+        .collect();
+    keyed.sort_by(|a, b| a.0.total_cmp(&b.0));
+    keyed.into_iter().map(|(_, p)| p).collect()
 }
 
 // ---------------------------------------------------------------------------------------

@@ -60,4 +60,21 @@ pub enum Error {
         /// Why.
         reason: String,
     },
+    /// A geometric object spans fewer dimensions than required (e.g. a velocity polytope at a
+    /// singular posture is flat and has zero volume).
+    #[error("{what} is degenerate: it spans only {dimension} dimension(s)")]
+    Degenerate {
+        /// Which object.
+        what: &'static str,
+        /// Dimension it spans.
+        dimension: usize,
+    },
+    /// Rounding broke a geometric construction (should not happen for finite inputs).
+    #[error("{what} failed numerically: {reason}")]
+    Numerical {
+        /// Which computation.
+        what: &'static str,
+        /// Why.
+        reason: String,
+    },
 }

@@ -17,3 +17,4 @@ pub use measures::{
     Ellipsoid, FullSvd, Measures, Subspaces, full_svd, measures, measures_from_svd, select_rows, subspaces,
     subspaces_from_svd, svd_with,
 };
+pub use polytope::{Polytope, convex_hull, dual_velocity_polytope, velocity_polytope};

@@ -11,7 +11,8 @@ use seaarms_core::manipulability::{measures, select_rows};
 use seaarms_core::{Model, ModelSpec, robots};
 
 fn model(name: &str) -> Model {
-    let spec: ModelSpec = serde_json::from_str(robots::builtin_text(name).expect("built-in")).expect("parses");
+    let spec: ModelSpec =
+        serde_json::from_str(robots::builtin_text(name).expect("built-in")).expect("parses");
     Model::from_spec(&spec).expect("builds")
 }
 
@@ -27,16 +28,22 @@ fn bench(c: &mut Criterion) {
         b.iter(|| analyze(black_box(&rx90), black_box(&q_rx), None).expect("analysis"))
     });
     let mut data = KinData::new(&magnum);
-    c.bench_function("FK + Jacobian, magnum", |b| b.iter(|| jacobian(black_box(&magnum), &mut data, black_box(&q))));
+    c.bench_function("FK + Jacobian, magnum", |b| {
+        b.iter(|| jacobian(black_box(&magnum), &mut data, black_box(&q)))
+    });
     jacobian(&magnum, &mut data, &q);
     let jt = select_rows(&data.jacobian, &[0, 1, 2]).expect("rows");
-    c.bench_function("translational measures (3x6)", |b| b.iter(|| measures(black_box(&jt)).expect("measures")));
+    c.bench_function("translational measures (3x6)", |b| {
+        b.iter(|| measures(black_box(&jt)).expect("measures"))
+    });
     let j6 = data.jacobian.clone();
     c.bench_function("full SVD with U and V (6x6, dynamic)", |b| {
         b.iter(|| seaarms_core::manipulability::full_svd(black_box(&j6)).expect("svd"))
     });
     let s6 = nalgebra::Matrix6::from_iterator(j6.iter().copied());
-    c.bench_function("nalgebra SVD (6x6, static)", |b| b.iter(|| nalgebra::SVD::new(black_box(s6), true, true)));
+    c.bench_function("nalgebra SVD (6x6, static)", |b| {
+        b.iter(|| nalgebra::SVD::new(black_box(s6), true, true))
+    });
     c.bench_function("nalgebra symmetric eigen of JJt (6x6, static)", |b| {
         b.iter(|| nalgebra::SymmetricEigen::new(black_box(s6) * s6.transpose()))
     });

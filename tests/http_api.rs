@@ -21,7 +21,10 @@ async fn start() -> Server {
         .await
         .unwrap();
     });
-    Server { base: format!("http://{addr}"), _shutdown: tx }
+    Server {
+        base: format!("http://{addr}"),
+        _shutdown: tx,
+    }
 }
 
 async fn post(s: &Server, path: &str, body: String) -> (u16, Value) {
@@ -34,7 +37,8 @@ async fn post(s: &Server, path: &str, body: String) -> (u16, Value) {
         .unwrap();
     let status = resp.status().as_u16();
     let text = resp.text().await.unwrap();
-    let v: Value = serde_json::from_str(&text).unwrap_or_else(|_| panic!("{path} answered non-JSON ({status}): {text}"));
+    let v: Value = serde_json::from_str(&text)
+        .unwrap_or_else(|_| panic!("{path} answered non-JSON ({status}): {text}"));
     (status, v)
 }
 
@@ -46,8 +50,13 @@ async fn get(s: &Server, path: &str) -> (u16, Value) {
 
 fn assert_error(status: u16, body: &Value, expected: u16, needle: &str) {
     assert_eq!(status, expected, "{body}");
-    let msg = body["error"].as_str().unwrap_or_else(|| panic!("no error message in {body}"));
-    assert!(msg.contains(needle), "error `{msg}` does not mention `{needle}`");
+    let msg = body["error"]
+        .as_str()
+        .unwrap_or_else(|| panic!("no error message in {body}"));
+    assert!(
+        msg.contains(needle),
+        "error `{msg}` does not mention `{needle}`"
+    );
 }
 
 #[tokio::test]
@@ -55,7 +64,12 @@ async fn robots_are_listed_and_returned_in_the_inline_schema() {
     let s = start().await;
     let (status, list) = get(&s, "/api/robots").await;
     assert_eq!(status, 200);
-    let names: Vec<&str> = list.as_array().unwrap().iter().map(|r| r["name"].as_str().unwrap()).collect();
+    let names: Vec<&str> = list
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["name"].as_str().unwrap())
+        .collect();
     for n in ["magnum", "orion", "rx90", "puma560", "pa10", "planar2r"] {
         assert!(names.contains(&n), "{n} missing from {names:?}");
     }
@@ -67,8 +81,18 @@ async fn robots_are_listed_and_returned_in_the_inline_schema() {
     assert!(magnum["source"].as_str().unwrap().contains("Lim"));
     // The returned spec is itself a valid inline model giving the same analysis.
     let q = json!([0.1, 0.5, -1.0, 0.3, 0.2, 0.1]);
-    let (_, by_name) = post(&s, "/api/analysis", json!({"robot": "magnum", "q": q}).to_string()).await;
-    let (st, inline) = post(&s, "/api/analysis", json!({"robot": magnum, "q": q}).to_string()).await;
+    let (_, by_name) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": "magnum", "q": q}).to_string(),
+    )
+    .await;
+    let (st, inline) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": magnum, "q": q}).to_string(),
+    )
+    .await;
     assert_eq!(st, 200, "{inline}");
     assert_eq!(by_name["jacobian"], inline["jacobian"]);
     let (status, body) = get(&s, "/api/robots/nope").await;
@@ -80,29 +104,57 @@ async fn analysis_reproduces_the_rx90_report_and_orion_paper() {
     let s = start().await;
     // RX90 report part VI: σ = 1.8760 1.5290 1.2439 0.5693 0.1521 0, 1-D null space.
     let q = json!([0.2, -0.3, -std::f64::consts::FRAC_PI_2, 0.6, 0.0, 0.7]);
-    let (status, a) = post(&s, "/api/analysis", json!({"robot": "rx90", "q": q}).to_string()).await;
+    let (status, a) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": "rx90", "q": q}).to_string(),
+    )
+    .await;
     assert_eq!(status, 200, "{a}");
-    let sv: Vec<f64> = a["measures"]["full"]["singular_values"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    let sv: Vec<f64> = a["measures"]["full"]["singular_values"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
     for (x, p) in sv.iter().zip([1.8760, 1.5290, 1.2439, 0.5693, 0.1521, 0.0]) {
         assert!((x - p).abs() < 5e-5, "{sv:?}");
     }
-    assert_eq!(a["measures"]["full"]["condition_number"], Value::Null, "infinite → null");
+    assert_eq!(
+        a["measures"]["full"]["condition_number"],
+        Value::Null,
+        "infinite → null"
+    );
     assert_eq!(a["measures"]["full"]["force_manipulability"], Value::Null);
     assert_eq!(a["null_space"].as_array().unwrap().len(), 1);
     assert_eq!(a["jacobian"].as_array().unwrap().len(), 6);
     // Jun 2008 §2.2: TMM 0.41, JLM 0.09; task rows = translational.
-    let q: Vec<f64> = [-15.3f64, 49.6, -31.0, 75.5, 85.2, -18.0].iter().map(|d| d.to_radians()).collect();
-    let (status, a) = post(&s, "/api/analysis", json!({"robot": "orion", "q": q, "rows": [0, 1, 2]}).to_string()).await;
+    let q: Vec<f64> = [-15.3f64, 49.6, -31.0, 75.5, 85.2, -18.0]
+        .iter()
+        .map(|d| d.to_radians())
+        .collect();
+    let (status, a) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": "orion", "q": q, "rows": [0, 1, 2]}).to_string(),
+    )
+    .await;
     assert_eq!(status, 200, "{a}");
     let tmm = a["measures"]["task"]["yoshikawa"].as_f64().unwrap();
     assert!((tmm - 0.41).abs() < 0.005, "TMM {tmm}");
-    assert_eq!(a["measures"]["task"]["yoshikawa"], a["measures"]["translational"]["yoshikawa"]);
+    assert_eq!(
+        a["measures"]["task"]["yoshikawa"],
+        a["measures"]["translational"]["yoshikawa"]
+    );
     assert!((a["jlm"].as_f64().unwrap() - 0.09).abs() < 0.005);
     let e = &a["measures"]["translational"]["ellipsoid"];
     assert_eq!(e["radii"].as_array().unwrap().len(), 3);
     assert_eq!(e["axes"].as_array().unwrap().len(), 3);
     let vol = e["volume"].as_f64().unwrap();
-    assert!((vol - 4.0 / 3.0 * std::f64::consts::PI * tmm).abs() < 1e-9, "eq. 2.18: c_3·w");
+    assert!(
+        (vol - 4.0 / 3.0 * std::f64::consts::PI * tmm).abs() < 1e-9,
+        "eq. 2.18: c_3·w"
+    );
     let pos = a["pose"]["position"].as_array().unwrap();
     assert_eq!(pos.len(), 3);
 }
@@ -111,14 +163,27 @@ async fn analysis_reproduces_the_rx90_report_and_orion_paper() {
 async fn velocity_polytope_is_returned_when_asked() {
     let s = start().await;
     let q = json!([0.0, 0.785, 0.0, 0.785, 0.0, 0.785, 0.0]);
-    let (status, a) = post(&s, "/api/analysis", json!({"robot": "pa10", "q": q, "polytope": true}).to_string()).await;
+    let (status, a) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": "pa10", "q": q, "polytope": true}).to_string(),
+    )
+    .await;
     assert_eq!(status, 200, "{a}");
     let p = &a["polytope"];
     assert!(p["vertices"].as_array().unwrap().len() >= 8);
     assert!(!p["facets"].as_array().unwrap().is_empty());
     let (v, w) = (p["volume"].as_f64().unwrap(), p["w_p"].as_f64().unwrap());
-    assert!(v > 0.0 && (v - w).abs() < 1e-9 * v, "Kilic eq. 1.54 with d_n = n!: w_p = volume");
-    let (_, without) = post(&s, "/api/analysis", json!({"robot": "pa10", "q": q}).to_string()).await;
+    assert!(
+        v > 0.0 && (v - w).abs() < 1e-9 * v,
+        "Kilic eq. 1.54 with d_n = n!: w_p = volume"
+    );
+    let (_, without) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": "pa10", "q": q}).to_string(),
+    )
+    .await;
     assert!(without.get("polytope").is_none());
 }
 
@@ -129,18 +194,31 @@ async fn dual_analysis_of_identical_parallel_arms() {
     // dual ellipsoid volume is 2^(-3/2) of one arm's (every radius / √2).
     let q = json!([0.0, 0.6, -1.2, 0.4, 0.0, 0.0]);
     let arm = |y: f64| json!({"robot": "magnum", "q": q, "base": {"position": [0.0, y, 0.0], "rotation": [[1,0,0],[0,1,0],[0,0,1]]}});
-    let (status, d) = post(&s, "/api/analysis/dual", json!({"arms": [arm(0.0), arm(1.0)], "polytope": true}).to_string()).await;
+    let (status, d) = post(
+        &s,
+        "/api/analysis/dual",
+        json!({"arms": [arm(0.0), arm(1.0)], "polytope": true}).to_string(),
+    )
+    .await;
     assert_eq!(status, 200, "{d}");
     let single = &d["arms"][0]["translational"];
     let dual = &d["translational"];
-    let ratio = dual["ellipsoid"]["volume"].as_f64().unwrap() / single["ellipsoid"]["volume"].as_f64().unwrap();
+    let ratio = dual["ellipsoid"]["volume"].as_f64().unwrap()
+        / single["ellipsoid"]["volume"].as_f64().unwrap();
     assert!((ratio - 2f64.powf(-1.5)).abs() < 1e-9, "{ratio}");
-    assert!((dual["isotropy"].as_f64().unwrap() - single["isotropy"].as_f64().unwrap()).abs() < 1e-9);
+    assert!(
+        (dual["isotropy"].as_f64().unwrap() - single["isotropy"].as_f64().unwrap()).abs() < 1e-9
+    );
     let y1 = d["arms"][1]["pose"]["position"][1].as_f64().unwrap();
     let y0 = d["arms"][0]["pose"]["position"][1].as_f64().unwrap();
     assert!((y1 - y0 - 1.0).abs() < 1e-12, "bases 1 m apart");
     // Intersection of two identical polytopes is the polytope itself.
-    let (_, one) = post(&s, "/api/analysis", json!({"robot": "magnum", "q": q, "polytope": true}).to_string()).await;
+    let (_, one) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": "magnum", "q": q, "polytope": true}).to_string(),
+    )
+    .await;
     let v1 = one["polytope"]["volume"].as_f64().unwrap();
     let vd = d["polytope"]["volume"].as_f64().unwrap();
     assert!((v1 - vd).abs() < 1e-9 * v1, "{v1} vs {vd}");
@@ -175,14 +253,22 @@ async fn bad_input_gets_a_clear_json_error() {
         assert_error(st, &v, status, needle);
     }
     // Body over 64 KiB → 413 with a JSON error.
-    let big = format!(r#"{{"robot": "magnum", "q": [0,0,0,0,0,0], "pad": "{}"}}"#, "x".repeat(70 * 1024));
+    let big = format!(
+        r#"{{"robot": "magnum", "q": [0,0,0,0,0,0], "pad": "{}"}}"#,
+        "x".repeat(70 * 1024)
+    );
     let (st, v) = post(&s, "/api/analysis", big).await;
     assert_error(st, &v, 413, "larger than");
     // Unknown route → 404 JSON.
     let (st, v) = get(&s, "/api/nothing").await;
     assert_error(st, &v, 404, "no route");
     // The server still answers after all of that.
-    let (st, _) = post(&s, "/api/analysis", json!({"robot": "planar2r", "q": [0.1, 1.0]}).to_string()).await;
+    let (st, _) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": "planar2r", "q": [0.1, 1.0]}).to_string(),
+    )
+    .await;
     assert_eq!(st, 200);
 }
 
@@ -191,7 +277,12 @@ async fn page_and_health_are_served() {
     let s = start().await;
     let resp = reqwest::get(format!("{}/", s.base)).await.unwrap();
     assert_eq!(resp.status().as_u16(), 200);
-    assert!(resp.headers()["content-type"].to_str().unwrap().starts_with("text/html"));
+    assert!(
+        resp.headers()["content-type"]
+            .to_str()
+            .unwrap()
+            .starts_with("text/html")
+    );
     assert!(resp.text().await.unwrap().contains("seaarms"));
     let resp = reqwest::get(format!("{}/healthz", s.base)).await.unwrap();
     assert_eq!(resp.status().as_u16(), 200);

@@ -23,7 +23,9 @@ pub struct AppState {
 impl AppState {
     /// Loads the built-in models.
     pub fn new() -> anyhow::Result<AppState> {
-        Ok(AppState { robots: Arc::new(Robots::load()?) })
+        Ok(AppState {
+            robots: Arc::new(Robots::load()?),
+        })
     }
 }
 
@@ -38,7 +40,9 @@ pub fn app(state: AppState) -> Router {
         .route("/api/robots/{name}", get(api::robots::get))
         .route("/api/analysis", post(api::analysis::single))
         .route("/api/analysis/dual", post(api::analysis::dual))
-        .fallback(|uri: axum::http::Uri| async move { ApiError::not_found(format!("no route for {}", uri.path())) })
+        .fallback(|uri: axum::http::Uri| async move {
+            ApiError::not_found(format!("no route for {}", uri.path()))
+        })
         .layer(DefaultBodyLimit::max(MAX_BODY_BYTES))
         .with_state(state)
 }

@@ -28,12 +28,19 @@ pub enum Command {
 #[derive(Debug, Clone, clap::Args)]
 pub struct ServeConfig {
     /// Address to listen on.
-    #[arg(long, env = "SEAARMS_BIND", default_value = "127.0.0.1:8080", global = true)]
+    #[arg(
+        long,
+        env = "SEAARMS_BIND",
+        default_value = "127.0.0.1:8080",
+        global = true
+    )]
     pub bind: SocketAddr,
 }
 
 impl Default for ServeConfig {
     fn default() -> Self {
-        ServeConfig { bind: SocketAddr::from(([127, 0, 0, 1], 8080)) }
+        ServeConfig {
+            bind: SocketAddr::from(([127, 0, 0, 1], 8080)),
+        }
     }
 }

@@ -20,15 +20,27 @@ pub struct ApiError {
 impl ApiError {
     /// 400 with a message.
     pub fn bad_request(error: impl Into<String>) -> ApiError {
-        ApiError { status: StatusCode::BAD_REQUEST, error: error.into(), detail: None }
+        ApiError {
+            status: StatusCode::BAD_REQUEST,
+            error: error.into(),
+            detail: None,
+        }
     }
     /// 404 with a message.
     pub fn not_found(error: impl Into<String>) -> ApiError {
-        ApiError { status: StatusCode::NOT_FOUND, error: error.into(), detail: None }
+        ApiError {
+            status: StatusCode::NOT_FOUND,
+            error: error.into(),
+            detail: None,
+        }
     }
     /// 422 with a message.
     pub fn unprocessable(error: impl Into<String>) -> ApiError {
-        ApiError { status: StatusCode::UNPROCESSABLE_ENTITY, error: error.into(), detail: None }
+        ApiError {
+            status: StatusCode::UNPROCESSABLE_ENTITY,
+            error: error.into(),
+            detail: None,
+        }
     }
     /// Adds a detail value.
     pub fn with_detail(mut self, detail: serde_json::Value) -> ApiError {
@@ -44,7 +56,11 @@ impl From<seaarms_core::Error> for ApiError {
             E::NotConverged { .. } | E::Unreachable { .. } => StatusCode::UNPROCESSABLE_ENTITY,
             _ => StatusCode::BAD_REQUEST,
         };
-        ApiError { status, error: e.to_string(), detail: None }
+        ApiError {
+            status,
+            error: e.to_string(),
+            detail: None,
+        }
     }
 }
 

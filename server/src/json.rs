@@ -18,14 +18,16 @@ impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for ApiJson<T> {
     type Rejection = ApiError;
 
     async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
-        let bytes = Bytes::from_request(req, state).await.map_err(|rejection| ApiError {
-            status: rejection.status(),
-            error: match rejection.status().as_u16() {
-                413 => format!("request body is larger than {MAX_BODY_BYTES} bytes"),
-                _ => rejection.body_text(),
-            },
-            detail: None,
-        })?;
+        let bytes = Bytes::from_request(req, state)
+            .await
+            .map_err(|rejection| ApiError {
+                status: rejection.status(),
+                error: match rejection.status().as_u16() {
+                    413 => format!("request body is larger than {MAX_BODY_BYTES} bytes"),
+                    _ => rejection.body_text(),
+                },
+                detail: None,
+            })?;
         let mut de = serde_json::Deserializer::from_slice(&bytes);
         let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
             let path = e.path().to_string();
@@ -39,7 +41,8 @@ impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for ApiJson<T> {
             };
             ApiError::bad_request(msg)
         })?;
-        de.end().map_err(|e| ApiError::bad_request(format!("malformed JSON: {e}")))?;
+        de.end()
+            .map_err(|e| ApiError::bad_request(format!("malformed JSON: {e}")))?;
         Ok(ApiJson(value))
     }
 }

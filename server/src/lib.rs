@@ -22,6 +22,12 @@ use std::future::Future;
 use tokio::net::TcpListener;
 
 /// Serves the application on a bound listener until `shutdown` completes (tests bind port 0).
-pub async fn run(listener: TcpListener, state: app::AppState, shutdown: impl Future<Output = ()> + Send + 'static) -> std::io::Result<()> {
-    axum::serve(listener, app::app(state)).with_graceful_shutdown(shutdown).await
+pub async fn run(
+    listener: TcpListener,
+    state: app::AppState,
+    shutdown: impl Future<Output = ()> + Send + 'static,
+) -> std::io::Result<()> {
+    axum::serve(listener, app::app(state))
+        .with_graceful_shutdown(shutdown)
+        .await
 }

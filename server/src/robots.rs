@@ -19,9 +19,12 @@ impl Robots {
     pub fn load() -> anyhow::Result<Robots> {
         let mut models = Vec::new();
         for (name, text) in BUILTIN {
-            let spec: ModelSpec =
-                serde_json::from_str(text).map_err(|e| anyhow::anyhow!("built-in model {name}: {e}"))?;
-            models.push(Arc::new(Model::from_spec(&spec).map_err(|e| anyhow::anyhow!("built-in model {name}: {e}"))?));
+            let spec: ModelSpec = serde_json::from_str(text)
+                .map_err(|e| anyhow::anyhow!("built-in model {name}: {e}"))?;
+            models.push(Arc::new(
+                Model::from_spec(&spec)
+                    .map_err(|e| anyhow::anyhow!("built-in model {name}: {e}"))?,
+            ));
         }
         Ok(Robots { models })
     }
@@ -42,14 +45,22 @@ impl Robots {
         match robot {
             Value::String(name) => self.get(name).ok_or_else(|| {
                 let known: Vec<&str> = self.models.iter().map(|m| m.name.as_str()).collect();
-                ApiError::not_found(format!("unknown robot `{name}`")).with_detail(serde_json::json!({ "known": known }))
+                ApiError::not_found(format!("unknown robot `{name}`"))
+                    .with_detail(serde_json::json!({ "known": known }))
             }),
             Value::Object(_) => {
-                let spec: ModelSpec = serde_path_to_error::deserialize(robot)
-                    .map_err(|e| ApiError::bad_request(format!("invalid inline robot at `robot.{}`: {}", e.path(), e.inner())))?;
+                let spec: ModelSpec = serde_path_to_error::deserialize(robot).map_err(|e| {
+                    ApiError::bad_request(format!(
+                        "invalid inline robot at `robot.{}`: {}",
+                        e.path(),
+                        e.inner()
+                    ))
+                })?;
                 Ok(Arc::new(Model::from_spec(&spec)?))
             }
-            _ => Err(ApiError::bad_request("`robot` must be a built-in robot name or an inline model object")),
+            _ => Err(ApiError::bad_request(
+                "`robot` must be a built-in robot name or an inline model object",
+            )),
         }
     }
 }

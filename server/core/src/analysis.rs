@@ -6,7 +6,8 @@ use nalgebra::{DMatrix, Isometry3};
 use crate::Error;
 use crate::kinematics::{KinData, jacobian, jacobian_in_end_effector_frame};
 use crate::manipulability::{
-    Measures, Subspaces, full_svd, jlm, jlm_gradient, measures, measures_from_svd, select_rows, subspaces_from_svd,
+    Measures, Subspaces, full_svd, jlm, jlm_gradient, measures, measures_from_svd, select_rows,
+    subspaces_from_svd,
 };
 use crate::model::Model;
 

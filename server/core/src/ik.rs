@@ -35,11 +35,21 @@ impl MagnumLengths {
             && model.tool == Vector3::zeros();
         if !ok {
             return Err(Error::InvalidModel {
-                reason: format!("{} does not have the Magnum structure of Lim Table 3-1", model.name),
+                reason: format!(
+                    "{} does not have the Magnum structure of Lim Table 3-1",
+                    model.name
+                ),
             });
         }
         let j = &s.joints;
-        Ok(MagnumLengths { l1: j[0].a, l2: j[1].a, l3: j[2].a, l4: j[3].a, l5: j[4].a, l6: j[5].d })
+        Ok(MagnumLengths {
+            l1: j[0].a,
+            l2: j[1].a,
+            l3: j[2].a,
+            l4: j[3].a,
+            l5: j[4].a,
+            l6: j[5].d,
+        })
     }
 }
 
@@ -85,7 +95,10 @@ pub fn magnum_ik(model: &Model, target: &Isometry3<f64>) -> Result<Vec<[f64; 6]>
                 let th2 = z.atan2(x) - (l.l3 * th3.sin()).atan2(l.l2 + l.l3 * th3.cos());
                 let th4 = th234 - th2 - th3;
                 if let Some(q) = within_limits(model, [th1, th2, th3, th4, th5, th6]) {
-                    if !out.iter().any(|s: &[f64; 6]| s.iter().zip(&q).all(|(u, v)| (u - v).abs() < 1e-9)) {
+                    if !out
+                        .iter()
+                        .any(|s: &[f64; 6]| s.iter().zip(&q).all(|(u, v)| (u - v).abs() < 1e-9))
+                    {
                         out.push(q);
                     }
                 }
@@ -139,7 +152,12 @@ pub struct IkOptions {
 
 impl Default for IkOptions {
     fn default() -> Self {
-        IkOptions { max_iterations: 300, tolerance_m: 1e-6, tolerance_rad: 1e-6, damping: 1e-2 }
+        IkOptions {
+            max_iterations: 300,
+            tolerance_m: 1e-6,
+            tolerance_rad: 1e-6,
+            damping: 1e-2,
+        }
     }
 }
 
@@ -159,18 +177,31 @@ fn task_error(data: &KinData, target: &IkTarget) -> DVector<f64> {
 /// iteration: Δq = Jᵀ(JJᵀ + λ²I)⁻¹e, λ halved after an improving step and doubled after a
 /// rejected one. Returns [`Error::NotConverged`] with the final residual when the tolerance
 /// is not met (e.g. a target out of reach).
-pub fn dls_ik(model: &Model, target: &IkTarget, q0: &[f64], opts: &IkOptions) -> Result<Vec<f64>, Error> {
+pub fn dls_ik(
+    model: &Model,
+    target: &IkTarget,
+    q0: &[f64],
+    opts: &IkOptions,
+) -> Result<Vec<f64>, Error> {
     model.check_q(q0)?;
     let rows: &[usize] = match target {
         IkTarget::Position(p) => {
             if p.iter().any(|v| !v.is_finite()) {
-                return Err(Error::NonFinite { what: "target", index: 0 });
+                return Err(Error::NonFinite {
+                    what: "target",
+                    index: 0,
+                });
             }
             &[0, 1, 2]
         }
         IkTarget::Pose(t) => {
-            if t.translation.vector.iter().any(|v| !v.is_finite()) || t.rotation.coords.iter().any(|v| !v.is_finite()) {
-                return Err(Error::NonFinite { what: "target", index: 0 });
+            if t.translation.vector.iter().any(|v| !v.is_finite())
+                || t.rotation.coords.iter().any(|v| !v.is_finite())
+            {
+                return Err(Error::NonFinite {
+                    what: "target",
+                    index: 0,
+                });
             }
             &[0, 1, 2, 3, 4, 5]
         }
@@ -188,7 +219,8 @@ pub fn dls_ik(model: &Model, target: &IkTarget, q0: &[f64], opts: &IkOptions) ->
     let mut e = task_error(&data, target);
     let cost = |e: &DVector<f64>| e.norm_squared();
     let converged = |e: &DVector<f64>| {
-        e.rows(0, 3).norm() <= opts.tolerance_m && (e.nrows() == 3 || e.rows(3, 3).norm() <= opts.tolerance_rad)
+        e.rows(0, 3).norm() <= opts.tolerance_m
+            && (e.nrows() == 3 || e.rows(3, 3).norm() <= opts.tolerance_rad)
     };
     let mut lambda = opts.damping;
     let mut trial = q.clone();
@@ -202,7 +234,8 @@ pub fn dls_ik(model: &Model, target: &IkTarget, q0: &[f64], opts: &IkOptions) ->
         let mut dq = DVector::zeros(n);
         let mut solved = false;
         for _ in 0..=n {
-            let a = &j * j.transpose() + DMatrix::identity(rows.len(), rows.len()) * (lambda * lambda);
+            let a =
+                &j * j.transpose() + DMatrix::identity(rows.len(), rows.len()) * (lambda * lambda);
             let Some(chol) = a.cholesky() else { break };
             dq = j.transpose() * chol.solve(&e);
             solved = true;
@@ -242,5 +275,9 @@ pub fn dls_ik(model: &Model, target: &IkTarget, q0: &[f64], opts: &IkOptions) ->
     if converged(&e) {
         return Ok(q);
     }
-    Err(Error::NotConverged { what: "damped least-squares IK", iterations: opts.max_iterations, residual: e.norm() })
+    Err(Error::NotConverged {
+        what: "damped least-squares IK",
+        iterations: opts.max_iterations,
+        residual: e.norm(),
+    })
 }

@@ -49,7 +49,10 @@ pub fn forward_kinematics(model: &Model, data: &mut KinData, q: &[f64]) {
         *frame = t;
     }
     data.flange = t * model.flange;
-    data.tool_point = data.flange.transform_point(&Point3::from(model.tool)).coords;
+    data.tool_point = data
+        .flange
+        .transform_point(&Point3::from(model.tool))
+        .coords;
 }
 
 /// Forward kinematics followed by the geometric Jacobian (Lim §2.3; RX90 report part II:
@@ -72,7 +75,12 @@ pub fn jacobian(model: &Model, data: &mut KinData, q: &[f64]) {
 /// The Jacobian expressed in the end-effector frame: blockdiag(Rᵀ, Rᵀ)·J (6×n; rows
 /// vx vy vz wx wy wz in the flange axes; same reference point). Call after [`jacobian`].
 pub fn jacobian_in_end_effector_frame(data: &KinData) -> DMatrix<f64> {
-    let rt: Matrix3<f64> = data.flange.rotation.to_rotation_matrix().matrix().transpose();
+    let rt: Matrix3<f64> = data
+        .flange
+        .rotation
+        .to_rotation_matrix()
+        .matrix()
+        .transpose();
     let mut out = data.jacobian.clone();
     for k in 0..out.ncols() {
         let lin: Vector3<f64> = rt * data.jacobian.fixed_view::<3, 1>(0, k);

@@ -140,24 +140,19 @@ impl Model {
                 None => (f64::NEG_INFINITY, f64::INFINITY),
             };
             let max_velocity = js.max_velocity.unwrap_or(1.0);
-            let name = js.name.clone().unwrap_or_else(|| format!("joint {}", i + 1));
+            let name = js
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("joint {}", i + 1));
             let z = Vector3::z_axis();
             let (origin, offset, post) = match spec.dh {
                 DhConvention::Standard => {
                     let twist = twist(js.twist_axis, js.alpha);
                     match js.kind {
                         // Rz(θ+q)·Tz(d)·Tx(a)·R(α): motion first, fixed part after.
-                        JointKind::Revolute => (
-                            pending,
-                            js.theta,
-                            tz(js.d) * tx(js.a) * twist,
-                        ),
+                        JointKind::Revolute => (pending, js.theta, tz(js.d) * tx(js.a) * twist),
                         // Rz(θ)·Tz(d+q)·Tx(a)·R(α) = Tz(d+q)·Rz(θ)·Tx(a)·R(α).
-                        JointKind::Prismatic => (
-                            pending,
-                            js.d,
-                            rz(js.theta) * tx(js.a) * twist,
-                        ),
+                        JointKind::Prismatic => (pending, js.d, rz(js.theta) * tx(js.a) * twist),
                     }
                 }
                 DhConvention::Modified => {
@@ -172,7 +167,9 @@ impl Model {
                     let base = pending * rx(js.alpha) * tx(js.a);
                     match js.kind {
                         // Rx(α)·Tx(a)·Rz(θ+q)·Tz(d) = Rx(α)·Tx(a)·Tz(d)·Rz(θ)·Rz(q).
-                        JointKind::Revolute => (base * tz(js.d) * rz(js.theta), 0.0, Isometry3::identity()),
+                        JointKind::Revolute => {
+                            (base * tz(js.d) * rz(js.theta), 0.0, Isometry3::identity())
+                        }
                         // Rx(α)·Tx(a)·Rz(θ)·Tz(d+q).
                         JointKind::Prismatic => (base * rz(js.theta), js.d, Isometry3::identity()),
                     }
@@ -319,7 +316,11 @@ pub struct JointSpec {
 
 impl JointSpec {
     fn validate(&self, i: usize) -> Result<(), Error> {
-        let bad = |reason: String| Err(Error::InvalidModel { reason: format!("joint {}: {reason}", i + 1) });
+        let bad = |reason: String| {
+            Err(Error::InvalidModel {
+                reason: format!("joint {}: {reason}", i + 1),
+            })
+        };
         for (name, v, max) in [
             ("a", self.a, MAX_LENGTH_M),
             ("d", self.d, MAX_LENGTH_M),

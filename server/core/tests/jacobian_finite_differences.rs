@@ -5,7 +5,9 @@
 mod common;
 
 use nalgebra::{DMatrix, Matrix3};
-use seaarms_core::kinematics::{KinData, end_effector_pose, jacobian, jacobian_in_end_effector_frame};
+use seaarms_core::kinematics::{
+    KinData, end_effector_pose, jacobian, jacobian_in_end_effector_frame,
+};
 
 fn sample_q(model: &seaarms_core::Model, k: usize) -> Vec<f64> {
     // Deterministic spread of postures inside the limits (or ±2 rad when unlimited).
@@ -14,7 +16,11 @@ fn sample_q(model: &seaarms_core::Model, k: usize) -> Vec<f64> {
         .iter()
         .enumerate()
         .map(|(i, j)| {
-            let (lo, hi) = if j.is_limited() { (j.limits[0], j.limits[1]) } else { (-2.0, 2.0) };
+            let (lo, hi) = if j.is_limited() {
+                (j.limits[0], j.limits[1])
+            } else {
+                (-2.0, 2.0)
+            };
             let t = (((i + 1) * 7919 + k * 104729) % 1000) as f64 / 1000.0;
             lo + (hi - lo) * (0.05 + 0.9 * t)
         })
@@ -68,8 +74,15 @@ fn inline_modified_and_standard_dh_agree_on_a_planar_arm() {
     for q in [[0.3, -0.4], [1.2, 2.0], [-2.0, 0.1]] {
         let ps = end_effector_pose(&s, &q).translation.vector;
         let pm = end_effector_pose(&m, &q).translation.vector;
-        let closed = nalgebra::Vector3::new(0.7 * q[0].cos() + 0.4 * (q[0] + q[1]).cos(), 0.7 * q[0].sin() + 0.4 * (q[0] + q[1]).sin(), 0.0);
-        assert!((ps - closed).norm() < 1e-12 && (pm - closed).norm() < 1e-12, "{ps} {pm} {closed}");
+        let closed = nalgebra::Vector3::new(
+            0.7 * q[0].cos() + 0.4 * (q[0] + q[1]).cos(),
+            0.7 * q[0].sin() + 0.4 * (q[0] + q[1]).sin(),
+            0.0,
+        );
+        assert!(
+            (ps - closed).norm() < 1e-12 && (pm - closed).norm() < 1e-12,
+            "{ps} {pm} {closed}"
+        );
     }
 }
 
@@ -86,5 +99,8 @@ fn prismatic_joint_column_is_its_axis() {
     // The tool point sits d + q along that axis from DH frame 1's origin (0.5cos q1, 0.5 sin q1, 0).
     let tip = end_effector_pose(&model, &q).translation.vector;
     let frame1 = nalgebra::Vector3::new(0.5 * q[0].cos(), 0.5 * q[0].sin(), 0.0);
-    assert!(((tip - frame1) - axis * 0.5).norm() < 1e-12, "{tip} {frame1} {axis}");
+    assert!(
+        ((tip - frame1) - axis * 0.5).norm() < 1e-12,
+        "{tip} {frame1} {axis}"
+    );
 }

@@ -32,7 +32,10 @@ fn eq_3_9(l: &MagnumLengths, q: &[f64]) -> (Matrix3<f64>, Vector3<f64>) {
     let px = c1 * w - s1 * (l.l5 + l.l6) * s5 + l.l1 * c1;
     let py = s1 * w + c1 * (l.l5 + l.l6) * s5 + l.l1 * s1;
     let pz = (l.l5 + l.l6) * s234 * c5 + l.l4 * s234 + l.l3 * s23 + l.l2 * s2;
-    (Matrix3::new(nx, ox, ax, ny, oy, ay, nz, oz, az), Vector3::new(px, py, pz))
+    (
+        Matrix3::new(nx, ox, ax, ny, oy, ay, nz, oz, az),
+        Vector3::new(px, py, pz),
+    )
 }
 
 fn magnum_q() -> impl Strategy<Value = Vec<f64>> {
@@ -40,7 +43,11 @@ fn magnum_q() -> impl Strategy<Value = Vec<f64>> {
     m.joints
         .iter()
         .map(|j| {
-            let (lo, hi) = if j.is_limited() { (j.limits[0], j.limits[1]) } else { (-3.1, 3.1) };
+            let (lo, hi) = if j.is_limited() {
+                (j.limits[0], j.limits[1])
+            } else {
+                (-3.1, 3.1)
+            };
             lo..hi
         })
         .collect::<Vec<_>>()
@@ -89,8 +96,13 @@ fn case_study_workspace_is_reachable_within_limits() {
     for ix in 0..=5 {
         for iz in 0..=5 {
             let target = Vector3::new(0.9 + 0.1 * ix as f64, 0.0, 0.1 * iz as f64);
-            let q = dls_ik(&model, &IkTarget::Position(target), &q0, &IkOptions::default())
-                .unwrap_or_else(|e| panic!("({:.2}, 0, {:.2}) unreachable: {e}", target.x, target.z));
+            let q = dls_ik(
+                &model,
+                &IkTarget::Position(target),
+                &q0,
+                &IkOptions::default(),
+            )
+            .unwrap_or_else(|e| panic!("({:.2}, 0, {:.2}) unreachable: {e}", target.x, target.z));
             let p = end_effector_pose(&model, &q).translation.vector;
             worst = worst.max((p - target).norm());
         }
@@ -103,11 +115,25 @@ fn dls_ik_reaches_a_full_pose_and_reports_unreachable_targets() {
     let model = common::builtin("magnum");
     let q_true = [0.1, 0.4, -0.9, 0.2, 0.3, 0.5];
     let target = end_effector_pose(&model, &q_true);
-    let q = dls_ik(&model, &IkTarget::Pose(target), &[0.0, 0.3, -0.8, 0.0, 0.0, 0.0], &IkOptions::default()).unwrap();
+    let q = dls_ik(
+        &model,
+        &IkTarget::Pose(target),
+        &[0.0, 0.3, -0.8, 0.0, 0.0, 0.0],
+        &IkOptions::default(),
+    )
+    .unwrap();
     let t = end_effector_pose(&model, &q);
     assert!((t.translation.vector - target.translation.vector).norm() < 1e-6);
     assert!(t.rotation.angle_to(&target.rotation) < 1e-6);
     // 3 m away: beyond the 1.5 m reach (Lim Table 1-1).
-    let far = dls_ik(&model, &IkTarget::Position(Vector3::new(3.0, 0.0, 0.0)), &[0.0; 6], &IkOptions::default());
-    assert!(matches!(far, Err(seaarms_core::Error::NotConverged { .. })), "{far:?}");
+    let far = dls_ik(
+        &model,
+        &IkTarget::Position(Vector3::new(3.0, 0.0, 0.0)),
+        &[0.0; 6],
+        &IkOptions::default(),
+    );
+    assert!(
+        matches!(far, Err(seaarms_core::Error::NotConverged { .. })),
+        "{far:?}"
+    );
 }

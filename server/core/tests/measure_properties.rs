@@ -8,7 +8,9 @@ use nalgebra::{DMatrix, Rotation3, Vector3};
 use proptest::prelude::*;
 use seaarms_core::kinematics::jacobian_at;
 use seaarms_core::manipulability::measures::ellipsoid_volume_coefficient;
-use seaarms_core::manipulability::{dual_measures, jlm, jlm_gradient, measures, select_rows, svd_with};
+use seaarms_core::manipulability::{
+    dual_measures, jlm, jlm_gradient, measures, select_rows, svd_with,
+};
 
 proptest! {
     /// Lim eq. 2.27: w = l1·l2·|sin q2|; §2.4.2: λ₁,₂ = [3 + 2C2 ± √(5 + 12C2 + 8C2²)]/2 for l1 = l2 = 1.
@@ -111,9 +113,19 @@ proptest! {
 fn ellipsoid_volume_coefficient_is_the_unit_ball_volume() {
     // Lim eq. 2.18 against π^{m/2}/Γ(m/2 + 1): 2, π, 4π/3, π²/2, 8π²/15, π³/6.
     use std::f64::consts::PI;
-    let expected = [2.0, PI, 4.0 * PI / 3.0, PI * PI / 2.0, 8.0 * PI * PI / 15.0, PI.powi(3) / 6.0];
+    let expected = [
+        2.0,
+        PI,
+        4.0 * PI / 3.0,
+        PI * PI / 2.0,
+        8.0 * PI * PI / 15.0,
+        PI.powi(3) / 6.0,
+    ];
     for (m, e) in (1..=6).zip(expected) {
-        assert!((ellipsoid_volume_coefficient(m) - e).abs() < 1e-12, "m = {m}");
+        assert!(
+            (ellipsoid_volume_coefficient(m) - e).abs() < 1e-12,
+            "m = {m}"
+        );
     }
 }
 
@@ -134,7 +146,11 @@ fn singular_jacobian_reports_infinite_values_as_none() {
 #[test]
 fn jlm_is_one_at_mid_range_and_zero_at_a_limit() {
     let model = common::builtin("orion");
-    let mid: Vec<f64> = model.joints.iter().map(|j| (j.limits[0] + j.limits[1]) / 2.0).collect();
+    let mid: Vec<f64> = model
+        .joints
+        .iter()
+        .map(|j| (j.limits[0] + j.limits[1]) / 2.0)
+        .collect();
     assert!((jlm(&model, &mid) - 1.0).abs() < 1e-12);
     let mut at = mid.clone();
     at[2] = model.joints[2].limits[1];

@@ -67,7 +67,10 @@ fn rx90_singular_values_and_null_space() {
 #[test]
 fn orion_example_posture_tmm_and_jlm() {
     let model = common::builtin("orion");
-    let q: Vec<f64> = [-15.3f64, 49.6, -31.0, 75.5, 85.2, -18.0].iter().map(|d| d.to_radians()).collect();
+    let q: Vec<f64> = [-15.3f64, 49.6, -31.0, 75.5, 85.2, -18.0]
+        .iter()
+        .map(|d| d.to_radians())
+        .collect();
     let j = jacobian_at(&model, &q);
     let jt = select_rows(&j, &[0, 1, 2]).unwrap();
     let tmm = measures(&jt).unwrap().yoshikawa;

@@ -105,22 +105,40 @@ pub struct PolytopeOut {
 fn check_q(model: &Model, q: &[f64]) -> Result<(), ApiError> {
     model.check_q(q)?;
     if let Some(i) = q.iter().position(|v| v.abs() > MAX_ABS_Q) {
-        return Err(ApiError::bad_request(format!("q[{i}] = {} is out of range (|q| ≤ {MAX_ABS_Q})", q[i])));
+        return Err(ApiError::bad_request(format!(
+            "q[{i}] = {} is out of range (|q| ≤ {MAX_ABS_Q})",
+            q[i]
+        )));
     }
     Ok(())
 }
 
 fn polytope_of(model: &Model, jt: &DMatrix<f64>) -> Result<PolytopeOut, ApiError> {
     let p = seaarms_core::manipulability::polytope::velocity_polytope(jt, &model.max_velocities())?;
-    Ok(PolytopeOut { vertices: p.vertices, facets: p.facets, volume: p.volume, w_p: p.w_p })
+    Ok(PolytopeOut {
+        vertices: p.vertices,
+        facets: p.facets,
+        volume: p.volume,
+        w_p: p.w_p,
+    })
 }
 
 /// Handler of `POST /api/analysis`.
-pub async fn single(State(state): State<AppState>, ApiJson(req): ApiJson<AnalysisRequest>) -> Result<Json<AnalysisResponse>, ApiError> {
+pub async fn single(
+    State(state): State<AppState>,
+    ApiJson(req): ApiJson<AnalysisRequest>,
+) -> Result<Json<AnalysisResponse>, ApiError> {
     let model = state.robots.resolve(&req.robot)?;
     check_q(&model, &req.q)?;
     let a = analyze(&model, &req.q, req.rows.as_deref())?;
-    let polytope = if req.polytope { Some(polytope_of(&model, &a.jacobian.select_rows(&TRANSLATIONAL_ROWS))?) } else { None };
+    let polytope = if req.polytope {
+        Some(polytope_of(
+            &model,
+            &a.jacobian.select_rows(&TRANSLATIONAL_ROWS),
+        )?)
+    } else {
+        None
+    };
     Ok(Json(AnalysisResponse {
         robot: model.name.clone(),
         pose: (&a.pose).into(),
@@ -205,7 +223,9 @@ pub struct DualArmOut {
 }
 
 fn base_rotation(base: &Option<BaseIn>, arm: usize) -> Result<(Matrix3<f64>, [f64; 3]), ApiError> {
-    let Some(b) = base else { return Ok((Matrix3::identity(), [0.0; 3])) };
+    let Some(b) = base else {
+        return Ok((Matrix3::identity(), [0.0; 3]));
+    };
     let bad = |what: &str| ApiError::bad_request(format!("arms[{arm}].base: {what}"));
     if b.position.iter().any(|v| !v.is_finite() || v.abs() > 1.0e3) {
         return Err(bad("position must be finite and within ±1000 m"));
@@ -217,23 +237,36 @@ fn base_rotation(base: &Option<BaseIn>, arm: usize) -> Result<(Matrix3<f64>, [f6
     if r.iter().any(|v| !v.is_finite()) {
         return Err(bad("rotation must be finite"));
     }
-    if (r.transpose() * r - Matrix3::identity()).abs().max() > 1e-6 || (r.determinant() - 1.0).abs() > 1e-6 {
-        return Err(bad("rotation must be a proper rotation matrix (RᵀR = I, det R = 1, to 1e-6)"));
+    if (r.transpose() * r - Matrix3::identity()).abs().max() > 1e-6
+        || (r.determinant() - 1.0).abs() > 1e-6
+    {
+        return Err(bad(
+            "rotation must be a proper rotation matrix (RᵀR = I, det R = 1, to 1e-6)",
+        ));
     }
     Ok((r, b.position))
 }
 
 /// Handler of `POST /api/analysis/dual`.
-pub async fn dual(State(state): State<AppState>, ApiJson(req): ApiJson<DualRequest>) -> Result<Json<DualResponse>, ApiError> {
+pub async fn dual(
+    State(state): State<AppState>,
+    ApiJson(req): ApiJson<DualRequest>,
+) -> Result<Json<DualResponse>, ApiError> {
     if req.arms.len() != 2 {
-        return Err(ApiError::bad_request(format!("`arms` must hold exactly 2 arms, got {}", req.arms.len())));
+        return Err(ApiError::bad_request(format!(
+            "`arms` must hold exactly 2 arms, got {}",
+            req.arms.len()
+        )));
     }
     let mut world_j = Vec::with_capacity(2);
     let mut arms = Vec::with_capacity(2);
     let mut qmax = Vec::with_capacity(2);
     for (i, arm) in req.arms.iter().enumerate() {
         let model = state.robots.resolve(&arm.robot)?;
-        check_q(&model, &arm.q).map_err(|e| ApiError { error: format!("arms[{i}]: {}", e.error), ..e })?;
+        check_q(&model, &arm.q).map_err(|e| ApiError {
+            error: format!("arms[{i}]: {}", e.error),
+            ..e
+        })?;
         let (r, p) = base_rotation(&arm.base, i)?;
         let jt = jacobian_at(&model, &arm.q).select_rows(&TRANSLATIONAL_ROWS);
         let rd = DMatrix::from_column_slice(3, 3, r.as_slice());
@@ -243,16 +276,34 @@ pub async fn dual(State(state): State<AppState>, ApiJson(req): ApiJson<DualReque
             nalgebra::Translation3::new(p[0], p[1], p[2]),
             nalgebra::UnitQuaternion::from_matrix(&r),
         );
-        arms.push(DualArmOut { robot: model.name.clone(), pose: (&(base * local)).into(), translational: (&measures(&jw)?).into() });
+        arms.push(DualArmOut {
+            robot: model.name.clone(),
+            pose: (&(base * local)).into(),
+            translational: (&measures(&jw)?).into(),
+        });
         qmax.push(model.max_velocities());
         world_j.push(jw);
     }
     let dual = dual_measures(&world_j[0], &world_j[1])?;
     let polytope = if req.polytope {
-        let p = seaarms_core::manipulability::polytope::dual_velocity_polytope(&world_j[0], &qmax[0], &world_j[1], &qmax[1])?;
-        Some(PolytopeOut { vertices: p.vertices, facets: p.facets, volume: p.volume, w_p: p.w_p })
+        let p = seaarms_core::manipulability::polytope::dual_velocity_polytope(
+            &world_j[0],
+            &qmax[0],
+            &world_j[1],
+            &qmax[1],
+        )?;
+        Some(PolytopeOut {
+            vertices: p.vertices,
+            facets: p.facets,
+            volume: p.volume,
+            w_p: p.w_p,
+        })
     } else {
         None
     };
-    Ok(Json(DualResponse { translational: (&dual).into(), arms, polytope }))
+    Ok(Json(DualResponse {
+        translational: (&dual).into(),
+        arms,
+        polytope,
+    }))
 }

@@ -25,13 +25,20 @@ pub async fn list(State(state): State<AppState>) -> Json<Vec<RobotSummary>> {
             .robots
             .all()
             .iter()
-            .map(|m| RobotSummary { name: m.name.clone(), dof: m.dof(), source: m.source.clone() })
+            .map(|m| RobotSummary {
+                name: m.name.clone(),
+                dof: m.dof(),
+                source: m.source.clone(),
+            })
             .collect(),
     )
 }
 
 /// One model in the inline-model schema (joints, limits, velocity limits, source, notes).
-pub async fn get(State(state): State<AppState>, Path(name): Path<String>) -> Result<Json<seaarms_core::ModelSpec>, ApiError> {
+pub async fn get(
+    State(state): State<AppState>,
+    Path(name): Path<String>,
+) -> Result<Json<seaarms_core::ModelSpec>, ApiError> {
     let model = state.robots.resolve(&serde_json::Value::String(name))?;
     Ok(Json(model.spec.clone()))
 }

@@ -31,7 +31,9 @@ impl From<&Isometry3<f64>> for PoseOut {
 
 /// A matrix as a list of rows.
 pub fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
-    (0..m.nrows()).map(|r| m.row(r).iter().copied().collect()).collect()
+    (0..m.nrows())
+        .map(|r| m.row(r).iter().copied().collect())
+        .collect()
 }
 
 /// An ellipsoid: radii (null = infinite), unit axes (one per radius), volume.
@@ -47,7 +49,11 @@ pub struct EllipsoidOut {
 
 impl From<&Ellipsoid> for EllipsoidOut {
     fn from(e: &Ellipsoid) -> EllipsoidOut {
-        EllipsoidOut { radii: e.radii.clone(), axes: e.axes.clone(), volume: e.volume }
+        EllipsoidOut {
+            radii: e.radii.clone(),
+            axes: e.axes.clone(),
+            volume: e.volume,
+        }
     }
 }
 

@@ -14,7 +14,11 @@ use crate::Error;
 /// expressed in the same frame and have the same number of rows.
 pub fn dual_shape_matrix(j1: &DMatrix<f64>, j2: &DMatrix<f64>) -> Result<DMatrix<f64>, Error> {
     if j1.nrows() != j2.nrows() {
-        return Err(Error::SizeMismatch { what: "second arm's jacobian rows", input: j2.nrows(), required: j1.nrows() });
+        return Err(Error::SizeMismatch {
+            what: "second arm's jacobian rows",
+            input: j2.nrows(),
+            required: j1.nrows(),
+        });
     }
     let m1 = j1 * j1.transpose();
     let m2 = j2 * j2.transpose();
@@ -23,9 +27,11 @@ pub fn dual_shape_matrix(j1: &DMatrix<f64>, j2: &DMatrix<f64>) -> Result<DMatrix
         Some(ch) => &m1 * ch.solve(&m2),
         // Both arms lose the same direction: use the pseudo-inverse of the sum.
         None => {
-            let pinv = sum
-                .pseudo_inverse(1e-12)
-                .map_err(|_| Error::NotConverged { what: "pseudo-inverse", iterations: 0, residual: f64::NAN })?;
+            let pinv = sum.pseudo_inverse(1e-12).map_err(|_| Error::NotConverged {
+                what: "pseudo-inverse",
+                iterations: 0,
+                residual: f64::NAN,
+            })?;
             &m1 * pinv * &m2
         }
     };
@@ -39,7 +45,10 @@ pub fn dual_measures(j1: &DMatrix<f64>, j2: &DMatrix<f64>) -> Result<Measures, E
     let eig = SymmetricEigen::new(m);
     let mut idx: Vec<usize> = (0..k).collect();
     idx.sort_by(|&a, &b| eig.eigenvalues[b].total_cmp(&eig.eigenvalues[a]));
-    let sigma: Vec<f64> = idx.iter().map(|&i| eig.eigenvalues[i].max(0.0).sqrt()).collect();
+    let sigma: Vec<f64> = idx
+        .iter()
+        .map(|&i| eig.eigenvalues[i].max(0.0).sqrt())
+        .collect();
     let mut u = DMatrix::zeros(k, k);
     for (dst, &src) in idx.iter().enumerate() {
         u.set_column(dst, &eig.eigenvectors.column(src));

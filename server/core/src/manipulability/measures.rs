@@ -26,20 +26,34 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
 pub fn svd_with(j: &DMatrix<f64>, want_v: bool) -> Result<FullSvd, Error> {
     let (m, n) = j.shape();
     if m == 0 || n == 0 {
-        return Err(Error::SizeMismatch { what: "jacobian", input: 0, required: 1 });
+        return Err(Error::SizeMismatch {
+            what: "jacobian",
+            input: 0,
+            required: 1,
+        });
     }
     if j.iter().any(|v| !v.is_finite()) {
-        return Err(Error::NonFinite { what: "jacobian", index: 0 });
+        return Err(Error::NonFinite {
+            what: "jacobian",
+            index: 0,
+        });
     }
-    let not_converged = Error::NotConverged { what: "svd", iterations: 200, residual: f64::NAN };
+    let not_converged = Error::NotConverged {
+        what: "svd",
+        iterations: 200,
+        residual: f64::NAN,
+    };
     // 6×6 (every 6-DOF arm's full Jacobian) takes nalgebra's stack-allocated path, about a
     // third faster than the heap one; results are converted to the common dynamic form.
     let svd = if (m, n) == (6, 6) {
         let s6 = nalgebra::Matrix6::from_iterator(j.iter().copied());
-        let s = nalgebra::SVD::try_new(s6, true, want_v, f64::EPSILON, 200).ok_or(not_converged.clone())?;
+        let s = nalgebra::SVD::try_new(s6, true, want_v, f64::EPSILON, 200)
+            .ok_or(not_converged.clone())?;
         SVD {
             u: s.u.map(|u| DMatrix::from_column_slice(6, 6, u.as_slice())),
-            v_t: s.v_t.map(|v| DMatrix::from_column_slice(6, 6, v.as_slice())),
+            v_t: s
+                .v_t
+                .map(|v| DMatrix::from_column_slice(6, 6, v.as_slice())),
             singular_values: DVector::from_column_slice(s.singular_values.as_slice()),
         }
     } else {
@@ -64,7 +78,11 @@ pub fn svd_with(j: &DMatrix<f64>, want_v: bool) -> Result<FullSvd, Error> {
     Ok(FullSvd {
         u: complete_basis(&u_sorted),
         sigma,
-        v: if want_v { complete_basis(&v_sorted) } else { v_sorted },
+        v: if want_v {
+            complete_basis(&v_sorted)
+        } else {
+            v_sorted
+        },
     })
 }
 
@@ -153,7 +171,9 @@ impl Measures {
         let s_min = sigma.last().copied().unwrap_or(0.0);
         let w: f64 = sigma.iter().product();
         let isotropy = if s_max > 0.0 { s_min / s_max } else { 0.0 };
-        let axes: Vec<Vec<f64>> = (0..m).map(|i| u.column(i).iter().copied().collect()).collect();
+        let axes: Vec<Vec<f64>> = (0..m)
+            .map(|i| u.column(i).iter().copied().collect())
+            .collect();
         let c_m = ellipsoid_volume_coefficient(m);
         let force_radii: Vec<Option<f64>> = sigma
             .iter()
@@ -192,10 +212,17 @@ impl Measures {
 pub fn measures(j: &DMatrix<f64>) -> Result<Measures, Error> {
     let (m, n) = j.shape();
     if m == 0 || n == 0 {
-        return Err(Error::SizeMismatch { what: "jacobian", input: 0, required: 1 });
+        return Err(Error::SizeMismatch {
+            what: "jacobian",
+            input: 0,
+            required: 1,
+        });
     }
     if let Some(index) = j.iter().position(|v| !v.is_finite()) {
-        return Err(Error::NonFinite { what: "jacobian", index });
+        return Err(Error::NonFinite {
+            what: "jacobian",
+            index,
+        });
     }
     if m > n {
         let svd = svd_with(j, false)?;
@@ -209,7 +236,10 @@ pub fn measures(j: &DMatrix<f64>) -> Result<Measures, Error> {
             a += v * v.transpose();
         }
         let eig = nalgebra::SymmetricEigen::new(a);
-        (eig.eigenvalues.iter().copied().collect(), DMatrix::from_column_slice(3, 3, eig.eigenvectors.as_slice()))
+        (
+            eig.eigenvalues.iter().copied().collect(),
+            DMatrix::from_column_slice(3, 3, eig.eigenvectors.as_slice()),
+        )
     } else {
         let eig = SymmetricEigen::new(j * j.transpose());
         (eig.eigenvalues.iter().copied().collect(), eig.eigenvectors)
@@ -234,7 +264,9 @@ pub fn measures_from_svd(svd: &FullSvd, n: usize) -> Measures {
 /// The rows of `j` listed in `rows` (Jun eq. 9: the task-oriented Jacobian).
 pub fn select_rows(j: &DMatrix<f64>, rows: &[usize]) -> Result<DMatrix<f64>, Error> {
     if rows.is_empty() {
-        return Err(Error::InvalidRows { reason: "at least one row is needed".into() });
+        return Err(Error::InvalidRows {
+            reason: "at least one row is needed".into(),
+        });
     }
     let mut seen = [false; 64];
     for &r in rows {
@@ -244,7 +276,9 @@ pub fn select_rows(j: &DMatrix<f64>, rows: &[usize]) -> Result<DMatrix<f64>, Err
             });
         }
         if seen[r] {
-            return Err(Error::InvalidRows { reason: format!("row {r} is repeated") });
+            return Err(Error::InvalidRows {
+                reason: format!("row {r} is repeated"),
+            });
         }
         seen[r] = true;
     }
@@ -276,9 +310,16 @@ pub fn subspaces(j: &DMatrix<f64>) -> Result<Subspaces, Error> {
 pub fn subspaces_from_svd(svd: &FullSvd) -> Subspaces {
     let (m, n) = (svd.u.nrows(), svd.v.nrows());
     let tol = default_tolerance(m, n, svd.sigma[0]);
-    let rank = svd.sigma.iter().take(m.min(n)).filter(|&&s| s > tol).count();
+    let rank = svd
+        .sigma
+        .iter()
+        .take(m.min(n))
+        .filter(|&&s| s > tol)
+        .count();
     let cols = |mat: &DMatrix<f64>, range: std::ops::Range<usize>| -> Vec<Vec<f64>> {
-        range.map(|i| mat.column(i).iter().copied().collect()).collect()
+        range
+            .map(|i| mat.column(i).iter().copied().collect())
+            .collect()
     };
     Subspaces {
         rank,

@@ -14,7 +14,7 @@ pub mod polytope;
 pub use dual::{dual_measures, dual_shape_matrix};
 pub use jlm::{jlm, jlm_gradient};
 pub use measures::{
-    Ellipsoid, FullSvd, Measures, Subspaces, full_svd, measures, measures_from_svd, select_rows, subspaces,
-    subspaces_from_svd, svd_with,
+    Ellipsoid, FullSvd, Measures, Subspaces, full_svd, measures, measures_from_svd, select_rows,
+    subspaces, subspaces_from_svd, svd_with,
 };
 pub use polytope::{Polytope, convex_hull, dual_velocity_polytope, velocity_polytope};

@@ -6,6 +6,7 @@
 //! * [`api`]: HTTP handlers and their wire types.
 //! * [`robots`]: built-in model registry and `"robot"` field resolution.
 //! * [`json`]: the JSON extractor whose rejections are JSON errors.
+//! * [`protocol`]: WebSocket wire types (the page contract).
 //! * [`error`]: the one HTTP error type.
 //! * [`assets`]: the embedded web page and vendored libraries.
 
@@ -15,6 +16,7 @@ pub mod assets;
 pub mod config;
 pub mod error;
 pub mod json;
+pub mod protocol;
 pub mod robots;
 
 use std::future::Future;

@@ -1,0 +1,305 @@
+//! WebSocket wire types of `/ws/sessions/{id}` — the contract between the server and the
+//! page. Explicit types, `#[serde(tag = "type")]`, never the core's internal structs; parse
+//! and validate at the edge into typed inputs.
+//!
+//! Client → server: [`ClientMessage`]. Server → client: a one-time [`Hello`], then a
+//! [`StateFrame`] at the frame rate (latest state wins: a slow client skips frames), plus
+//! [`ServerMessage::Error`], [`ServerMessage::Message`] and [`ServerMessage::Pong`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::api::wire::PoseOut;
+
+/// Largest WebSocket message accepted from a client (bytes); larger closes with 1008.
+pub const MAX_CLIENT_MESSAGE_BYTES: usize = 16 * 1024;
+
+/// Per-arm stick input: six axes and a grip, each in [−1, 1].
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ArmAxes {
+    /// Joint mode: axis i drives joint i's valve (swing, shoulder, elbow, pitch, yaw, rotate).
+    /// Cartesian mode: end-effector [vx, vy, vz, wx, wy, wz] as fractions of the maximum speed.
+    #[serde(default)]
+    pub axes: Vec<f64>,
+    /// Jaw: +1 opens, −1 closes.
+    #[serde(default)]
+    pub grip: f64,
+}
+
+/// Both arms' sticks.
+#[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ArmsAxes {
+    /// Left arm (index 0).
+    #[serde(default)]
+    pub left: Option<ArmAxes>,
+    /// Right arm (index 1).
+    #[serde(default)]
+    pub right: Option<ArmAxes>,
+}
+
+/// Joint or Cartesian teleoperation (Lim §4.1 "control mode").
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ControlMode {
+    /// Each axis drives one joint's valve.
+    #[default]
+    Joint,
+    /// Axes command end-effector velocity; redundancy resolution picks joint velocities.
+    Cartesian,
+}
+
+/// Open-loop or closed-loop cooperative control (Lim case studies 3 and 4).
+#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum ControlMethod {
+    /// Each input drives a valve.
+    #[default]
+    Open,
+    /// The operator commands object motion; a controller shares the load (both jaws holding).
+    Closed,
+}
+
+/// Everything a client may send.
+#[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ClientMessage {
+    /// Stick input, sent at a steady rate with increasing `seq`.
+    Input {
+        /// Sequence number, echoed as `input_seq` in state frames once applied.
+        seq: u64,
+        /// Per-arm axes and grip.
+        #[serde(default)]
+        arms: ArmsAxes,
+        /// Closed loop: commanded object twist [vx, vy, vz, wx, wy, wz] as fractions of the
+        /// controller's maximum speeds, each in [−1, 1].
+        #[serde(default)]
+        object: Option<Vec<f64>>,
+    },
+    /// Change settings; absent fields are unchanged.
+    Settings {
+        /// Joint or Cartesian.
+        #[serde(default)]
+        control_mode: Option<ControlMode>,
+        /// Open or closed loop.
+        #[serde(default)]
+        control_method: Option<ControlMethod>,
+        /// Arm speed in (0, 1] (Lim Fig. 4-3).
+        #[serde(default)]
+        arm_speed: Option<f64>,
+    },
+    /// Back to the initial position (Lim §4.1 "Initial Position").
+    Reset,
+    /// Pause the simulation clock.
+    Pause,
+    /// Resume it.
+    Resume,
+    /// Open both jaws (drop the object).
+    Release,
+    /// Latency probe: answered by a `pong` with the same `t`.
+    Ping {
+        /// Client timestamp (any unit; echoed).
+        t: f64,
+    },
+}
+
+/// Current settings of a session.
+#[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
+pub struct Settings {
+    /// Joint or Cartesian.
+    pub control_mode: ControlMode,
+    /// Open or closed loop.
+    pub control_method: ControlMethod,
+    /// Arm speed in (0, 1].
+    pub arm_speed: f64,
+}
+
+impl Default for Settings {
+    fn default() -> Self {
+        Settings { control_mode: ControlMode::Joint, control_method: ControlMethod::Open, arm_speed: 1.0 }
+    }
+}
+
+/// One arm as the page draws it.
+#[derive(Debug, Clone, Serialize)]
+pub struct ArmModelOut {
+    /// The model in the inline-model schema (DH table, limits, velocities).
+    pub model: seaarms_core::ModelSpec,
+    /// Base pose in the world frame.
+    pub base: PoseOut,
+}
+
+/// The object as the page draws it.
+#[derive(Debug, Clone, Serialize)]
+pub struct ObjectModelOut {
+    /// Box size [x, y, z] (m).
+    pub size_m: [f64; 3],
+    /// Mass (kg).
+    pub mass_kg: f64,
+}
+
+/// First message on every connection.
+#[derive(Debug, Clone, Serialize)]
+pub struct Hello {
+    /// Session id.
+    pub session: String,
+    /// `trainee` (may control) or `observer` (read-only).
+    pub role: &'static str,
+    /// Left and right arm models with their bases.
+    pub arms: [ArmModelOut; 2],
+    /// The object.
+    pub object: ObjectModelOut,
+    /// Height of the seabed surface (m, world z).
+    pub seabed_z_m: f64,
+    /// Current settings.
+    pub settings: Settings,
+    /// Scenario the session was created with.
+    pub scenario: String,
+    /// State frames per second.
+    pub frame_hz: u32,
+}
+
+/// Ellipsoid radii (m/s) along unit axes, world frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct EllipsoidFrame {
+    /// Semi-axes.
+    pub radii: [f64; 3],
+    /// Unit directions (one per radius).
+    pub axes: [[f64; 3]; 3],
+}
+
+/// Translational manipulability measures.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeasuresFrame {
+    /// √det(JJᵀ).
+    pub yoshikawa: f64,
+    /// σmin/σmax.
+    pub isotropy: f64,
+    /// Yoshikawa × isotropy (Lim eq. 4.1).
+    pub hong: f64,
+    /// σmax/σmin; null at a singularity.
+    pub condition_number: Option<f64>,
+    /// Joint-limit measure (Jun eq. 16); absent for the dual ellipsoid.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub jlm: Option<f64>,
+}
+
+/// One arm in a state frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct ArmFrame {
+    /// Joint angles (rad).
+    pub q: [f64; 6],
+    /// Joint velocities (rad/s).
+    pub qd: [f64; 6],
+    /// Inlet line pressures (Pa).
+    pub p_in: [f64; 6],
+    /// Outlet line pressures (Pa).
+    pub p_out: [f64; 6],
+    /// Jaw opening (m).
+    pub jaw_opening_m: f64,
+    /// The jaw holds the object.
+    pub holding: bool,
+    /// The jaw touches the object.
+    pub contact: bool,
+    /// End-effector pose, world.
+    pub pose: PoseOut,
+    /// Joint frames after their motion, world (for drawing the links).
+    pub joint_frames: Vec<PoseOut>,
+    /// Translational manipulability ellipsoid at the end-effector, world.
+    pub ellipsoid: EllipsoidFrame,
+    /// Its measures.
+    pub measures: MeasuresFrame,
+    /// Contact force (N) and torque (N·m) on the object, world.
+    pub contact_force_n: [f64; 3],
+    /// Contact torque (N·m).
+    pub contact_torque_nm: [f64; 3],
+    /// Relief valve open, per actuator.
+    pub relief_open: [bool; 6],
+}
+
+/// The dual-arm ellipsoid (Lim eq. 3.68), present while both jaws hold the object.
+#[derive(Debug, Clone, Serialize)]
+pub struct DualFrame {
+    /// Ellipsoid at the object, world.
+    pub ellipsoid: EllipsoidFrame,
+    /// Its measures.
+    pub measures: MeasuresFrame,
+}
+
+/// The object in a state frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct ObjectFrame {
+    /// Pose, world.
+    pub pose: PoseOut,
+    /// Linear velocity (m/s).
+    pub velocity: [f64; 3],
+}
+
+/// A state frame (server → client at the frame rate).
+#[derive(Debug, Clone, Serialize)]
+pub struct StateFrame {
+    /// Simulated time (s).
+    pub t: f64,
+    /// Frame sequence number (gaps = frames this client skipped).
+    pub seq: u64,
+    /// Last input `seq` applied.
+    pub input_seq: u64,
+    /// Clock paused.
+    pub paused: bool,
+    /// Current settings.
+    pub settings: Settings,
+    /// Left and right arm.
+    pub arms: ArmsFrame,
+    /// Dual-arm ellipsoid, when both jaws hold the object.
+    pub dual: Option<DualFrame>,
+    /// The object.
+    pub object: ObjectFrame,
+    /// `free`, `one_on_surface`, `one_lifted`, `one_holding_other_contact`, `both_holding`.
+    pub grasp: &'static str,
+    /// Internal force (N) on the object (Lim eq. 3.47).
+    pub internal_force_n: [f64; 3],
+    /// Internal torque (N·m).
+    pub internal_torque_nm: [f64; 3],
+    /// Relief-valve openings since reset (overload events).
+    pub relief_events: u64,
+    /// Active warnings: `near_singularity:left`, `near_joint_limit:right:3`, `relief:left:2`, …
+    pub warnings: Vec<String>,
+    /// Active faults, as instructors set them.
+    pub faults: Vec<String>,
+}
+
+/// Left and right arm frames.
+#[derive(Debug, Clone, Serialize)]
+pub struct ArmsFrame {
+    /// Left arm.
+    pub left: ArmFrame,
+    /// Right arm.
+    pub right: ArmFrame,
+}
+
+/// Everything the server sends.
+#[derive(Debug, Clone, Serialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ServerMessage {
+    /// Once, first.
+    Hello(Box<Hello>),
+    /// At the frame rate.
+    State(Box<StateFrame>),
+    /// A message was refused or adjusted; the session keeps running.
+    Error {
+        /// What was wrong.
+        message: String,
+    },
+    /// An instructor's message to the trainee.
+    Message {
+        /// Who sent it.
+        from: String,
+        /// Text.
+        text: String,
+    },
+    /// Answer to a ping.
+    Pong {
+        /// The ping's timestamp.
+        t: f64,
+    },
+}

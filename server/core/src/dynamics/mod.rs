@@ -132,6 +132,10 @@ pub struct DynData {
     pub comp_first: Vec<Vector3<f64>>,
     /// Composite inertia of links i..n about the base origin, base frame (kg·m²) (CRBA).
     pub comp_inertia: Vec<Matrix3<f64>>,
+    /// Joint axes, base frame (CRBA scratch).
+    pub axes: Vec<Vector3<f64>>,
+    /// Joint origins, base frame (CRBA scratch).
+    pub origins: Vec<Vector3<f64>>,
     /// Joint-space mass matrix H, n×n (kg·m² / kg), filled by [`crba`].
     pub mass_matrix: DMatrix<f64>,
 }
@@ -149,6 +153,8 @@ impl DynData {
             comp_mass: vec![0.0; n],
             comp_first: vec![Vector3::zeros(); n],
             comp_inertia: vec![Matrix3::zeros(); n],
+            axes: vec![Vector3::zeros(); n],
+            origins: vec![Vector3::zeros(); n],
             mass_matrix: DMatrix::zeros(n, n),
         }
     }
@@ -256,6 +262,8 @@ pub fn crba(model: &Model, inertials: &Inertials, kin: &KinData, data: &mut DynD
     let mut i_acc = Matrix3::zeros();
     for i in (0..n).rev() {
         let frame = &kin.joint_frames[i];
+        data.axes[i] = joint_axis(model, kin, i);
+        data.origins[i] = frame.translation.vector;
         let link = &inertials.links[i];
         let c = frame.transform_point(&link.com_m.into()).coords;
         let rot = frame.rotation.to_rotation_matrix();
@@ -270,8 +278,8 @@ pub fn crba(model: &Model, inertials: &Inertials, kin: &KinData, data: &mut DynD
         data.comp_inertia[i] = i_acc;
     }
     for j in 0..n {
-        let zj = joint_axis(model, kin, j);
-        let pj = kin.joint_frames[j].translation.vector;
+        let zj = data.axes[j];
+        let pj = data.origins[j];
         let (m, h, io) = (data.comp_mass[j], data.comp_first[j], data.comp_inertia[j]);
         // Rate of momentum of the composite body: force f, moment about the base origin n0.
         let (f, n0) = match model.joints[j].kind {
@@ -286,8 +294,8 @@ pub fn crba(model: &Model, inertials: &Inertials, kin: &KinData, data: &mut DynD
             JointKind::Prismatic => (zj * m, h.cross(&zj)),
         };
         for i in 0..=j {
-            let zi = joint_axis(model, kin, i);
-            let pi = kin.joint_frames[i].translation.vector;
+            let zi = data.axes[i];
+            let pi = data.origins[i];
             let hij = match model.joints[i].kind {
                 JointKind::Revolute => zi.dot(&(n0 - pi.cross(&f))),
                 JointKind::Prismatic => zi.dot(&f),

@@ -94,6 +94,10 @@ pub fn seabed_wrench(p: &ObjectParams, pose: &Isometry3<f64>, v: &Vector3<f64>, 
     let mut f = Vector3::zeros();
     let mut m = Vector3::zeros();
     let mut normal = 0.0;
+    // Quick reject: the whole box (bounding sphere) is above the seabed.
+    if pose.translation.vector.z - 0.5 * p.size_m.norm() > p.seabed_z_m {
+        return (Vector6::zeros(), 0.0);
+    }
     for c in p.corners() {
         let r = pose.rotation * c;
         let z = pose.translation.vector.z + r.z;

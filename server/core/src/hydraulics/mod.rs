@@ -334,6 +334,17 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
         let (qr, dqr) = if over > 0.0 { (hp.relief_gain * over, hp.relief_gain) } else { (0.0, 0.0) };
         (qv - ch.leak * (p - ch.other) - qr - ch.piston, dqv - ch.leak - dqr)
     };
+    // Closed valve: g is linear (piston, leakage and relief only): closed form.
+    if ch.s == 0.0 {
+        let k = ch.c * ch.leak;
+        let mut p = (ch.p0 + ch.c * (ch.leak * ch.other - ch.piston)) / (1.0 + k);
+        if p > hp.relief_pa {
+            let kr = ch.c * hp.relief_gain;
+            p = (ch.p0 + ch.c * (ch.leak * ch.other - ch.piston) + kr * hp.relief_pa) / (1.0 + k + kr);
+        }
+        let p = p.max(0.0);
+        return (p, p > hp.relief_pa);
+    }
     let (g0, _) = g(0.0);
     let r0 = -ch.p0 - ch.c * g0;
     if r0 >= 0.0 {
@@ -341,10 +352,18 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
     }
     let mut lo = 0.0;
     let mut hi = (ch.p0 + ch.c * g0).max(0.0) + 1.0;
-    let mut p = ch.p0.clamp(lo, hi);
-    for _ in 0..30 {
+    // Start from the explicit-Euler estimate (exact when the flows barely change).
+    let (gs, _) = g(ch.p0);
+    let mut p = ch.p0 + ch.c * gs;
+    if !(p > lo && p < hi) {
+        p = ch.p0.clamp(lo, hi);
+    }
+    for _ in 0..40 {
         let (gp, dg) = g(p);
         let r = p - ch.p0 - ch.c * gp;
+        if r.abs() < 0.1 {
+            break;
+        }
         if r > 0.0 {
             hi = p;
         } else {
@@ -355,9 +374,8 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
         if !(next > lo && next < hi) {
             next = 0.5 * (lo + hi);
         }
-        let step = (next - p).abs();
         p = next;
-        if step < 1e-3 || hi - lo < 1e-3 {
+        if hi - lo < 0.1 {
             break;
         }
     }

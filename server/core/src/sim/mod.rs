@@ -41,6 +41,9 @@ pub const LEFT: usize = 0;
 pub const RIGHT: usize = 1;
 
 type M12 = SMatrix<f64, 12, 12>;
+
+/// Overtravel beyond a joint limit at which q is clamped (rad): 0.1.
+const HARD_STOP_RAD: f64 = 0.1;
 type V12 = SVector<f64, 12>;
 
 /// Integration parameters (each default in its doc).
@@ -65,19 +68,26 @@ pub struct StepParams {
     /// Grasp constraint compliance (s²/kg-like regularization of the constraint matrix): 1e-7.
     /// Keeps the solve well posed near singular postures.
     pub constraint_compliance: f64,
+    /// Joint end-stop stiffness (N·m/rad): 1e6 — the cylinder bottoming out; a stop taking
+    /// the full 5 kN·m shoulder torque is penetrated by 5 mrad. Treated implicitly.
+    pub stop_stiffness: f64,
+    /// Joint end-stop damping (N·m·s/rad): 5e3. Treated implicitly.
+    pub stop_damping: f64,
 }
 
 impl Default for StepParams {
     fn default() -> Self {
         StepParams {
             dt_s: 1.0e-3,
-            substeps: 8,
+            substeps: 4,
             gravity: Vector3::new(0.0, 0.0, -9.81),
             buoyancy: false,
             water_density_kgm3: 1025.0,
             joint_drag: 0.0,
             constraint_omega: 40.0,
             constraint_compliance: 1.0e-7,
+            stop_stiffness: 1.0e6,
+            stop_damping: 5.0e3,
         }
     }
 }
@@ -623,6 +633,11 @@ impl Simulation {
         let mut damp = [[0.0; N_ACT]; 2];
         let mut y = [Matrix6::zeros(); 2];
         let mut jdqd = [Vector6::zeros(); 2];
+        // Actuator coordinate x, Ĵ and q at the start of the step; within the step
+        // x = x₀ + Ĵ·(q − q₀) (the linkage curvature changes x by < 1 µm over 1 ms).
+        let mut x0 = [[0.0; N_ACT]; 2];
+        let mut jhat = [[0.0; N_ACT]; 2];
+        let q0 = [self.state.arms[0].q, self.state.arms[1].q];
         for i in 0..2 {
             let ap = &self.params.arms[i];
             let model = &self.models[i];
@@ -643,9 +658,16 @@ impl Simulation {
                     m[(r, c)] = w.dynd.mass_matrix[(r, c)];
                 }
                 let act = &ap.hydraulics.actuators[r];
-                let (_, jh) = act.linkage.coordinate(a.q[r]);
+                let (x, jh) = act.linkage.coordinate(a.q[r]);
+                x0[i][r] = x;
+                jhat[i][r] = jh;
                 damp[i][r] = act.damping * jh * jh + 2.0 * sp.joint_drag * a.qd[r].abs();
                 m[(r, r)] += h * damp[i][r];
+                let lim = model.joints[r].limits;
+                if a.q[r] < lim[0] || a.q[r] > lim[1] {
+                    // End stop engaged at the start of the step: implicit spring-damper.
+                    m[(r, r)] += h * sp.stop_damping + h * h * sp.stop_stiffness;
+                }
                 bias[i][r] = tau[r] + sp.joint_drag * a.qd[r] * a.qd[r].abs() - 2.0 * sp.joint_drag * a.qd[r].abs() * a.qd[r];
             }
             chol[i] = m.cholesky();
@@ -715,7 +737,8 @@ impl Simulation {
                 let mut rhs = Vector6::zeros();
                 for j in 0..N_ACT {
                     let act = &hp.actuators[j];
-                    let (x, jh) = act.linkage.coordinate(a.q[j]);
+                    let jh = jhat[i][j];
+                    let x = x0[i][j] + jh * (a.q[j] - q0[i][j]);
                     let xd = jh * a.qd[j];
                     let leak = finite_or(f.leak_m3_s_pa[j], 0.0).clamp(0.0, 1e-8);
                     let fl = hydraulics::update_chambers(act, hp, supply, beta, leak, a.spool[j], x, xd, h, &mut a.p_in[j], &mut a.p_out[j]);
@@ -723,6 +746,11 @@ impl Simulation {
                     let t = jh * (act.area_in * a.p_in[j] - act.area_out * a.p_out[j]);
                     a.torque[j] = t - damp[i][j] * a.qd[j];
                     rhs[j] = t - bias[i][j] - damp[i][j] * a.qd[j];
+                    let lim = self.models[i].joints[j].limits;
+                    let pen = if a.q[j] < lim[0] { a.q[j] - lim[0] } else if a.q[j] > lim[1] { a.q[j] - lim[1] } else { 0.0 };
+                    if pen != 0.0 {
+                        rhs[j] -= sp.stop_stiffness * pen + sp.stop_damping * a.qd[j];
+                    }
                 }
                 if let Some(ch) = &chol[i] {
                     qdd_free[i] = ch.solve(&rhs);
@@ -765,12 +793,14 @@ impl Simulation {
                 for j in 0..N_ACT {
                     a.qd[j] += h * qdd_free[i][j];
                     a.q[j] += h * a.qd[j];
+                    // Hard backstop far beyond the elastic end stop (never reached in
+                    // normal use): keeps q bounded whatever happens.
                     let lim = model.joints[j].limits;
-                    if a.q[j] < lim[0] {
-                        a.q[j] = lim[0];
+                    if a.q[j] < lim[0] - HARD_STOP_RAD {
+                        a.q[j] = lim[0] - HARD_STOP_RAD;
                         a.qd[j] = a.qd[j].max(0.0);
-                    } else if a.q[j] > lim[1] {
-                        a.q[j] = lim[1];
+                    } else if a.q[j] > lim[1] + HARD_STOP_RAD {
+                        a.q[j] = lim[1] + HARD_STOP_RAD;
                         a.qd[j] = a.qd[j].min(0.0);
                     }
                 }

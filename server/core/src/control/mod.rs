@@ -22,11 +22,12 @@ pub struct ControlParams {
     pub servo_kp: f64,
     /// Largest tracking error the servo integrator may build (rad): 0.2 (anti-windup).
     pub servo_max_error_rad: f64,
-    /// Object pose gain of the cooperative controller (1/s): 2.
+    /// Object pose gain of the cooperative controller (1/s): 1.5 (2 and above excite a slow limit
+    /// cycle with the lightly damped oil-column resonance while holding).
     pub object_kp: f64,
-    /// Internal-force admittance, translation (m/s per N): 2·10⁻⁵ (1 kN → 2 cm/s back-off).
+    /// Internal-force admittance, translation (m/s per N): 1·10⁻⁵ (1 kN → 1 cm/s back-off).
     pub internal_admittance_lin: f64,
-    /// Internal-torque admittance, rotation (rad/s per N·m): 2·10⁻⁴.
+    /// Internal-torque admittance, rotation (rad/s per N·m): 1·10⁻⁴.
     pub internal_admittance_rot: f64,
     /// Damping of the damped-least-squares inverse Jacobian (m): 0.02.
     pub dls_damping: f64,
@@ -41,9 +42,9 @@ impl Default for ControlParams {
         ControlParams {
             servo_kp: 5.0,
             servo_max_error_rad: 0.2,
-            object_kp: 2.0,
-            internal_admittance_lin: 2.0e-5,
-            internal_admittance_rot: 2.0e-4,
+            object_kp: 1.5,
+            internal_admittance_lin: 1.0e-5,
+            internal_admittance_rot: 1.0e-4,
             dls_damping: 0.02,
             max_object_speed_m_s: 0.2,
             max_object_rate_rad_s: 0.5,

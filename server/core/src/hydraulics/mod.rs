@@ -175,8 +175,10 @@ impl HydraulicParams {
     ///   so the gain puts their geometric mean on the nominal speed.
     /// * Cylinder pins (shoulder, elbow, pitch): r_a = 0.35/0.30/0.25 m, r_b = 0.10/0.09/0.06 m,
     ///   φ = 90° at mid-range (largest lever where the arm works most). Assumed; Lim prints none.
-    /// * Dead volume 0.15 L per side (≈ 3 m of 3/8" hose); damping 2·10⁴ N·s/m for cylinders
-    ///   (README range 10³–10⁵), 200/50/5 N·m·s/rad for swing/yaw/rotate.
+    /// * Dead volume 0.15 L per side (≈ 3 m of 3/8" hose); damping 5·10⁴ N·s/m for cylinders
+    ///   (README range 10³–10⁵; the upper half, because a closed-centre valve adds no damping and
+    ///   the cooperative loop needs the oil-column resonance damped), 200/50/5 N·m·s/rad for
+    ///   swing/yaw/rotate.
     pub fn magnum(model: &Model, inertials: &Inertials) -> Result<HydraulicParams, Error> {
         if model.dof() != N_ACT {
             return Err(Error::InvalidModel { reason: "Magnum hydraulics need a 6-joint model".into() });
@@ -196,7 +198,7 @@ impl HydraulicParams {
             *gj -= col[2] * (-9.81 * MAGNUM_LIFT_KG);
         }
         let pins: [Option<(f64, f64)>; N_ACT] = [None, Some((0.35, 0.10)), Some((0.30, 0.09)), Some((0.25, 0.06)), None, None];
-        let damping = [200.0, 2.0e4, 2.0e4, 2.0e4, 50.0, 5.0];
+        let damping = [200.0, 5.0e4, 5.0e4, 5.0e4, 50.0, 5.0];
         let mut actuators = [ActuatorParams {
             linkage: Linkage::Rotary,
             area_in: 0.0,

@@ -169,7 +169,7 @@ pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Err
             segments.push(Segment::open("A", 4.0, ArmCommand::JointTarget { q: at, jaw: open }, rest));
             segments.push(Segment::open("B", 1.5, ArmCommand::jaw(close), rest));
             segments.push(Segment::open("B", 3.5, rest, rest));
-            segments.push(Segment::open("C", 2.0, ArmCommand::valve(1, 0.4, 0.0), rest));
+            segments.push(Segment::open("C", 2.0, ArmCommand::valve(1, 0.3, 0.0), rest));
             segments.push(Segment::open("C", 4.0, rest, rest));
             segments.push(Segment::open("D", 1.0, ArmCommand::jaw(open), rest));
             segments.push(Segment::open("D", 4.0, rest, rest));

@@ -16,3 +16,4 @@ pub(crate) fn all_builtin() -> Vec<Model> {
 }
 
 pub(crate) mod scenario_util;
+pub(crate) mod rng;

@@ -62,7 +62,11 @@ fn bench_step(c: &mut Criterion) {
         })
     });
     let mut coop = base.clone();
-    let lift = Input { method: ControlMethod::ClosedLoop, object_velocity: [0.0, 0.0, 0.02, 0.0, 0.0, 0.0], ..Input::default() };
+    let lift = Input {
+        method: ControlMethod::ClosedLoop,
+        object_velocity: [0.0, 0.0, 0.02, 0.0, 0.0, 0.0],
+        ..Input::default()
+    };
     c.bench_function("step_closed_loop_cooperative", |b| {
         b.iter(|| {
             if coop.time_s() > base.time_s() + 5.0 {

@@ -65,12 +65,17 @@ pub struct ScenarioSummary {
 
 /// (name, description) of every scenario.
 pub fn list_scenarios() -> Vec<(String, String)> {
-    SCENARIOS.iter().map(|(n, d)| (n.to_string(), d.to_string())).collect()
+    SCENARIOS
+        .iter()
+        .map(|(n, d)| (n.to_string(), d.to_string()))
+        .collect()
 }
 
 fn magnum() -> Result<Model, ScenarioError> {
-    let text = robots::builtin_text("magnum").ok_or_else(|| ScenarioError::Model("magnum missing".into()))?;
-    let spec: ModelSpec = serde_json::from_str(text).map_err(|e| ScenarioError::Model(e.to_string()))?;
+    let text = robots::builtin_text("magnum")
+        .ok_or_else(|| ScenarioError::Model("magnum missing".into()))?;
+    let spec: ModelSpec =
+        serde_json::from_str(text).map_err(|e| ScenarioError::Model(e.to_string()))?;
     Ok(Model::from_spec(&spec)?)
 }
 
@@ -98,7 +103,9 @@ pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioErr
     if let Some(e) = err {
         return Err(e.into());
     }
-    let bytes = w.into_inner().map_err(|e| ScenarioError::Csv(e.into_error().into()))?;
+    let bytes = w
+        .into_inner()
+        .map_err(|e| ScenarioError::Csv(e.into_error().into()))?;
     let text = String::from_utf8_lossy(&bytes).into_owned();
     Ok((
         ScenarioSummary {
@@ -115,7 +122,11 @@ pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioErr
             peak_grasp_error_m: s.peak_grasp_error_m,
             sim_seconds: s.sim_seconds,
             wall_seconds: wall,
-            realtime_factor: if wall > 0.0 { s.sim_seconds / wall } else { f64::INFINITY },
+            realtime_factor: if wall > 0.0 {
+                s.sim_seconds / wall
+            } else {
+                f64::INFINITY
+            },
             numerical_faults: s.numerical_faults,
             rows,
         },
@@ -130,6 +141,9 @@ mod tests {
     #[test]
     fn lists_four_and_rejects_unknown() {
         assert_eq!(list_scenarios().len(), 4);
-        assert!(matches!(run_scenario("nope"), Err(ScenarioError::Unknown(_))));
+        assert!(matches!(
+            run_scenario("nope"),
+            Err(ScenarioError::Unknown(_))
+        ));
     }
 }

@@ -13,11 +13,18 @@ fn hold_for_60_s(method: ControlMethod, lifted: bool) {
     // Run until both hold (and, if asked, through the closed-loop lift of stage C).
     run_while(&sc, &mut sim, |k, s| {
         let seg = &sc.segments[k];
-        if lifted { seg.stage != "D" } else { !(s.arm(0).holding && s.arm(1).holding) }
+        if lifted {
+            seg.stage != "D"
+        } else {
+            !(s.arm(0).holding && s.arm(1).holding)
+        }
     });
     assert_eq!(sim.grasp_state(), GraspState::BothHolding);
     let p0 = sim.object().pose.translation.vector;
-    let input = Input { method, ..Input::default() };
+    let input = Input {
+        method,
+        ..Input::default()
+    };
     let mut worst: f64 = 0.0;
     for _ in 0..60_000 {
         sim.step(&input);
@@ -26,12 +33,17 @@ fn hold_for_60_s(method: ControlMethod, lifted: bool) {
     let moved = (sim.object().pose.translation.vector - p0).norm();
     let cw = [sim.arm(0).contact_wrench, sim.arm(1).contact_wrench];
     let lift = cw[0][2] + cw[1][2];
-    println!("{method:?} lifted={lifted}: worst grasp error {worst:.2e} m, object moved {moved:.2e} m, jaws carry {lift:.1} N");
+    println!(
+        "{method:?} lifted={lifted}: worst grasp error {worst:.2e} m, object moved {moved:.2e} m, jaws carry {lift:.1} N"
+    );
     assert!(worst < 1e-3, "grasp drift {worst} m");
     assert!(sim.numerical_faults() == 0);
     if lifted {
         assert!(moved < 1e-3, "object moved {moved} m while held");
-        assert!((lift - 50.0 * 9.81).abs() < 5.0, "jaws carry {lift} N, object weighs 490.5 N");
+        assert!(
+            (lift - 50.0 * 9.81).abs() < 5.0,
+            "jaws carry {lift} N, object weighs 490.5 N"
+        );
         assert_eq!(sim.grasp_state(), GraspState::BothHolding);
     }
 }

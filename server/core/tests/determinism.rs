@@ -10,13 +10,27 @@ fn fingerprint(s: &Simulation) -> Vec<u64> {
     let mut v = Vec::new();
     for i in 0..2 {
         let a = s.arm(i);
-        for x in a.q.iter().chain(&a.qd).chain(&a.p_in).chain(&a.p_out).chain(&a.contact_wrench).chain(&a.spool) {
+        for x in
+            a.q.iter()
+                .chain(&a.qd)
+                .chain(&a.p_in)
+                .chain(&a.p_out)
+                .chain(&a.contact_wrench)
+                .chain(&a.spool)
+        {
             v.push(x.to_bits());
         }
         v.push(a.jaw_opening_m.to_bits());
     }
     let o = s.object();
-    for x in o.pose.translation.vector.iter().chain(o.pose.rotation.coords.iter()).chain(o.velocity.iter()) {
+    for x in o
+        .pose
+        .translation
+        .vector
+        .iter()
+        .chain(o.pose.rotation.coords.iter())
+        .chain(o.velocity.iter())
+    {
         v.push(x.to_bits());
     }
     v.extend(s.internal_wrench().iter().map(|x| x.to_bits()));
@@ -35,7 +49,11 @@ fn random_inputs(n: usize, seed: u64) -> Vec<Input> {
                 }
                 a.jaw = r.sym(1.0);
             }
-            cur.method = if r.next() < 0.5 { ControlMethod::OpenLoop } else { ControlMethod::ClosedLoop };
+            cur.method = if r.next() < 0.5 {
+                ControlMethod::OpenLoop
+            } else {
+                ControlMethod::ClosedLoop
+            };
             cur.speed_scale = 0.2 + 0.8 * r.next();
         }
         out.push(cur);
@@ -66,7 +84,11 @@ fn same_inputs_give_bit_identical_states() {
         let p = SimParams::case_study(&m, &m).expect("params");
         Simulation::new(m.clone(), m, p).expect("sim")
     };
-    assert_eq!(fingerprint(&a), fingerprint(&fresh), "reset differs from a fresh simulation");
+    assert_eq!(
+        fingerprint(&a),
+        fingerprint(&fresh),
+        "reset differs from a fresh simulation"
+    );
     for inp in &inputs {
         a.step(inp);
     }

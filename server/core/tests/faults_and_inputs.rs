@@ -22,7 +22,14 @@ fn non_finite_inputs_act_as_zero() {
     let mut a = sim();
     let mut b = sim();
     let mut bad = Input::default();
-    bad.arms[0].valves = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY, f64::NAN, f64::NAN, f64::NAN];
+    bad.arms[0].valves = [
+        f64::NAN,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::NAN,
+        f64::NAN,
+        f64::NAN,
+    ];
     bad.arms[1].jaw = f64::NAN;
     bad.object_velocity = [f64::NAN; 6];
     let good = Input::default();
@@ -32,7 +39,10 @@ fn non_finite_inputs_act_as_zero() {
     assert_eq!(a.arm(0).p_in, b.arm(0).p_in);
     // Non-finite speed scale stops everything.
     let mut c = sim();
-    let mut nan_speed = Input { speed_scale: f64::NAN, ..Input::default() };
+    let mut nan_speed = Input {
+        speed_scale: f64::NAN,
+        ..Input::default()
+    };
     nan_speed.arms[0].valves = [1.0; 6];
     run(&mut c, &nan_speed, 500);
     assert_eq!(c.arm(0).q, b.arm(0).q);
@@ -46,11 +56,17 @@ fn stuck_valve_moves_the_joint_without_command() {
     s.faults_mut(LEFT).stuck_valve[0] = Some(0.5);
     run(&mut s, &Input::default(), 500);
     let moved = s.arm(LEFT).q[0] - q0;
-    assert!(moved > 0.05, "stuck-open swing valve moved the joint {moved} rad in 0.5 s");
+    assert!(
+        moved > 0.05,
+        "stuck-open swing valve moved the joint {moved} rad in 0.5 s"
+    );
     s.faults_mut(LEFT).stuck_valve[0] = None;
     let q1 = s.arm(LEFT).q[0];
     run(&mut s, &Input::default(), 500);
-    assert!((s.arm(LEFT).q[0] - q1).abs() < 0.01, "cleared fault: joint stops");
+    assert!(
+        (s.arm(LEFT).q[0] - q1).abs() < 0.01,
+        "cleared fault: joint stops"
+    );
 }
 
 #[test]
@@ -63,7 +79,10 @@ fn supply_drop_slows_the_arm_and_leak_makes_it_drift() {
     run(&mut full, &inp, 500);
     run(&mut weak, &inp, 500);
     let (a, b) = (full.arm(LEFT).q[5], weak.arm(LEFT).q[5]);
-    assert!(b < 0.8 * a, "rotate with 1.89 MPa supply: {b} rad vs {a} rad");
+    assert!(
+        b < 0.8 * a,
+        "rotate with 1.89 MPa supply: {b} rad vs {a} rad"
+    );
 
     let mut leaky = sim();
     let q0 = leaky.arm(LEFT).q[1];
@@ -75,7 +94,10 @@ fn supply_drop_slows_the_arm_and_leak_makes_it_drift() {
     let mut tight = sim();
     run(&mut tight, &Input::default(), 3000);
     let still = (q0 - tight.arm(LEFT).q[1]).abs();
-    assert!(drift > 1e-3 && still < 1e-6, "leaking shoulder drifts {drift} rad in 3 s, tight one {still} rad");
+    assert!(
+        drift > 1e-3 && still < 1e-6,
+        "leaking shoulder drifts {drift} rad in 3 s, tight one {still} rad"
+    );
     assert_eq!(leaky.numerical_faults(), 0);
 }
 

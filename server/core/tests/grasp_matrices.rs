@@ -3,10 +3,15 @@
 //! internal part, and a pure squeeze is all internal. Plus the grasp-state colour code (§4.1).
 
 use nalgebra::{SVector, Vector3, Vector6};
-use seaarms_core::grasp::{GraspState, decompose, grasp_matrix, grasp_pinv_equal_share, internal_basis};
+use seaarms_core::grasp::{
+    GraspState, decompose, grasp_matrix, grasp_pinv_equal_share, internal_basis,
+};
 
 fn radii() -> [Vector3<f64>; 2] {
-    [Vector3::new(0.02, 0.15, 0.13), Vector3::new(-0.01, -0.15, 0.13)]
+    [
+        Vector3::new(0.02, 0.15, 0.13),
+        Vector3::new(-0.01, -0.15, 0.13),
+    ]
 }
 
 #[test]
@@ -27,7 +32,10 @@ fn decomposition_recomposes_contact_wrenches() {
     let fc = SVector::<f64, 12>::from_fn(|i, _| ((i * 7 + 3) % 11) as f64 * 37.0 - 150.0);
     let (fext, fint) = decompose(&r, &fc);
     let back = grasp_pinv_equal_share(&r) * fext + internal_basis(&r) * fint;
-    assert!((back - fc).abs().max() < 1e-9, "F_c = W⁺F_ext + V F_int (eq. 3.41)");
+    assert!(
+        (back - fc).abs().max() < 1e-9,
+        "F_c = W⁺F_ext + V F_int (eq. 3.41)"
+    );
     assert!((grasp_matrix(&r) * fc - fext).abs().max() < 1e-12);
     // Equal sharing of an external wrench has no internal part.
     let f = Vector6::new(10.0, -20.0, 490.5, 3.0, 4.0, -5.0);
@@ -50,13 +58,28 @@ fn pure_squeeze_is_internal_force() {
 #[test]
 fn grasp_state_colour_code() {
     use GraspState::*;
-    assert_eq!(GraspState::classify([false, false], [true, true], true), Free);
-    assert_eq!(GraspState::classify([false, true], [false, true], true), OneOnSurface);
+    assert_eq!(
+        GraspState::classify([false, false], [true, true], true),
+        Free
+    );
+    assert_eq!(
+        GraspState::classify([false, true], [false, true], true),
+        OneOnSurface
+    );
     assert_eq!(OneOnSurface.colour(), "black");
-    assert_eq!(GraspState::classify([true, false], [true, false], false), OneLifted);
+    assert_eq!(
+        GraspState::classify([true, false], [true, false], false),
+        OneLifted
+    );
     assert_eq!(OneLifted.colour(), "lightblue");
-    assert_eq!(GraspState::classify([false, true], [true, true], false), OneHoldingOtherContact);
+    assert_eq!(
+        GraspState::classify([false, true], [true, true], false),
+        OneHoldingOtherContact
+    );
     assert_eq!(OneHoldingOtherContact.colour(), "red");
-    assert_eq!(GraspState::classify([true, true], [true, true], false), BothHolding);
+    assert_eq!(
+        GraspState::classify([true, true], [true, true], false),
+        BothHolding
+    );
     assert_eq!(BothHolding.colour(), "yellow");
 }

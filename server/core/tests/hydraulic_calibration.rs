@@ -25,7 +25,7 @@ const MID: [f64; 6] = [0.0, 0.2618, -1.1345, 0.0, 0.0, 0.0];
 
 #[test]
 fn full_command_gives_nominal_speed_within_15_percent() {
-    for j in 0..6 {
+    for (j, &nominal) in MAGNUM_SPEEDS_DEG_S.iter().enumerate() {
         for dir in [1.0, -1.0] {
             let mut s = sim_with(MID, 0.0);
             let mut inp = Input::default();
@@ -38,9 +38,15 @@ fn full_command_gives_nominal_speed_within_15_percent() {
                 }
             }
             let speed = ((s.arm(LEFT).q[j] - q0) / 0.4).to_degrees();
-            let nominal = MAGNUM_SPEEDS_DEG_S[j];
-            println!("joint {} dir {dir:+}: {speed:.2} °/s (nominal {nominal})", j + 1);
-            assert!((speed * dir - nominal).abs() <= 0.15 * nominal, "joint {} dir {dir}: {speed} °/s vs {nominal}", j + 1);
+            println!(
+                "joint {} dir {dir:+}: {speed:.2} °/s (nominal {nominal})",
+                j + 1
+            );
+            assert!(
+                (speed * dir - nominal).abs() <= 0.15 * nominal,
+                "joint {} dir {dir}: {speed} °/s vs {nominal}",
+                j + 1
+            );
         }
     }
 }
@@ -61,7 +67,12 @@ fn hold(payload_kg: f64) -> (f64, f64, u64, f64) {
         }
     }
     let relief = s.params().arms[LEFT].hydraulics.relief_pa;
-    (z0 - s.end_effector(LEFT).translation.z, peak, s.arm(LEFT).relief_events, relief)
+    (
+        z0 - s.end_effector(LEFT).translation.z,
+        peak,
+        s.arm(LEFT).relief_events,
+        relief,
+    )
 }
 
 #[test]
@@ -69,15 +80,23 @@ fn holds_295_kg_at_full_extension_within_supply_pressure() {
     let (drop, peak, events, _) = hold(295.0);
     println!("295 kg: drop {drop:.5} m, peak {peak:.0} Pa, relief events {events}");
     assert!(drop.abs() < 0.005, "jaw dropped {drop} m");
-    assert!(peak <= 6.89e6 * 1.001, "peak line pressure {peak} above supply");
+    assert!(
+        peak <= 6.89e6 * 1.001,
+        "peak line pressure {peak} above supply"
+    );
     assert_eq!(events, 0);
 }
 
 #[test]
 fn cannot_hold_590_kg_relief_limits_pressure() {
     let (drop, peak, events, relief) = hold(590.0);
-    println!("590 kg: drop {drop:.4} m, peak {peak:.0} Pa (relief {relief:.0}), relief events {events}");
+    println!(
+        "590 kg: drop {drop:.4} m, peak {peak:.0} Pa (relief {relief:.0}), relief events {events}"
+    );
     assert!(drop > 0.05, "jaw dropped only {drop} m");
     assert!(events > 0);
-    assert!(peak <= relief * 1.02, "peak {peak} Pa above relief setting {relief}");
+    assert!(
+        peak <= relief * 1.02,
+        "peak {peak} Pa above relief setting {relief}"
+    );
 }

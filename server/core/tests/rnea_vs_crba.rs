@@ -25,7 +25,11 @@ fn postures(n: usize) -> Vec<[f64; 6]> {
         .map(|_| {
             core::array::from_fn(|j| {
                 let l = m.joints[j].limits;
-                let (lo, hi) = if l[0].is_finite() { (l[0], l[1]) } else { (-3.0, 3.0) };
+                let (lo, hi) = if l[0].is_finite() {
+                    (l[0], l[1])
+                } else {
+                    (-3.0, 3.0)
+                };
                 lo + (hi - lo) * next()
             })
         })
@@ -36,7 +40,10 @@ fn postures(n: usize) -> Vec<[f64; 6]> {
 fn rnea_columns_equal_crba_and_mass_matrix_is_spd() {
     let m = common::builtin("magnum");
     let inr = Inertials::magnum(&m).expect("inertials");
-    assert!((inr.total_mass_kg() - 71.0).abs() < 1e-9, "Lim Table 1-1: 71 kg in air");
+    assert!(
+        (inr.total_mass_kg() - 71.0).abs() < 1e-9,
+        "Lim Table 1-1: 71 kg in air"
+    );
     let mut kin = KinData::new(&m);
     let mut d = DynData::new(&m);
     for q in postures(50) {
@@ -47,13 +54,31 @@ fn rnea_columns_equal_crba_and_mass_matrix_is_spd() {
             let mut e = [0.0; 6];
             e[k] = 1.0;
             let mut tau = [0.0; 6];
-            rnea(&m, &inr, &kin, &[0.0; 6], &e, &Vector3::zeros(), 0.0, &mut tau, &mut d);
+            rnea(
+                &m,
+                &inr,
+                &kin,
+                &[0.0; 6],
+                &e,
+                &Vector3::zeros(),
+                0.0,
+                &mut tau,
+                &mut d,
+            );
             for r in 0..6 {
-                assert!((tau[r] - h[(r, k)]).abs() < 1e-9 * (1.0 + h[(r, k)].abs()), "H[{r},{k}]: RNEA {} CRBA {}", tau[r], h[(r, k)]);
+                assert!(
+                    (tau[r] - h[(r, k)]).abs() < 1e-9 * (1.0 + h[(r, k)].abs()),
+                    "H[{r},{k}]: RNEA {} CRBA {}",
+                    tau[r],
+                    h[(r, k)]
+                );
             }
         }
         assert!((&h - h.transpose()).abs().max() < 1e-12);
-        assert!(h.clone().cholesky().is_some(), "H must be positive definite at {q:?}");
+        assert!(
+            h.clone().cholesky().is_some(),
+            "H must be positive definite at {q:?}"
+        );
     }
 }
 
@@ -68,7 +93,9 @@ fn gravity_torques_equal_jacobian_transpose_statics() {
     for q in postures(20) {
         forward_kinematics(&m, &mut kin, &q);
         let mut g = [0.0; 6];
-        rnea(&m, &inr, &kin, &[0.0; 6], &[0.0; 6], &G, 0.0, &mut g, &mut d);
+        rnea(
+            &m, &inr, &kin, &[0.0; 6], &[0.0; 6], &G, 0.0, &mut g, &mut d,
+        );
         let mut statics = DVector::<f64>::zeros(6);
         for (i, link) in inr.links.iter().enumerate() {
             // Truncated chain 0..=i with the tool at link i's COM.
@@ -83,7 +110,12 @@ fn gravity_torques_equal_jacobian_transpose_statics() {
             }
         }
         for k in 0..6 {
-            assert!((g[k] - statics[k]).abs() < 1e-9 * (1.0 + g[k].abs()), "joint {k}: RNEA {} statics {}", g[k], statics[k]);
+            assert!(
+                (g[k] - statics[k]).abs() < 1e-9 * (1.0 + g[k].abs()),
+                "joint {k}: RNEA {} statics {}",
+                g[k],
+                statics[k]
+            );
         }
     }
 }
@@ -98,12 +130,18 @@ fn bias_acceleration_matches_finite_difference() {
         forward_kinematics(&m, &mut kin, &q);
         let jb = tool_bias_acceleration(&m, &kin, &qd, &[0.0; 6], &mut d);
         let eps = 1e-6;
-        let jv = |q: &[f64; 6]| -> DVector<f64> { jacobian_at(&m, q) * DVector::from_column_slice(&qd) };
+        let jv =
+            |q: &[f64; 6]| -> DVector<f64> { jacobian_at(&m, q) * DVector::from_column_slice(&qd) };
         let qp: [f64; 6] = core::array::from_fn(|k| q[k] + eps * qd[k]);
         let qm: [f64; 6] = core::array::from_fn(|k| q[k] - eps * qd[k]);
         let fd = (jv(&qp) - jv(&qm)) / (2.0 * eps);
         for r in 0..6 {
-            assert!((jb[r] - fd[r]).abs() < 1e-5, "row {r}: {} vs {}", jb[r], fd[r]);
+            assert!(
+                (jb[r] - fd[r]).abs() < 1e-5,
+                "row {r}: {} vs {}",
+                jb[r],
+                fd[r]
+            );
         }
     }
 }
@@ -116,7 +154,12 @@ fn energy(m: &seaarms_core::Model, inr: &Inertials, q: &[f64; 6], qd: &[f64; 6])
     crba(m, inr, &kin, &mut d);
     let v = DVector::from_column_slice(qd);
     let t = 0.5 * (v.transpose() * &d.mass_matrix * &v)[(0, 0)];
-    let u: f64 = inr.links.iter().enumerate().map(|(i, l)| l.mass_kg * 9.81 * kin.joint_frames[i].transform_point(&l.com_m.into()).z).sum();
+    let u: f64 = inr
+        .links
+        .iter()
+        .enumerate()
+        .map(|(i, l)| l.mass_kg * 9.81 * kin.joint_frames[i].transform_point(&l.com_m.into()).z)
+        .sum();
     t + u
 }
 
@@ -134,14 +177,19 @@ fn unactuated_arm_conserves_energy() {
         let h = d.mass_matrix.clone();
         let mut b = [0.0; 6];
         rnea(&m, &inr, &kin, qd, &[0.0; 6], &G, 0.0, &mut b, &mut d);
-        let x = h.cholesky().expect("spd").solve(&DMatrix::from_column_slice(6, 1, &b));
+        let x = h
+            .cholesky()
+            .expect("spd")
+            .solve(&DMatrix::from_column_slice(6, 1, &b));
         core::array::from_fn(|k| -x[k])
     };
     let mut q = [0.1, 0.6, -1.0, -0.3, 0.4, 0.2];
     let mut qd = [0.2, 0.0, 0.5, -0.3, 0.8, 1.5];
     let e0 = energy(&m, &inr, &q, &qd);
     let h = 1e-4;
-    let add = |a: &[f64; 6], b: &[f64; 6], s: f64| -> [f64; 6] { core::array::from_fn(|k| a[k] + s * b[k]) };
+    let add = |a: &[f64; 6], b: &[f64; 6], s: f64| -> [f64; 6] {
+        core::array::from_fn(|k| a[k] + s * b[k])
+    };
     for _ in 0..20000 {
         let k1q = qd;
         let k1v = acc(&q, &qd);
@@ -157,7 +205,10 @@ fn unactuated_arm_conserves_energy() {
         }
     }
     let e1 = energy(&m, &inr, &q, &qd);
-    assert!((e1 - e0).abs() < 1e-6 * e0.abs().max(1.0), "energy drift {e0} → {e1}");
+    assert!(
+        (e1 - e0).abs() < 1e-6 * e0.abs().max(1.0),
+        "energy drift {e0} → {e1}"
+    );
 }
 
 #[test]

@@ -13,19 +13,45 @@ use seaarms_core::sim::{ControlMethod, Input, Simulation};
 const STEPS: usize = 600_000; // 10 min at 1 ms
 
 fn check(s: &Simulation, what: &str) {
-    assert_eq!(s.numerical_faults(), 0, "{what}: rolled-back steps at t={}", s.time_s());
+    assert_eq!(
+        s.numerical_faults(),
+        0,
+        "{what}: rolled-back steps at t={}",
+        s.time_s()
+    );
     for i in 0..2 {
         let a = s.arm(i);
         let relief = s.params().arms[i].hydraulics.relief_pa;
         for j in 0..6 {
-            assert!(a.q[j].is_finite() && a.qd[j].abs() < 50.0, "{what}: arm {i} joint {j} q {} qd {}", a.q[j], a.qd[j]);
-            assert!(a.p_in[j] >= 0.0 && a.p_in[j] <= relief * 1.05, "{what}: P_in {}", a.p_in[j]);
-            assert!(a.p_out[j] >= 0.0 && a.p_out[j] <= relief * 1.05, "{what}: P_out {}", a.p_out[j]);
+            assert!(
+                a.q[j].is_finite() && a.qd[j].abs() < 50.0,
+                "{what}: arm {i} joint {j} q {} qd {}",
+                a.q[j],
+                a.qd[j]
+            );
+            assert!(
+                a.p_in[j] >= 0.0 && a.p_in[j] <= relief * 1.05,
+                "{what}: P_in {}",
+                a.p_in[j]
+            );
+            assert!(
+                a.p_out[j] >= 0.0 && a.p_out[j] <= relief * 1.05,
+                "{what}: P_out {}",
+                a.p_out[j]
+            );
         }
         assert!(a.contact_wrench.iter().all(|x| x.is_finite()));
     }
     let o = s.object();
-    assert!(o.pose.translation.vector.iter().all(|x| x.is_finite() && x.abs() < 10.0), "{what}: object at {:?}", o.pose.translation);
+    assert!(
+        o.pose
+            .translation
+            .vector
+            .iter()
+            .all(|x| x.is_finite() && x.abs() < 10.0),
+        "{what}: object at {:?}",
+        o.pose.translation
+    );
     assert!(o.velocity.norm() < 20.0);
 }
 
@@ -54,7 +80,12 @@ fn random_faults(s: &mut Simulation, r: &mut Rng) {
     }
 }
 
-fn soak(mut s: Simulation, seed: u64, what: &str, mut make: impl FnMut(&mut Rng, &Simulation) -> Input) {
+fn soak(
+    mut s: Simulation,
+    seed: u64,
+    what: &str,
+    mut make: impl FnMut(&mut Rng, &Simulation) -> Input,
+) {
     let mut r = Rng(seed);
     let mut inp = Input::default();
     for k in 0..STEPS {
@@ -82,7 +113,10 @@ fn soak(mut s: Simulation, seed: u64, what: &str, mut make: impl FnMut(&mut Rng,
 fn ten_minutes_open_loop_random_valves_and_jaws() {
     let (_, sim) = start("case3-dual-open-loop");
     soak(sim, 1, "open loop", |r, _| {
-        let mut inp = Input { speed_scale: 0.1 + 0.9 * r.next(), ..Input::default() };
+        let mut inp = Input {
+            speed_scale: 0.1 + 0.9 * r.next(),
+            ..Input::default()
+        };
         for a in inp.arms.iter_mut() {
             for v in a.valves.iter_mut() {
                 *v = r.sym(1.0);
@@ -109,9 +143,14 @@ fn ten_minutes_joint_velocity_servo() {
 #[test]
 fn ten_minutes_closed_loop_while_holding() {
     let (sc, mut sim) = start("case4-dual-closed-loop");
-    run_while(&sc, &mut sim, |_, s| !(s.arm(0).holding && s.arm(1).holding));
+    run_while(&sc, &mut sim, |_, s| {
+        !(s.arm(0).holding && s.arm(1).holding)
+    });
     soak(sim, 3, "closed loop", |r, _| {
-        let mut inp = Input { method: ControlMethod::ClosedLoop, ..Input::default() };
+        let mut inp = Input {
+            method: ControlMethod::ClosedLoop,
+            ..Input::default()
+        };
         for v in inp.object_velocity.iter_mut() {
             *v = r.sym(0.05);
         }

@@ -118,10 +118,17 @@ pub struct CoopInputs<'a> {
 /// `desired` is the controller's object pose reference (state), advanced by the commanded twist.
 /// Returns both arms' spool commands; if any exceeds ±1 both arms are scaled by the same factor
 /// so their motions stay consistent.
-pub fn cooperative(inp: &CoopInputs<'_>, desired: &mut Isometry3<f64>, dt_s: f64, p: &ControlParams) -> [[f64; N_ACT]; 2] {
+#[allow(clippy::needless_range_loop)]
+pub fn cooperative(
+    inp: &CoopInputs<'_>,
+    desired: &mut Isometry3<f64>,
+    dt_s: f64,
+    p: &ControlParams,
+) -> [[f64; N_ACT]; 2] {
     let tw = inp.twist;
     desired.translation.vector += Vector3::new(tw[0], tw[1], tw[2]) * dt_s;
-    desired.rotation = UnitQuaternion::from_scaled_axis(Vector3::new(tw[3], tw[4], tw[5]) * dt_s) * desired.rotation;
+    desired.rotation = UnitQuaternion::from_scaled_axis(Vector3::new(tw[3], tw[4], tw[5]) * dt_s)
+        * desired.rotation;
     let ep = desired.translation.vector - inp.object.translation.vector;
     let er = rotation_error(&desired.rotation, &inp.object.rotation);
     let v = Vector6::new(
@@ -144,7 +151,14 @@ pub fn cooperative(inp: &CoopInputs<'_>, desired: &mut Isometry3<f64>, dt_s: f64
         let f = Vector3::new(fext[0], fext[1], fext[2]) * 0.5;
         let m = Vector3::new(fext[3], fext[4], fext[5]) * 0.5 - inp.r[i].cross(&f);
         let c = inp.contact[i];
-        let excess = Vector6::new(c[0] - f.x, c[1] - f.y, c[2] - f.z, c[3] - m.x, c[4] - m.y, c[5] - m.z);
+        let excess = Vector6::new(
+            c[0] - f.x,
+            c[1] - f.y,
+            c[2] - f.z,
+            c[3] - m.x,
+            c[4] - m.y,
+            c[5] - m.z,
+        );
         let mut xd = wi.transpose() * v;
         for k in 0..3 {
             xd[k] -= p.internal_admittance_lin * excess[k];

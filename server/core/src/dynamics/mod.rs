@@ -38,8 +38,15 @@ impl LinkInertia {
         let c = (self.com_m * self.mass_kg + point_m * mass_kg) / m;
         let d1 = self.com_m - c;
         let d2 = point_m - c;
-        let pa = |d: &Vector3<f64>, mm: f64| (Matrix3::identity() * d.norm_squared() - d * d.transpose()) * mm;
-        LinkInertia { mass_kg: m, com_m: c, inertia_kgm2: self.inertia_kgm2 + pa(&d1, self.mass_kg) + pa(&d2, mass_kg), volume_m3: self.volume_m3 }
+        let pa = |d: &Vector3<f64>, mm: f64| {
+            (Matrix3::identity() * d.norm_squared() - d * d.transpose()) * mm
+        };
+        LinkInertia {
+            mass_kg: m,
+            com_m: c,
+            inertia_kgm2: self.inertia_kgm2 + pa(&d1, self.mass_kg) + pa(&d2, mass_kg),
+            volume_m3: self.volume_m3,
+        }
     }
 }
 
@@ -71,15 +78,29 @@ impl Inertials {
     /// COM is placed 60 % of the way to it (jaw mass forward).
     pub fn magnum(model: &Model) -> Result<Inertials, Error> {
         if model.dof() != MAGNUM_LINK_MASSES_KG.len() {
-            return Err(Error::InvalidModel { reason: "Magnum inertials need a 6-joint model".into() });
+            return Err(Error::InvalidModel {
+                reason: "Magnum inertials need a 6-joint model".into(),
+            });
         }
-        Ok(Self::rods(model, &MAGNUM_LINK_MASSES_KG, 0.06, MAGNUM_LINK_DENSITY_KGM3, "Lim Table 1-1 total mass 71 kg; split, COM and rod inertia assumed (see MAGNUM_LINK_MASSES_KG)"))
+        Ok(Self::rods(
+            model,
+            &MAGNUM_LINK_MASSES_KG,
+            0.06,
+            MAGNUM_LINK_DENSITY_KGM3,
+            "Lim Table 1-1 total mass 71 kg; split, COM and rod inertia assumed (see MAGNUM_LINK_MASSES_KG)",
+        ))
     }
 
     /// Each link as a solid cylinder of `radius_m` along its link vector (from the joint
     /// origin to the next joint's origin, or to the tool point for the last link), with
     /// the given masses and mean density (for the displaced volume).
-    pub fn rods(model: &Model, masses_kg: &[f64], radius_m: f64, density_kgm3: f64, source: &'static str) -> Inertials {
+    pub fn rods(
+        model: &Model,
+        masses_kg: &[f64],
+        radius_m: f64,
+        density_kgm3: f64,
+        source: &'static str,
+    ) -> Inertials {
         let n = model.dof();
         let links = (0..n)
             .map(|i| {
@@ -100,7 +121,12 @@ impl Inertials {
                 } else {
                     Matrix3::identity() * ia
                 };
-                LinkInertia { mass_kg: m, com_m: com, inertia_kgm2: inertia, volume_m3: m / density_kgm3 }
+                LinkInertia {
+                    mass_kg: m,
+                    com_m: com,
+                    inertia_kgm2: inertia,
+                    volume_m3: m / density_kgm3,
+                }
             })
             .collect();
         Inertials { links, source }
@@ -171,7 +197,14 @@ fn joint_axis(model: &Model, kin: &KinData, i: usize) -> Vector3<f64> {
 
 /// Forward pass shared by [`rnea`] and [`tool_bias_acceleration`]: link angular velocity and
 /// acceleration and joint-origin acceleration (base acceleration `a0`).
-fn forward_pass(model: &Model, kin: &KinData, qd: &[f64], qdd: &[f64], a0: Vector3<f64>, data: &mut DynData) {
+fn forward_pass(
+    model: &Model,
+    kin: &KinData,
+    qd: &[f64],
+    qdd: &[f64],
+    a0: Vector3<f64>,
+    data: &mut DynData,
+) {
     let mut w = Vector3::zeros();
     let mut wd = Vector3::zeros();
     let mut a = a0;
@@ -308,7 +341,13 @@ pub fn crba(model: &Model, inertials: &Inertials, kin: &KinData, data: &mut DynD
 
 /// Tool-point bias acceleration J̇(q,q̇)q̇ (6: linear, angular; base frame): the tool's
 /// acceleration when q̈ = 0, without gravity. Overwrites the forward-pass fields of `data`.
-pub fn tool_bias_acceleration(model: &Model, kin: &KinData, qd: &[f64], zero: &[f64], data: &mut DynData) -> [f64; 6] {
+pub fn tool_bias_acceleration(
+    model: &Model,
+    kin: &KinData,
+    qd: &[f64],
+    zero: &[f64],
+    data: &mut DynData,
+) -> [f64; 6] {
     let n = model.dof();
     forward_pass(model, kin, qd, zero, Vector3::zeros(), data);
     let p = kin.joint_frames[n - 1].translation.vector;

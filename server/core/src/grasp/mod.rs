@@ -53,7 +53,10 @@ impl ObjectParams {
         ObjectParams {
             mass_kg: 50.0,
             size_m: size,
-            handles_m: [Vector3::new(0.0, 0.15, 0.5 * size.z + 0.03), Vector3::new(0.0, -0.15, 0.5 * size.z + 0.03)],
+            handles_m: [
+                Vector3::new(0.0, 0.15, 0.5 * size.z + 0.03),
+                Vector3::new(0.0, -0.15, 0.5 * size.z + 0.03),
+            ],
             handle_width_m: 0.04,
             capture_radius_m: 0.04,
             seabed_z_m: seabed_z,
@@ -69,7 +72,11 @@ impl ObjectParams {
     pub fn inertia_body(&self) -> Matrix3<f64> {
         let (x, y, z) = (self.size_m.x, self.size_m.y, self.size_m.z);
         let k = self.mass_kg / 12.0;
-        Matrix3::from_diagonal(&Vector3::new(k * (y * y + z * z), k * (x * x + z * z), k * (x * x + y * y)))
+        Matrix3::from_diagonal(&Vector3::new(
+            k * (y * y + z * z),
+            k * (x * x + z * z),
+            k * (x * x + y * y),
+        ))
     }
 
     /// The eight box corners in the object frame.
@@ -90,7 +97,12 @@ impl ObjectParams {
 /// Seabed contact wrench on the object (6: force, moment about the COM; base frame) from
 /// penalty springs at the box corners that are below the seabed, with regularized Coulomb
 /// friction. Returns the wrench and the total normal force (N).
-pub fn seabed_wrench(p: &ObjectParams, pose: &Isometry3<f64>, v: &Vector3<f64>, w: &Vector3<f64>) -> (Vector6<f64>, f64) {
+pub fn seabed_wrench(
+    p: &ObjectParams,
+    pose: &Isometry3<f64>,
+    v: &Vector3<f64>,
+    w: &Vector3<f64>,
+) -> (Vector6<f64>, f64) {
     let mut f = Vector3::zeros();
     let mut m = Vector3::zeros();
     let mut normal = 0.0;
@@ -130,8 +142,10 @@ pub fn grasp_block(r: &Vector3<f64>) -> Matrix6<f64> {
 /// W = [W¹ W²] (6×12, eq. 3.40) for grasp points at r¹, r² from the COM.
 pub fn grasp_matrix(r: &[Vector3<f64>; 2]) -> SMatrix<f64, 6, 12> {
     let mut w = SMatrix::<f64, 6, 12>::zeros();
-    w.fixed_view_mut::<6, 6>(0, 0).copy_from(&grasp_block(&r[0]));
-    w.fixed_view_mut::<6, 6>(0, 6).copy_from(&grasp_block(&r[1]));
+    w.fixed_view_mut::<6, 6>(0, 0)
+        .copy_from(&grasp_block(&r[0]));
+    w.fixed_view_mut::<6, 6>(0, 6)
+        .copy_from(&grasp_block(&r[1]));
     w
 }
 

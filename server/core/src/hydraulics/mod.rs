@@ -48,10 +48,16 @@ impl Linkage {
     #[inline]
     pub fn coordinate(&self, q: f64) -> (f64, f64) {
         match *self {
-            Linkage::Linear { r_a_m, r_b_m, phi0_rad } => {
+            Linkage::Linear {
+                r_a_m,
+                r_b_m,
+                phi0_rad,
+            } => {
                 let phi = phi0_rad + q;
                 let (s, c) = phi.sin_cos();
-                let l = (r_a_m * r_a_m + r_b_m * r_b_m - 2.0 * r_a_m * r_b_m * c).max(1e-12).sqrt();
+                let l = (r_a_m * r_a_m + r_b_m * r_b_m - 2.0 * r_a_m * r_b_m * c)
+                    .max(1e-12)
+                    .sqrt();
                 (l, r_a_m * r_b_m * s / l)
             }
             Linkage::Rotary => (q, 1.0),
@@ -96,7 +102,10 @@ impl ActuatorParams {
             return (self.dead_volume_in_m3, self.dead_volume_out_m3);
         }
         let s = (x - self.x_min).clamp(0.0, self.stroke);
-        (self.dead_volume_in_m3 + self.area_in * s, self.dead_volume_out_m3 + self.area_out * (self.stroke - s))
+        (
+            self.dead_volume_in_m3 + self.area_in * s,
+            self.dead_volume_out_m3 + self.area_out * (self.stroke - s),
+        )
     }
 }
 
@@ -113,7 +122,11 @@ pub struct JawParams {
 
 impl Default for JawParams {
     fn default() -> Self {
-        JawParams { max_opening_m: 0.075, speed_m_s: 0.102, clamp_force_n: 150.0 * 9.80665 }
+        JawParams {
+            max_opening_m: 0.075,
+            speed_m_s: 0.102,
+            clamp_force_n: 150.0 * 9.80665,
+        }
     }
 }
 
@@ -181,7 +194,9 @@ impl HydraulicParams {
     ///   swing/yaw/rotate.
     pub fn magnum(model: &Model, inertials: &Inertials) -> Result<HydraulicParams, Error> {
         if model.dof() != N_ACT {
-            return Err(Error::InvalidModel { reason: "Magnum hydraulics need a 6-joint model".into() });
+            return Err(Error::InvalidModel {
+                reason: "Magnum hydraulics need a 6-joint model".into(),
+            });
         }
         let supply = 6.89e6;
         // Holding torques at full extension with the payload.
@@ -191,13 +206,30 @@ impl HydraulicParams {
         let mut dd = crate::dynamics::DynData::new(model);
         let mut g = [0.0; N_ACT];
         let g_vec = nalgebra::Vector3::new(0.0, 0.0, -9.81);
-        crate::dynamics::rnea(model, inertials, &kin, &[0.0; N_ACT], &[0.0; N_ACT], &g_vec, 0.0, &mut g, &mut dd);
+        crate::dynamics::rnea(
+            model,
+            inertials,
+            &kin,
+            &[0.0; N_ACT],
+            &[0.0; N_ACT],
+            &g_vec,
+            0.0,
+            &mut g,
+            &mut dd,
+        );
         // Payload weight at the tool: τ = −J_vᵀ·(m·g).
         for (j, gj) in g.iter_mut().enumerate() {
             let col = kin.jacobian.column(j);
             *gj -= col[2] * (-9.81 * MAGNUM_LIFT_KG);
         }
-        let pins: [Option<(f64, f64)>; N_ACT] = [None, Some((0.35, 0.10)), Some((0.30, 0.09)), Some((0.25, 0.06)), None, None];
+        let pins: [Option<(f64, f64)>; N_ACT] = [
+            None,
+            Some((0.35, 0.10)),
+            Some((0.30, 0.09)),
+            Some((0.25, 0.06)),
+            None,
+            None,
+        ];
         let damping = [200.0, 5.0e4, 5.0e4, 5.0e4, 50.0, 5.0];
         let mut actuators = [ActuatorParams {
             linkage: Linkage::Rotary,
@@ -215,7 +247,11 @@ impl HydraulicParams {
         }; N_ACT];
         for j in 0..N_ACT {
             let joint = &model.joints[j];
-            let (lo, hi) = if joint.is_limited() { (joint.limits[0], joint.limits[1]) } else { (-std::f64::consts::PI, std::f64::consts::PI) };
+            let (lo, hi) = if joint.is_limited() {
+                (joint.limits[0], joint.limits[1])
+            } else {
+                (-std::f64::consts::PI, std::f64::consts::PI)
+            };
             let mid = 0.5 * (lo + hi);
             let omega = MAGNUM_SPEEDS_DEG_S[j].to_radians();
             let torque = (HOLD_MARGIN * g[j].abs()).max(MAGNUM_TORQUE_FLOOR_NM[j]);
@@ -225,21 +261,30 @@ impl HydraulicParams {
             a.design_torque_nm = torque;
             match pins[j] {
                 Some((ra, rb)) => {
-                    let link = Linkage::Linear { r_a_m: ra, r_b_m: rb, phi0_rad: std::f64::consts::FRAC_PI_2 - mid };
+                    let link = Linkage::Linear {
+                        r_a_m: ra,
+                        r_b_m: rb,
+                        phi0_rad: std::f64::consts::FRAC_PI_2 - mid,
+                    };
                     let (x_lo, _) = link.coordinate(lo);
                     let (x_hi, _) = link.coordinate(hi);
                     let (_, jh_q) = link.coordinate(q[j]);
                     let (_, jh_mid) = link.coordinate(mid);
                     let hold_area = torque / (jh_q * supply);
                     // τ_act = G holds the arm; G > 0 with Ĵ > 0 needs an extending force (inlet side).
-                    let (ai, ao) = if g[j] >= 0.0 { (hold_area, hold_area * AREA_RATIO) } else { (hold_area / AREA_RATIO, hold_area) };
+                    let (ai, ao) = if g[j] >= 0.0 {
+                        (hold_area, hold_area * AREA_RATIO)
+                    } else {
+                        (hold_area / AREA_RATIO, hold_area)
+                    };
                     a.linkage = link;
                     a.area_in = ai;
                     a.area_out = ao;
                     a.x_min = x_lo;
                     a.stroke = x_hi - x_lo;
                     let alpha = ao / ai;
-                    a.flow_gain = omega * jh_mid * ai * (1.0 + alpha.powi(3)).sqrt() / (supply.sqrt() * alpha.powf(0.25));
+                    a.flow_gain = omega * jh_mid * ai * (1.0 + alpha.powi(3)).sqrt()
+                        / (supply.sqrt() * alpha.powf(0.25));
                 }
                 None => {
                     let d = torque / supply;
@@ -282,7 +327,12 @@ pub struct Faults {
 
 impl Default for Faults {
     fn default() -> Self {
-        Faults { supply_drop_pa: 0.0, stuck_valve: [None; N_ACT], leak_m3_s_pa: [0.0; N_ACT], bulk_modulus_scale: 1.0 }
+        Faults {
+            supply_drop_pa: 0.0,
+            stuck_valve: [None; N_ACT],
+            leak_m3_s_pa: [0.0; N_ACT],
+            bulk_modulus_scale: 1.0,
+        }
     }
 }
 
@@ -333,8 +383,15 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
     let g = |p: f64| -> (f64, f64) {
         let (qv, dqv) = valve_flow(ch.gain, ch.s, p, supply, hp.return_pa, hp.laminar_pa);
         let over = p - hp.relief_pa;
-        let (qr, dqr) = if over > 0.0 { (hp.relief_gain * over, hp.relief_gain) } else { (0.0, 0.0) };
-        (qv - ch.leak * (p - ch.other) - qr - ch.piston, dqv - ch.leak - dqr)
+        let (qr, dqr) = if over > 0.0 {
+            (hp.relief_gain * over, hp.relief_gain)
+        } else {
+            (0.0, 0.0)
+        };
+        (
+            qv - ch.leak * (p - ch.other) - qr - ch.piston,
+            dqv - ch.leak - dqr,
+        )
     };
     // Closed valve: g is linear (piston, leakage and relief only): closed form.
     if ch.s == 0.0 {
@@ -342,7 +399,8 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
         let mut p = (ch.p0 + ch.c * (ch.leak * ch.other - ch.piston)) / (1.0 + k);
         if p > hp.relief_pa {
             let kr = ch.c * hp.relief_gain;
-            p = (ch.p0 + ch.c * (ch.leak * ch.other - ch.piston) + kr * hp.relief_pa) / (1.0 + k + kr);
+            p = (ch.p0 + ch.c * (ch.leak * ch.other - ch.piston) + kr * hp.relief_pa)
+                / (1.0 + k + kr);
         }
         let p = p.max(0.0);
         return (p, p > hp.relief_pa);
@@ -412,13 +470,31 @@ pub fn update_chambers(
     p_out: &mut f64,
 ) -> ChamberFlags {
     let (v_in, v_out) = act.volumes(x);
-    let a = Chamber { p0: *p_in, c: h_s * beta_pa / v_in, gain: act.flow_gain, s: spool, other: *p_out, leak, piston: act.area_in * xdot };
+    let a = Chamber {
+        p0: *p_in,
+        c: h_s * beta_pa / v_in,
+        gain: act.flow_gain,
+        s: spool,
+        other: *p_out,
+        leak,
+        piston: act.area_in * xdot,
+    };
     let (pi, ri) = solve_chamber(&a, hp, supply_pa);
-    let b = Chamber { p0: *p_out, c: h_s * beta_pa / v_out, gain: act.flow_gain, s: -spool, other: pi, leak, piston: -act.area_out * xdot };
+    let b = Chamber {
+        p0: *p_out,
+        c: h_s * beta_pa / v_out,
+        gain: act.flow_gain,
+        s: -spool,
+        other: pi,
+        leak,
+        piston: -act.area_out * xdot,
+    };
     let (po, ro) = solve_chamber(&b, hp, supply_pa);
     *p_in = pi;
     *p_out = po;
-    ChamberFlags { relief_open: ri || ro }
+    ChamberFlags {
+        relief_open: ri || ro,
+    }
 }
 
 /// Actuator force (eq. 3.52), N (N·m for rotary): A_I P_I − A_O P_O − K_damp ẋ.

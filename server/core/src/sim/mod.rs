@@ -25,7 +25,9 @@
 
 pub mod scenario;
 
-use nalgebra::{Isometry3, Matrix3, Matrix6, SMatrix, SVector, Translation3, UnitQuaternion, Vector3, Vector6};
+use nalgebra::{
+    Isometry3, Matrix3, Matrix6, SMatrix, SVector, Translation3, UnitQuaternion, Vector3, Vector6,
+};
 
 use crate::Error;
 use crate::control::{self, ControlParams, CoopInputs};
@@ -130,7 +132,8 @@ pub const SEABED_Z_M: f64 = -0.45;
 pub const OBJECT_XY_M: [f64; 2] = [1.0, 0.5];
 /// Reset posture of both arms (rad): swing 0, shoulder 30°, elbow −70°, pitch −20°, yaw 0,
 /// rotate 0 — jaws raised in front of the arm, clear of the object.
-pub const INITIAL_Q: [f64; N_ACT] = [0.0, 0.5236, -1.2217, -0.3491, 0.0, 0.0];
+pub const INITIAL_Q: [f64; N_ACT] = [0.0, 30.0 * DEG, -70.0 * DEG, -20.0 * DEG, 0.0, 0.0];
+const DEG: f64 = std::f64::consts::PI / 180.0;
 
 impl SimParams {
     /// The case-study setup: two Magnum arms ([`HydraulicParams::magnum`], [`Inertials::magnum`]),
@@ -140,7 +143,13 @@ impl SimParams {
         let arm = |m: &Model, y: f64| -> Result<ArmParams, Error> {
             let inertials = Inertials::magnum(m)?;
             let hydraulics = HydraulicParams::magnum(m, &inertials)?;
-            Ok(ArmParams { base: Isometry3::translation(0.0, y, 0.0), inertials, hydraulics, initial_q: INITIAL_Q, faults: Faults::default() })
+            Ok(ArmParams {
+                base: Isometry3::translation(0.0, y, 0.0),
+                inertials,
+                hydraulics,
+                initial_q: INITIAL_Q,
+                faults: Faults::default(),
+            })
         };
         Ok(SimParams {
             arms: [arm(left, LEFT_BASE_Y_M)?, arm(right, 0.0)?],
@@ -192,7 +201,12 @@ pub struct Input {
 
 impl Default for Input {
     fn default() -> Self {
-        Input { arms: [ArmInput::default(); 2], method: ControlMethod::OpenLoop, object_velocity: [0.0; 6], speed_scale: 1.0 }
+        Input {
+            arms: [ArmInput::default(); 2],
+            method: ControlMethod::OpenLoop,
+            object_velocity: [0.0; 6],
+            speed_scale: 1.0,
+        }
     }
 }
 
@@ -291,30 +305,65 @@ impl Simulation {
     pub fn new(left: Model, right: Model, params: SimParams) -> Result<Simulation, Error> {
         for m in [&left, &right] {
             if m.dof() != N_ACT {
-                return Err(Error::InvalidModel { reason: format!("the simulation needs 6-joint arms, {} has {}", m.name, m.dof()) });
+                return Err(Error::InvalidModel {
+                    reason: format!(
+                        "the simulation needs 6-joint arms, {} has {}",
+                        m.name,
+                        m.dof()
+                    ),
+                });
             }
         }
         for (i, a) in params.arms.iter().enumerate() {
             if a.inertials.links.len() != N_ACT {
-                return Err(Error::InvalidParameter { what: "inertials", reason: format!("arm {i} needs 6 links") });
+                return Err(Error::InvalidParameter {
+                    what: "inertials",
+                    reason: format!("arm {i} needs 6 links"),
+                });
             }
-            if a.inertials.links.iter().any(|l| !(l.mass_kg > 0.0) || !l.mass_kg.is_finite()) {
-                return Err(Error::InvalidParameter { what: "inertials", reason: "masses must be finite and > 0".into() });
+            if a.inertials
+                .links
+                .iter()
+                .any(|l| l.mass_kg.is_nan() || l.mass_kg <= 0.0 || !l.mass_kg.is_finite())
+            {
+                return Err(Error::InvalidParameter {
+                    what: "inertials",
+                    reason: "masses must be finite and > 0".into(),
+                });
             }
             if a.initial_q.iter().any(|v| !v.is_finite()) {
-                return Err(Error::NonFinite { what: "initial_q", index: i });
+                return Err(Error::NonFinite {
+                    what: "initial_q",
+                    index: i,
+                });
             }
         }
         let s = &params.step;
         if !(s.dt_s > 0.0 && s.dt_s <= 0.01) || s.substeps == 0 || s.substeps > 1000 {
-            return Err(Error::InvalidParameter { what: "step", reason: "dt_s in (0, 0.01] and 1..=1000 substeps".into() });
+            return Err(Error::InvalidParameter {
+                what: "step",
+                reason: "dt_s in (0, 0.01] and 1..=1000 substeps".into(),
+            });
         }
-        if !(params.object.mass_kg > 0.0) {
-            return Err(Error::InvalidParameter { what: "object", reason: "mass must be > 0".into() });
+        if params.object.mass_kg.is_nan() || params.object.mass_kg <= 0.0 {
+            return Err(Error::InvalidParameter {
+                what: "object",
+                reason: "mass must be > 0".into(),
+            });
         }
         let work = [
-            ArmWork { kin: KinData::new(&left), dynd: DynData::new(&left), jw: Matrix6::zeros(), tool: Isometry3::identity() },
-            ArmWork { kin: KinData::new(&right), dynd: DynData::new(&right), jw: Matrix6::zeros(), tool: Isometry3::identity() },
+            ArmWork {
+                kin: KinData::new(&left),
+                dynd: DynData::new(&left),
+                jw: Matrix6::zeros(),
+                tool: Isometry3::identity(),
+            },
+            ArmWork {
+                kin: KinData::new(&right),
+                dynd: DynData::new(&right),
+                jw: Matrix6::zeros(),
+                tool: Isometry3::identity(),
+            },
         ];
         let blank_arm = ArmState {
             q: [0.0; N_ACT],
@@ -336,14 +385,25 @@ impl Simulation {
         };
         let state = State {
             arms: [blank_arm; 2],
-            object: ObjectState { pose: Isometry3::identity(), velocity: Vector3::zeros(), angular_velocity: Vector3::zeros(), seabed_force_n: 0.0 },
+            object: ObjectState {
+                pose: Isometry3::identity(),
+                velocity: Vector3::zeros(),
+                angular_velocity: Vector3::zeros(),
+                seabed_force_n: 0.0,
+            },
             time_s: 0.0,
             steps: 0,
             coop_active: false,
             coop_ref: Isometry3::identity(),
             internal: [0.0; 6],
         };
-        let mut sim = Simulation { models: [left, right], params, state, work, numerical_faults: 0 };
+        let mut sim = Simulation {
+            models: [left, right],
+            params,
+            state,
+            work,
+            numerical_faults: 0,
+        };
         sim.reset();
         Ok(sim)
     }
@@ -351,6 +411,7 @@ impl Simulation {
     /// Back to the initial position (Lim §4.1 "Initial Position"): arms at their initial q,
     /// at rest, line pressures balancing gravity around half supply, jaws open, object resting
     /// on the seabed, counters cleared. Faults are kept.
+    #[allow(clippy::needless_range_loop)]
     pub fn reset(&mut self) {
         let g = self.params.step.gravity;
         for i in 0..2 {
@@ -375,8 +436,22 @@ impl Simulation {
             kinematics::jacobian(model, &mut w.kin, &a.q);
             let gb = ap.base.rotation.inverse() * g;
             let mut tau = [0.0; N_ACT];
-            let rho = if self.params.step.buoyancy { self.params.step.water_density_kgm3 } else { 0.0 };
-            dynamics::rnea(model, &ap.inertials, &w.kin, &[0.0; N_ACT], &[0.0; N_ACT], &gb, rho, &mut tau, &mut w.dynd);
+            let rho = if self.params.step.buoyancy {
+                self.params.step.water_density_kgm3
+            } else {
+                0.0
+            };
+            dynamics::rnea(
+                model,
+                &ap.inertials,
+                &w.kin,
+                &[0.0; N_ACT],
+                &[0.0; N_ACT],
+                &gb,
+                rho,
+                &mut tau,
+                &mut w.dynd,
+            );
             let hp = &ap.hydraulics;
             for j in 0..N_ACT {
                 let act = &hp.actuators[j];
@@ -393,7 +468,12 @@ impl Simulation {
         let sink = op.mass_kg * g.norm() / (4.0 * op.contact_stiffness_n_m);
         let mut pose = op.initial_pose;
         pose.translation.vector.z -= sink;
-        self.state.object = ObjectState { pose, velocity: Vector3::zeros(), angular_velocity: Vector3::zeros(), seabed_force_n: op.mass_kg * g.norm() };
+        self.state.object = ObjectState {
+            pose,
+            velocity: Vector3::zeros(),
+            angular_velocity: Vector3::zeros(),
+            seabed_force_n: op.mass_kg * g.norm(),
+        };
         self.state.time_s = 0.0;
         self.state.steps = 0;
         self.state.coop_active = false;
@@ -475,7 +555,11 @@ impl Simulation {
     /// Grasp state (Lim §4.1 colour code).
     pub fn grasp_state(&self) -> GraspState {
         let a = &self.state.arms;
-        GraspState::classify([a[0].holding, a[1].holding], [a[0].contact, a[1].contact], self.state.object.seabed_force_n > 0.0)
+        GraspState::classify(
+            [a[0].holding, a[1].holding],
+            [a[0].contact, a[1].contact],
+            self.state.object.seabed_force_n > 0.0,
+        )
     }
     /// Whether the cooperative closed loop is currently in control.
     pub fn closed_loop_active(&self) -> bool {
@@ -498,7 +582,10 @@ impl Simulation {
         }
         let des = self.state.object.pose * a.grasp_rel;
         let t = self.work[i].tool;
-        ((t.translation.vector - des.translation.vector).norm(), control::rotation_error(&t.rotation, &des.rotation).norm())
+        (
+            (t.translation.vector - des.translation.vector).norm(),
+            control::rotation_error(&t.rotation, &des.rotation).norm(),
+        )
     }
 
     /// Advances the simulation by one step (`params.step.dt_s`). Never panics; inputs are
@@ -524,16 +611,25 @@ impl Simulation {
     fn state_is_finite(&self) -> bool {
         let s = &self.state;
         let arms_ok = s.arms.iter().all(|a| {
-            a.q.iter().chain(&a.qd).chain(&a.p_in).chain(&a.p_out).chain(&a.contact_wrench).all(|v| v.is_finite())
+            a.q.iter()
+                .chain(&a.qd)
+                .chain(&a.p_in)
+                .chain(&a.p_out)
+                .chain(&a.contact_wrench)
+                .all(|v| v.is_finite())
         });
         let o = &s.object;
         arms_ok
             && o.pose.translation.vector.iter().all(|v| v.is_finite())
             && o.pose.rotation.coords.iter().all(|v| v.is_finite())
-            && o.velocity.iter().chain(o.angular_velocity.iter()).all(|v| v.is_finite())
+            && o.velocity
+                .iter()
+                .chain(o.angular_velocity.iter())
+                .all(|v| v.is_finite())
             && s.internal.iter().all(|v| v.is_finite())
     }
 
+    #[allow(clippy::needless_range_loop)] // per-arm arrays indexed in parallel read clearer
     fn step_inner(&mut self, input: &Input) {
         let sp = self.params.step;
         let dt = sp.dt_s;
@@ -548,11 +644,18 @@ impl Simulation {
             let obj = self.state.object.pose;
             let a = &mut self.state.arms[i];
             let was_open_enough = a.jaw_opening_m >= op.handle_width_m - 1e-9;
-            let stop = if contact && was_open_enough { op.handle_width_m } else { 0.0 };
-            a.jaw_opening_m = (a.jaw_opening_m + cmd * jaw.speed_m_s * dt).clamp(stop, jaw.max_opening_m);
-            let closed_on_handle = contact && was_open_enough && a.jaw_opening_m <= op.handle_width_m + 1e-9;
+            let stop = if contact && was_open_enough {
+                op.handle_width_m
+            } else {
+                0.0
+            };
+            a.jaw_opening_m =
+                (a.jaw_opening_m + cmd * jaw.speed_m_s * dt).clamp(stop, jaw.max_opening_m);
+            let closed_on_handle =
+                contact && was_open_enough && a.jaw_opening_m <= op.handle_width_m + 1e-9;
             if closed_on_handle && cmd < 0.0 {
-                a.clamp_force_n = jaw.clamp_force_n * (-cmd).min(1.0).max(a.clamp_force_n / jaw.clamp_force_n);
+                a.clamp_force_n =
+                    jaw.clamp_force_n * (-cmd).min(1.0).max(a.clamp_force_n / jaw.clamp_force_n);
             } else if !closed_on_handle || cmd > 0.0 {
                 a.clamp_force_n = 0.0;
             }
@@ -574,12 +677,24 @@ impl Simulation {
         }
         self.state.coop_active = coop;
         let mut spools = [[0.0; N_ACT]; 2];
-        let nominal: [[f64; N_ACT]; 2] = core::array::from_fn(|i| core::array::from_fn(|j| self.params.arms[i].hydraulics.actuators[j].nominal_speed_rad_s));
+        let nominal: [[f64; N_ACT]; 2] = core::array::from_fn(|i| {
+            core::array::from_fn(|j| {
+                self.params.arms[i].hydraulics.actuators[j].nominal_speed_rad_s
+            })
+        });
         if coop {
             let cp = &self.params.control;
             let ov = &input.object_velocity;
-            let mut lin = Vector3::new(finite_or(ov[0], 0.0), finite_or(ov[1], 0.0), finite_or(ov[2], 0.0)) * speed;
-            let mut ang = Vector3::new(finite_or(ov[3], 0.0), finite_or(ov[4], 0.0), finite_or(ov[5], 0.0)) * speed;
+            let mut lin = Vector3::new(
+                finite_or(ov[0], 0.0),
+                finite_or(ov[1], 0.0),
+                finite_or(ov[2], 0.0),
+            ) * speed;
+            let mut ang = Vector3::new(
+                finite_or(ov[3], 0.0),
+                finite_or(ov[4], 0.0),
+                finite_or(ov[5], 0.0),
+            ) * speed;
             if lin.norm() > cp.max_object_speed_m_s {
                 lin *= cp.max_object_speed_m_s / lin.norm();
             }
@@ -590,8 +705,18 @@ impl Simulation {
             let obj = self.state.object.pose;
             let r = self.grasp_radii();
             let jac = [self.work[0].jw, self.work[1].jw];
-            let contact = [Vector6::from(self.state.arms[0].contact_wrench), Vector6::from(self.state.arms[1].contact_wrench)];
-            let ci = CoopInputs { object: &obj, r: &r, jacobians: &jac, contact: &contact, twist: &twist, nominal_speed: &nominal };
+            let contact = [
+                Vector6::from(self.state.arms[0].contact_wrench),
+                Vector6::from(self.state.arms[1].contact_wrench),
+            ];
+            let ci = CoopInputs {
+                object: &obj,
+                r: &r,
+                jacobians: &jac,
+                contact: &contact,
+                twist: &twist,
+                nominal_speed: &nominal,
+            };
             spools = control::cooperative(&ci, &mut self.state.coop_ref, dt, cp);
             for a in self.state.arms.iter_mut() {
                 a.servo_active = false;
@@ -606,12 +731,23 @@ impl Simulation {
                             a.servo_ref = a.q;
                             a.servo_active = true;
                         }
-                        let qd_ref: [f64; N_ACT] = core::array::from_fn(|j| (finite_or(r[j], 0.0) * speed).clamp(-2.0 * nominal[i][j], 2.0 * nominal[i][j]));
-                        *sp_i = control::joint_servo(&qd_ref, &a.q, &mut a.servo_ref, &nominal[i], dt, &self.params.control);
+                        let qd_ref: [f64; N_ACT] = core::array::from_fn(|j| {
+                            (finite_or(r[j], 0.0) * speed)
+                                .clamp(-2.0 * nominal[i][j], 2.0 * nominal[i][j])
+                        });
+                        *sp_i = control::joint_servo(
+                            &qd_ref,
+                            &a.q,
+                            &mut a.servo_ref,
+                            &nominal[i],
+                            dt,
+                            &self.params.control,
+                        );
                     }
                     None => {
                         a.servo_active = false;
-                        let v: [f64; N_ACT] = core::array::from_fn(|j| finite_or(ai.valves[j], 0.0).clamp(-1.0, 1.0));
+                        let v: [f64; N_ACT] =
+                            core::array::from_fn(|j| finite_or(ai.valves[j], 0.0).clamp(-1.0, 1.0));
                         *sp_i = control::open_loop(&v, speed);
                     }
                 }
@@ -627,7 +763,11 @@ impl Simulation {
         }
         // ---- per-step dynamics terms (held over the sub-steps) ----
         let h = dt / sp.substeps as f64;
-        let rho = if sp.buoyancy { sp.water_density_kgm3 } else { 0.0 };
+        let rho = if sp.buoyancy {
+            sp.water_density_kgm3
+        } else {
+            0.0
+        };
         let mut chol: [Option<nalgebra::Cholesky<f64, nalgebra::Const<6>>>; 2] = [None, None];
         let mut bias = [Vector6::zeros(); 2];
         let mut damp = [[0.0; N_ACT]; 2];
@@ -645,9 +785,20 @@ impl Simulation {
             let w = &mut self.work[i];
             let gb = ap.base.rotation.inverse() * sp.gravity;
             let mut tau = [0.0; N_ACT];
-            dynamics::rnea(model, &ap.inertials, &w.kin, &a.qd, &[0.0; N_ACT], &gb, rho, &mut tau, &mut w.dynd);
+            dynamics::rnea(
+                model,
+                &ap.inertials,
+                &w.kin,
+                &a.qd,
+                &[0.0; N_ACT],
+                &gb,
+                rho,
+                &mut tau,
+                &mut w.dynd,
+            );
             dynamics::crba(model, &ap.inertials, &w.kin, &mut w.dynd);
-            let jb = dynamics::tool_bias_acceleration(model, &w.kin, &a.qd, &[0.0; N_ACT], &mut w.dynd);
+            let jb =
+                dynamics::tool_bias_acceleration(model, &w.kin, &a.qd, &[0.0; N_ACT], &mut w.dynd);
             let rm = ap.base.rotation.to_rotation_matrix();
             let l = rm * Vector3::new(jb[0], jb[1], jb[2]);
             let an = rm * Vector3::new(jb[3], jb[4], jb[5]);
@@ -668,7 +819,8 @@ impl Simulation {
                     // End stop engaged at the start of the step: implicit spring-damper.
                     m[(r, r)] += h * sp.stop_damping + h * h * sp.stop_stiffness;
                 }
-                bias[i][r] = tau[r] + sp.joint_drag * a.qd[r] * a.qd[r].abs() - 2.0 * sp.joint_drag * a.qd[r].abs() * a.qd[r];
+                bias[i][r] = tau[r] + sp.joint_drag * a.qd[r] * a.qd[r].abs()
+                    - 2.0 * sp.joint_drag * a.qd[r].abs() * a.qd[r];
             }
             chol[i] = m.cholesky();
             if let Some(ch) = &chol[i] {
@@ -680,16 +832,29 @@ impl Simulation {
         let rot = self.state.object.pose.rotation.to_rotation_matrix();
         let ib = op.inertia_body();
         let iw: Matrix3<f64> = rot.matrix() * ib * rot.matrix().transpose();
-        let iw_inv = rot.matrix() * ib.try_inverse().unwrap_or_else(Matrix3::identity) * rot.matrix().transpose();
+        let iw_inv = rot.matrix()
+            * ib.try_inverse().unwrap_or_else(Matrix3::identity)
+            * rot.matrix().transpose();
         let mut mo_inv = Matrix6::zeros();
-        mo_inv.fixed_view_mut::<3, 3>(0, 0).copy_from(&(Matrix3::identity() / op.mass_kg));
+        mo_inv
+            .fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(Matrix3::identity() / op.mass_kg));
         mo_inv.fixed_view_mut::<3, 3>(3, 3).copy_from(&iw_inv);
-        let obj_weight = sp.gravity * (op.mass_kg - if sp.buoyancy { sp.water_density_kgm3 * op.size_m.x * op.size_m.y * op.size_m.z } else { 0.0 });
+        let obj_weight = sp.gravity
+            * (op.mass_kg
+                - if sp.buoyancy {
+                    sp.water_density_kgm3 * op.size_m.x * op.size_m.y * op.size_m.z
+                } else {
+                    0.0
+                });
         // Constraint system.
         let r = self.grasp_radii();
         let wb = [grasp::grasp_block(&r[0]), grasp::grasp_block(&r[1])];
         let mut big = M12::identity();
-        let active = [holding[0] && chol[0].is_some(), holding[1] && chol[1].is_some()];
+        let active = [
+            holding[0] && chol[0].is_some(),
+            holding[1] && chol[1].is_some(),
+        ];
         for i in 0..2 {
             if !active[i] {
                 continue;
@@ -705,7 +870,11 @@ impl Simulation {
                 big.fixed_view_mut::<6, 6>(6 * i, 6 * k).copy_from(&blk);
             }
         }
-        let big_ch = if active[0] || active[1] { big.cholesky() } else { None };
+        let big_ch = if active[0] || active[1] {
+            big.cholesky()
+        } else {
+            None
+        };
         // Baumgarte position error and velocity-product terms per holding arm.
         let kp = sp.constraint_omega * sp.constraint_omega;
         let kd = 2.0 * sp.constraint_omega;
@@ -720,7 +889,15 @@ impl Simulation {
             let er = control::rotation_error(&t.rotation, &des.rotation);
             let w = self.state.object.angular_velocity;
             let cen = w.cross(&w.cross(&r[i]));
-            c_const[i] = -jdqd[i] + Vector6::new(cen.x - kp * ep.x, cen.y - kp * ep.y, cen.z - kp * ep.z, -kp * er.x, -kp * er.y, -kp * er.z);
+            c_const[i] = -jdqd[i]
+                + Vector6::new(
+                    cen.x - kp * ep.x,
+                    cen.y - kp * ep.y,
+                    cen.z - kp * ep.z,
+                    -kp * er.x,
+                    -kp * er.y,
+                    -kp * er.z,
+                );
         }
         // ---- sub-steps ----
         let mut relief_now = [[false; N_ACT]; 2];
@@ -731,8 +908,10 @@ impl Simulation {
                 let ap = &self.params.arms[i];
                 let hp = &ap.hydraulics;
                 let f = &ap.faults;
-                let supply = hp.supply_pa - finite_or(f.supply_drop_pa, 0.0).clamp(0.0, hp.supply_pa);
-                let beta = hp.bulk_modulus_pa * finite_or(f.bulk_modulus_scale, 1.0).clamp(0.01, 1.0);
+                let supply =
+                    hp.supply_pa - finite_or(f.supply_drop_pa, 0.0).clamp(0.0, hp.supply_pa);
+                let beta =
+                    hp.bulk_modulus_pa * finite_or(f.bulk_modulus_scale, 1.0).clamp(0.01, 1.0);
                 let a = &mut self.state.arms[i];
                 let mut rhs = Vector6::zeros();
                 for j in 0..N_ACT {
@@ -741,13 +920,31 @@ impl Simulation {
                     let x = x0[i][j] + jh * (a.q[j] - q0[i][j]);
                     let xd = jh * a.qd[j];
                     let leak = finite_or(f.leak_m3_s_pa[j], 0.0).clamp(0.0, 1e-8);
-                    let fl = hydraulics::update_chambers(act, hp, supply, beta, leak, a.spool[j], x, xd, h, &mut a.p_in[j], &mut a.p_out[j]);
+                    let fl = hydraulics::update_chambers(
+                        act,
+                        hp,
+                        supply,
+                        beta,
+                        leak,
+                        a.spool[j],
+                        x,
+                        xd,
+                        h,
+                        &mut a.p_in[j],
+                        &mut a.p_out[j],
+                    );
                     relief_now[i][j] = fl.relief_open;
                     let t = jh * (act.area_in * a.p_in[j] - act.area_out * a.p_out[j]);
                     a.torque[j] = t - damp[i][j] * a.qd[j];
                     rhs[j] = t - bias[i][j] - damp[i][j] * a.qd[j];
                     let lim = self.models[i].joints[j].limits;
-                    let pen = if a.q[j] < lim[0] { a.q[j] - lim[0] } else if a.q[j] > lim[1] { a.q[j] - lim[1] } else { 0.0 };
+                    let pen = if a.q[j] < lim[0] {
+                        a.q[j] - lim[0]
+                    } else if a.q[j] > lim[1] {
+                        a.q[j] - lim[1]
+                    } else {
+                        0.0
+                    };
                     if pen != 0.0 {
                         rhs[j] -= sp.stop_stiffness * pen + sp.stop_damping * a.qd[j];
                     }
@@ -758,11 +955,26 @@ impl Simulation {
             }
             // Object free acceleration: gravity, seabed, gyroscopic.
             let o = self.state.object;
-            let (sea, normal) = grasp::seabed_wrench(&op, &o.pose, &o.velocity, &o.angular_velocity);
+            let (sea, normal) =
+                grasp::seabed_wrench(&op, &o.pose, &o.velocity, &o.angular_velocity);
             let gyro = o.angular_velocity.cross(&(iw * o.angular_velocity));
-            let wrench = Vector6::new(obj_weight.x + sea[0], obj_weight.y + sea[1], obj_weight.z + sea[2], sea[3] - gyro.x, sea[4] - gyro.y, sea[5] - gyro.z);
+            let wrench = Vector6::new(
+                obj_weight.x + sea[0],
+                obj_weight.y + sea[1],
+                obj_weight.z + sea[2],
+                sea[3] - gyro.x,
+                sea[4] - gyro.y,
+                sea[5] - gyro.z,
+            );
             let mut acc_o = mo_inv * wrench;
-            let vo = Vector6::new(o.velocity.x, o.velocity.y, o.velocity.z, o.angular_velocity.x, o.angular_velocity.y, o.angular_velocity.z);
+            let vo = Vector6::new(
+                o.velocity.x,
+                o.velocity.y,
+                o.velocity.z,
+                o.angular_velocity.x,
+                o.angular_velocity.y,
+                o.angular_velocity.z,
+            );
             if let Some(ch) = &big_ch {
                 let mut b = V12::zeros();
                 for i in 0..2 {
@@ -809,7 +1021,8 @@ impl Simulation {
             ob.velocity += h * Vector3::new(acc_o[0], acc_o[1], acc_o[2]);
             ob.angular_velocity += h * Vector3::new(acc_o[3], acc_o[4], acc_o[5]);
             ob.pose.translation.vector += h * ob.velocity;
-            ob.pose.rotation = UnitQuaternion::from_scaled_axis(ob.angular_velocity * h) * ob.pose.rotation;
+            ob.pose.rotation =
+                UnitQuaternion::from_scaled_axis(ob.angular_velocity * h) * ob.pose.rotation;
             ob.pose.rotation.renormalize();
             ob.seabed_force_n = normal;
         }
@@ -822,7 +1035,11 @@ impl Simulation {
                 }
                 a.relief_open[j] = relief_now[i][j];
             }
-            a.contact_wrench = if active[i] { [fc[i][0], fc[i][1], fc[i][2], fc[i][3], fc[i][4], fc[i][5]] } else { [0.0; 6] };
+            a.contact_wrench = if active[i] {
+                [fc[i][0], fc[i][1], fc[i][2], fc[i][3], fc[i][4], fc[i][5]]
+            } else {
+                [0.0; 6]
+            };
         }
         self.state.internal = if active[0] && active[1] {
             let mut f = V12::zeros();
@@ -859,5 +1076,8 @@ impl Simulation {
 
 /// Convenience: an isometry from a translation and a rotation vector.
 pub fn pose(t: [f64; 3], r: [f64; 3]) -> Isometry3<f64> {
-    Isometry3::from_parts(Translation3::new(t[0], t[1], t[2]), UnitQuaternion::from_scaled_axis(Vector3::new(r[0], r[1], r[2])))
+    Isometry3::from_parts(
+        Translation3::new(t[0], t[1], t[2]),
+        UnitQuaternion::from_scaled_axis(Vector3::new(r[0], r[1], r[2])),
+    )
 }

@@ -44,7 +44,10 @@ pub enum ArmCommand {
 impl ArmCommand {
     /// Valves at rest with a jaw command.
     pub const fn jaw(jaw: f64) -> ArmCommand {
-        ArmCommand::Valves { valves: [0.0; N_ACT], jaw }
+        ArmCommand::Valves {
+            valves: [0.0; N_ACT],
+            jaw,
+        }
     }
     /// One valve at `u`, others 0, jaw command `jaw`.
     pub const fn valve(j: usize, u: f64, jaw: f64) -> ArmCommand {
@@ -71,10 +74,22 @@ pub struct Segment {
 
 impl Segment {
     fn open(stage: &'static str, duration_s: f64, left: ArmCommand, right: ArmCommand) -> Segment {
-        Segment { stage, duration_s, arms: [left, right], method: ControlMethod::OpenLoop, object_velocity: [0.0; 6] }
+        Segment {
+            stage,
+            duration_s,
+            arms: [left, right],
+            method: ControlMethod::OpenLoop,
+            object_velocity: [0.0; 6],
+        }
     }
     fn closed(stage: &'static str, duration_s: f64, jaw: f64, v: [f64; 6]) -> Segment {
-        Segment { stage, duration_s, arms: [ArmCommand::jaw(jaw); 2], method: ControlMethod::ClosedLoop, object_velocity: v }
+        Segment {
+            stage,
+            duration_s,
+            arms: [ArmCommand::jaw(jaw); 2],
+            method: ControlMethod::ClosedLoop,
+            object_velocity: v,
+        }
     }
 }
 
@@ -95,15 +110,31 @@ pub struct Scenario {
 
 /// Names and descriptions of the built-in scenarios.
 pub const SCENARIOS: &[(&str, &str)] = &[
-    ("case1-single-arm", "Lim case study 1 (Fig. 4-5): left arm, no object; each joint driven in turn by a joystick signal, then released"),
-    ("case2-single-arm-load", "Lim case study 2 (Fig. 4-12): left arm reaches, grabs the 50 kg object, lifts it open loop, holds, releases it"),
-    ("case3-dual-open-loop", "Lim case study 3 (Fig. 4-17): right then left arm grab the object; open-loop lift and move left; release"),
-    ("case4-dual-closed-loop", "Lim case study 4 (Fig. 4-29): as case 3, but switched to closed-loop cooperative control to lift 0.2 m and move left"),
+    (
+        "case1-single-arm",
+        "Lim case study 1 (Fig. 4-5): left arm, no object; each joint driven in turn by a joystick signal, then released",
+    ),
+    (
+        "case2-single-arm-load",
+        "Lim case study 2 (Fig. 4-12): left arm reaches, grabs the 50 kg object, lifts it open loop, holds, releases it",
+    ),
+    (
+        "case3-dual-open-loop",
+        "Lim case study 3 (Fig. 4-17): right then left arm grab the object; open-loop lift and move left; release",
+    ),
+    (
+        "case4-dual-closed-loop",
+        "Lim case study 4 (Fig. 4-29): as case 3, but switched to closed-loop cooperative control to lift 0.2 m and move left",
+    ),
 ];
 
 /// Position-only damped-least-squares IK for the tool point of `model` (base frame), from
 /// `q0`, respecting joint limits. Allocates (scenario set-up only).
-pub fn ik_position(model: &Model, target: &Vector3<f64>, q0: &[f64; N_ACT]) -> Result<[f64; N_ACT], Error> {
+pub fn ik_position(
+    model: &Model,
+    target: &Vector3<f64>,
+    q0: &[f64; N_ACT],
+) -> Result<[f64; N_ACT], Error> {
     let mut q = *q0;
     let mut kin = KinData::new(model);
     let mut err = f64::INFINITY;
@@ -123,18 +154,31 @@ pub fn ik_position(model: &Model, target: &Vector3<f64>, q0: &[f64; N_ACT]) -> R
             q[j] = (q[j] + 0.5 * dq[j]).clamp(lim[0], lim[1]);
         }
     }
-    Err(Error::NotConverged { what: "scenario IK", iterations: 500, residual: err })
+    Err(Error::NotConverged {
+        what: "scenario IK",
+        iterations: 500,
+        residual: err,
+    })
 }
 
 /// Postures of arm `arm` above its handle (`above_m` higher) and at it.
-fn approach(params: &SimParams, model: &Model, arm: usize, above_m: f64) -> Result<([f64; N_ACT], [f64; N_ACT]), Error> {
+fn approach(
+    params: &SimParams,
+    model: &Model,
+    arm: usize,
+    above_m: f64,
+) -> Result<([f64; N_ACT], [f64; N_ACT]), Error> {
     let op = &params.object;
     let base = &params.arms[arm].base;
     let mut obj = op.initial_pose;
     obj.translation.vector.z -= op.mass_kg * 9.81 / (4.0 * op.contact_stiffness_n_m);
     let handle = obj * Point3::from(op.handles_m[arm]);
     let local = base.inverse() * handle;
-    let pre = ik_position(model, &(local.coords + Vector3::new(0.0, 0.0, above_m)), &params.arms[arm].initial_q)?;
+    let pre = ik_position(
+        model,
+        &(local.coords + Vector3::new(0.0, 0.0, above_m)),
+        &params.arms[arm].initial_q,
+    )?;
     let at = ik_position(model, &local.coords, &pre)?;
     Ok((pre, at))
 }
@@ -144,7 +188,12 @@ pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Err
     let params = SimParams::case_study(left, right)?;
     let (desc, idx) = match SCENARIOS.iter().position(|(n, _)| *n == name) {
         Some(i) => (SCENARIOS[i].1, i),
-        None => return Err(Error::InvalidParameter { what: "scenario", reason: format!("unknown scenario {name:?}") }),
+        None => {
+            return Err(Error::InvalidParameter {
+                what: "scenario",
+                reason: format!("unknown scenario {name:?}"),
+            });
+        }
     };
     let name: &'static str = SCENARIOS[idx].0;
     let open = 1.0;
@@ -156,20 +205,45 @@ pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Err
         0 => {
             // Each joint: +0.6 for 2 s, pause 1 s, −0.6 for 2 s, pause 1 s; then 4 s at rest.
             for j in 0..N_ACT {
-                segments.push(Segment::open("A", 2.0, ArmCommand::valve(j, 0.6, 0.0), rest));
+                segments.push(Segment::open(
+                    "A",
+                    2.0,
+                    ArmCommand::valve(j, 0.6, 0.0),
+                    rest,
+                ));
                 segments.push(Segment::open("A", 1.0, rest, rest));
-                segments.push(Segment::open("A", 2.0, ArmCommand::valve(j, -0.6, 0.0), rest));
+                segments.push(Segment::open(
+                    "A",
+                    2.0,
+                    ArmCommand::valve(j, -0.6, 0.0),
+                    rest,
+                ));
                 segments.push(Segment::open("A", 1.0, rest, rest));
             }
             segments.push(Segment::open("B", 4.0, rest, rest));
         }
         1 => {
             let (pre, at) = approach(&params, left, LEFT, 0.10)?;
-            segments.push(Segment::open("A", 6.0, ArmCommand::JointTarget { q: pre, jaw: open }, rest));
-            segments.push(Segment::open("A", 4.0, ArmCommand::JointTarget { q: at, jaw: open }, rest));
+            segments.push(Segment::open(
+                "A",
+                6.0,
+                ArmCommand::JointTarget { q: pre, jaw: open },
+                rest,
+            ));
+            segments.push(Segment::open(
+                "A",
+                4.0,
+                ArmCommand::JointTarget { q: at, jaw: open },
+                rest,
+            ));
             segments.push(Segment::open("B", 1.5, ArmCommand::jaw(close), rest));
             segments.push(Segment::open("B", 3.5, rest, rest));
-            segments.push(Segment::open("C", 2.0, ArmCommand::valve(1, 0.3, 0.0), rest));
+            segments.push(Segment::open(
+                "C",
+                2.0,
+                ArmCommand::valve(1, 0.3, 0.0),
+                rest,
+            ));
             segments.push(Segment::open("C", 4.0, rest, rest));
             segments.push(Segment::open("D", 1.0, ArmCommand::jaw(open), rest));
             segments.push(Segment::open("D", 4.0, rest, rest));
@@ -187,13 +261,26 @@ pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Err
             if idx == 2 {
                 segments.push(Segment::open("B", 3.0, rest, rest));
                 // C: lift with the shoulders (signal 2) and elbows (signal 3) of both arms.
-                let lift = ArmCommand::Valves { valves: [0.0, 0.4, 0.2, 0.0, 0.0, 0.0], jaw: 0.0 };
+                let lift = ArmCommand::Valves {
+                    valves: [0.0, 0.4, 0.2, 0.0, 0.0, 0.0],
+                    jaw: 0.0,
+                };
                 segments.push(Segment::open("C", 3.0, lift, lift));
                 segments.push(Segment::open("C", 2.0, rest, rest));
                 // D: move left: both swing joints the same way.
-                segments.push(Segment::open("D", 2.0, ArmCommand::valve(0, 0.4, 0.0), ArmCommand::valve(0, 0.4, 0.0)));
+                segments.push(Segment::open(
+                    "D",
+                    2.0,
+                    ArmCommand::valve(0, 0.4, 0.0),
+                    ArmCommand::valve(0, 0.4, 0.0),
+                ));
                 segments.push(Segment::open("D", 2.0, rest, rest));
-                segments.push(Segment::open("E", 1.0, ArmCommand::jaw(open), ArmCommand::jaw(open)));
+                segments.push(Segment::open(
+                    "E",
+                    1.0,
+                    ArmCommand::jaw(open),
+                    ArmCommand::jaw(open),
+                ));
                 segments.push(Segment::open("E", 4.0, rest, rest));
             } else {
                 segments.push(Segment::open("B", 1.0, rest, rest));
@@ -205,12 +292,23 @@ pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Err
                 segments.push(Segment::closed("C", 2.0, 0.0, [0.0; 6]));
                 segments.push(Segment::closed("D", 2.0, 0.0, [0.0, v, 0.0, 0.0, 0.0, 0.0]));
                 segments.push(Segment::closed("D", 2.0, 0.0, [0.0; 6]));
-                segments.push(Segment::open("E", 1.0, ArmCommand::jaw(open), ArmCommand::jaw(open)));
+                segments.push(Segment::open(
+                    "E",
+                    1.0,
+                    ArmCommand::jaw(open),
+                    ArmCommand::jaw(open),
+                ));
                 segments.push(Segment::open("E", 4.0, rest, rest));
             }
         }
     }
-    Ok(Scenario { name, description: desc, params, segments, commanded_lift_m })
+    Ok(Scenario {
+        name,
+        description: desc,
+        params,
+        segments,
+        commanded_lift_m,
+    })
 }
 
 impl Scenario {
@@ -221,7 +319,12 @@ impl Scenario {
 
     /// The step input for `seg` given the current simulation state (`_t_s` is the scenario time).
     pub fn input_at(&self, sim: &Simulation, seg: &Segment, _t_s: f64) -> Input {
-        let mut input = Input { method: seg.method, object_velocity: seg.object_velocity, speed_scale: 1.0, ..Input::default() };
+        let mut input = Input {
+            method: seg.method,
+            object_velocity: seg.object_velocity,
+            speed_scale: 1.0,
+            ..Input::default()
+        };
         for (i, cmd) in seg.arms.iter().enumerate() {
             match *cmd {
                 ArmCommand::Valves { valves, jaw } => {
@@ -313,7 +416,14 @@ impl Row {
             h.push(format!("object_{c}"));
         }
         h.push("grasp_state".into());
-        for c in ["left_yoshikawa", "left_isotropy", "right_yoshikawa", "right_isotropy", "dual_yoshikawa", "dual_isotropy"] {
+        for c in [
+            "left_yoshikawa",
+            "left_isotropy",
+            "right_yoshikawa",
+            "right_isotropy",
+            "dual_yoshikawa",
+            "dual_isotropy",
+        ] {
             h.push(c.into());
         }
         h
@@ -338,7 +448,14 @@ impl Row {
         v.extend(self.object_xyz.iter().map(|&x| f(x)));
         v.extend(self.object_rpy.iter().map(|&x| f(x)));
         v.push(self.grasp.as_str().into());
-        for x in [self.yoshikawa[0], self.isotropy[0], self.yoshikawa[1], self.isotropy[1], self.dual_yoshikawa, self.dual_isotropy] {
+        for x in [
+            self.yoshikawa[0],
+            self.isotropy[0],
+            self.yoshikawa[1],
+            self.isotropy[1],
+            self.dual_yoshikawa,
+            self.dual_isotropy,
+        ] {
             v.push(f(x));
         }
         v
@@ -443,10 +560,20 @@ pub fn row(sim: &Simulation, stage: &'static str) -> Row {
 }
 
 /// Runs `sc` from reset, calling `on_row` every [`RECORD_EVERY_STEPS`] steps (and at t = 0).
-pub fn run(sc: &Scenario, left: &Model, right: &Model, mut on_row: impl FnMut(&Row)) -> Result<Summary, Error> {
+pub fn run(
+    sc: &Scenario,
+    left: &Model,
+    right: &Model,
+    mut on_row: impl FnMut(&Row),
+) -> Result<Summary, Error> {
     let mut sim = Simulation::new(left.clone(), right.clone(), sc.params.clone())?;
     let dt = sc.params.step.dt_s;
-    let relief = sc.params.arms.iter().map(|a| a.hydraulics.relief_pa).fold(0.0, f64::max);
+    let relief = sc
+        .params
+        .arms
+        .iter()
+        .map(|a| a.hydraulics.relief_pa)
+        .fold(0.0, f64::max);
     let z0 = sim.object().pose.translation.z;
     let mut s = Summary {
         scenario: sc.name,
@@ -464,7 +591,10 @@ pub fn run(sc: &Scenario, left: &Model, right: &Model, mut on_row: impl FnMut(&R
         sim_seconds: 0.0,
         numerical_faults: 0,
     };
-    on_row(&row(&sim, sc.segments.first().map(|s| s.stage).unwrap_or("")));
+    on_row(&row(
+        &sim,
+        sc.segments.first().map(|s| s.stage).unwrap_or(""),
+    ));
     let total = sc.duration_s();
     let mut lift_start: Option<f64> = None;
     let mut lift_end: Option<f64> = None;
@@ -480,18 +610,24 @@ pub fn run(sc: &Scenario, left: &Model, right: &Model, mut on_row: impl FnMut(&R
             for a in 0..2 {
                 let arm = sim.arm(a);
                 for j in 0..N_ACT {
-                    s.peak_line_pressure_pa = s.peak_line_pressure_pa.max(arm.p_in[j]).max(arm.p_out[j]);
+                    s.peak_line_pressure_pa =
+                        s.peak_line_pressure_pa.max(arm.p_in[j]).max(arm.p_out[j]);
                 }
                 s.peak_grasp_error_m = s.peak_grasp_error_m.max(sim.grasp_error(a).0);
                 if sim.time_s() > total - 1.0 {
                     for j in 0..N_ACT {
-                        s.final_max_joint_speed_rad_s = s.final_max_joint_speed_rad_s.max(arm.qd[j].abs());
+                        s.final_max_joint_speed_rad_s =
+                            s.final_max_joint_speed_rad_s.max(arm.qd[j].abs());
                     }
                 }
             }
             let fi = sim.internal_wrench();
-            s.peak_internal_force_n = s.peak_internal_force_n.max(Vector3::new(fi[0], fi[1], fi[2]).norm());
-            s.peak_internal_torque_nm = s.peak_internal_torque_nm.max(Vector3::new(fi[3], fi[4], fi[5]).norm());
+            s.peak_internal_force_n = s
+                .peak_internal_force_n
+                .max(Vector3::new(fi[0], fi[1], fi[2]).norm());
+            s.peak_internal_torque_nm = s
+                .peak_internal_torque_nm
+                .max(Vector3::new(fi[3], fi[4], fi[5]).norm());
             s.object_lift_m = s.object_lift_m.max(sim.object().pose.translation.z - z0);
             if sim.steps() % RECORD_EVERY_STEPS == 0 {
                 on_row(&row(&sim, seg.stage));

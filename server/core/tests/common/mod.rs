@@ -15,5 +15,5 @@ pub(crate) fn all_builtin() -> Vec<Model> {
     robots::BUILTIN.iter().map(|(n, _)| builtin(n)).collect()
 }
 
-pub(crate) mod scenario_util;
 pub(crate) mod rng;
+pub(crate) mod scenario_util;

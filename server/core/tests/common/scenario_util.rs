@@ -14,7 +14,11 @@ pub(crate) fn start(name: &str) -> (Scenario, Simulation) {
 
 /// Runs the scenario's segments while `keep_going(segment index, sim)` holds; returns the
 /// index of the first segment not run (or the number of segments).
-pub(crate) fn run_while(sc: &Scenario, sim: &mut Simulation, mut keep_going: impl FnMut(usize, &Simulation) -> bool) -> usize {
+pub(crate) fn run_while(
+    sc: &Scenario,
+    sim: &mut Simulation,
+    mut keep_going: impl FnMut(usize, &Simulation) -> bool,
+) -> usize {
     for (k, seg) in sc.segments.iter().enumerate() {
         if !keep_going(k, sim) {
             return k;

@@ -9,6 +9,7 @@
 //! * [`protocol`]: WebSocket wire types (the page contract).
 //! * [`error`]: the one HTTP error type.
 //! * [`assets`]: the embedded web page and vendored libraries.
+//! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
 
 pub mod api;
 pub mod app;
@@ -18,6 +19,7 @@ pub mod error;
 pub mod json;
 pub mod protocol;
 pub mod robots;
+pub mod scenarios;
 
 use std::future::Future;
 

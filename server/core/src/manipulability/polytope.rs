@@ -369,6 +369,7 @@ fn intersect(p1: &Polytope, p2: &Polytope) -> Result<Polytope, Error> {
         .collect();
     let mut next: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(faces.len() + 8);
     let mut cap: Vec<Vector3<f64>> = Vec::new();
+    let mut ds: Vec<f64> = Vec::new();
     for f in &p2.facets {
         let (a, b, c) = (v2[f[0]], v2[f[1]], v2[f[2]]);
         let n = (b - a).cross(&(c - a));
@@ -384,12 +385,19 @@ fn intersect(p1: &Polytope, p2: &Polytope) -> Result<Polytope, Error> {
         }
         next.clear();
         cap.clear();
-        for face in &faces {
+        for face in faces.drain(..) {
+            ds.clear();
+            ds.extend(face.iter().map(dist));
+            if ds.iter().all(|&d| d <= eps) {
+                // Untouched face; its corners on the plane belong to the cap.
+                let on = face.iter().zip(&ds).filter(|(_, d)| d.abs() <= eps);
+                cap.extend(on.map(|(x, _)| *x));
+                next.push(face);
+                continue;
+            }
             let mut out: Vec<Vector3<f64>> = Vec::with_capacity(face.len() + 1);
-            let mut prev = face[face.len() - 1];
-            let mut prev_d = dist(&prev);
-            for &cur in face {
-                let cur_d = dist(&cur);
+            let (mut prev, mut prev_d) = (face[face.len() - 1], ds[ds.len() - 1]);
+            for (&cur, &cur_d) in face.iter().zip(&ds) {
                 match (prev_d <= eps, cur_d <= eps) {
                     (true, true) => out.push(cur),
                     (true, false) => out.push(cut(prev, prev_d, cur, cur_d)),

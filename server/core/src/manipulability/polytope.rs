@@ -64,7 +64,9 @@ const GEN_TOL: f64 = 1e-9;
 /// With s the largest absolute coordinate: points closer than 10⁻¹⁰·s to each other are one
 /// (the first in x order is kept), points within 10⁻¹²·s of the hull count as on it, and
 /// points inside an edge or a face of the hull are not corners; duplicate, collinear and
-/// coplanar points are therefore harmless. Every corner of the result is one of the inputs. `volume` is the signed-tetrahedron sum (divergence
+/// coplanar points are therefore harmless. Every corner of the result is one of the inputs.
+/// The volume is exact up to about (surface area)·10⁻¹²·s, which matters only for hulls
+/// thinner than about 10⁻⁸·s. `volume` is the signed-tetrahedron sum (divergence
 /// theorem) and `w_p` the cone-cell index about the origin (see [`Polytope::w_p`]).
 ///
 /// # Errors

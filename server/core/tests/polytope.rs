@@ -99,7 +99,8 @@ fn check_mesh(p: &Polytope) {
         for v in &p.vertices {
             assert!(
                 n.dot(&v3(v)) <= d + tol,
-                "hull is not convex at facet {f:?}"
+                "hull is not convex at facet {f:?}: {} > {tol:e}",
+                n.dot(&v3(v)) - d
             );
         }
     }
@@ -422,6 +423,41 @@ proptest! {
         prop_assert!(close(ps.volume, p.volume * s.powi(3), 1e-9));
         let q = dual_velocity_polytope(&(&j * s), &qmax, &(&j * s), &qmax).unwrap();
         prop_assert!(close(q.volume, ps.volume, 1e-9));
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// Near-degenerate clouds (a 4×4×4 grid, cube-face points and near-duplicates, all jittered
+    /// by 10⁻¹⁶…10⁻⁸ relative): the hull is still a closed outward convex mesh containing every
+    /// input, with volume within the jitter of the grid cube's.
+    #[test]
+    fn hull_of_jittered_grids_is_valid(
+        jitter in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 64 + 48),
+        e in -16i32..=-8,
+        offset in prop::array::uniform3(-10.0f64..10.0),
+    ) {
+        let amp = 10f64.powi(e);
+        let mut pts: Vec<[f64; 3]> = (0..64)
+            .map(|i| [(i % 4) as f64 / 3.0, (i / 4 % 4) as f64 / 3.0, (i / 16) as f64 / 3.0])
+            .collect();
+        // Face-centre points and near-duplicates of corners.
+        for i in 0..48 {
+            pts.push(if i % 2 == 0 { [0.5, 0.5, (i % 4 / 2) as f64] } else { pts[(i * 7) % 64] });
+        }
+        for (p, j) in pts.iter_mut().zip(&jitter) {
+            for k in 0..3 {
+                p[k] += offset[k] + amp * j[k];
+            }
+        }
+        let h = convex_hull(&pts).unwrap();
+        check_mesh(&h);
+        let tol = 1e-9 * scale_of(&h);
+        for q in &pts {
+            prop_assert!(inside(&h, &v3(q), tol), "{:?} outside", q);
+        }
+        prop_assert!((h.volume - 1.0).abs() <= 1e-6, "volume {}", h.volume);
     }
 }
 

@@ -66,7 +66,9 @@ const GEN_TOL: f64 = 1e-9;
 /// points inside an edge or a face of the hull are not corners; duplicate, collinear and
 /// coplanar points are therefore harmless. Every corner of the result is one of the inputs.
 /// The volume is exact up to about (surface area)·10⁻¹²·s, which matters only for hulls
-/// thinner than about 10⁻⁸·s. `volume` is the signed-tetrahedron sum (divergence
+/// thinner than about 10⁻⁸·s. The result is checked: if rounding left any point more than
+/// 10⁻⁹·s outside a facet plane (points scattered about a plane by about the tolerance can
+/// do that), the hull is recomputed with the tolerance raised to 10⁻⁹·s and then 10⁻⁷·s. `volume` is the signed-tetrahedron sum (divergence
 /// theorem) and `w_p` the cone-cell index about the origin (see [`Polytope::w_p`]).
 ///
 /// # Errors
@@ -549,14 +551,44 @@ type Mesh = (Vec<Vector3<f64>>, Vec<[usize; 3]>);
 /// Quickhull of `pts` without spurious corners: returns the corners (a subset of `pts`) and
 /// outward triangles indexing them.
 ///
-/// Quickhull adds the farthest outside point at each step, which can end up on an edge or in
-/// a face of the final hull (e.g. a zonotope's edge midpoint). Such points are no corners:
-/// they are dropped (see [`corner_flags`]) and the remaining corners hulled again (rarely
-/// more than once).
+/// Near-duplicates are merged first ([`distinct`]). Quickhull adds the farthest outside point
+/// at each step, which can end up on an edge or in a face of the final hull (e.g. a zonotope's
+/// edge midpoint); such points are no corners: they are dropped ([`corner_flags`]) and the rest
+/// hulled again. Points scattered about a plane by about the tolerance can make the
+/// tolerance-based visibility inconsistent; the result is therefore checked (every point on
+/// or below every facet plane, to 1000× the tolerance) and, failing that, recomputed with a
+/// 1000× and then a 10⁵× larger tolerance.
 fn quickhull(pts: &[Vector3<f64>]) -> Result<Mesh, Error> {
     let scale = pts.iter().map(|p| p.amax()).fold(0.0, f64::max);
-    let eps = HULL_TOL * scale;
-    let (mut verts, mut facets) = quickhull_raw(&distinct(pts, MERGE_TOL * scale))?;
+    let pts = distinct(pts, MERGE_TOL * scale);
+    let mut failure = Error::Numerical {
+        what: "convex hull",
+        reason: "no attempt".into(),
+    };
+    for tol in [HULL_TOL, 1e3 * HULL_TOL, 1e5 * HULL_TOL] {
+        let eps = tol * scale;
+        match hull_without_spurious_corners(&pts, eps) {
+            Ok(mesh) => {
+                let worst = max_violation(&mesh, &pts);
+                if worst <= 1e3 * eps {
+                    return Ok(mesh);
+                }
+                failure = Error::Numerical {
+                    what: "convex hull",
+                    reason: format!("a point is {worst:e} outside a facet"),
+                };
+            }
+            Err(e @ Error::Degenerate { .. }) => return Err(e),
+            Err(e) => failure = e,
+        }
+    }
+    Err(failure)
+}
+
+/// [`quickhull_raw`] at tolerance `eps` (a length), then non-corners dropped and the rest
+/// hulled again (rarely more than once).
+fn hull_without_spurious_corners(pts: &[Vector3<f64>], eps: f64) -> Result<Mesh, Error> {
+    let (mut verts, mut facets) = quickhull_raw(pts, eps)?;
     for _ in 0..4 {
         let keep = corner_flags(&verts, &facets, eps);
         if keep.iter().all(|&k| k) {
@@ -568,9 +600,25 @@ fn quickhull(pts: &[Vector3<f64>]) -> Result<Mesh, Error> {
             .filter(|(_, k)| **k)
             .map(|(v, _)| *v)
             .collect();
-        (verts, facets) = quickhull_raw(&corners)?;
+        (verts, facets) = quickhull_raw(&corners, eps)?;
     }
     Ok((verts, facets))
+}
+
+/// Largest signed distance of any of `pts` above any facet plane of `mesh` (≤ 0 when all
+/// are inside), or +∞ for a facet without a normal.
+fn max_violation(mesh: &Mesh, pts: &[Vector3<f64>]) -> f64 {
+    let (verts, facets) = mesh;
+    let mut worst = f64::NEG_INFINITY;
+    for f in facets {
+        let Ok((n, d)) = plane_of(verts, *f) else {
+            return f64::INFINITY;
+        };
+        for p in pts {
+            worst = worst.max(n.dot(p) - d);
+        }
+    }
+    worst
 }
 
 /// For each vertex of a closed convex mesh: whether it is a true corner. A vertex is not
@@ -622,17 +670,16 @@ fn corner_flags(verts: &[Vector3<f64>], facets: &[[usize; 3]], eps: f64) -> Vec<
         .collect()
 }
 
-/// Plain quickhull of `pts`: corners (a subset of `pts`, possibly with points on edges or
-/// faces of the hull) and outward triangles indexing them.
-fn quickhull_raw(pts: &[Vector3<f64>]) -> Result<Mesh, Error> {
-    let scale = pts.iter().map(|p| p.amax()).fold(0.0, f64::max);
+/// Plain quickhull of `pts` at tolerance `eps` (a length: points within it of a facet plane
+/// are on it): corners (a subset of `pts`, possibly with points on edges or faces of the
+/// hull) and outward triangles indexing them.
+fn quickhull_raw(pts: &[Vector3<f64>], eps: f64) -> Result<Mesh, Error> {
     if pts.is_empty() {
         return Err(Error::Degenerate {
             what: "convex hull",
             dimension: 0,
         });
     }
-    let eps = HULL_TOL * scale;
     let simplex = initial_simplex(pts, eps)?;
     let mut faces: Vec<Face> = Vec::with_capacity(8 * pts.len().min(1024));
     let [i0, i1, i2, i3] = simplex;

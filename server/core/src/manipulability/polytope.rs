@@ -68,13 +68,16 @@ const GEN_TOL: f64 = 1e-9;
 /// The volume is exact up to about (surface area)·10⁻¹²·s, which matters only for hulls
 /// thinner than about 10⁻⁸·s. The result is checked: if rounding left any point more than
 /// 10⁻⁹·s outside a facet plane (points scattered about a plane by about the tolerance can
-/// do that), the hull is recomputed with the tolerance raised to 10⁻⁹·s and then 10⁻⁷·s. `volume` is the signed-tetrahedron sum (divergence
+/// do that), the hull is recomputed with the tolerance raised to 10⁻⁹·s and then 10⁻⁷·s, and
+/// accepted when every point is within 1000× the tolerance used of it (at worst 10⁻⁴·s, for
+/// such noisy near-degenerate clouds only; velocity polytopes pass at the first tolerance). `volume` is the signed-tetrahedron sum (divergence
 /// theorem) and `w_p` the cone-cell index about the origin (see [`Polytope::w_p`]).
 ///
 /// # Errors
 /// [`Error::NonFinite`] for a NaN or infinite coordinate, [`Error::Degenerate`] when the
 /// points span fewer than 3 dimensions (none, one point, a segment or a flat set; the hull
-/// then has zero volume), [`Error::Numerical`] if rounding breaks the hull's topology.
+/// then has zero volume), [`Error::Numerical`] if no tolerance gives a valid hull (not seen in
+/// testing).
 pub fn convex_hull(points: &[[f64; 3]]) -> Result<Polytope, Error> {
     for (i, p) in points.iter().enumerate() {
         if p.iter().any(|v| !v.is_finite()) {

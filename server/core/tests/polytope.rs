@@ -308,9 +308,9 @@ proptest! {
         }
     }
 
-    /// Hull of random points (with duplicates and a coplanar grid mixed in): every input is
-    /// inside or on every facet plane, every corner is an input, facets point outward,
-    /// V − E + F = 2; the volume of the hull of a cube's grid points is the cube's.
+    /// Definition of the convex hull, on random points with exact duplicates mixed in: every
+    /// input is inside or on every facet plane, every corner is an input, facets point
+    /// outward, every edge has two facets, V − E + F = 2 (Euler, convex polyhedron).
     #[test]
     fn hull_contains_inputs_and_corners_are_inputs(
         pts in prop::collection::vec(prop::array::uniform3(-5.0f64..5.0), 4..120),

@@ -592,6 +592,20 @@ fn degenerate_inputs_give_errors_not_panics() {
         convex_hull(&flat),
         Err(Error::Degenerate { dimension: 2, .. })
     ));
+    // Planar: parallel columns give a segment; a dual polytope needs 3 rows.
+    assert!(matches!(
+        velocity_polytope(&matrix(2, 3, &[1.0, 2.0, 0.0, 2.0, 4.0, 0.0]), &[1.0; 3]),
+        Err(Error::Degenerate { dimension: 1, .. })
+    ));
+    assert!(matches!(
+        dual_velocity_polytope(
+            &DMatrix::identity(2, 2),
+            &[1.0; 2],
+            &DMatrix::identity(2, 2),
+            &[1.0; 2]
+        ),
+        Err(Error::InvalidRows { .. })
+    ));
     // Magnitudes whose products overflow or underflow f64: an error or a finite result.
     for s in [1e200, 1e-200, f64::MAX, f64::MIN_POSITIVE] {
         let j = matrix(

@@ -100,7 +100,9 @@ pub fn convex_hull(points: &[[f64; 3]]) -> Result<Polytope, Error> {
 /// `j` is m×n with m = 3 (rows vx vy vz of a geometric Jacobian, any frame) or m = 2 (a
 /// planar task, rows x y); `qdot_max` holds n joint-rate bounds (each joint's
 /// `max_velocity`, rad/s or m/s), each ≥ 0. The result is in the frame of `j`'s rows;
-/// zero columns and zero bounds contribute nothing.
+/// zero columns and zero bounds contribute nothing. Relative tolerance 10⁻⁹: a generator
+/// shorter than that times the longest is zero, two within that angle (sine) are parallel and
+/// merge, and generators within it of a common plane make the polytope flat.
 ///
 /// # Errors
 /// [`Error::InvalidRows`] unless m is 2 or 3; [`Error::SizeMismatch`] when `qdot_max` does

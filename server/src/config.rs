@@ -33,6 +33,13 @@ pub enum Command {
     },
     /// Load-test a running server: N trainee sessions with random sticks plus M observers.
     Load(crate::load::LoadArgs),
+    /// Exit 0 when the server answers `/healthz` (the container's HEALTHCHECK; the runtime
+    /// image has no curl).
+    Healthcheck {
+        /// URL to probe.
+        #[arg(long, default_value = "http://127.0.0.1:8080/healthz")]
+        url: String,
+    },
 }
 
 /// Settings of the HTTP server.

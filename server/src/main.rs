@@ -24,6 +24,20 @@ async fn main() -> anyhow::Result<()> {
             println!("{}", serde_json::to_string_pretty(&summary)?);
             Ok(())
         }
+        Some(Command::Healthcheck { url }) => {
+            let resp = reqwest::Client::builder()
+                .timeout(std::time::Duration::from_secs(2))
+                .build()?
+                .get(&url)
+                .send()
+                .await?;
+            anyhow::ensure!(
+                resp.status().is_success(),
+                "{url} answered {}",
+                resp.status()
+            );
+            Ok(())
+        }
         Some(Command::Load(args)) => {
             let report = seaarms::load::run(args, cli.serve.instructor_token).await?;
             println!("{}", serde_json::to_string_pretty(&report)?);

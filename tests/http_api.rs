@@ -2,6 +2,8 @@
 //! and every error path (unknown robot, wrong q length, non-finite numbers, malformed JSON,
 //! bodies over 64 KiB) answered with a 4xx and a JSON `{"error": ...}` body.
 
+#![allow(clippy::unwrap_used)]
+
 use serde_json::{Value, json};
 
 struct Server {

@@ -3,6 +3,8 @@
 //! messages get an error and never hurt the session; a stalled client does not slow another
 //! session; records survive a restart; the cap answers 503; OpenAPI lists every route.
 
+#![allow(clippy::unwrap_used)]
+
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 

@@ -2,6 +2,8 @@
 //! Πσ = √det(JJᵀ), sorted non-negative σ, ellipsoid volume coefficient (eq. 2.18), force
 //! measures reciprocal, and the dual-arm ellipsoid of two identical arms (eq. 3.68).
 
+#![allow(clippy::unwrap_used)]
+
 mod common;
 
 use nalgebra::{DMatrix, Rotation3, Vector3};

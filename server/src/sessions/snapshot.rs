@@ -48,74 +48,79 @@ fn translational(j: &Matrix6<f64>) -> DMatrix<f64> {
     DMatrix::from_fn(3, 6, |r, c| j[(r, c)])
 }
 
+/// One arm's frame and its translational Jacobian (world), with its warnings.
+fn arm_frame(
+    session: &Session,
+    live: &mut Live,
+    arm: usize,
+    name: &str,
+    warnings: &mut Vec<String>,
+) -> (ArmFrame, DMatrix<f64>) {
+    let sim = &live.sim;
+    let model = &session.models[arm];
+    let state = sim.arm(arm);
+    let jt = translational(sim.jacobian_world(arm));
+    let m = measures(&jt)
+        .unwrap_or_else(|_| Measures::from_spectrum(&[0.0; 3], &DMatrix::identity(3, 3), 0.0));
+    if m.isotropy < NEAR_SINGULAR_ISOTROPY {
+        warnings.push(format!("near_singularity:{name}"));
+    }
+    for (i, (q, joint)) in state.q.iter().zip(&model.joints).enumerate() {
+        if joint.is_limited() {
+            let span = joint.limits[1] - joint.limits[0];
+            if q - joint.limits[0] < NEAR_LIMIT_FRACTION * span
+                || joint.limits[1] - q < NEAR_LIMIT_FRACTION * span
+            {
+                warnings.push(format!("near_joint_limit:{name}:{i}"));
+            }
+        }
+    }
+    for (i, open) in state.relief_open.iter().enumerate() {
+        if *open {
+            warnings.push(format!("relief:{name}:{i}"));
+        }
+    }
+    let base: Isometry3<f64> = sim.params().arms[arm].base;
+    forward_kinematics(model, &mut live.kin[arm], &state.q);
+    let joint_frames = live.kin[arm]
+        .joint_frames
+        .iter()
+        .map(|f| PoseOut::from(&(base * f)))
+        .collect();
+    let w = state.contact_wrench;
+    let frame = ArmFrame {
+        q: state.q,
+        qd: state.qd,
+        p_in: state.p_in,
+        p_out: state.p_out,
+        jaw_opening_m: state.jaw_opening_m,
+        holding: state.holding,
+        contact: state.contact,
+        pose: (&sim.end_effector(arm)).into(),
+        joint_frames,
+        ellipsoid: ellipsoid(&m),
+        measures: measures_frame(&m, Some(jlm(model, &state.q))),
+        contact_force_n: [w[0], w[1], w[2]],
+        contact_torque_nm: [w[3], w[4], w[5]],
+        relief_open: state.relief_open,
+    };
+    (frame, jt)
+}
+
 /// Builds the frame for the session's current state.
 pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
-    let sim = &live.sim;
     let mut warnings = Vec::new();
-    let mut jt = [DMatrix::zeros(3, 6), DMatrix::zeros(3, 6)];
-    let mut arms = Vec::with_capacity(2);
-    for (arm, name) in [(LEFT, "left"), (RIGHT, "right")] {
-        let model = &session.models[arm];
-        let state = sim.arm(arm);
-        jt[arm] = translational(sim.jacobian_world(arm));
-        let m = measures(&jt[arm]).unwrap_or_else(|_| zero_measures());
-        let p_jlm = jlm(model, &state.q);
-        if m.isotropy < NEAR_SINGULAR_ISOTROPY {
-            warnings.push(format!("near_singularity:{name}"));
-        }
-        for (i, (q, joint)) in state.q.iter().zip(&model.joints).enumerate() {
-            if joint.is_limited() {
-                let span = joint.limits[1] - joint.limits[0];
-                if q - joint.limits[0] < NEAR_LIMIT_FRACTION * span
-                    || joint.limits[1] - q < NEAR_LIMIT_FRACTION * span
-                {
-                    warnings.push(format!("near_joint_limit:{name}:{i}"));
-                }
-            }
-        }
-        for (i, open) in state.relief_open.iter().enumerate() {
-            if *open {
-                warnings.push(format!("relief:{name}:{i}"));
-            }
-        }
-        let base: Isometry3<f64> = sim.params().arms[arm].base;
-        forward_kinematics(model, &mut live.kin[arm], &state.q);
-        let joint_frames = live.kin[arm]
-            .joint_frames
-            .iter()
-            .map(|f| PoseOut::from(&(base * f)))
-            .collect();
-        let w = state.contact_wrench;
-        arms.push(ArmFrame {
-            q: state.q,
-            qd: state.qd,
-            p_in: state.p_in,
-            p_out: state.p_out,
-            jaw_opening_m: state.jaw_opening_m,
-            holding: state.holding,
-            contact: state.contact,
-            pose: (&sim.end_effector(arm)).into(),
-            joint_frames,
+    let (left, jl) = arm_frame(session, live, LEFT, "left", &mut warnings);
+    let (right, jr) = arm_frame(session, live, RIGHT, "right", &mut warnings);
+    let sim = &live.sim;
+    let dual = if left.holding && right.holding {
+        dual_measures(&jl, &jr).ok().map(|m| DualFrame {
             ellipsoid: ellipsoid(&m),
-            measures: measures_frame(&m, Some(p_jlm)),
-            contact_force_n: [w[0], w[1], w[2]],
-            contact_torque_nm: [w[3], w[4], w[5]],
-            relief_open: state.relief_open,
-        });
-    }
-    let both = sim.arm(LEFT).holding && sim.arm(RIGHT).holding;
-    let dual = if both {
-        dual_measures(&jt[LEFT], &jt[RIGHT])
-            .ok()
-            .map(|m| DualFrame {
-                ellipsoid: ellipsoid(&m),
-                measures: measures_frame(&m, None),
-            })
+            measures: measures_frame(&m, None),
+        })
     } else {
         None
     };
-    let right = arms.pop().unwrap_or_else(|| unreachable_arm());
-    let left = arms.pop().unwrap_or_else(|| unreachable_arm());
     let object = sim.object();
     let v = object.velocity;
     let internal = sim.internal_wrench();
@@ -137,39 +142,6 @@ pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
         relief_events: sim.relief_events(),
         warnings,
         faults: live.faults.clone(),
-    }
-}
-
-fn zero_measures() -> Measures {
-    Measures::from_spectrum(&[0.0; 3], &DMatrix::identity(3, 3), 0.0)
-}
-
-fn unreachable_arm() -> ArmFrame {
-    // Both arms are always pushed above; this keeps the code free of panics regardless.
-    ArmFrame {
-        q: [0.0; 6],
-        qd: [0.0; 6],
-        p_in: [0.0; 6],
-        p_out: [0.0; 6],
-        jaw_opening_m: 0.0,
-        holding: false,
-        contact: false,
-        pose: (&Isometry3::identity()).into(),
-        joint_frames: Vec::new(),
-        ellipsoid: EllipsoidFrame {
-            radii: [0.0; 3],
-            axes: [[0.0; 3]; 3],
-        },
-        measures: MeasuresFrame {
-            yoshikawa: 0.0,
-            isotropy: 0.0,
-            hong: 0.0,
-            condition_number: None,
-            jlm: None,
-        },
-        contact_force_n: [0.0; 3],
-        contact_torque_nm: [0.0; 3],
-        relief_open: [false; 6],
     }
 }
 

@@ -28,11 +28,11 @@ podman build -q --runtime runc -f "$ctx/Prebuilt" -t localhost/seaarms-prebuilt 
 # The runtime stage exactly as written in the Dockerfile.
 awk '/^FROM \$\{RUNTIME_IMAGE\} AS runtime/{on=1} on' Dockerfile > "$ctx/Runtime"
 sed -i '1i ARG RUNTIME_IMAGE\nFROM localhost/seaarms-prebuilt AS builder' "$ctx/Runtime"
-podman build -q --runtime runc --build-arg RUNTIME_IMAGE=localhost/debian-base:bookworm \
+podman build -q --format docker --runtime runc --build-arg RUNTIME_IMAGE=localhost/debian-base:bookworm \
   -f "$ctx/Runtime" -t localhost/seaarms-smoke "$ctx" >/dev/null
 podman rm -f seaarms-smoke >/dev/null 2>&1 || true
 podman volume rm -f seaarms-smoke-data >/dev/null 2>&1 || true
-podman run -d --runtime runc --name seaarms-smoke --network host \
+podman run -d --runtime runc --ulimit host --name seaarms-smoke --network host \
   -e SEAARMS_BIND="127.0.0.1:$port" -e SEAARMS_INSTRUCTOR_TOKEN=smoke \
   -v seaarms-smoke-data:/var/lib/seaarms/data localhost/seaarms-smoke >/dev/null
 trap 'podman rm -f seaarms-smoke >/dev/null 2>&1 || true' EXIT

@@ -74,8 +74,7 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
     let rank = (0..k).filter(|&i| sigma[i] > tolerance).count();
     let mut u_r = DMatrix::zeros(m, rank);
     for i in 0..rank {
-        let ui = j * v.column(i) / sigma[i];
-        u_r.set_column(i, &ui);
+        u_r.column_mut(i).gemv(1.0 / sigma[i], j, &v.column(i), 0.0);
     }
     Ok(FullSvd {
         u: complete_basis(&u_r),

@@ -7,7 +7,8 @@
 //! * [`valve_flow`]: turbulent orifice flow with the sign logic of eq. 3.48.
 //! * [`update_chambers`]: one backward-Euler step of the chamber continuity equations
 //!   (3.49–3.50, 3.56) including relief flow, piston leakage and the cavitation floor.
-//! * [`JawParams`]: the jaw function (Table 1-1: 7.5 cm, 10.2 cm/s, 150 kgf).
+//! * [`JawParams`]: the jaw function (Table 1-1: 7.5 cm, 10.2 cm/s, 150 kgf), modelled as a
+//!   flow-limited actuator (opening rate ∝ command) with a clamp force, not a chamber model.
 //!
 //! Pressures are gauge pressures relative to the return line (Pa); the return line is at
 //! `return_pa` (0 by default). A chamber never goes below 0 Pa: below that the oil would

@@ -25,6 +25,15 @@
 //! once per 1 ms step and held over its sub-steps (they change by < 0.3 % in 1 ms at the
 //! arms' speeds); pressures, forces, velocities and positions are updated every sub-step.
 //! Everything is fixed-size and allocation-free; the result depends only on the inputs.
+//!
+//! # Simplifications (not modelled)
+//! * The jaw is a flow-limited actuator (opening rate ∝ command, Table 1-1 speed) with a clamp
+//!   force, not a chamber model; the grasp is rigid whatever the clamp force (no slip).
+//! * Contact is jaw–handle only (capture radius) and box–seabed (corner penalty springs with
+//!   friction); links do not collide with the object, the seabed or each other.
+//! * Valves are ideal critically lapped spools with instantaneous response (Lim eq. 3.51);
+//!   no valve leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
+//! * Buoyancy (optional) uses the mean link density; drag is an optional quadratic joint term.
 
 pub mod scenario;
 

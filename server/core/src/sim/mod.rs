@@ -812,8 +812,8 @@ impl Simulation {
                 &mut w.dynd,
             );
             dynamics::crba(model, &ap.inertials, &w.kin, &mut w.dynd);
-            let jb =
-                dynamics::tool_bias_acceleration(model, &w.kin, &a.qd, &[0.0; N_ACT], &mut w.dynd);
+            // J̇q̇ from the forward pass of the RNEA call above (q̈ = 0).
+            let jb = dynamics::tool_bias_from_rnea(model, &w.kin, &gb, &w.dynd);
             let rm = ap.base.rotation.to_rotation_matrix();
             let l = rm * Vector3::new(jb[0], jb[1], jb[2]);
             let an = rm * Vector3::new(jb[3], jb[4], jb[5]);

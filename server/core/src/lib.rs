@@ -9,6 +9,7 @@
 //! * [`kinematics`]: forward kinematics of every frame, geometric Jacobian.
 //! * [`ik`]: Magnum closed-form IK (Lim eqs 3.10–3.19) and damped-least-squares IK.
 //! * [`manipulability`]: ellipsoid measures, JLM, dual-arm ellipsoid, velocity polytopes.
+//! * [`optimize`]: TOMM/JLM objective and gradients; optimal posture by multi-start SLSQP (Jun §3).
 
 pub mod error;
 pub mod ik;
@@ -16,6 +17,7 @@ pub mod ik;
 pub mod kinematics;
 pub mod manipulability;
 pub mod model;
+pub mod optimize;
 pub mod robots;
 
 pub use error::Error;

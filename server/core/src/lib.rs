@@ -10,6 +10,8 @@
 //! * [`ik`]: Magnum closed-form IK (Lim eqs 3.10–3.19) and damped-least-squares IK.
 //! * [`manipulability`]: ellipsoid measures, JLM, dual-arm ellipsoid, velocity polytopes.
 //! * [`optimize`]: TOMM/JLM objective and gradients; optimal posture by multi-start SLSQP (Jun §3).
+//! * [`redundancy`]: task-oriented redundancy resolution, task priority, damping, velocity
+//!   limits, feedback form (Jun eqs 19–24, Kilic eqs 0.2–0.10); allocation-free steps.
 
 pub mod error;
 pub mod ik;
@@ -18,6 +20,7 @@ pub mod kinematics;
 pub mod manipulability;
 pub mod model;
 pub mod optimize;
+pub mod redundancy;
 pub mod robots;
 
 pub use error::Error;

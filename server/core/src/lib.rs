@@ -12,6 +12,8 @@
 //! * [`optimize`]: TOMM/JLM objective and gradients; optimal posture by multi-start SLSQP (Jun §3).
 //! * [`redundancy`]: task-oriented redundancy resolution, task priority, damping, velocity
 //!   limits, feedback form (Jun eqs 19–24, Kilic eqs 0.2–0.10); allocation-free steps.
+//! * [`studies`]: Lim §4.3 manipulability case studies (single and dual arm) as rows, and a
+//!   workspace map of translational measures.
 
 pub mod error;
 pub mod ik;
@@ -22,6 +24,7 @@ pub mod model;
 pub mod optimize;
 pub mod redundancy;
 pub mod robots;
+pub mod studies;
 
 pub use error::Error;
 pub use model::{Joint, JointKind, Model, ModelSpec};

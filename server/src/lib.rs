@@ -1,1 +1,3 @@
 //! seaarms server.
+
+pub mod analysis_ext;

@@ -497,13 +497,16 @@ fn symmetric_min_eigenvalue(m: &[f64; MAX_ROWS * MAX_ROWS], k: usize) -> f64 {
             }
         }
         let scale: f64 = (0..k).map(|i| a[i * k + i].abs()).sum::<f64>() + f64::MIN_POSITIVE;
-        if off.sqrt() <= 1e-15 * scale {
+        if off.sqrt() <= 1e-14 * scale {
             break;
         }
         for p in 0..k {
             for q in p + 1..k {
                 let apq = a[p * k + q];
-                if apq == 0.0 {
+                // Negligible against the diagonal: treat as converged (no rotation).
+                if apq.abs() <= 1e-15 * (a[p * k + p].abs() + a[q * k + q].abs()) {
+                    a[p * k + q] = 0.0;
+                    a[q * k + p] = 0.0;
                     continue;
                 }
                 let theta = (a[q * k + q] - a[p * k + p]) / (2.0 * apq);

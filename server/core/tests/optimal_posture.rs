@@ -6,6 +6,7 @@ mod common;
 
 use seaarms_core::Error;
 use seaarms_core::kinematics::end_effector_pose;
+use seaarms_core::manipulability::jlm;
 use seaarms_core::optimize::{PostureOptions, PostureResult, optimal_posture, posture_objective};
 
 /// Jun Fig. 3 / Fig. 4(a): the example posture (deg).
@@ -33,6 +34,14 @@ fn orion_at_example(alpha: f64) -> PostureResult {
         r.tomm, r.jlm, r.objective, r.iterations, r.constraint_violation_m, r.start
     );
     check_result(&model, &r, &[p.x, p.y, p.z], alpha, &[0, 1, 2]);
+    for s in &r.starts {
+        let t = -posture_objective(&model, &s.q, &[0, 1, 2], 1.0).expect("tomm");
+        println!(
+            "   local optimum f {:.4}: TOMM {t:.3} JLM {:.3}",
+            s.objective,
+            jlm(&model, &s.q)
+        );
+    }
     r
 }
 

@@ -9,7 +9,8 @@ pub mod objective;
 pub mod posture;
 
 pub use objective::{
-    PerformanceIndex, check_rows, performance_index, tomm, tomm_gradient, tomm_of_jacobian,
+    PerformanceIndex, check_rows, performance_index, tomm, tomm_gradient, tomm_gradient_analytic,
+    tomm_of_jacobian,
 };
 pub use posture::{
     PostureOptions, PostureResult, StartOutcome, initial_candidates, optimal_posture,

@@ -6,8 +6,10 @@
 //! * the performance index P = α·TOMM + (1 − α)·JLM, which is to be *increased*; Jun's
 //!   objective (eq. 17) is f = −P.
 //!
-//! The TOMM gradient is a central finite difference of the analytic Jacobian (step
-//! [`TOMM_FD_STEP`]); the JLM gradient is analytic ([`crate::manipulability::jlm_gradient`]).
+//! The TOMM gradient is in closed form from the derivative of the geometric Jacobian
+//! ([`tomm_gradient_analytic`]), with a central finite difference of the analytic Jacobian
+//! ([`tomm_gradient`], step [`TOMM_FD_STEP`]) where J_rJ_rᵀ is singular; the JLM gradient is
+//! analytic ([`crate::manipulability::jlm_gradient`]).
 
 use crate::Error;
 use crate::kinematics::{KinData, jacobian};
@@ -126,6 +128,109 @@ pub fn tomm_gradient(
     }
 }
 
+/// ∂TOMM/∂q in closed form from the Jacobian in `data` (call [`jacobian`] first), written into
+/// `grad`; returns false (leaving `grad` unspecified) when J_rJ_rᵀ is singular, where TOMM is
+/// not differentiable.
+///
+/// ∂w/∂q_k = w·tr(M⁻¹J_r ∂J_rᵀ/∂q_k), M = J_rJ_rᵀ, with the derivative of the geometric
+/// Jacobian's columns (base frame, z_i joint axis, o_i a point on it, p the tool point):
+/// revolute k < i: ∂J_i/∂q_k = z_k × J_i (both halves); prismatic k < i: 0; k ≥ i:
+/// ∂J_vi/∂q_k = z_i × J_vk for revolute i (∂J_ωi = 0), 0 for prismatic i.
+pub fn tomm_gradient_analytic(
+    model: &Model,
+    data: &KinData,
+    rows: &[usize],
+    grad: &mut [f64],
+) -> bool {
+    use crate::model::JointKind;
+    use nalgebra::Vector3;
+    let j = &data.jacobian;
+    let n = j.ncols();
+    let k = rows.len();
+    // M = J_r J_rᵀ and its Cholesky factor L; det M = Π L_aa².
+    let mut m = [0.0; MAX_ROWS * MAX_ROWS];
+    for (a, &ra) in rows.iter().enumerate() {
+        for (b, &rb) in rows.iter().enumerate().skip(a) {
+            let mut s = 0.0;
+            for c in 0..n {
+                s += j[(ra, c)] * j[(rb, c)];
+            }
+            m[a * k + b] = s;
+            m[b * k + a] = s;
+        }
+    }
+    let scale = (0..k).map(|i| m[i * k + i]).fold(0.0, f64::max);
+    let mut l = [0.0; MAX_ROWS * MAX_ROWS];
+    let mut det = 1.0;
+    for a in 0..k {
+        for b in 0..=a {
+            let mut s = m[a * k + b];
+            for p in 0..b {
+                s -= l[a * k + p] * l[b * k + p];
+            }
+            if a == b {
+                if s.is_nan() || s <= 1e-10 * scale {
+                    return false;
+                }
+                l[a * k + a] = s.sqrt();
+                det *= s;
+            } else {
+                l[a * k + b] = s / l[b * k + b];
+            }
+        }
+    }
+    let w = det.sqrt();
+    // B = M⁻¹ J_r (k×n), column c stored at bm[c·k..].
+    let mut bm = [0.0; MAX_ROWS * crate::model::MAX_JOINTS];
+    for c in 0..n {
+        let mut x = [0.0; MAX_ROWS];
+        for a in 0..k {
+            let mut s = j[(rows[a], c)];
+            for p in 0..a {
+                s -= l[a * k + p] * x[p];
+            }
+            x[a] = s / l[a * k + a];
+        }
+        for a in (0..k).rev() {
+            let mut s = x[a];
+            for p in a + 1..k {
+                s -= l[p * k + a] * x[p];
+            }
+            x[a] = s / l[a * k + a];
+        }
+        bm[c * k..(c + 1) * k].copy_from_slice(&x[..k]);
+    }
+    let axis = |i: usize| -> Vector3<f64> {
+        data.joint_frames[i].rotation * model.joints[i].axis.into_inner()
+    };
+    for (kk, g) in grad.iter_mut().enumerate().take(n) {
+        let zk = axis(kk);
+        let revolute_k = model.joints[kk].kind == JointKind::Revolute;
+        let jvk = Vector3::new(j[(0, kk)], j[(1, kk)], j[(2, kk)]);
+        let mut s = 0.0;
+        for i in 0..n {
+            let mut d = [0.0; 6];
+            if i > kk {
+                if revolute_k {
+                    let lin = zk.cross(&Vector3::new(j[(0, i)], j[(1, i)], j[(2, i)]));
+                    let ang = zk.cross(&Vector3::new(j[(3, i)], j[(4, i)], j[(5, i)]));
+                    d = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
+                }
+            } else if model.joints[i].kind == JointKind::Revolute {
+                let lin = axis(i).cross(&jvk);
+                d[0] = lin.x;
+                d[1] = lin.y;
+                d[2] = lin.z;
+            }
+            for (a, &r) in rows.iter().enumerate() {
+                s += bm[i * k + a] * d[r];
+            }
+        }
+        *g = w * s;
+    }
+    true
+}
+
 /// Performance index P = α·TOMM + (1 − α)·JLM (to be increased; Jun eq. 17's f = −P).
 pub fn performance_index(
     model: &Model,
@@ -182,14 +287,18 @@ impl PerformanceIndex {
             *g *= b;
         }
         if self.alpha != 0.0 {
-            tomm_gradient(
-                model,
-                &mut self.scratch,
-                &mut self.scratch_q,
-                q,
-                rows,
-                &mut self.tmp,
-            );
+            // Closed form; central differences where J_rJ_rᵀ is singular.
+            jacobian(model, &mut self.scratch, q);
+            if !tomm_gradient_analytic(model, &self.scratch, rows, &mut self.tmp) {
+                tomm_gradient(
+                    model,
+                    &mut self.scratch,
+                    &mut self.scratch_q,
+                    q,
+                    rows,
+                    &mut self.tmp,
+                );
+            }
             for (g, t) in grad.iter_mut().zip(&self.tmp) {
                 *g += self.alpha * t;
             }

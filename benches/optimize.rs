@@ -52,6 +52,14 @@ fn bench_redundancy_step(c: &mut Criterion) {
     let q = example_q();
     let rows = [0usize, 1, 2];
     let v = [0.1, 0.08, -0.08];
+    // Baseline: one forward kinematics + geometric Jacobian.
+    let mut data = seaarms_core::kinematics::KinData::new(&orion);
+    c.bench_function("redundancy/baseline_jacobian_orion", |b| {
+        b.iter(|| {
+            seaarms_core::kinematics::jacobian(&orion, &mut data, black_box(&q));
+            data.jacobian[(0, 0)]
+        })
+    });
     let mut r = Redundancy::new(&orion, RedundancyParams::default());
     c.bench_function("redundancy/step_eq21_orion_translational", |b| {
         b.iter(|| {

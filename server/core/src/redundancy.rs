@@ -64,8 +64,10 @@ impl Default for RedundancyParams {
 /// Diagnostics of the last step.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct StepInfo {
-    /// Smallest singular value of J₁ at q.
-    pub sigma_min: f64,
+    /// Smallest singular value of J₁ at q when it is below the damping threshold σ_0 (then
+    /// computed exactly, by Jacobi); `None` when σ_min ≥ σ_0 (one Cholesky of J₁J₁ᵀ − σ_0²I
+    /// proves it, so a well-conditioned step needs no eigenvalue solve).
+    pub sigma_min: Option<f64>,
     /// Damping λ used in J₁⁺.
     pub damping: f64,
     /// Uniform velocity scale applied (1 = none).
@@ -414,7 +416,8 @@ fn copy_rows(data: &KinData, rows: &[usize], out: &mut [f64]) {
 }
 
 /// Damped pseudo-inverse of `a` (k×n row-major) into `out` (n×k row-major):
-/// Aᵀ(AAᵀ + λ²I)⁻¹ with λ² = λ_max²(1 − (σ_min/σ_0)²) below σ_0. Returns (σ_min, λ).
+/// Aᵀ(AAᵀ + λ²I)⁻¹ with λ² = λ_max²(1 − (σ_min/σ_0)²) below σ_0. Returns (σ_min if below
+/// σ_0, λ).
 /// Allocation-free (k ≤ 6).
 pub fn damped_pinv(
     a: &[f64],
@@ -423,7 +426,7 @@ pub fn damped_pinv(
     sigma_0: f64,
     lambda_max: f64,
     out: &mut [f64],
-) -> Result<(f64, f64), Error> {
+) -> Result<(Option<f64>, f64), Error> {
     let mut m = [0.0; MAX_ROWS * MAX_ROWS];
     for i in 0..k {
         for j in i..k {
@@ -432,12 +435,17 @@ pub fn damped_pinv(
             m[j * k + i] = s;
         }
     }
-    let sigma_min = symmetric_min_eigenvalue(&m, k).max(0.0).sqrt();
-    let lambda2 = if sigma_min < sigma_0 && sigma_0 > 0.0 {
-        lambda_max * lambda_max * (1.0 - (sigma_min / sigma_0).powi(2))
-    } else {
-        0.0
-    };
+    // σ_min ≥ σ_0 ⟺ AAᵀ − σ_0²I ⪰ 0: one Cholesky attempt instead of an eigenvalue solve.
+    let (sigma_min, lambda2) =
+        if sigma_0 <= 0.0 || positive_definite_shifted(&m, k, sigma_0 * sigma_0) {
+            (None, 0.0)
+        } else {
+            let s = symmetric_min_eigenvalue(&m, k).max(0.0).sqrt();
+            (
+                Some(s),
+                lambda_max * lambda_max * (1.0 - (s / sigma_0).powi(2)).max(0.0),
+            )
+        };
     let scale = (0..k).map(|i| m[i * k + i]).fold(0.0, f64::max);
     for i in 0..k {
         m[i * k + i] += lambda2;
@@ -455,7 +463,7 @@ pub fn damped_pinv(
                     return Err(Error::NotConverged {
                         what: "pseudo-inverse (singular task Jacobian; enable damping)",
                         iterations: 0,
-                        residual: sigma_min,
+                        residual: sigma_min.unwrap_or(0.0),
                     });
                 }
                 l[i * k + i] = s.sqrt();
@@ -484,6 +492,28 @@ pub fn damped_pinv(
         out[c * k..(c + 1) * k].copy_from_slice(&x[..k]);
     }
     Ok((sigma_min, lambda2.sqrt()))
+}
+
+/// Whether the symmetric k×k matrix `m` − `shift`·I is positive definite (Cholesky succeeds).
+fn positive_definite_shifted(m: &[f64; MAX_ROWS * MAX_ROWS], k: usize, shift: f64) -> bool {
+    let mut l = [0.0; MAX_ROWS * MAX_ROWS];
+    for i in 0..k {
+        for j in 0..=i {
+            let mut s = m[i * k + j] - if i == j { shift } else { 0.0 };
+            for p in 0..j {
+                s -= l[i * k + p] * l[j * k + p];
+            }
+            if i == j {
+                if s.is_nan() || s <= 0.0 {
+                    return false;
+                }
+                l[i * k + i] = s.sqrt();
+            } else {
+                l[i * k + j] = s / l[j * k + j];
+            }
+        }
+    }
+    true
 }
 
 /// Smallest eigenvalue of a symmetric k×k matrix (row-major, k ≤ 6) by cyclic Jacobi.

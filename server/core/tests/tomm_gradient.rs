@@ -73,14 +73,15 @@ proptest! {
 
 /// A Stanford-like arm (prismatic third joint), inline model, to exercise the prismatic terms.
 fn stanford() -> seaarms_core::Model {
+    let h = std::f64::consts::FRAC_PI_2;
     let spec: seaarms_core::ModelSpec = serde_json::from_value(serde_json::json!({
         "name": "stanford-like", "dh": "standard",
         "joints": [
-            {"type": "revolute", "alpha": -1.5707963267948966, "d": 0.4},
-            {"type": "revolute", "alpha": 1.5707963267948966, "d": 0.15},
+            {"type": "revolute", "alpha": -h, "d": 0.4},
+            {"type": "revolute", "alpha": h, "d": 0.15},
             {"type": "prismatic", "theta": 0.0, "limits": [0.2, 1.0]},
-            {"type": "revolute", "alpha": -1.5707963267948966},
-            {"type": "revolute", "alpha": 1.5707963267948966, "a": 0.05},
+            {"type": "revolute", "alpha": -h},
+            {"type": "revolute", "alpha": h, "a": 0.05},
             {"type": "revolute", "d": 0.2}
         ]
     }))

@@ -657,8 +657,14 @@ pub fn workspace_map(model: &Model, spec: &MapSpec) -> Result<WorkspaceMap, Erro
     ];
     let magnum = MagnumLengths::from_model(model).is_ok();
     let fallback = reference_posture(model);
-    let opts = IkOptions {
-        max_iterations: 60,
+    // A warm start from the neighbouring cell converges in a few iterations when the cell is
+    // reachable; the mid-range restart gets more. Unreachable cells cost both caps.
+    let warm_opts = IkOptions {
+        max_iterations: 15,
+        ..IkOptions::default()
+    };
+    let cold_opts = IkOptions {
+        max_iterations: 30,
         ..IkOptions::default()
     };
     let mut prev: Option<Vec<f64>> = None;
@@ -688,8 +694,8 @@ pub fn workspace_map(model: &Model, spec: &MapSpec) -> Result<WorkspaceMap, Erro
                         None => IkTarget::Position(p),
                     };
                     let seed = prev.as_deref().unwrap_or(&fallback);
-                    dls_ik(model, &target, seed, &opts)
-                        .or_else(|_| dls_ik(model, &target, &fallback, &opts))
+                    dls_ik(model, &target, seed, &warm_opts)
+                        .or_else(|_| dls_ik(model, &target, &fallback, &cold_opts))
                         .ok()
                 }
             };

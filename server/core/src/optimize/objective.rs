@@ -281,6 +281,33 @@ impl PerformanceIndex {
 
     /// ∂P/∂q written into `grad` (length n). Does not allocate.
     pub fn gradient(&mut self, model: &Model, q: &[f64], rows: &[usize], grad: &mut [f64]) {
+        if self.alpha != 0.0 {
+            jacobian(model, &mut self.scratch, q);
+        }
+        self.combine(model, None, q, rows, grad);
+    }
+
+    /// As [`PerformanceIndex::gradient`], reusing the Jacobian at `q` already in `data`.
+    pub fn gradient_from(
+        &mut self,
+        model: &Model,
+        data: &KinData,
+        q: &[f64],
+        rows: &[usize],
+        grad: &mut [f64],
+    ) {
+        self.combine(model, Some(data), q, rows, grad);
+    }
+
+    /// ∂P/∂q with the Jacobian at q in `data` (or, for `None`, in `self.scratch`).
+    fn combine(
+        &mut self,
+        model: &Model,
+        data: Option<&KinData>,
+        q: &[f64],
+        rows: &[usize],
+        grad: &mut [f64],
+    ) {
         jlm_gradient(model, q, grad);
         let b = 1.0 - self.alpha;
         for g in grad.iter_mut() {
@@ -288,8 +315,9 @@ impl PerformanceIndex {
         }
         if self.alpha != 0.0 {
             // Closed form; central differences where J_rJ_rᵀ is singular.
-            jacobian(model, &mut self.scratch, q);
-            if !tomm_gradient_analytic(model, &self.scratch, rows, &mut self.tmp) {
+            let ok =
+                tomm_gradient_analytic(model, data.unwrap_or(&self.scratch), rows, &mut self.tmp);
+            if !ok {
                 tomm_gradient(
                     model,
                     &mut self.scratch,

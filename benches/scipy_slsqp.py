@@ -5,8 +5,10 @@ problem as seaarms' multi-start SLSQP (Jun 2008 eqs 17-18), from the same feasib
 ORION (Jun Table 1; seeds README convention): standard DH in metres, point = frame-6 origin,
 theta3's "+90" offset NOT applied. f(q) = -a*TOMM - (1-a)*JLM, TOMM = sqrt(det(Jv Jv^T))
 (translational rows), JLM = prod(1 - x_i^2) (eq. 16, factors clamped at 0), subject to
-p(q) = target and the joint limits. Gradients as in seaarms: TOMM by central differences
-(h = 1e-6) of the analytic Jacobian, JLM analytic; constraint Jacobian = Jv.
+p(q) = target and the joint limits. Gradients as in seaarms: TOMM in closed form from the
+Jacobian derivative (central differences if singular), JLM analytic; constraint Jacobian = Jv.
+Note: scipy's time is dominated by evaluating the numpy model (Python call overhead on
+6x6 arrays), not by the SLSQP solver itself (the same Kraft algorithm as NLopt's).
 
 Usage:
     python3 benches/scipy_slsqp.py            # runs the Rust side (cargo test --release ...)
@@ -14,12 +16,17 @@ Usage:
 Requires numpy and scipy (pip install numpy scipy). A benchmark script, not part of the product.
 """
 import json
+import os
 import subprocess
 import sys
 import time
 
-import numpy as np
-from scipy.optimize import minimize
+# Single-threaded BLAS, like the Rust side (threaded BLAS on 6x6 matrices only adds overhead).
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    os.environ.setdefault(_var, "1")
+
+import numpy as np  # noqa: E402
+from scipy.optimize import minimize  # noqa: E402
 
 # Jun Table 1: a (m), alpha (rad), d (m); limits (deg).
 A = np.array([0.0711, 0.5664, 0.1346, 0.0, 0.0, 0.0])
@@ -57,6 +64,34 @@ def tomm(q):
     return np.sqrt(max(np.linalg.det(j @ j.T), 0.0))
 
 
+def tomm_grad_fd(q):
+    g = np.zeros(6)
+    for i in range(6):
+        e = np.zeros(6)
+        e[i] = H
+        g[i] = (tomm(q + e) - tomm(q - e)) / (2 * H)
+    return g
+
+
+def tomm_grad(q):
+    """Closed form, as seaarms' tomm_gradient_analytic: dw/dq_k = w tr(M^-1 Jv dJv^T/dq_k);
+    revolute joints: dJv_i/dq_k = z_k x Jv_i (k < i), z_i x Jv_k (k >= i). Falls back to
+    central differences when M is singular."""
+    zs, os, p = frames(q)
+    j = np.column_stack([np.cross(z, p - o) for z, o in zip(zs, os)])
+    m = j @ j.T
+    try:
+        b = np.linalg.solve(m, j)
+    except np.linalg.LinAlgError:
+        return tomm_grad_fd(q)
+    w = np.sqrt(max(np.linalg.det(m), 0.0))
+    g = np.zeros(6)
+    for k in range(6):
+        dj = np.column_stack([np.cross(zs[k], j[:, i]) if i > k else np.cross(zs[i], j[:, k]) for i in range(6)])
+        g[k] = w * np.sum(b * dj)
+    return g
+
+
 def jlm_and_grad(q):
     d = 2.0 / (HI - LO)
     x = d * q - (HI + LO) / (HI - LO)
@@ -74,12 +109,7 @@ def make_problem(alpha, target):
         return -(alpha * tomm(q) + (1.0 - alpha) * jlm_and_grad(q)[0])
 
     def jac(q):
-        gt = np.zeros(6)
-        if alpha != 0.0:
-            for i in range(6):
-                e = np.zeros(6)
-                e[i] = H
-                gt[i] = (tomm(q + e) - tomm(q - e)) / (2 * H)
+        gt = tomm_grad(q) if alpha != 0.0 else np.zeros(6)
         return -(alpha * gt + (1.0 - alpha) * jlm_and_grad(q)[1])
 
     cons = {"type": "eq",

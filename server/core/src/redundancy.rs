@@ -304,7 +304,8 @@ impl Redundancy {
             performance_index: self.params.alpha * t + (1.0 - self.params.alpha) * l,
         };
         if self.params.epsilon > 0.0 {
-            self.index.gradient_from(model, &self.data, q, rows, &mut self.grad);
+            self.index
+                .gradient_from(model, &self.data, q, rows, &mut self.grad);
             for g in self.grad.iter_mut() {
                 *g *= self.params.epsilon;
             }

@@ -208,7 +208,11 @@ fn dual_yoshikawa_is_highest_when_the_arms_are_parallel() {
 #[test]
 fn workspace_map_is_nan_free() {
     let model = common::builtin("magnum");
-    let spec = MapSpec { nx: 30, nz: 30, ..MapSpec::case_study(&model) };
+    let spec = MapSpec {
+        nx: 30,
+        nz: 30,
+        ..MapSpec::case_study(&model)
+    };
     let map = workspace_map(&model, &spec).expect("map");
     assert_eq!(map.cells.len(), 900);
     let reachable = map.cells.iter().filter(|c| c.measures.is_some()).count();

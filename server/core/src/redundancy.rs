@@ -11,7 +11,7 @@
 //!
 //! * Near singularities J₁⁺ is the damped pseudo-inverse J₁ᵀ(J₁J₁ᵀ + λ²I)⁻¹ with
 //!   λ² = λ_max²·(1 − (σ_min/σ_0)²) when σ_min < σ_0 and 0 otherwise (Chiaverini 1997, Jun
-//!   ref. [6]); with λ > 0 the null-space term is approximate, as usual.
+//!   ref. 6); with λ > 0 the null-space term is approximate, as usual.
 //! * A second task (Kilic eq. 0.6): q̇ = b + J̄₂⁺(ṙ₂ − J₂b), b the solution above and
 //!   J̄₂ = J₂(I − J₁⁺J₁) — algebraically eq. 0.6 with k₂ = y.
 //! * Joint-velocity limits: the whole q̇ is scaled by one factor s ≤ 1 so that

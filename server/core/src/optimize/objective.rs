@@ -2,7 +2,7 @@
 //!
 //! * TOMM w = √det(J_r J_rᵀ) of the selected rows J_r of the 6×n base-frame Jacobian (Jun eq. 4,
 //!   with eq. 9's row selection);
-//! * JLM p_joint = Π(1 − xᵢ²) (Jun eq. 16, [`crate::manipulability::jlm`]);
+//! * JLM p_joint = Π(1 − xᵢ²) (Jun eq. 16, [`crate::manipulability::jlm()`]);
 //! * the performance index P = α·TOMM + (1 − α)·JLM, which is to be *increased*; Jun's
 //!   objective (eq. 17) is f = −P.
 //!

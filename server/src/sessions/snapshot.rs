@@ -2,7 +2,7 @@
 //! joint frames, end-effector poses, translational manipulability ellipsoids and measures
 //! per arm and dual (Lim eqs 3.62, 3.68; Hong eq. 4.1), JLM (Jun eq. 16), forces, warnings.
 
-use nalgebra::{DMatrix, Isometry3, Matrix6, Vector6};
+use nalgebra::{DMatrix, Isometry3, Matrix6};
 use seaarms_core::kinematics::forward_kinematics;
 use seaarms_core::manipulability::{Measures, dual_measures, jlm, measures};
 use seaarms_core::sim::{LEFT, RIGHT};
@@ -147,34 +147,35 @@ pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
 }
 
 /// Cartesian mode: the stick command (fractions of the maximum end-effector speeds, world
-/// frame) to a joint-velocity reference by damped least squares on the world Jacobian,
-/// q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ (Nakamura; Kilic eq. 0.2 with a damped pseudo-inverse), with λ = 0.05
-/// so the reference stays bounded near singularities.
-pub fn cartesian_to_joint_velocity(live: &Live, arm: usize) -> [f64; 6] {
+/// frame) to a joint-velocity reference by task-oriented redundancy resolution (Jun eq. 21):
+/// translational rows when the angular sticks are idle, so the three spare DOF keep the arm
+/// away from joint limits and singularities (P = α·TOMM + (1−α)·JLM rises in the null space);
+/// all six rows otherwise. Damped near singularities; joint-velocity limits respected.
+pub fn cartesian_to_joint_velocity(
+    live: &mut Live,
+    models: &[std::sync::Arc<seaarms_core::Model>; 2],
+    arm: usize,
+) -> [f64; 6] {
     let cmd = live.cartesian[arm];
-    let xdot = Vector6::new(
-        cmd[0] * CARTESIAN_MAX_LINEAR_M_S,
-        cmd[1] * CARTESIAN_MAX_LINEAR_M_S,
-        cmd[2] * CARTESIAN_MAX_LINEAR_M_S,
-        cmd[3] * CARTESIAN_MAX_ANGULAR_RAD_S,
-        cmd[4] * CARTESIAN_MAX_ANGULAR_RAD_S,
-        cmd[5] * CARTESIAN_MAX_ANGULAR_RAD_S,
-    );
-    if xdot.iter().all(|v| *v == 0.0) {
+    if cmd.iter().all(|v| *v == 0.0) {
         return [0.0; 6];
     }
-    let j = live.sim.jacobian_world(arm);
-    let lambda2 = 0.05 * 0.05;
-    let a = j * j.transpose() + Matrix6::identity() * lambda2;
-    match a.cholesky() {
-        Some(ch) => {
-            let qd = j.transpose() * ch.solve(&xdot);
-            let mut out = [0.0; 6];
-            for (o, v) in out.iter_mut().zip(qd.iter()) {
-                *o = if v.is_finite() { *v } else { 0.0 };
-            }
-            out
+    // World → arm base frame (velocities rotate only).
+    let r = live.sim.params().arms[arm].base.rotation.inverse();
+    let lin = r * nalgebra::Vector3::new(cmd[0], cmd[1], cmd[2]) * CARTESIAN_MAX_LINEAR_M_S;
+    let ang = r * nalgebra::Vector3::new(cmd[3], cmd[4], cmd[5]) * CARTESIAN_MAX_ANGULAR_RAD_S;
+    let q = live.sim.arm(arm).q;
+    let full = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
+    let (rows, rdot): (&[usize], &[f64]) = if ang.norm() == 0.0 {
+        (&[0, 1, 2], &full[..3])
+    } else {
+        (&[0, 1, 2, 3, 4, 5], &full[..])
+    };
+    let mut out = [0.0; 6];
+    if let Ok(qd) = live.redundancy[arm].step(&models[arm], &q, rdot, rows, 1e-3) {
+        for (o, v) in out.iter_mut().zip(qd) {
+            *o = if v.is_finite() { *v } else { 0.0 };
         }
-        None => [0.0; 6],
     }
+    out
 }

@@ -431,7 +431,11 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
             }
         }
         if !(next > lo && next < hi) {
-            next = if hi.is_finite() { 0.5 * (lo + hi) } else { 2.0 * p.max(1.0e3) };
+            next = if hi.is_finite() {
+                0.5 * (lo + hi)
+            } else {
+                2.0 * p.max(1.0e3)
+            };
         }
         p = next;
         if hi - lo < 0.1 {

@@ -1,0 +1,147 @@
+// Shared test harness: the real release binary (started by tests/run.sh, which exports
+// SEAARMS_URL; started here on a free loopback port when it is not set) and real headless
+// Chromium (Debian /usr/bin/chromium driven by playwright-core; no downloaded browsers).
+
+import { chromium } from 'playwright-core';
+import { spawn } from 'node:child_process';
+import { mkdtempSync, mkdirSync, rmSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import net from 'node:net';
+
+const here = dirname(fileURLToPath(import.meta.url));
+export const ROOT = join(here, '..', '..');
+export const ARTIFACTS = join(here, 'artifacts');
+export const INSTRUCTOR_TOKEN = process.env.SEAARMS_INSTRUCTOR_TOKEN || 'test-token';
+mkdirSync(ARTIFACTS, { recursive: true });
+
+export const CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+  '--disable-background-networking', '--disable-component-update', '--disable-sync',
+  '--use-angle=swiftshader', '--enable-unsafe-swiftshader'];
+
+async function freePort() {
+  return new Promise((resolve, reject) => {
+    const s = net.createServer();
+    s.listen(0, '127.0.0.1', () => { const p = s.address().port; s.close(() => resolve(p)); });
+    s.on('error', reject);
+  });
+}
+
+async function waitHealthy(url, ms = 20000) {
+  const t0 = Date.now();
+  while (Date.now() - t0 < ms) {
+    try { const r = await fetch(`${url}/healthz`); if (r.ok) return; } catch { /* not yet */ }
+    await new Promise((r) => setTimeout(r, 100));
+  }
+  throw new Error(`server at ${url} not healthy after ${ms} ms`);
+}
+
+let own = null;
+/** Base URL of the server under test (starting one if tests/run.sh did not). */
+export async function server() {
+  if (process.env.SEAARMS_URL) return process.env.SEAARMS_URL;
+  if (own) return own.url;
+  const bin = join(ROOT, 'target', 'release', 'seaarms');
+  if (!existsSync(bin)) throw new Error(`${bin} missing: run cargo build --release (tests/run.sh does)`);
+  const port = await freePort();
+  const dataDir = mkdtempSync(join(tmpdir(), 'seaarms-data-'));
+  const args = ['--bind', `127.0.0.1:${port}`];
+  if (process.env.SEAARMS_DATA_DIR_FLAG !== '0') args.push('--data-dir', dataDir);
+  const proc = spawn(bin, args, {
+    env: { ...process.env, SEAARMS_INSTRUCTOR_TOKEN: INSTRUCTOR_TOKEN, RUST_LOG: 'warn' },
+    stdio: ['ignore', 'ignore', 'inherit'],
+  });
+  own = { url: `http://127.0.0.1:${port}`, proc, dataDir };
+  process.on('exit', () => { proc.kill(); rmSync(dataDir, { recursive: true, force: true }); });
+  await waitHealthy(own.url);
+  return own.url;
+}
+
+/**
+ * A fresh browser (persistent context in a temp profile) and page. Any request that is not to
+ * the loopback server is aborted and recorded in `offsite`; console errors and page errors are
+ * recorded in `errors`.
+ */
+export async function openBrowser({ viewport = { width: 1280, height: 800 }, initScript } = {}) {
+  const profile = mkdtempSync(join(tmpdir(), 'seaarms-chromium-'));
+  const context = await chromium.launchPersistentContext(profile, {
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    args: CHROMIUM_ARGS,
+    viewport,
+  });
+  const offsite = [];
+  const errors = [];
+  await context.route('**/*', (route) => {
+    const u = new URL(route.request().url());
+    if (u.protocol === 'data:' || u.hostname === '127.0.0.1' || u.hostname === 'localhost') return route.continue();
+    offsite.push(route.request().url());
+    return route.abort();
+  });
+  if (initScript) await context.addInitScript(initScript);
+  const page = context.pages()[0] || await context.newPage();
+  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+  page.on('pageerror', (e) => errors.push(String(e)));
+  const close = async () => {
+    await context.close();
+    rmSync(profile, { recursive: true, force: true });
+  };
+  return { context, page, offsite, errors, close };
+}
+
+/** Waits until `fn()` (evaluated in the page) is truthy; returns its value. */
+export async function until(page, fn, arg, timeout = 15000) {
+  const h = await page.waitForFunction(fn, arg, { timeout, polling: 50 });
+  return h.jsonValue();
+}
+
+/** RGB of a pixel in a PNG screenshot buffer (decoded by the page itself: no extra packages). */
+export async function decodePng(page, png) {
+  return page.evaluate(async (b64) => {
+    const img = new Image();
+    img.src = `data:image/png;base64,${b64}`;
+    await img.decode();
+    const c = document.createElement('canvas');
+    c.width = img.width; c.height = img.height;
+    const g = c.getContext('2d');
+    g.drawImage(img, 0, 0);
+    const d = g.getImageData(0, 0, img.width, img.height).data;
+    return { width: img.width, height: img.height, data: Array.from(d) };
+  }, png.toString('base64'));
+}
+
+export function hue([r, g, b]) {
+  const mx = Math.max(r, g, b), mn = Math.min(r, g, b);
+  if (mx === mn) return 0;
+  let h;
+  if (mx === r) h = ((g - b) / (mx - mn)) % 6;
+  else if (mx === g) h = (b - r) / (mx - mn) + 2;
+  else h = (r - g) / (mx - mn) + 4;
+  return (h * 60 + 360) % 360;
+}
+
+export function sat([r, g, b]) {
+  const mx = Math.max(r, g, b), mn = Math.min(r, g, b);
+  return mx === 0 ? 0 : (mx - mn) / mx;
+}
+
+/** Classifies a lit colour sample by the page's palette (hue/brightness bands). */
+export function classify(rgb) {
+  const [r, g, b] = rgb;
+  const v = Math.max(r, g, b), s = sat(rgb), h = hue(rgb);
+  if (v < 45) return 'black';
+  if (s < 0.18) return 'grey';
+  if (h >= 190 && h <= 215 && s < 0.7) return 'lightblue';
+  if (h >= 42 && h <= 62) return 'yellow';
+  if (h >= 12 && h < 35) return 'orange';
+  if (h < 10 || h > 345) return 'red';
+  return 'other';
+}
+
+/** Creates a trainee session over the REST API (as the page does). */
+export async function createSession(url, body = {}) {
+  const r = await fetch(`${url}/api/sessions`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify(body) });
+  if (!r.ok) throw new Error(`POST /api/sessions: ${r.status} ${await r.text()}`);
+  return r.json();
+}

@@ -32,7 +32,7 @@ const conn = new Connection({
     view.setHello(h);
     settings = { ...h.settings };
     syncControls();
-    plots.setSession(h.session);
+    plots.setSession(h.session, conn.session?.control_token);
     status.role(h.role);
     if (h.scenario) $('sel-scenario').value = h.scenario;
   },

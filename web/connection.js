@@ -47,10 +47,11 @@ export class Connection {
     if (this.role === 'trainee') {
       let stored = null;
       try { stored = JSON.parse(localStorage.getItem(STORE_KEY) || 'null'); } catch { stored = null; }
-      if (stored && stored.id && stored.control_token) {
+      if (stored && stored.id && stored.control_token && await this.stillLive(stored)) {
         this.session = stored;
         this.resuming = true;
       } else {
+        if (stored) localStorage.removeItem(STORE_KEY);
         if (!(await this.create())) return;
       }
     } else {
@@ -58,6 +59,19 @@ export class Connection {
         ws_url: `/ws/sessions/${encodeURIComponent(this.opts.sessionId)}?token=${encodeURIComponent(this.opts.token)}&role=observer` };
     }
     this.open();
+  }
+
+  /** GET /api/sessions/{id} with the control token: is the stored session still live? */
+  async stillLive(stored) {
+    try {
+      const r = await fetch(`/api/sessions/${encodeURIComponent(stored.id)}`, {
+        headers: { authorization: `Bearer ${stored.control_token}` }, cache: 'no-store' });
+      if (!r.ok) return false;
+      const s = await r.json();
+      return s.status === undefined || s.status === 'live';
+    } catch {
+      return true; // server unreachable: try the socket, which retries with backoff
+    }
   }
 
   /** POST /api/sessions; returns false (and retries later) when the server is full or down. */

@@ -9,6 +9,8 @@ import { StatusBar, fmt } from './status.js';
 const $ = (id) => document.getElementById(id);
 const TOKEN_KEY = 'seaarms.instructor_token';
 const POLL_MS = 1000;
+/** Default size of each fault when the value box is empty (server ranges in README). */
+const FAULT_DEFAULTS = { supply_drop: 3.0e6, stuck_valve: 0.5, leak: 5e-10, air: 0.3 };
 
 let token = sessionStorage.getItem(TOKEN_KEY) || '';
 let sessions = [];
@@ -36,27 +38,20 @@ function banner(kind, text) {
 
 const esc = (s) => String(s ?? '').replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
 
-/** Tolerant reading of a session summary (field names as the server sends them). */
+/** One row of GET /api/sessions: {id, status, label, scenario, sim_seconds, grasp?, paused?,
+ * trainees?, measures?: [left, right], overload_count, faults?}. */
 function summary(s) {
-  const sum = s.summary || s.state || s;
-  const arms = sum.arms || {};
-  const w = (side) => {
-    const a = arms[side];
-    const v = a?.measures?.yoshikawa ?? a?.yoshikawa ?? sum[`yoshikawa_${side}`];
-    return v === undefined ? '—' : fmt(v, 3);
-  };
-  const mode = sum.settings ? `${sum.settings.control_mode}/${sum.settings.control_method}` : (sum.control_mode || '');
-  const clients = s.clients ?? s.connections ?? (s.connected === undefined ? '' : (s.connected ? 'yes' : 'no'));
+  const w = (i) => (s.measures && s.measures[i] ? fmt(s.measures[i].yoshikawa, 3) : '—');
   return {
     id: s.id,
+    status: s.status || 'live',
     label: s.label ?? '',
-    scenario: s.scenario ?? sum.scenario ?? '',
-    clients: typeof clients === 'object' ? JSON.stringify(clients) : clients,
-    t: sum.t === undefined ? '' : Number(sum.t).toFixed(1),
-    grasp: sum.grasp ?? '',
-    mode,
-    w: `${w('left')} / ${w('right')}`,
-    warn: [...(sum.warnings || []), ...(sum.faults || [])].join(', '),
+    scenario: s.scenario ?? '',
+    clients: s.status === 'ended' ? (s.end_reason || 'ended') : `${s.trainees ?? 0} trainee(s)${s.paused ? ', paused' : ''}`,
+    t: s.sim_seconds === undefined ? '' : Number(s.sim_seconds).toFixed(1),
+    grasp: s.grasp ?? '',
+    w: `${w(0)} / ${w(1)}`,
+    warn: [...(s.faults || []), s.overload_count ? `${s.overload_count} overload(s)` : ''].filter(Boolean).join(', '),
   };
 }
 
@@ -64,9 +59,10 @@ function renderList() {
   const tb = document.querySelector('#sessions tbody');
   tb.innerHTML = sessions.map((s) => {
     const r = summary(s);
-    return `<tr data-id="${esc(r.id)}" class="${r.id === observed ? 'open' : ''}"><td>${esc(r.id)}</td><td>${esc(r.label)}</td><td>${esc(r.scenario)}</td>
-      <td>${esc(r.clients)}</td><td>${esc(r.t)}</td><td>${esc(r.grasp)}</td><td>${esc(r.mode)}</td><td>${esc(r.w)}</td>
-      <td class="warn">${esc(r.warn)}</td><td><button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button></td></tr>`;
+    const btn = r.status === 'live' ? `<button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button>` : '';
+    return `<tr data-id="${esc(r.id)}" data-status="${esc(r.status)}" class="${r.id === observed ? 'open' : ''}"><td>${esc(r.id)}</td><td>${esc(r.status)}</td><td>${esc(r.label)}</td>
+      <td>${esc(r.scenario)}</td><td>${esc(r.clients)}</td><td>${esc(r.t)}</td><td>${esc(r.grasp)}</td><td>${esc(r.w)}</td>
+      <td class="warn">${esc(r.warn)}</td><td>${btn}</td></tr>`;
   }).join('') || '<tr><td colspan="10">no sessions</td></tr>';
 }
 
@@ -124,7 +120,7 @@ function observe(id) {
   }
   $('instr-actions').hidden = false;
   $('obs-title').textContent = `session ${id}`;
-  $('act-csv').href = `/api/sessions/${encodeURIComponent(id)}/log.csv`;
+  $('act-csv').href = `/api/sessions/${encodeURIComponent(id)}/log.csv?token=${encodeURIComponent(token)}`;
   conn = new Connection({
     role: 'observer', sessionId: id, token,
     onHello(h) { view.setHello(h); status.role(h.role); if (h.scenario) $('act-scenario').value = h.scenario; },
@@ -146,7 +142,8 @@ async function act(type) {
     body.arm = $('act-arm').value;
     if ($('act-joint').value !== '') body.joint = +$('act-joint').value;
     const v = $('act-value').value.trim();
-    if (v !== '') body.value = +v;
+    body.value = v === '' ? FAULT_DEFAULTS[body.fault] : +v;
+    if ((body.fault === 'stuck_valve' || body.fault === 'leak') && body.joint === undefined) body.joint = 1;
   }
   if (type === 'message') body.text = $('act-text').value;
   const out = $('act-result');

@@ -82,7 +82,9 @@ export class Plots {
     }).observe(el);
   }
 
-  setSession(id) { this.csv.href = `/api/sessions/${encodeURIComponent(id)}/log.csv`; }
+  setSession(id, token) {
+    this.csv.href = `/api/sessions/${encodeURIComponent(id)}/log.csv${token ? `?token=${encodeURIComponent(token)}` : ''}`;
+  }
 
   clearSelected() { this.pressure.s.clear(); }
 

@@ -20,6 +20,7 @@ export class View {
     this.pending = null; // newest undrawn state
     this.drawn = null; // last drawn state
     this.statesDrawn = 0;
+    this.firstStateFrameAt = null; // ms after navigation: first frame with the arms drawn
     this.legendEl = legendEl;
     this.polytopes = false;
     this.polyBusy = false;
@@ -105,7 +106,9 @@ export class View {
       this.statesDrawn++;
       this.viewports.dirty = true;
     }
-    this.viewports.render();
+    if (this.viewports.render() && this.drawn && this.firstStateFrameAt === null) {
+      this.firstStateFrameAt = performance.now();
+    }
   }
 
   /** Read-only hooks for the browser tests. */
@@ -117,6 +120,7 @@ export class View {
       get statesDrawn() { return v.statesDrawn; },
       get framesRendered() { return v.viewports.frames; },
       get firstFrameAt() { return v.viewports.firstFrameAt; },
+      get firstStateFrameAt() { return v.firstStateFrameAt; },
       drawnJointAngles() { return v.arms ? v.arms.map((a) => a.q.slice()) : null; },
       drawnJawCentres() { return v.arms ? v.arms.map((a) => a.drawnJawCentre()) : null; },
       drawnJawGaps() { return v.arms ? v.arms.map((a) => a.drawnJawGap()) : null; },

@@ -145,3 +145,69 @@ export async function createSession(url, body = {}) {
   if (!r.ok) throw new Error(`POST /api/sessions: ${r.status} ${await r.text()}`);
   return r.json();
 }
+
+/**
+ * Init script: a fake standard-mapping gamepad. `navigator.getGamepads()` returns it once
+ * `window.__connectPad()` has dispatched `gamepadconnected`; tests set `window.__pad.axes[i]`
+ * and `window.__pad.buttons[i].value/pressed`.
+ */
+export const FAKE_GAMEPAD = () => {
+  const buttons = Array.from({ length: 17 }, () => ({ pressed: false, touched: false, value: 0 }));
+  const pad = { id: 'Fake pad (STANDARD GAMEPAD)', index: 0, connected: false, mapping: 'standard', timestamp: 0, axes: [0, 0, 0, 0], buttons };
+  window.__pad = pad;
+  Object.defineProperty(Navigator.prototype, 'getGamepads', { configurable: true, value: () => [pad.connected ? pad : null, null, null, null] });
+  window.__connectPad = () => {
+    pad.connected = true;
+    const e = new Event('gamepadconnected');
+    Object.defineProperty(e, 'gamepad', { value: pad });
+    window.dispatchEvent(e);
+  };
+  window.__setButton = (i, v) => { buttons[i].value = v; buttons[i].pressed = v > 0.5; };
+};
+
+/** Stick value that comes out of the page's dead zone (0.12) as `v`. */
+export function stick(v) {
+  const dz = 0.12;
+  if (Math.abs(v) < 1e-3) return 0;
+  return Math.sign(v) * (dz + Math.min(1, Math.abs(v)) * (1 - dz));
+}
+
+/** JS heap (after a forced GC), DOM nodes, and the page's frame counters, via CDP. */
+export async function sampleMemory(page, cdp) {
+  await cdp.send('HeapProfiler.collectGarbage');
+  const { metrics } = await cdp.send('Performance.getMetrics');
+  const m = Object.fromEntries(metrics.map((x) => [x.name, x.value]));
+  const c = await page.evaluate(() => ({ received: window.__seaarms.connection.framesReceived, drawn: window.__seaarms.statesDrawn, rendered: window.__seaarms.framesRendered, frameHz: window.__seaarms.hello.frame_hz }));
+  return { t: Date.now(), heapMB: m.JSHeapUsedSize / 1048576, nodes: m.Nodes, listeners: m.JSEventListeners, ...c };
+}
+
+/** Runs the trainee page for `seconds` and reports heap growth and frame rates. */
+export async function soak(url, seconds, { log = () => {}, every = 30 } = {}) {
+  const b = await openBrowser();
+  try {
+    await b.page.goto(`${url}/`);
+    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    const cdp = await b.context.newCDPSession(b.page);
+    await cdp.send('Performance.enable');
+    await b.page.waitForTimeout(5000); // warm up (JIT, plots filling their windows)
+    const samples = [await sampleMemory(b.page, cdp)];
+    const t0 = Date.now();
+    while (Date.now() - t0 < seconds * 1000) {
+      await b.page.waitForTimeout(Math.min(every * 1000, seconds * 1000 - (Date.now() - t0)));
+      const s = await sampleMemory(b.page, cdp);
+      samples.push(s);
+      log(s);
+    }
+    const a = samples[0], z = samples[samples.length - 1];
+    const dt = (z.t - a.t) / 1000;
+    return {
+      seconds: dt, samples, errors: b.errors,
+      heapStartMB: a.heapMB, heapEndMB: z.heapMB, heapMaxMB: Math.max(...samples.map((s) => s.heapMB)),
+      nodesStart: a.nodes, nodesEnd: z.nodes,
+      receivedHz: (z.received - a.received) / dt, drawnHz: (z.drawn - a.drawn) / dt, renderedHz: (z.rendered - a.rendered) / dt,
+      frameHz: z.frameHz,
+    };
+  } finally {
+    await b.close();
+  }
+}

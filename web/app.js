@@ -160,6 +160,7 @@ async function loadScenarios() {
     if (!r.ok) throw new Error();
     const body = await r.json();
     const list = Array.isArray(body) ? body : body.scenarios || [];
+    if (!list.some((s) => (typeof s === 'string' ? s : s.name) === 'training')) list.unshift({ name: 'training', description: 'Free play from the initial position' });
     sel.innerHTML = list.map((s) => {
       const name = typeof s === 'string' ? s : s.name || s.id;
       const title = typeof s === 'string' ? s : s.title || s.description || name;

@@ -172,6 +172,7 @@ for (const b of document.querySelectorAll('#instr-actions button[data-act]')) {
     if (!r.ok) throw new Error();
     const body = await r.json();
     const list = Array.isArray(body) ? body : body.scenarios || [];
+    if (!list.some((s) => (typeof s === 'string' ? s : s.name) === 'training')) list.unshift({ name: 'training' });
     $('act-scenario').innerHTML = list.map((s) => {
       const name = typeof s === 'string' ? s : s.name || s.id;
       return `<option value="${esc(name)}">${esc(name)}</option>`;

@@ -27,11 +27,27 @@ export function poseToMatrix(pose, m = new THREE.Matrix4()) {
   return m;
 }
 
+/** True when WebGL runs on a CPU rasterizer (probed on a throw-away canvas). */
+function softwareRenderer() {
+  try {
+    const gl = document.createElement('canvas').getContext('webgl2');
+    if (!gl) return true;
+    const ext = gl.getExtension('WEBGL_debug_renderer_info');
+    const name = ext ? String(gl.getParameter(ext.UNMASKED_RENDERER_WEBGL)) : '';
+    gl.getExtension('WEBGL_lose_context')?.loseContext();
+    return /swiftshader|llvmpipe|softpipe|software/i.test(name);
+  } catch {
+    return false;
+  }
+}
+
 export class World {
   constructor(canvas) {
     this.canvas = canvas;
-    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
-    this.renderer.setPixelRatio(Math.min(window.devicePixelRatio || 1, 1.5));
+    this.software = softwareRenderer();
+    // multisampling in a software rasterizer (SwiftShader, llvmpipe) costs more than it shows
+    this.renderer = new THREE.WebGLRenderer({ canvas, antialias: !this.software, powerPreference: 'high-performance' });
+    this.renderer.setPixelRatio(this.software ? 1 : Math.min(window.devicePixelRatio || 1, 1.5));
     this.renderer.setClearColor(BACKGROUND, 1);
     this.renderer.setScissorTest(true);
     this.scene = new THREE.Scene();

@@ -23,6 +23,9 @@ export class View {
     this.firstStateFrameAt = null; // ms after navigation: first frame with the arms drawn
     this.legendEl = legendEl;
     this.polytopes = false;
+    this.lastFrameAt = -Infinity;
+    const want = Number(new URLSearchParams(location.search).get('maxfps'));
+    this.maxFps = want > 0 ? want : (this.world.software ? 20 : 120);
     this.polyBusy = false;
     this.legend();
     const loop = () => {
@@ -95,6 +98,11 @@ export class View {
   }
 
   frame() {
+    // A CPU rasterizer draws at most 20 fps (the newest state each time), leaving CPU to the
+    // page's input timer; ?maxfps=N overrides.
+    const now = performance.now();
+    if (now - this.lastFrameAt < 1000 / this.maxFps - 4) return;
+    this.lastFrameAt = now;
     const s = this.pending;
     if (s && this.arms) {
       this.pending = null;
@@ -114,11 +122,12 @@ export class View {
   /** Read-only hooks for the browser tests. */
   debugHooks(extra = {}) {
     const v = this;
-    return {
+    const hooks = {
       get hello() { return v.hello; },
       get lastState() { return v.drawn; },
       get statesDrawn() { return v.statesDrawn; },
       get framesRendered() { return v.viewports.frames; },
+      get renderMs() { return v.viewports.renderMs; },
       get firstFrameAt() { return v.viewports.firstFrameAt; },
       get firstStateFrameAt() { return v.firstStateFrameAt; },
       drawnJointAngles() { return v.arms ? v.arms.map((a) => a.q.slice()) : null; },
@@ -130,7 +139,8 @@ export class View {
       project(view, p) { return v.viewports.project(view, p); },
       viewports() { return v.viewports.views.map((x) => ({ name: x.name, rect: x.el.getBoundingClientRect().toJSON(), visible: !v.viewports.single || v.viewports.single === x.name })); },
       colours: { arm: ARM_COLOUR, grasp: GRASP_COLOURS },
-      ...extra,
     };
+    // keep the extra getters live (a spread would read them once)
+    return Object.freeze(Object.defineProperties(hooks, Object.getOwnPropertyDescriptors(extra)));
   }
 }

@@ -22,7 +22,9 @@ export class Viewports {
       el.dataset.view = name;
       el.innerHTML = `<span class="vp-title">${title}</span><button class="vp-max" title="one large view">⤢</button>`;
       container.appendChild(el);
-      el.querySelector('.vp-max').addEventListener('click', () => this.toggleSingle(name));
+      const max = el.querySelector('.vp-max');
+      max.addEventListener('pointerdown', (e) => e.stopPropagation()); // not an orbit drag
+      max.addEventListener('click', () => this.toggleSingle(name));
       el.addEventListener('dblclick', () => this.toggleSingle(name));
       return { name, title, el, camera };
     };
@@ -82,6 +84,7 @@ export class Viewports {
   render(force = false) {
     if (!this.dirty && !force) return false;
     this.dirty = false;
+    const t0 = performance.now();
     const r = this.world.renderer;
     const canvas = r.domElement;
     const cw = canvas.clientWidth, ch = canvas.clientHeight;
@@ -111,7 +114,9 @@ export class Viewports {
       r.render(this.world.scene, cam);
     }
     this.frames++;
-    if (this.firstFrameAt === null) this.firstFrameAt = performance.now();
+    const t1 = performance.now();
+    this.renderMs = this.renderMs === undefined ? t1 - t0 : 0.9 * this.renderMs + 0.1 * (t1 - t0);
+    if (this.firstFrameAt === null) this.firstFrameAt = t1;
     return true;
   }
 

@@ -40,7 +40,7 @@ test('a gamepad stick moves a joint: streamed q changes and the drawn arm moves'
     const moved = Math.hypot(...after.jaw.map((v, i) => v - before.jaw[i]));
     assert.ok(moved > 0.03, `drawn jaws moved ${moved} m`);
     // steady input stream with increasing sequence numbers, applied by the server
-    assert.ok(after.seq - before.seq >= 50, `sent ${after.seq - before.seq} inputs in ~1.5 s`);
+    assert.ok(after.seq - before.seq >= 30, `sent ${after.seq - before.seq} inputs in ~1.5 s (50 Hz nominal)`);
     assert.ok(after.inputSeq > before.seq, 'server applied the page\'s input seq');
     // the page's dead zone: a small stick deflection sends 0
     await b.page.evaluate(() => { window.__pad.axes[0] = 0.08; });

@@ -72,7 +72,7 @@ export class StatusBar {
 
   latency(ms) { this.set('latency', ms.toFixed(1)); }
   role(r) { this.set('role', r); }
-  pad(id) { this.set('pad', id ? '🎮 ' + id.slice(0, 24) : ''); }
+  pad(id) { this.set('pad', id ? 'gamepad: ' + id.slice(0, 24) : ''); }
   message(text) { this.set('message', text); }
 }
 

@@ -13,7 +13,13 @@ async fn start() -> Server {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
     let (tx, rx) = tokio::sync::oneshot::channel::<()>();
-    let state = seaarms::app::AppState::new().unwrap();
+    let dir =
+        std::env::temp_dir().join(format!("seaarms-http-{}", seaarms::sessions::random_hex(6)));
+    let config = seaarms::config::ServeConfig {
+        data_dir: dir,
+        ..Default::default()
+    };
+    let state = seaarms::app::AppState::new(&config).unwrap();
     tokio::spawn(async move {
         seaarms::run(listener, state, async {
             let _ = rx.await;

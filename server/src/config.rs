@@ -2,6 +2,7 @@
 //! `seaarms` serve on http://127.0.0.1:8080.
 
 use std::net::SocketAddr;
+use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
 
@@ -22,6 +23,23 @@ pub struct Cli {
 pub enum Command {
     /// Serve the simulator and the HTTP API (the default).
     Serve,
+    /// Run one of Lim's dynamic case studies headless; prints the summary JSON.
+    Scenario {
+        /// `case1-single-arm`, `case2-single-arm-load`, `case3-dual-open-loop` or `case4-dual-closed-loop`.
+        name: String,
+        /// Write the post-processing CSV here.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
+    /// Load-test a running server: N trainee sessions with random sticks plus M observers.
+    Load(crate::load::LoadArgs),
+    /// Exit 0 when the server answers `/healthz` (the container's HEALTHCHECK; the runtime
+    /// image has no curl).
+    Healthcheck {
+        /// URL to probe.
+        #[arg(long, default_value = "http://127.0.0.1:8080/healthz")]
+        url: String,
+    },
 }
 
 /// Settings of the HTTP server.
@@ -35,12 +53,60 @@ pub struct ServeConfig {
         global = true
     )]
     pub bind: SocketAddr,
+    /// Instructor token; generated and printed at start-up when not set.
+    #[arg(long, env = "SEAARMS_INSTRUCTOR_TOKEN", global = true)]
+    pub instructor_token: Option<String>,
+    /// Directory of session records and the session index.
+    #[arg(
+        long,
+        env = "SEAARMS_DATA_DIR",
+        default_value = "./data",
+        global = true
+    )]
+    pub data_dir: PathBuf,
+    /// Most live sessions at once (503 beyond).
+    #[arg(
+        long,
+        env = "SEAARMS_MAX_SESSIONS",
+        default_value_t = 64,
+        global = true
+    )]
+    pub max_sessions: usize,
+    /// A session with no trainee connected and no input for this many seconds ends.
+    #[arg(
+        long,
+        env = "SEAARMS_IDLE_TIMEOUT_SECS",
+        default_value_t = 900,
+        global = true
+    )]
+    pub idle_timeout_secs: u64,
+    /// State frames per second streamed to each client (10–120).
+    #[arg(long, env = "SEAARMS_FRAME_HZ", default_value_t = 60, value_parser = clap::value_parser!(u32).range(10..=120), global = true)]
+    pub frame_hz: u32,
+    /// Client WebSocket messages per second allowed per connection.
+    #[arg(
+        long,
+        env = "SEAARMS_MAX_MESSAGES_PER_SECOND",
+        default_value_t = 200,
+        global = true
+    )]
+    pub max_messages_per_second: u32,
+    /// Physics worker threads (default: one per CPU).
+    #[arg(long, env = "SEAARMS_PHYSICS_THREADS", global = true)]
+    pub physics_threads: Option<usize>,
 }
 
 impl Default for ServeConfig {
     fn default() -> Self {
         ServeConfig {
             bind: SocketAddr::from(([127, 0, 0, 1], 8080)),
+            instructor_token: None,
+            data_dir: PathBuf::from("./data"),
+            max_sessions: 64,
+            idle_timeout_secs: 900,
+            frame_hz: 60,
+            max_messages_per_second: 200,
+            physics_threads: None,
         }
     }
 }

@@ -9,6 +9,9 @@
 //! * [`protocol`]: WebSocket wire types (the page contract).
 //! * [`error`]: the one HTTP error type.
 //! * [`assets`]: the embedded web page and vendored libraries.
+//! * [`sessions`]: live sessions — physics threads, frames, WebSocket, REST, records.
+//! * [`metrics`]: Prometheus counters; [`load`]: the `seaarms load` client.
+//! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
 
 pub mod api;
 pub mod app;
@@ -16,20 +19,41 @@ pub mod assets;
 pub mod config;
 pub mod error;
 pub mod json;
+pub mod load;
+pub mod metrics;
 pub mod protocol;
 pub mod robots;
+pub mod scenarios;
+pub mod sessions;
 
 use std::future::Future;
 
 use tokio::net::TcpListener;
 
-/// Serves the application on a bound listener until `shutdown` completes (tests bind port 0).
+/// Serves the application on a bound listener until `shutdown` completes (tests bind port
+/// 0). Idle sessions are expired every few seconds; on shutdown every session is ended and
+/// every record flushed before this returns.
 pub async fn run(
     listener: TcpListener,
     state: app::AppState,
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
-    axum::serve(listener, app::app(state))
+    let sessions = state.sessions.clone();
+    let expiry = tokio::spawn({
+        let sessions = sessions.clone();
+        async move {
+            let mut tick = tokio::time::interval(std::time::Duration::from_secs(5));
+            loop {
+                tick.tick().await;
+                let s = sessions.clone();
+                let _ = tokio::task::spawn_blocking(move || s.expire_idle()).await;
+            }
+        }
+    });
+    let result = axum::serve(listener, app::app(state))
         .with_graceful_shutdown(shutdown)
-        .await
+        .await;
+    expiry.abort();
+    let _ = tokio::task::spawn_blocking(move || sessions.shutdown()).await;
+    result
 }

@@ -9,20 +9,78 @@ async fn main() -> anyhow::Result<()> {
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()),
         )
+        .with_writer(std::io::stderr)
         .init();
     let cli = Cli::parse();
     match cli.command {
-        None | Some(Command::Serve) => {
-            let state = seaarms::app::AppState::new()?;
-            let listener = tokio::net::TcpListener::bind(cli.serve.bind).await?;
-            let addr = listener.local_addr()?;
-            println!("seaarms serving on http://{addr}");
-            tracing::info!(%addr, "listening");
-            seaarms::run(listener, state, async {
-                let _ = tokio::signal::ctrl_c().await;
-            })
-            .await?;
+        None | Some(Command::Serve) => serve(cli.serve).await,
+        Some(Command::Scenario { name, out }) => {
+            let (summary, csv) =
+                tokio::task::spawn_blocking(move || seaarms::scenarios::run_scenario(&name))
+                    .await??;
+            if let Some(path) = out {
+                std::fs::write(&path, csv)?;
+            }
+            println!("{}", serde_json::to_string_pretty(&summary)?);
+            Ok(())
+        }
+        Some(Command::Healthcheck { url }) => {
+            let resp = reqwest::Client::builder()
+                .timeout(std::time::Duration::from_secs(2))
+                .build()?
+                .get(&url)
+                .send()
+                .await?;
+            anyhow::ensure!(
+                resp.status().is_success(),
+                "{url} answered {}",
+                resp.status()
+            );
+            Ok(())
+        }
+        Some(Command::Load(args)) => {
+            let report = seaarms::load::run(args, cli.serve.instructor_token).await?;
+            println!("{}", serde_json::to_string_pretty(&report)?);
+            Ok(())
         }
     }
+}
+
+async fn serve(config: seaarms::config::ServeConfig) -> anyhow::Result<()> {
+    let state = seaarms::app::AppState::new(&config)?;
+    let listener = tokio::net::TcpListener::bind(config.bind).await?;
+    let addr = listener.local_addr()?;
+    println!("seaarms serving on http://{addr}");
+    println!(
+        "instructor dashboard: http://{addr}/instructor  token: {}",
+        state.instructor_token
+    );
+    if config.instructor_token.is_none() {
+        println!(
+            "(token generated for this run; set --instructor-token or SEAARMS_INSTRUCTOR_TOKEN to keep one)"
+        );
+    }
+    tracing::info!(%addr, data_dir = %config.data_dir.display(), "listening");
+    seaarms::run(listener, state, shutdown_signal()).await?;
+    tracing::info!("stopped; records flushed");
     Ok(())
+}
+
+async fn shutdown_signal() {
+    let ctrl_c = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let term = async {
+        if let Ok(mut s) = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate())
+        {
+            s.recv().await;
+        }
+    };
+    #[cfg(not(unix))]
+    let term = std::future::pending::<()>();
+    tokio::select! {
+        _ = ctrl_c => {},
+        _ = term => {},
+    }
 }

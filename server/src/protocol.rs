@@ -116,7 +116,11 @@ pub struct Settings {
 
 impl Default for Settings {
     fn default() -> Self {
-        Settings { control_mode: ControlMode::Joint, control_method: ControlMethod::Open, arm_speed: 1.0 }
+        Settings {
+            control_mode: ControlMode::Joint,
+            control_method: ControlMethod::Open,
+            arm_speed: 1.0,
+        }
     }
 }
 

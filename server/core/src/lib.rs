@@ -10,10 +10,21 @@
 //! * [`kinematics`]: forward kinematics of every frame, geometric Jacobian.
 //! * [`ik`]: Magnum closed-form IK (Lim eqs 3.10–3.19) and damped-least-squares IK.
 //! * [`manipulability`]: ellipsoid measures, JLM, dual-arm ellipsoid, velocity polytopes.
+//! * [`dynamics`]: link inertials, RNEA, CRBA, tool bias acceleration (Lim eq. 3.38).
+//! * [`hydraulics`]: valves, cylinders, relief, linkage Ĵ(q), Magnum sizing (Lim eqs 3.48–3.56).
+//! * [`grasp`]: the object, seabed contact, grasp matrices W, W⁺, V, grasp state (Lim eqs 3.39–3.47).
+//! * [`control`]: open loop, joint-velocity servo, closed-loop cooperative control.
+//! * [`sim`]: the whole-system [`sim::Simulation`] stepped at 1 ms, and scripted scenarios.
 
 pub mod analysis;
 pub mod error;
 pub mod ik;
+
+pub mod control;
+pub mod dynamics;
+pub mod grasp;
+pub mod hydraulics;
+pub mod sim;
 
 pub mod kinematics;
 pub mod manipulability;

@@ -89,17 +89,22 @@ fn inside(p: &Polytope, x: &Vector3<f64>, tol: f64) -> bool {
 /// Closed-mesh invariants: outward facets, every directed edge matched by its reverse,
 /// Euler V − E + F = 2, convexity (all corners on or below every facet plane).
 fn check_mesh(p: &Polytope) {
+    check_mesh_tol(p, 1e-9 * scale_of(p));
+}
+
+/// [`check_mesh`] with convexity to within `tol`.
+fn check_mesh_tol(p: &Polytope, tol: f64) {
     let nv = p.vertices.len();
     assert!(nv >= 4, "{} vertices", nv);
     let centroid: Vector3<f64> = p.vertices.iter().map(v3).sum::<Vector3<f64>>() / nv as f64;
-    let tol = 1e-9 * scale_of(p);
     for (f, (n, d)) in p.facets.iter().zip(planes(p)) {
         let a = v3(&p.vertices[f[0]]);
         assert!(n.dot(&(a - centroid)) > 0.0, "facet {f:?} points inward");
         for v in &p.vertices {
             assert!(
                 n.dot(&v3(v)) <= d + tol,
-                "hull is not convex at facet {f:?}"
+                "hull is not convex at facet {f:?}: {} > {tol:e}",
+                n.dot(&v3(v)) - d
             );
         }
     }
@@ -303,9 +308,9 @@ proptest! {
         }
     }
 
-    /// Hull of random points (with duplicates and a coplanar grid mixed in): every input is
-    /// inside or on every facet plane, every corner is an input, facets point outward,
-    /// V − E + F = 2; the volume of the hull of a cube's grid points is the cube's.
+    /// Definition of the convex hull, on random points with exact duplicates mixed in: every
+    /// input is inside or on every facet plane, every corner is an input, facets point
+    /// outward, every edge has two facets, V − E + F = 2 (Euler, convex polyhedron).
     #[test]
     fn hull_contains_inputs_and_corners_are_inputs(
         pts in prop::collection::vec(prop::array::uniform3(-5.0f64..5.0), 4..120),
@@ -422,6 +427,42 @@ proptest! {
         prop_assert!(close(ps.volume, p.volume * s.powi(3), 1e-9));
         let q = dual_velocity_polytope(&(&j * s), &qmax, &(&j * s), &qmax).unwrap();
         prop_assert!(close(q.volume, ps.volume, 1e-9));
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(200))]
+
+    /// Near-degenerate clouds (a 4×4×4 grid, cube-face points and near-duplicates, all jittered
+    /// by 10⁻¹⁶…10⁻⁸): the hull is a closed outward mesh, convex and containing every input
+    /// to the documented worst case (10⁻⁴ × the largest coordinate, reached only when the
+    /// jitter is near a hull tolerance), with the grid cube's volume.
+    #[test]
+    fn hull_of_jittered_grids_is_valid(
+        jitter in prop::collection::vec(prop::array::uniform3(-1.0f64..1.0), 64 + 48),
+        e in -16i32..=-8,
+        offset in prop::array::uniform3(-10.0f64..10.0),
+    ) {
+        let amp = 10f64.powi(e);
+        let mut pts: Vec<[f64; 3]> = (0..64)
+            .map(|i| [(i % 4) as f64 / 3.0, (i / 4 % 4) as f64 / 3.0, (i / 16) as f64 / 3.0])
+            .collect();
+        // Face-centre points and near-duplicates of corners.
+        for i in 0..48 {
+            pts.push(if i % 2 == 0 { [0.5, 0.5, (i % 4 / 2) as f64] } else { pts[(i * 7) % 64] });
+        }
+        for (p, j) in pts.iter_mut().zip(&jitter) {
+            for k in 0..3 {
+                p[k] += offset[k] + amp * j[k];
+            }
+        }
+        let h = convex_hull(&pts).unwrap();
+        let tol = 1e-4 * scale_of(&h);
+        check_mesh_tol(&h, tol);
+        for q in &pts {
+            prop_assert!(inside(&h, &v3(q), tol), "{:?} outside", q);
+        }
+        prop_assert!((h.volume - 1.0).abs() <= 1e-6, "volume {}", h.volume);
     }
 }
 
@@ -551,6 +592,20 @@ fn degenerate_inputs_give_errors_not_panics() {
         convex_hull(&flat),
         Err(Error::Degenerate { dimension: 2, .. })
     ));
+    // Planar: parallel columns give a segment; a dual polytope needs 3 rows.
+    assert!(matches!(
+        velocity_polytope(&matrix(2, 3, &[1.0, 2.0, 0.0, 2.0, 4.0, 0.0]), &[1.0; 3]),
+        Err(Error::Degenerate { dimension: 1, .. })
+    ));
+    assert!(matches!(
+        dual_velocity_polytope(
+            &DMatrix::identity(2, 2),
+            &[1.0; 2],
+            &DMatrix::identity(2, 2),
+            &[1.0; 2]
+        ),
+        Err(Error::InvalidRows { .. })
+    ));
     // Magnitudes whose products overflow or underflow f64: an error or a finite result.
     for s in [1e200, 1e-200, f64::MAX, f64::MIN_POSITIVE] {
         let j = matrix(
@@ -558,14 +613,13 @@ fn degenerate_inputs_give_errors_not_panics() {
             4,
             &[1.0, 0.2, 0.0, 0.5, 0.0, 1.0, 0.3, -0.5, 0.1, 0.0, 1.0, 0.5],
         ) * s;
-        for r in [
+        let results = [
             velocity_polytope(&j, &[1.0; 4]),
             dual_velocity_polytope(&j, &[1.0; 4], &j, &[1.0; 4]),
-        ] {
-            if let Ok(p) = r {
-                assert!(p.volume.is_finite() && p.w_p.is_finite());
-                assert!(p.vertices.iter().flatten().all(|x| x.is_finite()));
-            }
+        ];
+        for p in results.into_iter().flatten() {
+            assert!(p.volume.is_finite() && p.w_p.is_finite());
+            assert!(p.vertices.iter().flatten().all(|x| x.is_finite()));
         }
     }
     // A flat arm makes the dual polytope flat.

@@ -2,5 +2,7 @@
 //! never the core's internal structs.
 
 pub mod analysis;
+pub mod openapi;
 pub mod robots;
+pub mod scenarios;
 pub mod wire;

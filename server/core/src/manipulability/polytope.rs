@@ -64,13 +64,20 @@ const GEN_TOL: f64 = 1e-9;
 /// With s the largest absolute coordinate: points closer than 10⁻¹⁰·s to each other are one
 /// (the first in x order is kept), points within 10⁻¹²·s of the hull count as on it, and
 /// points inside an edge or a face of the hull are not corners; duplicate, collinear and
-/// coplanar points are therefore harmless. Every corner of the result is one of the inputs. `volume` is the signed-tetrahedron sum (divergence
+/// coplanar points are therefore harmless. Every corner of the result is one of the inputs.
+/// The volume is exact up to about (surface area)·10⁻¹²·s, which matters only for hulls
+/// thinner than about 10⁻⁸·s. The result is checked: if rounding left any point more than
+/// 10⁻⁹·s outside a facet plane (points scattered about a plane by about the tolerance can
+/// do that), the hull is recomputed with the tolerance raised to 10⁻⁹·s and then 10⁻⁷·s, and
+/// accepted when every point is within 1000× the tolerance used of it (at worst 10⁻⁴·s, for
+/// such noisy near-degenerate clouds only; velocity polytopes pass at the first tolerance). `volume` is the signed-tetrahedron sum (divergence
 /// theorem) and `w_p` the cone-cell index about the origin (see [`Polytope::w_p`]).
 ///
 /// # Errors
 /// [`Error::NonFinite`] for a NaN or infinite coordinate, [`Error::Degenerate`] when the
 /// points span fewer than 3 dimensions (none, one point, a segment or a flat set; the hull
-/// then has zero volume), [`Error::Numerical`] if rounding breaks the hull's topology.
+/// then has zero volume), [`Error::Numerical`] if no tolerance gives a valid hull (not seen in
+/// testing).
 pub fn convex_hull(points: &[[f64; 3]]) -> Result<Polytope, Error> {
     for (i, p) in points.iter().enumerate() {
         if p.iter().any(|v| !v.is_finite()) {
@@ -93,7 +100,9 @@ pub fn convex_hull(points: &[[f64; 3]]) -> Result<Polytope, Error> {
 /// `j` is m×n with m = 3 (rows vx vy vz of a geometric Jacobian, any frame) or m = 2 (a
 /// planar task, rows x y); `qdot_max` holds n joint-rate bounds (each joint's
 /// `max_velocity`, rad/s or m/s), each ≥ 0. The result is in the frame of `j`'s rows;
-/// zero columns and zero bounds contribute nothing.
+/// zero columns and zero bounds contribute nothing. Relative tolerance 10⁻⁹: a generator
+/// shorter than that times the longest is zero, two within that angle (sine) are parallel and
+/// merge, and generators within it of a common plane make the polytope flat.
 ///
 /// # Errors
 /// [`Error::InvalidRows`] unless m is 2 or 3; [`Error::SizeMismatch`] when `qdot_max` does
@@ -369,6 +378,7 @@ fn intersect(p1: &Polytope, p2: &Polytope) -> Result<Polytope, Error> {
         .collect();
     let mut next: Vec<Vec<Vector3<f64>>> = Vec::with_capacity(faces.len() + 8);
     let mut cap: Vec<Vector3<f64>> = Vec::new();
+    let mut ds: Vec<f64> = Vec::new();
     for f in &p2.facets {
         let (a, b, c) = (v2[f[0]], v2[f[1]], v2[f[2]]);
         let n = (b - a).cross(&(c - a));
@@ -384,12 +394,19 @@ fn intersect(p1: &Polytope, p2: &Polytope) -> Result<Polytope, Error> {
         }
         next.clear();
         cap.clear();
-        for face in &faces {
+        for face in faces.drain(..) {
+            ds.clear();
+            ds.extend(face.iter().map(dist));
+            if ds.iter().all(|&d| d <= eps) {
+                // Untouched face; its corners on the plane belong to the cap.
+                let on = face.iter().zip(&ds).filter(|(_, d)| d.abs() <= eps);
+                cap.extend(on.map(|(x, _)| *x));
+                next.push(face);
+                continue;
+            }
             let mut out: Vec<Vector3<f64>> = Vec::with_capacity(face.len() + 1);
-            let mut prev = face[face.len() - 1];
-            let mut prev_d = dist(&prev);
-            for &cur in face {
-                let cur_d = dist(&cur);
+            let (mut prev, mut prev_d) = (face[face.len() - 1], ds[ds.len() - 1]);
+            for (&cur, &cur_d) in face.iter().zip(&ds) {
                 match (prev_d <= eps, cur_d <= eps) {
                     (true, true) => out.push(cur),
                     (true, false) => out.push(cut(prev, prev_d, cur, cur_d)),
@@ -539,14 +556,44 @@ type Mesh = (Vec<Vector3<f64>>, Vec<[usize; 3]>);
 /// Quickhull of `pts` without spurious corners: returns the corners (a subset of `pts`) and
 /// outward triangles indexing them.
 ///
-/// Quickhull adds the farthest outside point at each step, which can end up on an edge or in
-/// a face of the final hull (e.g. a zonotope's edge midpoint). Such points are no corners:
-/// they are dropped (see [`corner_flags`]) and the remaining corners hulled again (rarely
-/// more than once).
+/// Near-duplicates are merged first ([`distinct`]). Quickhull adds the farthest outside point
+/// at each step, which can end up on an edge or in a face of the final hull (e.g. a zonotope's
+/// edge midpoint); such points are no corners: they are dropped ([`corner_flags`]) and the rest
+/// hulled again. Points scattered about a plane by about the tolerance can make the
+/// tolerance-based visibility inconsistent; the result is therefore checked (every point on
+/// or below every facet plane, to 1000× the tolerance) and, failing that, recomputed with a
+/// 1000× and then a 10⁵× larger tolerance.
 fn quickhull(pts: &[Vector3<f64>]) -> Result<Mesh, Error> {
     let scale = pts.iter().map(|p| p.amax()).fold(0.0, f64::max);
-    let eps = HULL_TOL * scale;
-    let (mut verts, mut facets) = quickhull_raw(&distinct(pts, MERGE_TOL * scale))?;
+    let pts = distinct(pts, MERGE_TOL * scale);
+    let mut failure = Error::Numerical {
+        what: "convex hull",
+        reason: "no attempt".into(),
+    };
+    for tol in [HULL_TOL, 1e3 * HULL_TOL, 1e5 * HULL_TOL] {
+        let eps = tol * scale;
+        match hull_without_spurious_corners(&pts, eps) {
+            Ok(mesh) => {
+                let worst = max_violation(&mesh, &pts);
+                if worst <= 1e3 * eps {
+                    return Ok(mesh);
+                }
+                failure = Error::Numerical {
+                    what: "convex hull",
+                    reason: format!("a point is {worst:e} outside a facet"),
+                };
+            }
+            Err(e @ Error::Degenerate { .. }) => return Err(e),
+            Err(e) => failure = e,
+        }
+    }
+    Err(failure)
+}
+
+/// [`quickhull_raw`] at tolerance `eps` (a length), then non-corners dropped and the rest
+/// hulled again (rarely more than once).
+fn hull_without_spurious_corners(pts: &[Vector3<f64>], eps: f64) -> Result<Mesh, Error> {
+    let (mut verts, mut facets) = quickhull_raw(pts, eps)?;
     for _ in 0..4 {
         let keep = corner_flags(&verts, &facets, eps);
         if keep.iter().all(|&k| k) {
@@ -558,9 +605,25 @@ fn quickhull(pts: &[Vector3<f64>]) -> Result<Mesh, Error> {
             .filter(|(_, k)| **k)
             .map(|(v, _)| *v)
             .collect();
-        (verts, facets) = quickhull_raw(&corners)?;
+        (verts, facets) = quickhull_raw(&corners, eps)?;
     }
     Ok((verts, facets))
+}
+
+/// Largest signed distance of any of `pts` above any facet plane of `mesh` (≤ 0 when all
+/// are inside), or +∞ for a facet without a normal.
+fn max_violation(mesh: &Mesh, pts: &[Vector3<f64>]) -> f64 {
+    let (verts, facets) = mesh;
+    let mut worst = f64::NEG_INFINITY;
+    for f in facets {
+        let Ok((n, d)) = plane_of(verts, *f) else {
+            return f64::INFINITY;
+        };
+        for p in pts {
+            worst = worst.max(n.dot(p) - d);
+        }
+    }
+    worst
 }
 
 /// For each vertex of a closed convex mesh: whether it is a true corner. A vertex is not
@@ -612,17 +675,16 @@ fn corner_flags(verts: &[Vector3<f64>], facets: &[[usize; 3]], eps: f64) -> Vec<
         .collect()
 }
 
-/// Plain quickhull of `pts`: corners (a subset of `pts`, possibly with points on edges or
-/// faces of the hull) and outward triangles indexing them.
-fn quickhull_raw(pts: &[Vector3<f64>]) -> Result<Mesh, Error> {
-    let scale = pts.iter().map(|p| p.amax()).fold(0.0, f64::max);
+/// Plain quickhull of `pts` at tolerance `eps` (a length: points within it of a facet plane
+/// are on it): corners (a subset of `pts`, possibly with points on edges or faces of the
+/// hull) and outward triangles indexing them.
+fn quickhull_raw(pts: &[Vector3<f64>], eps: f64) -> Result<Mesh, Error> {
     if pts.is_empty() {
         return Err(Error::Degenerate {
             what: "convex hull",
             dimension: 0,
         });
     }
-    let eps = HULL_TOL * scale;
     let simplex = initial_simplex(pts, eps)?;
     let mut faces: Vec<Face> = Vec::with_capacity(8 * pts.len().min(1024));
     let [i0, i1, i2, i3] = simplex;

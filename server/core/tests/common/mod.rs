@@ -14,3 +14,6 @@ pub(crate) fn builtin(name: &str) -> Model {
 pub(crate) fn all_builtin() -> Vec<Model> {
     robots::BUILTIN.iter().map(|(n, _)| builtin(n)).collect()
 }
+
+pub(crate) mod rng;
+pub(crate) mod scenario_util;

@@ -1,0 +1,81 @@
+//! One full 1 ms step of the whole system (two arms' rigid-body dynamics, 12 actuators with
+//! their valves and chambers, jaws, object, grasp constraint, control), in three situations:
+//! arms moving open loop, both jaws holding the object open loop, and closed-loop cooperative.
+
+use std::hint::black_box;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use seaarms_core::sim::scenario::{Scenario, scenario};
+use seaarms_core::sim::{ControlMethod, Input, SimParams, Simulation};
+use seaarms_core::{Model, ModelSpec, robots};
+
+fn magnum() -> Model {
+    let text = robots::builtin_text("magnum").expect("magnum");
+    let spec: ModelSpec = serde_json::from_str(text).expect("json");
+    Model::from_spec(&spec).expect("model")
+}
+
+/// A simulation advanced to the point of `case4-dual-closed-loop` where both jaws hold.
+fn holding_sim() -> Simulation {
+    let m = magnum();
+    let sc: Scenario = scenario("case4-dual-closed-loop", &m, &m).expect("scenario");
+    let mut sim = Simulation::new(m.clone(), m, sc.params.clone()).expect("sim");
+    let mut t = 0.0;
+    for seg in &sc.segments {
+        if sim.arm(0).holding && sim.arm(1).holding {
+            break;
+        }
+        let n = (seg.duration_s / 1e-3).round() as usize;
+        for _ in 0..n {
+            let inp = sc.input_at(&sim, seg, t);
+            sim.step(&inp);
+            t += 1e-3;
+        }
+    }
+    sim
+}
+
+fn bench_step(c: &mut Criterion) {
+    let m = magnum();
+    let params = SimParams::case_study(&m, &m).expect("params");
+    let mut free = Simulation::new(m.clone(), m.clone(), params).expect("sim");
+    let mut moving = Input::default();
+    moving.arms[0].valves = [0.5, 0.5, -0.5, 0.5, 0.5, 1.0];
+    moving.arms[1].valves = [-0.5, 0.5, -0.5, 0.5, -0.5, -1.0];
+    c.bench_function("step_free_open_loop", |b| {
+        b.iter(|| {
+            if free.time_s() > 2.0 {
+                free.reset();
+            }
+            free.step(black_box(&moving));
+        })
+    });
+    let base = holding_sim();
+    let mut held = base.clone();
+    let hold = Input::default();
+    c.bench_function("step_both_holding_open_loop", |b| {
+        b.iter(|| {
+            if held.time_s() > base.time_s() + 5.0 {
+                held = base.clone();
+            }
+            held.step(black_box(&hold));
+        })
+    });
+    let mut coop = base.clone();
+    let lift = Input {
+        method: ControlMethod::ClosedLoop,
+        object_velocity: [0.0, 0.0, 0.02, 0.0, 0.0, 0.0],
+        ..Input::default()
+    };
+    c.bench_function("step_closed_loop_cooperative", |b| {
+        b.iter(|| {
+            if coop.time_s() > base.time_s() + 5.0 {
+                coop = base.clone();
+            }
+            coop.step(black_box(&lift));
+        })
+    });
+}
+
+criterion_group!(benches, bench_step);
+criterion_main!(benches);

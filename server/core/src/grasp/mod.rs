@@ -1,0 +1,253 @@
+//! The object, its contact with the seabed, grasp detection and the grasp matrices
+//! (Lim §3.4.2, eqs 3.39–3.47).
+//!
+//! Wrench convention: a contact wrench F_c^i = [f; m] (6: force N, moment N·m, base frame) is
+//! what end-effector i exerts on the object at its grasp point. The object twist is
+//! [v; ω] of its centre of mass, base frame.
+//!
+//! * [`ObjectParams`]: the 50 kg box with two handles, its seabed contact.
+//! * [`grasp_block`], [`grasp_matrix`], [`grasp_pinv_equal_share`], [`internal_basis`]:
+//!   W = [W¹ W²] (eq. 3.40), the equal-load-sharing W⁺ (eq. 3.46) and V (eq. 3.47).
+//! * [`decompose`]: external and internal force/torque of a pair of contact wrenches.
+//! * [`GraspState`]: the colour code of Lim §4.1.
+
+use nalgebra::{Isometry3, Matrix3, Matrix6, SMatrix, SVector, Vector3, Vector6};
+use serde::{Deserialize, Serialize};
+
+use crate::dynamics::skew;
+
+/// The object and its environment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ObjectParams {
+    /// Mass (kg): 50 (Lim §4.2.2, "an object which is 50 kg").
+    pub mass_kg: f64,
+    /// Box size x, y, z (m): 0.30 × 0.40 × 0.20 (assumed; mean density ≈ 2 080 kg/m³).
+    pub size_m: Vector3<f64>,
+    /// Handle grasp points in the object frame (m): bars 3 cm above the top face at y = ±0.15
+    /// that the jaws close on, one per arm (index 0: left arm at +y, 1: right arm). Assumed.
+    pub handles_m: [Vector3<f64>; 2],
+    /// Handle bar thickness the jaw closes on (m): 0.04 (< 7.5 cm jaw opening).
+    pub handle_width_m: f64,
+    /// Contact (capture) radius (m) around a handle within which the tool point touches it:
+    /// 0.04. Stands in for the thesis's collision detection of jaw and object meshes.
+    pub capture_radius_m: f64,
+    /// Seabed height (m, base frame z).
+    pub seabed_z_m: f64,
+    /// Initial pose of the object frame (at its centre of mass), resting on the seabed.
+    pub initial_pose: Isometry3<f64>,
+    /// Seabed contact stiffness per bottom corner (N/m): 2·10⁶ (stiff sediment-free rock/
+    /// steel plate; settles 0.06 mm under 50 kg).
+    pub contact_stiffness_n_m: f64,
+    /// Seabed contact damping per corner (N·s/m): 2·10⁴ (about critical for 50 kg on 4 corners).
+    pub contact_damping_n_s_m: f64,
+    /// Seabed Coulomb friction coefficient: 0.5.
+    pub friction: f64,
+    /// Friction regularization speed (m/s): 0.01 (μN·v/√(v²+ε²)).
+    pub friction_speed_m_s: f64,
+}
+
+impl ObjectParams {
+    /// The case-study object: 50 kg box centred at (x, y), resting on the seabed at `seabed_z`.
+    pub fn case_study_box(x: f64, y: f64, seabed_z: f64) -> ObjectParams {
+        let size = Vector3::new(0.30, 0.40, 0.20);
+        ObjectParams {
+            mass_kg: 50.0,
+            size_m: size,
+            handles_m: [
+                Vector3::new(0.0, 0.15, 0.5 * size.z + 0.03),
+                Vector3::new(0.0, -0.15, 0.5 * size.z + 0.03),
+            ],
+            handle_width_m: 0.04,
+            capture_radius_m: 0.04,
+            seabed_z_m: seabed_z,
+            initial_pose: Isometry3::translation(x, y, seabed_z + 0.5 * size.z),
+            contact_stiffness_n_m: 2.0e6,
+            contact_damping_n_s_m: 2.0e4,
+            friction: 0.5,
+            friction_speed_m_s: 0.01,
+        }
+    }
+
+    /// Inertia about the centre of mass, object axes (kg·m²): solid box.
+    pub fn inertia_body(&self) -> Matrix3<f64> {
+        let (x, y, z) = (self.size_m.x, self.size_m.y, self.size_m.z);
+        let k = self.mass_kg / 12.0;
+        Matrix3::from_diagonal(&Vector3::new(
+            k * (y * y + z * z),
+            k * (x * x + z * z),
+            k * (x * x + y * y),
+        ))
+    }
+
+    /// The eight box corners in the object frame.
+    pub fn corners(&self) -> [Vector3<f64>; 8] {
+        let h = self.size_m * 0.5;
+        let mut out = [Vector3::zeros(); 8];
+        for (k, c) in out.iter_mut().enumerate() {
+            *c = Vector3::new(
+                if k & 1 == 0 { -h.x } else { h.x },
+                if k & 2 == 0 { -h.y } else { h.y },
+                if k & 4 == 0 { -h.z } else { h.z },
+            );
+        }
+        out
+    }
+}
+
+/// Seabed contact wrench on the object (6: force, moment about the COM; base frame) from
+/// penalty springs at the box corners that are below the seabed, with regularized Coulomb
+/// friction. Returns the wrench and the total normal force (N).
+pub fn seabed_wrench(
+    p: &ObjectParams,
+    pose: &Isometry3<f64>,
+    v: &Vector3<f64>,
+    w: &Vector3<f64>,
+) -> (Vector6<f64>, f64) {
+    let mut f = Vector3::zeros();
+    let mut m = Vector3::zeros();
+    let mut normal = 0.0;
+    // Quick reject: the whole box (bounding sphere) is above the seabed.
+    if pose.translation.vector.z - 0.5 * p.size_m.norm() > p.seabed_z_m {
+        return (Vector6::zeros(), 0.0);
+    }
+    for c in p.corners() {
+        let r = pose.rotation * c;
+        let z = pose.translation.vector.z + r.z;
+        let pen = p.seabed_z_m - z;
+        if pen <= 0.0 {
+            continue;
+        }
+        let vc = v + w.cross(&r);
+        let fn_ = (p.contact_stiffness_n_m * pen - p.contact_damping_n_s_m * vc.z).max(0.0);
+        let vt = Vector3::new(vc.x, vc.y, 0.0);
+        let s = (vt.norm_squared() + p.friction_speed_m_s * p.friction_speed_m_s).sqrt();
+        let ft = -vt * (p.friction * fn_ / s);
+        let fc = Vector3::new(ft.x, ft.y, fn_);
+        f += fc;
+        m += r.cross(&fc);
+        normal += fn_;
+    }
+    (Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z), normal)
+}
+
+/// Wⁱ (6×6, eq. 3.40 block): maps the wrench at grasp point i (at r from the object COM, base
+/// frame) to the wrench at the COM: [f; m + r×f]. Its transpose maps the object twist to the
+/// grasp point twist.
+pub fn grasp_block(r: &Vector3<f64>) -> Matrix6<f64> {
+    let mut w = Matrix6::identity();
+    w.fixed_view_mut::<3, 3>(3, 0).copy_from(&skew(r));
+    w
+}
+
+/// W = [W¹ W²] (6×12, eq. 3.40) for grasp points at r¹, r² from the COM.
+pub fn grasp_matrix(r: &[Vector3<f64>; 2]) -> SMatrix<f64, 6, 12> {
+    let mut w = SMatrix::<f64, 6, 12>::zeros();
+    w.fixed_view_mut::<6, 6>(0, 0)
+        .copy_from(&grasp_block(&r[0]));
+    w.fixed_view_mut::<6, 6>(0, 6)
+        .copy_from(&grasp_block(&r[1]));
+    w
+}
+
+/// W⁺ for equal load sharing (12×6, eq. 3.46): ½[I 0; −Rⁱ I] per arm, Rⁱ = [rⁱ]×.
+/// W·W⁺ = I.
+pub fn grasp_pinv_equal_share(r: &[Vector3<f64>; 2]) -> SMatrix<f64, 12, 6> {
+    let mut p = SMatrix::<f64, 12, 6>::zeros();
+    for (i, ri) in r.iter().enumerate() {
+        let mut b = Matrix6::identity();
+        b.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-skew(ri)));
+        p.fixed_view_mut::<6, 6>(6 * i, 0).copy_from(&(b * 0.5));
+    }
+    p
+}
+
+/// V (12×6, eq. 3.47) with aⁱ = 2(−1)ⁱ/(N − (−1)ⁱ(1 − (−1)ᴺ)/2): for N = 2, a¹ = −1, a² = 1;
+/// blocks aⁱ[I 0; −Rⁱ I]. W·V = 0.
+pub fn internal_basis(r: &[Vector3<f64>; 2]) -> SMatrix<f64, 12, 6> {
+    let n = 2.0_f64;
+    let mut v = SMatrix::<f64, 12, 6>::zeros();
+    for (k, ri) in r.iter().enumerate() {
+        let i = (k + 1) as i32;
+        let s = (-1.0_f64).powi(i);
+        let a = 2.0 * s / (n - s * (1.0 - (-1.0_f64).powi(2)) / 2.0);
+        let mut b = Matrix6::identity();
+        b.fixed_view_mut::<3, 3>(3, 0).copy_from(&(-skew(ri)));
+        v.fixed_view_mut::<6, 6>(6 * k, 0).copy_from(&(b * a));
+    }
+    v
+}
+
+/// External wrench W·F_c (6) and internal wrench F_int (6) with F_c = W⁺F_ext + V·F_int
+/// (eq. 3.41), F_int = V⁺(I − W⁺W)F_c (least squares; exact since (I − W⁺W)F_c lies in the
+/// range of V).
+pub fn decompose(r: &[Vector3<f64>; 2], fc: &SVector<f64, 12>) -> (Vector6<f64>, Vector6<f64>) {
+    let w = grasp_matrix(r);
+    let wp = grasp_pinv_equal_share(r);
+    let v = internal_basis(r);
+    let fext = w * fc;
+    let rest = fc - wp * fext;
+    let vtv = v.transpose() * v;
+    let fint = match vtv.cholesky() {
+        Some(ch) => ch.solve(&(v.transpose() * rest)),
+        None => Vector6::zeros(),
+    };
+    (fext, fint)
+}
+
+/// Grasp state, with the colour code of Lim §4.1 (Fig. 4-4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GraspState {
+    /// No jaw holds the object.
+    Free,
+    /// One jaw holds it and it still touches the seabed (black).
+    OneOnSurface,
+    /// One jaw holds it clear of the seabed (light blue).
+    OneLifted,
+    /// One jaw holds it and the other arm touches it (red).
+    OneHoldingOtherContact,
+    /// Both jaws hold it (yellow).
+    BothHolding,
+}
+
+impl GraspState {
+    /// Snake-case name used in CSV and JSON.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            GraspState::Free => "free",
+            GraspState::OneOnSurface => "one_on_surface",
+            GraspState::OneLifted => "one_lifted",
+            GraspState::OneHoldingOtherContact => "one_holding_other_contact",
+            GraspState::BothHolding => "both_holding",
+        }
+    }
+
+    /// Colour of the object in the GUI (Lim §4.1): "" (default colour), black, light blue, red, yellow.
+    pub fn colour(self) -> &'static str {
+        match self {
+            GraspState::Free => "",
+            GraspState::OneOnSurface => "black",
+            GraspState::OneLifted => "lightblue",
+            GraspState::OneHoldingOtherContact => "red",
+            GraspState::BothHolding => "yellow",
+        }
+    }
+
+    /// Classifies from per-arm holding/contact flags and seabed contact.
+    pub fn classify(holding: [bool; 2], contact: [bool; 2], on_surface: bool) -> GraspState {
+        match (holding[0], holding[1]) {
+            (true, true) => GraspState::BothHolding,
+            (false, false) => GraspState::Free,
+            (h0, _) => {
+                let other = if h0 { contact[1] } else { contact[0] };
+                if other {
+                    GraspState::OneHoldingOtherContact
+                } else if on_surface {
+                    GraspState::OneOnSurface
+                } else {
+                    GraspState::OneLifted
+                }
+            }
+        }
+    }
+}

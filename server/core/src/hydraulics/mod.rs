@@ -1,0 +1,504 @@
+//! Valve-controlled hydraulic actuators, one per joint (Lim §3.4.3, eqs 3.48–3.54), with the
+//! relief valves and cavitation floor the thesis lacked.
+//!
+//! * [`Linkage`]: the cylinder-to-joint geometry, x(q) and Ĵ(q) = dx/dq (eq. 3.53).
+//! * [`ActuatorParams`], [`HydraulicParams`]: sizes and fluid data; [`HydraulicParams::magnum`]
+//!   sizes them from Lim Table 1-1 with documented rules.
+//! * [`valve_flow`]: turbulent orifice flow with the sign logic of eq. 3.48.
+//! * [`update_chambers`]: one backward-Euler step of the chamber continuity equations
+//!   (3.49–3.50, 3.56) including relief flow, piston leakage and the cavitation floor.
+//! * [`JawParams`]: the jaw function (Table 1-1: 7.5 cm, 10.2 cm/s, 150 kgf).
+//!
+//! Pressures are gauge pressures relative to the return line (Pa); the return line is at
+//! `return_pa` (0 by default). A chamber never goes below 0 Pa: below that the oil would
+//! cavitate, and anti-cavitation check valves from the return line refill it (modelled as a
+//! hard floor in the implicit update).
+
+use crate::Error;
+use crate::dynamics::Inertials;
+use crate::kinematics::{KinData, jacobian};
+use crate::model::Model;
+
+/// Number of joint actuators per arm.
+pub const N_ACT: usize = 6;
+
+/// How an actuator drives its joint.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Linkage {
+    /// A linear cylinder pinned to the parent link at distance `r_a_m` from the joint axis and
+    /// to the child link at `r_b_m`, both in the plane normal to the axis. The angle between
+    /// the two pin radii is φ = `phi0_rad` + q, so the cylinder length is
+    /// L(q) = √(r_a² + r_b² − 2 r_a r_b cos φ) and Ĵ(q) = dL/dq = r_a r_b sin φ / L: extending
+    /// the cylinder increases q. φ stays in (0, π) over the joint range.
+    Linear {
+        /// Parent-side pin radius (m).
+        r_a_m: f64,
+        /// Child-side pin radius (m).
+        r_b_m: f64,
+        /// φ at q = 0 (rad).
+        phi0_rad: f64,
+    },
+    /// A rotary actuator (vane, rack-and-pinion or motor): x = q, Ĵ = 1; "area" is the
+    /// volumetric displacement (m³/rad).
+    Rotary,
+}
+
+impl Linkage {
+    /// Actuator coordinate x (m or rad) and Ĵ = dx/dq (m/rad or 1) at joint angle `q`.
+    #[inline]
+    pub fn coordinate(&self, q: f64) -> (f64, f64) {
+        match *self {
+            Linkage::Linear {
+                r_a_m,
+                r_b_m,
+                phi0_rad,
+            } => {
+                let phi = phi0_rad + q;
+                let (s, c) = phi.sin_cos();
+                let l = (r_a_m * r_a_m + r_b_m * r_b_m - 2.0 * r_a_m * r_b_m * c)
+                    .max(1e-12)
+                    .sqrt();
+                (l, r_a_m * r_b_m * s / l)
+            }
+            Linkage::Rotary => (q, 1.0),
+        }
+    }
+}
+
+/// One joint actuator with its proportional valve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ActuatorParams {
+    /// Cylinder-to-joint geometry.
+    pub linkage: Linkage,
+    /// Piston area of the inlet (extend) chamber A_I (m²; m³/rad for rotary).
+    pub area_in: f64,
+    /// Piston area of the outlet chamber A_O (m²; m³/rad for rotary).
+    pub area_out: f64,
+    /// Actuator coordinate at the joint's lower limit (m or rad): the fully retracted end.
+    pub x_min: f64,
+    /// Usable stroke (m or rad) from `x_min`.
+    pub stroke: f64,
+    /// Dead volume of the inlet side (hoses, end clearance) V̄_I (m³).
+    pub dead_volume_in_m3: f64,
+    /// Dead volume of the outlet side V̄_O (m³).
+    pub dead_volume_out_m3: f64,
+    /// Flow gain K·K_sp of eq. 3.48/3.51 (m³/s per √Pa) at full command u = ±1.
+    pub flow_gain: f64,
+    /// Equivalent viscous damping K_damp of eq. 3.52 (N·s/m; N·m·s/rad for rotary).
+    pub damping: f64,
+    /// Continuous rotation (hydraulic motor): chamber volumes do not change with x.
+    pub continuous: bool,
+    /// Nominal joint speed at full command, Lim Table 1-1 (rad/s); used by the servo.
+    pub nominal_speed_rad_s: f64,
+    /// Design torque used for sizing (N·m), for reference.
+    pub design_torque_nm: f64,
+}
+
+impl ActuatorParams {
+    /// Chamber volumes (V_I, V_O) (m³) at actuator coordinate `x` (eq. 3.50).
+    #[inline]
+    pub fn volumes(&self, x: f64) -> (f64, f64) {
+        if self.continuous {
+            return (self.dead_volume_in_m3, self.dead_volume_out_m3);
+        }
+        let s = (x - self.x_min).clamp(0.0, self.stroke);
+        (
+            self.dead_volume_in_m3 + self.area_in * s,
+            self.dead_volume_out_m3 + self.area_out * (self.stroke - s),
+        )
+    }
+}
+
+/// The jaw function (Lim Table 1-1: "7.5 cm opening; 10.2 cm per second; clamp force 150 kg").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JawParams {
+    /// Full opening (m): 0.075.
+    pub max_opening_m: f64,
+    /// Opening/closing speed at full command (m/s): 0.102.
+    pub speed_m_s: f64,
+    /// Clamp force at full closing command (N): 150 kgf = 1 471 N.
+    pub clamp_force_n: f64,
+}
+
+impl Default for JawParams {
+    fn default() -> Self {
+        JawParams {
+            max_opening_m: 0.075,
+            speed_m_s: 0.102,
+            clamp_force_n: 150.0 * 9.80665,
+        }
+    }
+}
+
+/// Hydraulic system of one arm.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HydraulicParams {
+    /// Pump (supply) pressure P_i (Pa): 6.89 MPa, Lim Table 1-1 "operating pressure 6,890 kPa".
+    pub supply_pa: f64,
+    /// Exit (return) pressure P_e (Pa): 0 (gauge; README: tank ≈ 0–0.1 MPa).
+    pub return_pa: f64,
+    /// Relief valve cracking pressure (Pa): 1.10 × supply = 7.58 MPa ("usually set a little
+    /// above supply", README); the thesis had none and saw 12 MPa.
+    pub relief_pa: f64,
+    /// Relief valve flow gain above cracking (m³/s per Pa): 1e-8, i.e. 1 L/s at 0.1 MPa
+    /// override — far more than any actuator's full valve flow, so the line stays near the setting.
+    pub relief_gain: f64,
+    /// Effective bulk modulus β (Pa): 1.0 GPa (README: 0.7–1.5 GPa in practice with hoses).
+    pub bulk_modulus_pa: f64,
+    /// Pressure drop below which orifice flow is taken as laminar (linear) (Pa): 2e4. Keeps
+    /// dq/dP finite at ΔP → 0 (numerical regularization; flows there are tiny).
+    pub laminar_pa: f64,
+    /// The six joint actuators.
+    pub actuators: [ActuatorParams; N_ACT],
+    /// The jaw.
+    pub jaw: JawParams,
+}
+
+/// Payload at the jaw for the holding requirement, Lim Table 1-1 "lift 295 kg at full extension".
+pub const MAGNUM_LIFT_KG: f64 = 295.0;
+/// Margin of the holding side over the 295 kg requirement at supply pressure: 1.15.
+pub const HOLD_MARGIN: f64 = 1.15;
+/// Rod-side to bore-side area ratio of the linear cylinders (typical single-rod cylinder): 0.8.
+pub const AREA_RATIO: f64 = 0.8;
+/// Nominal joint speeds, Lim Table 1-1 (°/s): 20, 20, 30, 30, 30, 150.
+pub const MAGNUM_SPEEDS_DEG_S: [f64; N_ACT] = [20.0, 20.0, 30.0, 30.0, 30.0, 150.0];
+
+/// Floor on the design torque of each joint (N·m), for joints the full-extension load does
+/// not exercise: swing 2 000 (lateral loads of the order of the elbow's), shoulder/elbow/
+/// pitch 0 (sized by the load), yaw 600, rotate 150 (typical wrist torques of 7-function
+/// subsea arms; assumed).
+pub const MAGNUM_TORQUE_FLOOR_NM: [f64; N_ACT] = [2000.0, 0.0, 0.0, 0.0, 600.0, 150.0];
+
+/// The "full extension" posture of the Magnum model used for sizing and for the holding test:
+/// all joints at 0 — upper arm, forearm and wrist in line and horizontal, reach 1.5 m.
+pub const MAGNUM_FULL_EXTENSION: [f64; N_ACT] = [0.0; N_ACT];
+
+impl HydraulicParams {
+    /// Magnum hydraulics sized from Lim Table 1-1 by these rules:
+    ///
+    /// * Shoulder, elbow, pitch: linear cylinders (geometry below); swing, yaw: rotary
+    ///   actuators; rotate: continuous hydraulic motor.
+    /// * Design torque of joint j = max(1.15 × |G_j| at [`MAGNUM_FULL_EXTENSION`] with 295 kg at
+    ///   the jaw (in air), [`MAGNUM_TORQUE_FLOOR_NM`]). The side of the actuator that holds
+    ///   that load gets area = design torque / (Ĵ · supply); the other side is 0.8× (or
+    ///   1/0.8×) for cylinders, equal for rotary actuators. So 295 kg is held below supply
+    ///   pressure, and 590 kg needs ≈ 1.7× the relief setting: it cannot be held.
+    /// * Flow gain so that full command moves the unloaded joint at its Table 1-1 speed at
+    ///   mid-range: extend and retract speeds of a cylinder with area ratio α differ by √α,
+    ///   so the gain puts their geometric mean on the nominal speed.
+    /// * Cylinder pins (shoulder, elbow, pitch): r_a = 0.35/0.30/0.25 m, r_b = 0.10/0.09/0.06 m,
+    ///   φ = 90° at mid-range (largest lever where the arm works most). Assumed; Lim prints none.
+    /// * Dead volume 0.15 L per side (≈ 3 m of 3/8" hose); damping 5·10⁴ N·s/m for cylinders
+    ///   (README range 10³–10⁵; the upper half, because a closed-centre valve adds no damping and
+    ///   the cooperative loop needs the oil-column resonance damped), 200/50/5 N·m·s/rad for
+    ///   swing/yaw/rotate.
+    pub fn magnum(model: &Model, inertials: &Inertials) -> Result<HydraulicParams, Error> {
+        if model.dof() != N_ACT {
+            return Err(Error::InvalidModel {
+                reason: "Magnum hydraulics need a 6-joint model".into(),
+            });
+        }
+        let supply = 6.89e6;
+        // Holding torques at full extension with the payload.
+        let q = MAGNUM_FULL_EXTENSION;
+        let mut kin = KinData::new(model);
+        jacobian(model, &mut kin, &q);
+        let mut dd = crate::dynamics::DynData::new(model);
+        let mut g = [0.0; N_ACT];
+        let g_vec = nalgebra::Vector3::new(0.0, 0.0, -9.81);
+        crate::dynamics::rnea(
+            model,
+            inertials,
+            &kin,
+            &[0.0; N_ACT],
+            &[0.0; N_ACT],
+            &g_vec,
+            0.0,
+            &mut g,
+            &mut dd,
+        );
+        // Payload weight at the tool: τ = −J_vᵀ·(m·g).
+        for (j, gj) in g.iter_mut().enumerate() {
+            let col = kin.jacobian.column(j);
+            *gj -= col[2] * (-9.81 * MAGNUM_LIFT_KG);
+        }
+        let pins: [Option<(f64, f64)>; N_ACT] = [
+            None,
+            Some((0.35, 0.10)),
+            Some((0.30, 0.09)),
+            Some((0.25, 0.06)),
+            None,
+            None,
+        ];
+        let damping = [200.0, 5.0e4, 5.0e4, 5.0e4, 50.0, 5.0];
+        let mut actuators = [ActuatorParams {
+            linkage: Linkage::Rotary,
+            area_in: 0.0,
+            area_out: 0.0,
+            x_min: 0.0,
+            stroke: 0.0,
+            dead_volume_in_m3: 1.5e-4,
+            dead_volume_out_m3: 1.5e-4,
+            flow_gain: 0.0,
+            damping: 0.0,
+            continuous: false,
+            nominal_speed_rad_s: 0.0,
+            design_torque_nm: 0.0,
+        }; N_ACT];
+        for j in 0..N_ACT {
+            let joint = &model.joints[j];
+            let (lo, hi) = if joint.is_limited() {
+                (joint.limits[0], joint.limits[1])
+            } else {
+                (-std::f64::consts::PI, std::f64::consts::PI)
+            };
+            let mid = 0.5 * (lo + hi);
+            let omega = MAGNUM_SPEEDS_DEG_S[j].to_radians();
+            let torque = (HOLD_MARGIN * g[j].abs()).max(MAGNUM_TORQUE_FLOOR_NM[j]);
+            let a = &mut actuators[j];
+            a.damping = damping[j];
+            a.nominal_speed_rad_s = omega;
+            a.design_torque_nm = torque;
+            match pins[j] {
+                Some((ra, rb)) => {
+                    let link = Linkage::Linear {
+                        r_a_m: ra,
+                        r_b_m: rb,
+                        phi0_rad: std::f64::consts::FRAC_PI_2 - mid,
+                    };
+                    let (x_lo, _) = link.coordinate(lo);
+                    let (x_hi, _) = link.coordinate(hi);
+                    let (_, jh_q) = link.coordinate(q[j]);
+                    let (_, jh_mid) = link.coordinate(mid);
+                    let hold_area = torque / (jh_q * supply);
+                    // τ_act = G holds the arm; G > 0 with Ĵ > 0 needs an extending force (inlet side).
+                    let (ai, ao) = if g[j] >= 0.0 {
+                        (hold_area, hold_area * AREA_RATIO)
+                    } else {
+                        (hold_area / AREA_RATIO, hold_area)
+                    };
+                    a.linkage = link;
+                    a.area_in = ai;
+                    a.area_out = ao;
+                    a.x_min = x_lo;
+                    a.stroke = x_hi - x_lo;
+                    let alpha = ao / ai;
+                    a.flow_gain = omega * jh_mid * ai * (1.0 + alpha.powi(3)).sqrt()
+                        / (supply.sqrt() * alpha.powf(0.25));
+                }
+                None => {
+                    let d = torque / supply;
+                    a.linkage = Linkage::Rotary;
+                    a.area_in = d;
+                    a.area_out = d;
+                    a.x_min = lo;
+                    a.stroke = hi - lo;
+                    a.continuous = !joint.is_limited();
+                    a.flow_gain = omega * d * 2.0f64.sqrt() / supply.sqrt();
+                }
+            }
+        }
+        Ok(HydraulicParams {
+            supply_pa: supply,
+            return_pa: 0.0,
+            relief_pa: 1.10 * supply,
+            relief_gain: 1.0e-8,
+            bulk_modulus_pa: 1.0e9,
+            laminar_pa: 2.0e4,
+            actuators,
+            jaw: JawParams::default(),
+        })
+    }
+}
+
+/// Per-arm fault injection, plain mutable parameters (all "no fault" by default). Any value is
+/// accepted; non-finite or out-of-range values are clamped by the simulation at use.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Faults {
+    /// Supply pressure drop (Pa), subtracted from the supply, clamped to [0, supply].
+    pub supply_drop_pa: f64,
+    /// Stuck valve per actuator: `Some(u)` holds the spool at u ∈ [−1, 1] whatever the command.
+    pub stuck_valve: [Option<f64>; N_ACT],
+    /// Cross-piston leakage coefficient per actuator (m³/s per Pa), ≥ 0; e.g. 1e-11 is a worn seal.
+    pub leak_m3_s_pa: [f64; N_ACT],
+    /// Entrained air: multiplies the bulk modulus, clamped to [0.01, 1] (e.g. 0.2 with 1–2 % air).
+    pub bulk_modulus_scale: f64,
+}
+
+impl Default for Faults {
+    fn default() -> Self {
+        Faults {
+            supply_drop_pa: 0.0,
+            stuck_valve: [None; N_ACT],
+            leak_m3_s_pa: [0.0; N_ACT],
+            bulk_modulus_scale: 1.0,
+        }
+    }
+}
+
+/// Signed square root with a linear (laminar) region below `lam` Pa, continuous in value.
+#[inline]
+fn signed_root(dp: f64, lam: f64) -> (f64, f64) {
+    let a = dp.abs();
+    if a >= lam {
+        let r = a.sqrt();
+        (dp.signum() * r, 0.5 / r)
+    } else {
+        let k = 1.0 / lam.sqrt();
+        (dp * k, k)
+    }
+}
+
+/// Valve flow into a chamber (m³/s) and its derivative with respect to the chamber pressure,
+/// eq. 3.48: with a spool opening `s` ∈ [−1, 1] towards this chamber (s > 0 connects it to
+/// supply, s < 0 to return), q = K·s·√(P_s − P) or K·s·√(P − P_e). The flow reverses sign
+/// (signed root) if the pressure difference does.
+#[inline]
+pub fn valve_flow(gain: f64, s: f64, p: f64, supply: f64, ret: f64, lam: f64) -> (f64, f64) {
+    if s >= 0.0 {
+        let (r, dr) = signed_root(supply - p, lam);
+        (gain * s * r, -gain * s * dr)
+    } else {
+        let (r, dr) = signed_root(p - ret, lam);
+        (gain * s * r, gain * s * dr)
+    }
+}
+
+/// Fixed inputs of one chamber update.
+#[derive(Debug, Clone, Copy)]
+struct Chamber {
+    p0: f64,
+    c: f64,
+    gain: f64,
+    s: f64,
+    other: f64,
+    leak: f64,
+    piston: f64,
+}
+
+/// Backward-Euler pressure of one chamber: solves P − P0 − c·g(P) = 0 with
+/// g = valve flow − leak·(P − P_other) − relief − piston flow; g decreases with P, so the
+/// residual increases strictly and the root in [0, ∞) is unique. Safeguarded Newton.
+fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool) {
+    let g = |p: f64| -> (f64, f64) {
+        let (qv, dqv) = valve_flow(ch.gain, ch.s, p, supply, hp.return_pa, hp.laminar_pa);
+        let over = p - hp.relief_pa;
+        let (qr, dqr) = if over > 0.0 {
+            (hp.relief_gain * over, hp.relief_gain)
+        } else {
+            (0.0, 0.0)
+        };
+        (
+            qv - ch.leak * (p - ch.other) - qr - ch.piston,
+            dqv - ch.leak - dqr,
+        )
+    };
+    // Closed valve: g is linear (piston, leakage and relief only): closed form.
+    if ch.s == 0.0 {
+        let k = ch.c * ch.leak;
+        let mut p = (ch.p0 + ch.c * (ch.leak * ch.other - ch.piston)) / (1.0 + k);
+        if p > hp.relief_pa {
+            let kr = ch.c * hp.relief_gain;
+            p = (ch.p0 + ch.c * (ch.leak * ch.other - ch.piston) + kr * hp.relief_pa)
+                / (1.0 + k + kr);
+        }
+        let p = p.max(0.0);
+        return (p, p > hp.relief_pa);
+    }
+    let (g0, _) = g(0.0);
+    let r0 = -ch.p0 - ch.c * g0;
+    if r0 >= 0.0 {
+        return (0.0, false); // cavitation floor
+    }
+    let mut lo = 0.0;
+    let mut hi = (ch.p0 + ch.c * g0).max(0.0) + 1.0;
+    // Start from the explicit-Euler estimate (exact when the flows barely change).
+    let (gs, _) = g(ch.p0);
+    let mut p = ch.p0 + ch.c * gs;
+    if !(p > lo && p < hi) {
+        p = ch.p0.clamp(lo, hi);
+    }
+    for _ in 0..40 {
+        let (gp, dg) = g(p);
+        let r = p - ch.p0 - ch.c * gp;
+        if r.abs() < 0.1 {
+            break;
+        }
+        if r > 0.0 {
+            hi = p;
+        } else {
+            lo = p;
+        }
+        let dr = 1.0 - ch.c * dg;
+        let mut next = p - r / dr;
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        p = next;
+        if hi - lo < 0.1 {
+            break;
+        }
+    }
+    (p, p > hp.relief_pa)
+}
+
+/// Result of one chamber update.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ChamberFlags {
+    /// A relief valve of this actuator is open at the end of the update.
+    pub relief_open: bool,
+}
+
+/// One backward-Euler step of length `h_s` of both chamber pressures of an actuator
+/// (eqs 3.48–3.50, 3.56 with relief, leakage and cavitation floor). `spool` ∈ [−1, 1] is the
+/// valve opening (eq. 3.51 with K_sp folded into the flow gain), `x` and `xdot` the actuator
+/// coordinate and rate at the start of the step. Each chamber is solved implicitly in its own
+/// pressure (the stiff orifice/relief terms); the coupling through leakage uses the other
+/// chamber's latest value (Gauss–Seidel).
+#[allow(clippy::too_many_arguments)]
+pub fn update_chambers(
+    act: &ActuatorParams,
+    hp: &HydraulicParams,
+    supply_pa: f64,
+    beta_pa: f64,
+    leak: f64,
+    spool: f64,
+    x: f64,
+    xdot: f64,
+    h_s: f64,
+    p_in: &mut f64,
+    p_out: &mut f64,
+) -> ChamberFlags {
+    let (v_in, v_out) = act.volumes(x);
+    let a = Chamber {
+        p0: *p_in,
+        c: h_s * beta_pa / v_in,
+        gain: act.flow_gain,
+        s: spool,
+        other: *p_out,
+        leak,
+        piston: act.area_in * xdot,
+    };
+    let (pi, ri) = solve_chamber(&a, hp, supply_pa);
+    let b = Chamber {
+        p0: *p_out,
+        c: h_s * beta_pa / v_out,
+        gain: act.flow_gain,
+        s: -spool,
+        other: pi,
+        leak,
+        piston: -act.area_out * xdot,
+    };
+    let (po, ro) = solve_chamber(&b, hp, supply_pa);
+    *p_in = pi;
+    *p_out = po;
+    ChamberFlags {
+        relief_open: ri || ro,
+    }
+}
+
+/// Actuator force (eq. 3.52), N (N·m for rotary): A_I P_I − A_O P_O − K_damp ẋ.
+#[inline]
+pub fn actuator_force(act: &ActuatorParams, p_in: f64, p_out: f64, xdot: f64) -> f64 {
+    act.area_in * p_in - act.area_out * p_out - act.damping * xdot
+}

@@ -1,0 +1,648 @@
+//! Scripted scenarios: the four dynamic case studies of Lim §4.2 as time charts (pure data),
+//! and the runner loop that steps a [`Simulation`] through one and produces post-processing
+//! rows (Lim §4.2: "dynamics data of both arms … are saved to files for post processing") and
+//! a summary.
+//!
+//! The thesis's time charts (Figs 4-5, 4-12, 4-17, 4-29) survive only as captions, so the
+//! stages follow the text; durations and signal levels are chosen here. Reaching the handle
+//! (stage A) is scripted as a joint-space move to an IK posture through the joint servo: the
+//! thesis's operator steered the jaw onto the object by joystick, which a fixed open-loop
+//! script cannot reproduce to within the 4 cm capture radius. All other stages use the
+//! open-loop valve signals (case studies 1–3) or the cooperative closed loop (case study 4) as
+//! in the thesis.
+
+use nalgebra::{DMatrix, Isometry3, Point3, Vector3};
+
+use super::{ControlMethod, Input, LEFT, RIGHT, SimParams, Simulation};
+use crate::Error;
+use crate::grasp::GraspState;
+use crate::hydraulics::N_ACT;
+use crate::kinematics::{self, KinData};
+use crate::manipulability::{dual_measures, measures};
+use crate::model::Model;
+
+/// What one arm does during a segment.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ArmCommand {
+    /// Joystick valve commands (open loop) and jaw command.
+    Valves {
+        /// Six valve commands in [−1, 1].
+        valves: [f64; N_ACT],
+        /// Jaw command in [−1, 1] (+ opens).
+        jaw: f64,
+    },
+    /// Move to a joint posture through the joint servo (q̇_ref = 2 s⁻¹·(q* − q), at most half
+    /// the nominal speed), and jaw command.
+    JointTarget {
+        /// Target posture (rad).
+        q: [f64; N_ACT],
+        /// Jaw command.
+        jaw: f64,
+    },
+}
+
+impl ArmCommand {
+    /// Valves at rest with a jaw command.
+    pub const fn jaw(jaw: f64) -> ArmCommand {
+        ArmCommand::Valves {
+            valves: [0.0; N_ACT],
+            jaw,
+        }
+    }
+    /// One valve at `u`, others 0, jaw command `jaw`.
+    pub const fn valve(j: usize, u: f64, jaw: f64) -> ArmCommand {
+        let mut valves = [0.0; N_ACT];
+        valves[j] = u;
+        ArmCommand::Valves { valves, jaw }
+    }
+}
+
+/// One stage of a time chart.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Segment {
+    /// Stage label of the thesis's chart ("A" … "E").
+    pub stage: &'static str,
+    /// Duration (s).
+    pub duration_s: f64,
+    /// Left (0) and right (1) arm commands.
+    pub arms: [ArmCommand; 2],
+    /// Control method.
+    pub method: ControlMethod,
+    /// Commanded object twist for closed loop (m/s, rad/s).
+    pub object_velocity: [f64; 6],
+}
+
+impl Segment {
+    fn open(stage: &'static str, duration_s: f64, left: ArmCommand, right: ArmCommand) -> Segment {
+        Segment {
+            stage,
+            duration_s,
+            arms: [left, right],
+            method: ControlMethod::OpenLoop,
+            object_velocity: [0.0; 6],
+        }
+    }
+    fn closed(stage: &'static str, duration_s: f64, jaw: f64, v: [f64; 6]) -> Segment {
+        Segment {
+            stage,
+            duration_s,
+            arms: [ArmCommand::jaw(jaw); 2],
+            method: ControlMethod::ClosedLoop,
+            object_velocity: v,
+        }
+    }
+}
+
+/// A scripted scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scenario {
+    /// Name, e.g. `case1-single-arm`.
+    pub name: &'static str,
+    /// One-line description.
+    pub description: &'static str,
+    /// Simulation parameters.
+    pub params: SimParams,
+    /// Time chart.
+    pub segments: Vec<Segment>,
+    /// Object lift commanded in closed loop (m), if any.
+    pub commanded_lift_m: Option<f64>,
+}
+
+/// Names and descriptions of the built-in scenarios.
+pub const SCENARIOS: &[(&str, &str)] = &[
+    (
+        "case1-single-arm",
+        "Lim case study 1 (Fig. 4-5): left arm, no object; each joint driven in turn by a joystick signal, then released",
+    ),
+    (
+        "case2-single-arm-load",
+        "Lim case study 2 (Fig. 4-12): left arm reaches, grabs the 50 kg object, lifts it open loop, holds, releases it",
+    ),
+    (
+        "case3-dual-open-loop",
+        "Lim case study 3 (Fig. 4-17): right then left arm grab the object; open-loop lift and move left; release",
+    ),
+    (
+        "case4-dual-closed-loop",
+        "Lim case study 4 (Fig. 4-29): as case 3, but switched to closed-loop cooperative control to lift 0.2 m and move left",
+    ),
+];
+
+/// Position-only damped-least-squares IK for the tool point of `model` (base frame), from
+/// `q0`, respecting joint limits. Allocates (scenario set-up only).
+pub fn ik_position(
+    model: &Model,
+    target: &Vector3<f64>,
+    q0: &[f64; N_ACT],
+) -> Result<[f64; N_ACT], Error> {
+    let mut q = *q0;
+    let mut kin = KinData::new(model);
+    let mut err = f64::INFINITY;
+    for _ in 0..500 {
+        kinematics::jacobian(model, &mut kin, &q);
+        let e = target - kin.tool_point;
+        err = e.norm();
+        if err < 1e-6 {
+            return Ok(q);
+        }
+        let jv = kin.jacobian.rows(0, 3).into_owned();
+        let a = &jv * jv.transpose() + DMatrix::<f64>::identity(3, 3) * 1e-4;
+        let Some(ch) = a.cholesky() else { break };
+        let dq = jv.transpose() * ch.solve(&DMatrix::from_column_slice(3, 1, e.as_slice()));
+        for j in 0..N_ACT {
+            let lim = model.joints[j].limits;
+            q[j] = (q[j] + 0.5 * dq[j]).clamp(lim[0], lim[1]);
+        }
+    }
+    Err(Error::NotConverged {
+        what: "scenario IK",
+        iterations: 500,
+        residual: err,
+    })
+}
+
+/// Postures of arm `arm` above its handle (`above_m` higher) and at it.
+fn approach(
+    params: &SimParams,
+    model: &Model,
+    arm: usize,
+    above_m: f64,
+) -> Result<([f64; N_ACT], [f64; N_ACT]), Error> {
+    let op = &params.object;
+    let base = &params.arms[arm].base;
+    let mut obj = op.initial_pose;
+    obj.translation.vector.z -= op.mass_kg * 9.81 / (4.0 * op.contact_stiffness_n_m);
+    let handle = obj * Point3::from(op.handles_m[arm]);
+    let local = base.inverse() * handle;
+    let pre = ik_position(
+        model,
+        &(local.coords + Vector3::new(0.0, 0.0, above_m)),
+        &params.arms[arm].initial_q,
+    )?;
+    let at = ik_position(model, &local.coords, &pre)?;
+    Ok((pre, at))
+}
+
+/// Builds scenario `name` for the two models.
+pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Error> {
+    let params = SimParams::case_study(left, right)?;
+    let (desc, idx) = match SCENARIOS.iter().position(|(n, _)| *n == name) {
+        Some(i) => (SCENARIOS[i].1, i),
+        None => {
+            return Err(Error::InvalidParameter {
+                what: "scenario",
+                reason: format!("unknown scenario {name:?}"),
+            });
+        }
+    };
+    let name: &'static str = SCENARIOS[idx].0;
+    let open = 1.0;
+    let close = -1.0;
+    let rest = ArmCommand::jaw(0.0);
+    let mut segments = Vec::new();
+    let mut commanded_lift_m = None;
+    match idx {
+        0 => {
+            // Each joint: +0.6 for 2 s, pause 1 s, −0.6 for 2 s, pause 1 s; then 4 s at rest.
+            for j in 0..N_ACT {
+                segments.push(Segment::open(
+                    "A",
+                    2.0,
+                    ArmCommand::valve(j, 0.6, 0.0),
+                    rest,
+                ));
+                segments.push(Segment::open("A", 1.0, rest, rest));
+                segments.push(Segment::open(
+                    "A",
+                    2.0,
+                    ArmCommand::valve(j, -0.6, 0.0),
+                    rest,
+                ));
+                segments.push(Segment::open("A", 1.0, rest, rest));
+            }
+            segments.push(Segment::open("B", 4.0, rest, rest));
+        }
+        1 => {
+            let (pre, at) = approach(&params, left, LEFT, 0.10)?;
+            segments.push(Segment::open(
+                "A",
+                6.0,
+                ArmCommand::JointTarget { q: pre, jaw: open },
+                rest,
+            ));
+            segments.push(Segment::open(
+                "A",
+                4.0,
+                ArmCommand::JointTarget { q: at, jaw: open },
+                rest,
+            ));
+            segments.push(Segment::open("B", 1.5, ArmCommand::jaw(close), rest));
+            segments.push(Segment::open("B", 3.5, rest, rest));
+            segments.push(Segment::open(
+                "C",
+                2.0,
+                ArmCommand::valve(1, 0.3, 0.0),
+                rest,
+            ));
+            segments.push(Segment::open("C", 4.0, rest, rest));
+            segments.push(Segment::open("D", 1.0, ArmCommand::jaw(open), rest));
+            segments.push(Segment::open("D", 4.0, rest, rest));
+        }
+        _ => {
+            let (lpre, lat) = approach(&params, left, LEFT, 0.10)?;
+            let (rpre, rat) = approach(&params, right, RIGHT, 0.10)?;
+            let tgt = |q: [f64; N_ACT], jaw: f64| ArmCommand::JointTarget { q, jaw };
+            segments.push(Segment::open("A", 6.0, tgt(lpre, open), tgt(rpre, open)));
+            segments.push(Segment::open("A", 4.0, tgt(lpre, open), tgt(rat, open)));
+            segments.push(Segment::open("A", 1.5, rest, ArmCommand::jaw(close)));
+            segments.push(Segment::open("A", 2.5, rest, rest));
+            segments.push(Segment::open("B", 4.0, tgt(lat, open), rest));
+            segments.push(Segment::open("B", 1.5, ArmCommand::jaw(close), rest));
+            if idx == 2 {
+                segments.push(Segment::open("B", 3.0, rest, rest));
+                // C: lift with the shoulders (signal 2) and elbows (signal 3) of both arms.
+                let lift = ArmCommand::Valves {
+                    valves: [0.0, 0.4, 0.2, 0.0, 0.0, 0.0],
+                    jaw: 0.0,
+                };
+                segments.push(Segment::open("C", 3.0, lift, lift));
+                segments.push(Segment::open("C", 2.0, rest, rest));
+                // D: move left: both swing joints the same way.
+                segments.push(Segment::open(
+                    "D",
+                    2.0,
+                    ArmCommand::valve(0, 0.4, 0.0),
+                    ArmCommand::valve(0, 0.4, 0.0),
+                ));
+                segments.push(Segment::open("D", 2.0, rest, rest));
+                segments.push(Segment::open(
+                    "E",
+                    1.0,
+                    ArmCommand::jaw(open),
+                    ArmCommand::jaw(open),
+                ));
+                segments.push(Segment::open("E", 4.0, rest, rest));
+            } else {
+                segments.push(Segment::open("B", 1.0, rest, rest));
+                segments.push(Segment::closed("B", 2.0, 0.0, [0.0; 6]));
+                let v = 0.05;
+                let t = 4.0;
+                commanded_lift_m = Some(v * t);
+                segments.push(Segment::closed("C", t, 0.0, [0.0, 0.0, v, 0.0, 0.0, 0.0]));
+                segments.push(Segment::closed("C", 2.0, 0.0, [0.0; 6]));
+                segments.push(Segment::closed("D", 2.0, 0.0, [0.0, v, 0.0, 0.0, 0.0, 0.0]));
+                segments.push(Segment::closed("D", 2.0, 0.0, [0.0; 6]));
+                segments.push(Segment::open(
+                    "E",
+                    1.0,
+                    ArmCommand::jaw(open),
+                    ArmCommand::jaw(open),
+                ));
+                segments.push(Segment::open("E", 4.0, rest, rest));
+            }
+        }
+    }
+    Ok(Scenario {
+        name,
+        description: desc,
+        params,
+        segments,
+        commanded_lift_m,
+    })
+}
+
+impl Scenario {
+    /// Total scripted duration (s).
+    pub fn duration_s(&self) -> f64 {
+        self.segments.iter().map(|s| s.duration_s).sum()
+    }
+
+    /// The step input for `seg` given the current simulation state (`_t_s` is the scenario time).
+    pub fn input_at(&self, sim: &Simulation, seg: &Segment, _t_s: f64) -> Input {
+        let mut input = Input {
+            method: seg.method,
+            object_velocity: seg.object_velocity,
+            speed_scale: 1.0,
+            ..Input::default()
+        };
+        for (i, cmd) in seg.arms.iter().enumerate() {
+            match *cmd {
+                ArmCommand::Valves { valves, jaw } => {
+                    input.arms[i].valves = valves;
+                    input.arms[i].jaw = jaw;
+                }
+                ArmCommand::JointTarget { q, jaw } => {
+                    let a = sim.arm(i);
+                    let acts = &sim.params().arms[i].hydraulics.actuators;
+                    let r: [f64; N_ACT] = core::array::from_fn(|j| {
+                        let lim = 0.5 * acts[j].nominal_speed_rad_s;
+                        (2.0 * (q[j] - a.q[j])).clamp(-lim, lim)
+                    });
+                    input.arms[i].joint_velocity_ref = Some(r);
+                    input.arms[i].jaw = jaw;
+                }
+            }
+        }
+        input
+    }
+}
+
+/// One post-processing row (Lim §4.2): everything the thesis plotted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    /// Time (s).
+    pub t_s: f64,
+    /// Stage label.
+    pub stage: &'static str,
+    /// Joint angles per arm (rad).
+    pub q: [[f64; N_ACT]; 2],
+    /// Joint velocities per arm (rad/s).
+    pub qd: [[f64; N_ACT]; 2],
+    /// Applied valve commands per arm.
+    pub u: [[f64; N_ACT]; 2],
+    /// Jaw opening per arm (m).
+    pub jaw_m: [f64; 2],
+    /// P_I per actuator (Pa).
+    pub p_in: [[f64; N_ACT]; 2],
+    /// P_O per actuator (Pa).
+    pub p_out: [[f64; N_ACT]; 2],
+    /// Contact force/torque of each arm on the object (N, N·m).
+    pub contact: [[f64; 6]; 2],
+    /// Internal force/torque F_int (eq. 3.41).
+    pub internal: [f64; 6],
+    /// Object position (m).
+    pub object_xyz: [f64; 3],
+    /// Object orientation, roll pitch yaw (rad).
+    pub object_rpy: [f64; 3],
+    /// Grasp state.
+    pub grasp: GraspState,
+    /// Translational Yoshikawa measure per arm (Lim §3.5.1).
+    pub yoshikawa: [f64; 2],
+    /// Translational isotropy per arm.
+    pub isotropy: [f64; 2],
+    /// Dual-arm translational Yoshikawa measure (Lim eq. 3.68).
+    pub dual_yoshikawa: f64,
+    /// Dual-arm translational isotropy.
+    pub dual_isotropy: f64,
+}
+
+impl Row {
+    /// CSV header matching [`Row::values`].
+    pub fn header() -> Vec<String> {
+        let mut h = vec!["t_s".to_string(), "stage".to_string()];
+        for arm in ["left", "right"] {
+            for k in 1..=N_ACT {
+                h.push(format!("{arm}_q{k}_rad"));
+            }
+            for k in 1..=N_ACT {
+                h.push(format!("{arm}_qd{k}_rad_s"));
+            }
+            for k in 1..=N_ACT {
+                h.push(format!("{arm}_u{k}"));
+            }
+            h.push(format!("{arm}_jaw_m"));
+            for k in 1..=N_ACT {
+                h.push(format!("{arm}_p_in{k}_pa"));
+                h.push(format!("{arm}_p_out{k}_pa"));
+            }
+            for c in ["fx_n", "fy_n", "fz_n", "tx_nm", "ty_nm", "tz_nm"] {
+                h.push(format!("{arm}_contact_{c}"));
+            }
+        }
+        for c in ["fx_n", "fy_n", "fz_n", "tx_nm", "ty_nm", "tz_nm"] {
+            h.push(format!("internal_{c}"));
+        }
+        for c in ["x_m", "y_m", "z_m", "roll_rad", "pitch_rad", "yaw_rad"] {
+            h.push(format!("object_{c}"));
+        }
+        h.push("grasp_state".into());
+        for c in [
+            "left_yoshikawa",
+            "left_isotropy",
+            "right_yoshikawa",
+            "right_isotropy",
+            "dual_yoshikawa",
+            "dual_isotropy",
+        ] {
+            h.push(c.into());
+        }
+        h
+    }
+
+    /// Values as strings, in header order.
+    pub fn values(&self) -> Vec<String> {
+        let f = |x: f64| format!("{x:.6e}");
+        let mut v = vec![format!("{:.3}", self.t_s), self.stage.to_string()];
+        for i in 0..2 {
+            v.extend(self.q[i].iter().map(|&x| f(x)));
+            v.extend(self.qd[i].iter().map(|&x| f(x)));
+            v.extend(self.u[i].iter().map(|&x| f(x)));
+            v.push(f(self.jaw_m[i]));
+            for k in 0..N_ACT {
+                v.push(f(self.p_in[i][k]));
+                v.push(f(self.p_out[i][k]));
+            }
+            v.extend(self.contact[i].iter().map(|&x| f(x)));
+        }
+        v.extend(self.internal.iter().map(|&x| f(x)));
+        v.extend(self.object_xyz.iter().map(|&x| f(x)));
+        v.extend(self.object_rpy.iter().map(|&x| f(x)));
+        v.push(self.grasp.as_str().into());
+        for x in [
+            self.yoshikawa[0],
+            self.isotropy[0],
+            self.yoshikawa[1],
+            self.isotropy[1],
+            self.dual_yoshikawa,
+            self.dual_isotropy,
+        ] {
+            v.push(f(x));
+        }
+        v
+    }
+}
+
+/// Outcome of a scenario run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Summary {
+    /// Scenario name.
+    pub scenario: &'static str,
+    /// Highest line pressure of any actuator (Pa).
+    pub peak_line_pressure_pa: f64,
+    /// Relief valve setting (Pa), for reference.
+    pub relief_setting_pa: f64,
+    /// Largest |internal force| (N).
+    pub peak_internal_force_n: f64,
+    /// Largest |internal torque| (N·m).
+    pub peak_internal_torque_nm: f64,
+    /// Relief valve openings (rising edges) of both arms.
+    pub relief_events: u64,
+    /// Highest object COM height above its initial height (m).
+    pub object_lift_m: f64,
+    /// Object lift over the first closed-loop lift stage (C), if the scenario has one (m).
+    pub closed_loop_lift_m: Option<f64>,
+    /// Commanded closed-loop lift (m), if any.
+    pub commanded_lift_m: Option<f64>,
+    /// Grasp state at the end.
+    pub final_grasp_state: GraspState,
+    /// Largest grasp constraint position error while holding (m).
+    pub peak_grasp_error_m: f64,
+    /// Largest |q̇| of any joint over the last second (rad/s).
+    pub final_max_joint_speed_rad_s: f64,
+    /// Simulated time (s).
+    pub sim_seconds: f64,
+    /// Steps rolled back for non-finite values (0 expected).
+    pub numerical_faults: u64,
+}
+
+/// Rows are recorded every this many steps (10 ms, 100 Hz) to keep the CSV small.
+pub const RECORD_EVERY_STEPS: u64 = 10;
+
+fn rpy(iso: &Isometry3<f64>) -> [f64; 3] {
+    let (r, p, y) = iso.rotation.euler_angles();
+    [r, p, y]
+}
+
+/// Builds a row from the simulation state (allocates: manipulability SVDs).
+pub fn row(sim: &Simulation, stage: &'static str) -> Row {
+    let mut q = [[0.0; N_ACT]; 2];
+    let mut qd = q;
+    let mut u = q;
+    let mut p_in = q;
+    let mut p_out = q;
+    let mut contact = [[0.0; 6]; 2];
+    let mut jaw_m = [0.0; 2];
+    let mut yoshikawa = [0.0; 2];
+    let mut isotropy = [0.0; 2];
+    let mut jt: Vec<DMatrix<f64>> = Vec::with_capacity(2);
+    for i in 0..2 {
+        let a = sim.arm(i);
+        q[i] = a.q;
+        qd[i] = a.qd;
+        u[i] = a.spool;
+        p_in[i] = a.p_in;
+        p_out[i] = a.p_out;
+        contact[i] = a.contact_wrench;
+        jaw_m[i] = a.jaw_opening_m;
+        let j = sim.jacobian_world(i);
+        let jtr = DMatrix::from_fn(3, N_ACT, |r, c| j[(r, c)]);
+        if let Ok(m) = measures(&jtr) {
+            yoshikawa[i] = m.yoshikawa;
+            isotropy[i] = m.isotropy;
+        }
+        jt.push(jtr);
+    }
+    let (dual_yoshikawa, dual_isotropy) = match dual_measures(&jt[0], &jt[1]) {
+        Ok(m) => (m.yoshikawa, m.isotropy),
+        Err(_) => (0.0, 0.0),
+    };
+    let o = sim.object();
+    let t = o.pose.translation.vector;
+    Row {
+        t_s: sim.time_s(),
+        stage,
+        q,
+        qd,
+        u,
+        jaw_m,
+        p_in,
+        p_out,
+        contact,
+        internal: sim.internal_wrench(),
+        object_xyz: [t.x, t.y, t.z],
+        object_rpy: rpy(&o.pose),
+        grasp: sim.grasp_state(),
+        yoshikawa,
+        isotropy,
+        dual_yoshikawa,
+        dual_isotropy,
+    }
+}
+
+/// Runs `sc` from reset, calling `on_row` every [`RECORD_EVERY_STEPS`] steps (and at t = 0).
+pub fn run(
+    sc: &Scenario,
+    left: &Model,
+    right: &Model,
+    mut on_row: impl FnMut(&Row),
+) -> Result<Summary, Error> {
+    let mut sim = Simulation::new(left.clone(), right.clone(), sc.params.clone())?;
+    let dt = sc.params.step.dt_s;
+    let relief = sc
+        .params
+        .arms
+        .iter()
+        .map(|a| a.hydraulics.relief_pa)
+        .fold(0.0, f64::max);
+    let z0 = sim.object().pose.translation.z;
+    let mut s = Summary {
+        scenario: sc.name,
+        peak_line_pressure_pa: 0.0,
+        relief_setting_pa: relief,
+        peak_internal_force_n: 0.0,
+        peak_internal_torque_nm: 0.0,
+        relief_events: 0,
+        object_lift_m: 0.0,
+        closed_loop_lift_m: None,
+        commanded_lift_m: sc.commanded_lift_m,
+        final_grasp_state: GraspState::Free,
+        peak_grasp_error_m: 0.0,
+        final_max_joint_speed_rad_s: 0.0,
+        sim_seconds: 0.0,
+        numerical_faults: 0,
+    };
+    on_row(&row(
+        &sim,
+        sc.segments.first().map(|s| s.stage).unwrap_or(""),
+    ));
+    let total = sc.duration_s();
+    let mut lift_start: Option<f64> = None;
+    let mut lift_end: Option<f64> = None;
+    for seg in &sc.segments {
+        let n = (seg.duration_s / dt).round() as u64;
+        let closed_lift = seg.stage == "C" && seg.method == ControlMethod::ClosedLoop;
+        if closed_lift && lift_start.is_none() {
+            lift_start = Some(sim.object().pose.translation.z);
+        }
+        for _ in 0..n {
+            let input = sc.input_at(&sim, seg, sim.time_s());
+            sim.step(&input);
+            for a in 0..2 {
+                let arm = sim.arm(a);
+                for j in 0..N_ACT {
+                    s.peak_line_pressure_pa =
+                        s.peak_line_pressure_pa.max(arm.p_in[j]).max(arm.p_out[j]);
+                }
+                s.peak_grasp_error_m = s.peak_grasp_error_m.max(sim.grasp_error(a).0);
+                if sim.time_s() > total - 1.0 {
+                    for j in 0..N_ACT {
+                        s.final_max_joint_speed_rad_s =
+                            s.final_max_joint_speed_rad_s.max(arm.qd[j].abs());
+                    }
+                }
+            }
+            let fi = sim.internal_wrench();
+            s.peak_internal_force_n = s
+                .peak_internal_force_n
+                .max(Vector3::new(fi[0], fi[1], fi[2]).norm());
+            s.peak_internal_torque_nm = s
+                .peak_internal_torque_nm
+                .max(Vector3::new(fi[3], fi[4], fi[5]).norm());
+            s.object_lift_m = s.object_lift_m.max(sim.object().pose.translation.z - z0);
+            if sim.steps() % RECORD_EVERY_STEPS == 0 {
+                on_row(&row(&sim, seg.stage));
+            }
+        }
+        if closed_lift {
+            lift_end = Some(sim.object().pose.translation.z);
+        }
+    }
+    if let (Some(a), Some(b)) = (lift_start, lift_end) {
+        s.closed_loop_lift_m = Some(b - a);
+    }
+    s.relief_events = sim.relief_events();
+    s.final_grasp_state = sim.grasp_state();
+    s.sim_seconds = sim.time_s();
+    s.numerical_faults = sim.numerical_faults();
+    Ok(s)
+}

@@ -1,0 +1,114 @@
+//! Counters exported at `GET /metrics` in the Prometheus text format.
+
+use std::fmt::Write as _;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// Server-wide counters and gauges (relaxed atomics: monotonic counts, no ordering needed).
+#[derive(Debug, Default)]
+pub struct Metrics {
+    /// HTTP requests answered.
+    pub http_requests: AtomicU64,
+    /// Sessions created since start.
+    pub sessions_created: AtomicU64,
+    /// Live sessions now.
+    pub sessions_live: AtomicU64,
+    /// Simulation steps run.
+    pub steps: AtomicU64,
+    /// Steps dropped because a session fell more than the catch-up cap behind real time.
+    pub step_overruns: AtomicU64,
+    /// State frames published (once per session per frame).
+    pub frames_published: AtomicU64,
+    /// Frames sent to clients.
+    pub frames_sent: AtomicU64,
+    /// Frames a slow client skipped (latest state wins).
+    pub frames_skipped: AtomicU64,
+    /// WebSocket clients connected now.
+    pub ws_clients: AtomicU64,
+    /// Client messages refused (malformed, out of range, over the rate).
+    pub ws_messages_rejected: AtomicU64,
+    /// Records dropped because the recorder queue was full.
+    pub records_dropped: AtomicU64,
+}
+
+impl Metrics {
+    /// The Prometheus text exposition.
+    pub fn render(&self) -> String {
+        let mut out = String::new();
+        let rows: [(&str, &str, &str, &AtomicU64); 11] = [
+            (
+                "seaarms_http_requests_total",
+                "counter",
+                "HTTP requests answered",
+                &self.http_requests,
+            ),
+            (
+                "seaarms_sessions_created_total",
+                "counter",
+                "Sessions created since start",
+                &self.sessions_created,
+            ),
+            (
+                "seaarms_sessions",
+                "gauge",
+                "Live sessions",
+                &self.sessions_live,
+            ),
+            (
+                "seaarms_steps_total",
+                "counter",
+                "Simulation steps (1 ms each)",
+                &self.steps,
+            ),
+            (
+                "seaarms_step_overruns_total",
+                "counter",
+                "Steps dropped to stay real time",
+                &self.step_overruns,
+            ),
+            (
+                "seaarms_frames_published_total",
+                "counter",
+                "State frames published",
+                &self.frames_published,
+            ),
+            (
+                "seaarms_frames_sent_total",
+                "counter",
+                "State frames sent to clients",
+                &self.frames_sent,
+            ),
+            (
+                "seaarms_frames_skipped_total",
+                "counter",
+                "State frames skipped by slow clients",
+                &self.frames_skipped,
+            ),
+            (
+                "seaarms_websocket_clients",
+                "gauge",
+                "WebSocket clients connected",
+                &self.ws_clients,
+            ),
+            (
+                "seaarms_ws_messages_rejected_total",
+                "counter",
+                "Client messages refused",
+                &self.ws_messages_rejected,
+            ),
+            (
+                "seaarms_records_dropped_total",
+                "counter",
+                "Records dropped (recorder queue full)",
+                &self.records_dropped,
+            ),
+        ];
+        for (name, kind, help, v) in rows {
+            let _ = writeln!(
+                out,
+                "# HELP {name} {help}\n# TYPE {name} {kind}\n{name} {}",
+                v.load(Ordering::Relaxed)
+            );
+        }
+        out
+    }
+}

@@ -1,0 +1,427 @@
+//! Live training sessions: one dual-arm simulation per trainee, stepped at 1 kHz of
+//! simulated time in real time on dedicated physics threads (never on the async reactor),
+//! published as "latest state wins" snapshots on a `watch` channel.
+//!
+//! * [`SessionManager`]: create, find, list, expire, cap; owns the physics workers.
+//! * [`physics`]: the worker threads that step sessions and publish frames.
+//! * [`snapshot`]: building a [`crate::protocol::StateFrame`] (measures included) from a simulation.
+//! * [`record`]: the recorder thread (CSV time series, events, the session index on disk).
+//! * [`ws`]: the WebSocket endpoint; [`rest`]: the REST endpoints.
+
+pub mod physics;
+pub mod record;
+pub mod rest;
+pub mod snapshot;
+pub mod ws;
+
+use std::collections::HashMap;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex, MutexGuard};
+use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+
+use axum::extract::ws::Utf8Bytes;
+use seaarms_core::Model;
+use seaarms_core::kinematics::KinData;
+use seaarms_core::sim::{Input, SimParams, Simulation};
+use tokio::sync::watch;
+
+use crate::metrics::Metrics;
+use crate::protocol::{ControlMethod, ControlMode, Settings};
+use record::{RecordMsg, Recorder};
+
+/// Scenarios a live session can start from (the initial position of Lim §4.1 for all of
+/// them); `training` is free play.
+pub const LIVE_SCENARIOS: &[(&str, &str)] = &[
+    (
+        "training",
+        "Free play: both arms at the initial position, the 50 kg box on the seabed",
+    ),
+    (
+        "case1-single-arm",
+        "Lim case study 1 set-up: move the left arm joint by joint, no object",
+    ),
+    (
+        "case2-single-arm-load",
+        "Lim case study 2 set-up: grab, lift and release the box with the left arm",
+    ),
+    (
+        "case3-dual-open-loop",
+        "Lim case study 3 set-up: both arms grab and carry the box in open loop",
+    ),
+    (
+        "case4-dual-closed-loop",
+        "Lim case study 4 set-up: both arms grab the box, switch to closed loop, carry it",
+    ),
+];
+
+/// Session settings and limits (from [`crate::config::ServeConfig`]).
+#[derive(Debug, Clone)]
+pub struct SessionConfig {
+    /// Most live sessions at once.
+    pub max_sessions: usize,
+    /// A session with no connected trainee and no input for this long ends.
+    pub idle_timeout: Duration,
+    /// State frames per second (10–120).
+    pub frame_hz: u32,
+    /// Client messages per second allowed per connection.
+    pub max_messages_per_second: u32,
+    /// Physics worker threads.
+    pub physics_threads: usize,
+}
+
+/// A random hex token of `bytes` bytes.
+pub fn random_hex(bytes: usize) -> String {
+    let mut buf = vec![0u8; bytes];
+    // getrandom only fails when the OS has no entropy source at all; fall back to the clock
+    // mixed with the address of the buffer so ids stay unique in that case.
+    if getrandom::fill(&mut buf).is_err() {
+        let seed = SystemTime::now()
+            .duration_since(UNIX_EPOCH)
+            .map(|d| d.as_nanos())
+            .unwrap_or(0);
+        for (i, b) in buf.iter_mut().enumerate() {
+            *b = (seed >> ((i % 16) * 8)) as u8 ^ (i as u8).wrapping_mul(151);
+        }
+    }
+    buf.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// Compares two tokens in time independent of where they differ.
+pub fn token_eq(a: &str, b: &str) -> bool {
+    let (a, b) = (a.as_bytes(), b.as_bytes());
+    if a.len() != b.len() {
+        return false;
+    }
+    a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
+/// Seconds since the Unix epoch.
+pub fn unix_now() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map(|d| d.as_secs_f64())
+        .unwrap_or(0.0)
+}
+
+/// A published state frame: its sequence number and the serialized JSON, shared by every client.
+#[derive(Debug, Clone)]
+pub struct Frame {
+    /// Frame sequence number.
+    pub seq: u64,
+    /// `{"type": "state", ...}` text.
+    pub json: Utf8Bytes,
+}
+
+/// Instructor-injected faults, as shown to users.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FaultLabel(pub String);
+
+/// Mutable state of a session, behind one mutex (held briefly by the physics worker each
+/// tick and by handlers applying input).
+pub struct Live {
+    /// The simulation.
+    pub sim: Simulation,
+    /// Inputs applied from the next step on.
+    pub input: Input,
+    /// Current settings.
+    pub settings: Settings,
+    /// Clock paused.
+    pub paused: bool,
+    /// Last input sequence number applied.
+    pub input_seq: u64,
+    /// Cartesian-mode stick commands per arm (fractions of the maximum speeds), turned into
+    /// joint-velocity references every step by redundancy resolution.
+    pub cartesian: [[f64; 6]; 2],
+    /// Active fault descriptions.
+    pub faults: Vec<String>,
+    /// Steps taken since the clock origin.
+    pub steps_since_origin: u64,
+    /// Wall time of the clock origin (reset on resume so a pause never causes a catch-up burst).
+    pub origin: Instant,
+    /// Frames published.
+    pub frame_seq: u64,
+    /// When the next frame is due.
+    pub next_frame: Instant,
+    /// Per-arm kinematics scratch for frames.
+    pub kin: [KinData; 2],
+    /// Relief events already recorded.
+    pub relief_recorded: u64,
+    /// Grasp state at the last record row (events on change).
+    pub last_grasp: &'static str,
+    /// Both jaws are driven open until this simulated time (release/drop).
+    pub release_until_s: f64,
+}
+
+/// One trainee's session.
+pub struct Session {
+    /// Id (hex).
+    pub id: String,
+    /// Trainee label.
+    pub label: String,
+    /// Scenario name.
+    pub scenario: Mutex<String>,
+    /// Token that lets a trainee control this session.
+    pub control_token: String,
+    /// Creation time (Unix seconds).
+    pub created_unix: f64,
+    /// The live state.
+    live: Mutex<Live>,
+    /// Latest frame (latest state wins).
+    pub frames: watch::Sender<Option<Frame>>,
+    /// Instructor messages and other one-off notices to every client.
+    pub notices: tokio::sync::broadcast::Sender<Utf8Bytes>,
+    /// Trainee connections open now.
+    pub trainees: AtomicU64,
+    /// Last trainee activity (Unix seconds, as f64 bits).
+    last_activity: AtomicU64,
+    /// Set once the session has ended.
+    pub ended: AtomicBool,
+    /// Relief events (overloads) since creation, all resets included.
+    pub overloads: AtomicU64,
+    /// Models (left, right) for `hello`.
+    pub models: [Arc<Model>; 2],
+}
+
+impl Session {
+    /// Locks the live state (a poisoned lock is recovered: the state is plain data).
+    pub fn live(&self) -> MutexGuard<'_, Live> {
+        self.live.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Marks trainee activity now.
+    pub fn touch(&self) {
+        self.last_activity
+            .store(unix_now().to_bits(), Ordering::Relaxed);
+    }
+
+    /// Seconds since the last trainee activity.
+    pub fn idle_seconds(&self) -> f64 {
+        unix_now() - f64::from_bits(self.last_activity.load(Ordering::Relaxed))
+    }
+
+    /// Current scenario name.
+    pub fn scenario(&self) -> String {
+        self.scenario
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone()
+    }
+}
+
+/// Builds the simulation of a scenario.
+pub fn build_sim(models: &[Arc<Model>; 2]) -> anyhow::Result<Simulation> {
+    let params = SimParams::case_study(&models[0], &models[1])?;
+    Ok(Simulation::new(
+        (*models[0]).clone(),
+        (*models[1]).clone(),
+        params,
+    )?)
+}
+
+/// Why a session could not be created.
+#[derive(Debug, thiserror::Error)]
+pub enum CreateError {
+    /// The cap is reached.
+    #[error("the server is full ({0} live sessions); try again later")]
+    Full(usize),
+    /// Unknown scenario.
+    #[error("unknown scenario `{0}`")]
+    UnknownScenario(String),
+    /// The simulation refused its parameters.
+    #[error("simulation: {0}")]
+    Sim(String),
+}
+
+/// All sessions of the server.
+pub struct SessionManager {
+    /// Settings.
+    pub config: SessionConfig,
+    live: Mutex<HashMap<String, Arc<Session>>>,
+    workers: Vec<physics::WorkerHandle>,
+    next_worker: AtomicU64,
+    /// The recorder (disk).
+    pub recorder: Recorder,
+    /// Counters.
+    pub metrics: Arc<Metrics>,
+    magnum: Arc<Model>,
+}
+
+impl SessionManager {
+    /// Starts the physics workers and the recorder.
+    pub fn start(
+        config: SessionConfig,
+        recorder: Recorder,
+        metrics: Arc<Metrics>,
+        magnum: Arc<Model>,
+    ) -> Arc<SessionManager> {
+        let workers = (0..config.physics_threads.max(1))
+            .map(|i| physics::spawn_worker(i, recorder.sender(), metrics.clone(), config.frame_hz))
+            .collect();
+        Arc::new(SessionManager {
+            config,
+            live: Mutex::new(HashMap::new()),
+            workers,
+            next_worker: AtomicU64::new(0),
+            recorder,
+            metrics,
+            magnum,
+        })
+    }
+
+    fn map(&self) -> MutexGuard<'_, HashMap<String, Arc<Session>>> {
+        self.live.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Creates a session and starts stepping it.
+    pub fn create(
+        &self,
+        scenario: Option<String>,
+        mode: Option<ControlMode>,
+        method: Option<ControlMethod>,
+        label: Option<String>,
+    ) -> Result<Arc<Session>, CreateError> {
+        let scenario = scenario.unwrap_or_else(|| "training".to_string());
+        if !LIVE_SCENARIOS.iter().any(|(n, _)| *n == scenario) {
+            return Err(CreateError::UnknownScenario(scenario));
+        }
+        {
+            let map = self.map();
+            if map.len() >= self.config.max_sessions {
+                return Err(CreateError::Full(map.len()));
+            }
+        }
+        let models = [self.magnum.clone(), self.magnum.clone()];
+        let sim = build_sim(&models).map_err(|e| CreateError::Sim(e.to_string()))?;
+        let settings = Settings {
+            control_mode: mode.unwrap_or_default(),
+            control_method: method.unwrap_or_default(),
+            arm_speed: 1.0,
+        };
+        let kin = [KinData::new(&models[0]), KinData::new(&models[1])];
+        let now = Instant::now();
+        let live = Live {
+            input: Input::default(),
+            sim,
+            settings,
+            paused: false,
+            input_seq: 0,
+            cartesian: [[0.0; 6]; 2],
+            faults: Vec::new(),
+            steps_since_origin: 0,
+            origin: now,
+            frame_seq: 0,
+            next_frame: now,
+            kin,
+            relief_recorded: 0,
+            last_grasp: "free",
+            release_until_s: 0.0,
+        };
+        let (frames, _) = watch::channel(None);
+        let (notices, _) = tokio::sync::broadcast::channel(16);
+        let label = label.unwrap_or_default().chars().take(64).collect();
+        let session = Arc::new(Session {
+            id: random_hex(8),
+            label,
+            scenario: Mutex::new(scenario.clone()),
+            control_token: random_hex(16),
+            created_unix: unix_now(),
+            live: Mutex::new(live),
+            frames,
+            notices,
+            trainees: AtomicU64::new(0),
+            last_activity: AtomicU64::new(unix_now().to_bits()),
+            ended: AtomicBool::new(false),
+            overloads: AtomicU64::new(0),
+            models,
+        });
+        {
+            let mut map = self.map();
+            if map.len() >= self.config.max_sessions {
+                return Err(CreateError::Full(map.len()));
+            }
+            map.insert(session.id.clone(), session.clone());
+        }
+        self.recorder.send(RecordMsg::Created {
+            id: session.id.clone(),
+            label: session.label.clone(),
+            scenario,
+            created_unix: session.created_unix,
+        });
+        let w = self.next_worker.fetch_add(1, Ordering::Relaxed) as usize % self.workers.len();
+        self.workers[w].add(session.clone());
+        self.metrics
+            .sessions_created
+            .fetch_add(1, Ordering::Relaxed);
+        self.metrics
+            .sessions_live
+            .store(self.map().len() as u64, Ordering::Relaxed);
+        tracing::info!(id = %session.id, "session created");
+        Ok(session)
+    }
+
+    /// A live session by id.
+    pub fn get(&self, id: &str) -> Option<Arc<Session>> {
+        self.map().get(id).cloned()
+    }
+
+    /// Every live session.
+    pub fn all(&self) -> Vec<Arc<Session>> {
+        let mut v: Vec<_> = self.map().values().cloned().collect();
+        v.sort_by(|a, b| a.created_unix.total_cmp(&b.created_unix));
+        v
+    }
+
+    /// Ends a session: stops stepping, records the end, tells clients.
+    pub fn end(&self, id: &str, reason: &str) {
+        let Some(session) = self.map().remove(id) else {
+            return;
+        };
+        session.ended.store(true, Ordering::Relaxed);
+        for w in &self.workers {
+            w.remove(id);
+        }
+        let sim_seconds = session.live().sim.time_s();
+        self.recorder.send(RecordMsg::Ended {
+            id: id.to_string(),
+            ended_unix: unix_now(),
+            sim_seconds,
+            reason: reason.to_string(),
+            overloads: session.overloads.load(Ordering::Relaxed),
+        });
+        let _ = session.notices.send(Utf8Bytes::from(
+            serde_json::json!({"type": "error", "message": format!("session ended: {reason}")})
+                .to_string(),
+        ));
+        // Dropping the watch sender's last frame wakes every client; they see `ended`.
+        session.frames.send_modify(|_| {});
+        self.metrics
+            .sessions_live
+            .store(self.map().len() as u64, Ordering::Relaxed);
+        tracing::info!(%id, reason, "session ended");
+    }
+
+    /// Ends sessions idle for longer than the configured timeout.
+    pub fn expire_idle(&self) {
+        let limit = self.config.idle_timeout.as_secs_f64();
+        let idle: Vec<String> = self
+            .all()
+            .into_iter()
+            .filter(|s| s.trainees.load(Ordering::Relaxed) == 0 && s.idle_seconds() > limit)
+            .map(|s| s.id.clone())
+            .collect();
+        for id in idle {
+            self.end(&id, "idle timeout");
+        }
+    }
+
+    /// Ends every session (graceful shutdown) and flushes the recorder.
+    pub fn shutdown(&self) {
+        for s in self.all() {
+            self.end(&s.id, "server shutdown");
+        }
+        for w in &self.workers {
+            w.stop();
+        }
+        self.recorder.shutdown();
+    }
+}

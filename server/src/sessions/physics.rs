@@ -1,0 +1,262 @@
+//! Physics workers: OS threads (never the async reactor) that step their sessions at 1 kHz
+//! of simulated time in real time and publish frames at the frame rate.
+//!
+//! Each worker wakes every millisecond, and for each of its sessions runs as many 1 ms steps
+//! as the wall clock is ahead of the session's simulated clock (so the average rate is
+//! exactly 1 kHz whatever the scheduler does), capped at [`MAX_CATCH_UP_STEPS`]; a larger
+//! backlog is dropped and counted as a step overrun. A paused session's clock origin moves,
+//! so resuming never causes a burst. Publishing a frame never waits on a client: the frame is
+//! put on a `watch` channel and each connection sends whatever is latest when it can.
+
+use std::fmt::Write as _;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
+
+use seaarms_core::sim::{LEFT, RIGHT};
+
+use super::record::{RecordMsg, RecordSender};
+use super::snapshot::{build_frame, cartesian_to_joint_velocity};
+use super::{Frame, Live, Session};
+use crate::metrics::Metrics;
+use crate::protocol::{ControlMethod, ControlMode, ServerMessage};
+
+/// Most 1 ms steps one session may run in one wake-up to catch up (50 ms of simulated time).
+pub const MAX_CATCH_UP_STEPS: u64 = 50;
+/// Record rows every this many steps (100 Hz).
+pub const RECORD_EVERY_STEPS: u64 = 10;
+
+/// Handle to one worker thread.
+pub struct WorkerHandle {
+    sessions: Arc<Mutex<Vec<Arc<Session>>>>,
+    generation: Arc<AtomicU64>,
+    stop: Arc<AtomicBool>,
+    thread: Mutex<Option<JoinHandle<()>>>,
+}
+
+impl WorkerHandle {
+    /// Starts stepping `session` on this worker.
+    pub fn add(&self, session: Arc<Session>) {
+        self.sessions
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .push(session);
+        self.generation.fetch_add(1, Ordering::Release);
+    }
+
+    /// Stops stepping the session `id` (no-op when not here).
+    pub fn remove(&self, id: &str) {
+        self.sessions
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .retain(|s| s.id != id);
+        self.generation.fetch_add(1, Ordering::Release);
+    }
+
+    /// Stops the thread and waits for it.
+    pub fn stop(&self) {
+        self.stop.store(true, Ordering::Relaxed);
+        if let Some(t) = self.thread.lock().unwrap_or_else(|e| e.into_inner()).take() {
+            let _ = t.join();
+        }
+    }
+}
+
+/// Spawns worker `index`.
+pub fn spawn_worker(
+    index: usize,
+    recorder: RecordSender,
+    metrics: Arc<Metrics>,
+    frame_hz: u32,
+) -> WorkerHandle {
+    let sessions: Arc<Mutex<Vec<Arc<Session>>>> = Arc::default();
+    let generation = Arc::new(AtomicU64::new(0));
+    let stop = Arc::new(AtomicBool::new(false));
+    let frame_interval = Duration::from_secs_f64(1.0 / f64::from(frame_hz.clamp(10, 120)));
+    let thread = {
+        let (sessions, generation, stop) = (sessions.clone(), generation.clone(), stop.clone());
+        std::thread::Builder::new()
+            .name(format!("physics-{index}"))
+            .spawn(move || {
+                let mut local: Vec<Arc<Session>> = Vec::new();
+                let mut seen = u64::MAX;
+                let tick = Duration::from_millis(1);
+                let mut next = Instant::now();
+                while !stop.load(Ordering::Relaxed) {
+                    let g = generation.load(Ordering::Acquire);
+                    if g != seen {
+                        local = sessions.lock().unwrap_or_else(|e| e.into_inner()).clone();
+                        seen = g;
+                    }
+                    for s in &local {
+                        step_session(s, &recorder, &metrics, frame_interval);
+                    }
+                    next += tick;
+                    let now = Instant::now();
+                    if next > now {
+                        std::thread::sleep(next - now);
+                    } else if now - next > Duration::from_millis(20) {
+                        // The worker itself fell behind (machine overloaded): do not spiral.
+                        next = now;
+                    }
+                }
+            })
+            .expect("spawning a physics thread")
+    };
+    WorkerHandle {
+        sessions,
+        generation,
+        stop,
+        thread: Mutex::new(Some(thread)),
+    }
+}
+
+/// Runs the steps due for one session and publishes a frame when one is due.
+pub fn step_session(
+    session: &Session,
+    recorder: &RecordSender,
+    metrics: &Metrics,
+    frame_interval: Duration,
+) {
+    let mut guard = session.live();
+    let live: &mut Live = &mut guard;
+    let now = Instant::now();
+    if live.paused {
+        live.origin = now;
+        live.steps_since_origin = 0;
+    } else {
+        let due = (now.duration_since(live.origin).as_micros() / 1000) as u64;
+        let mut todo = due.saturating_sub(live.steps_since_origin);
+        if todo > MAX_CATCH_UP_STEPS {
+            metrics
+                .step_overruns
+                .fetch_add(todo - MAX_CATCH_UP_STEPS, Ordering::Relaxed);
+            live.steps_since_origin = due - MAX_CATCH_UP_STEPS;
+            todo = MAX_CATCH_UP_STEPS;
+        }
+        for _ in 0..todo {
+            apply_control(live);
+            live.sim.step(&live.input);
+            live.steps_since_origin += 1;
+            metrics.steps.fetch_add(1, Ordering::Relaxed);
+            if live.sim.steps() % RECORD_EVERY_STEPS == 0 {
+                record_row(session, live, recorder);
+            }
+        }
+    }
+    if now >= live.next_frame {
+        live.frame_seq += 1;
+        let frame = build_frame(session, live);
+        match serde_json::to_string(&ServerMessage::State(Box::new(frame))) {
+            Ok(json) => {
+                let seq = live.frame_seq;
+                session.frames.send_replace(Some(Frame {
+                    seq,
+                    json: json.into(),
+                }));
+                metrics.frames_published.fetch_add(1, Ordering::Relaxed);
+            }
+            Err(e) => tracing::error!(id = %session.id, "frame serialization failed: {e}"),
+        }
+        live.next_frame += frame_interval;
+        if live.next_frame < now {
+            live.next_frame = now + frame_interval;
+        }
+    }
+}
+
+/// Turns the latest commands into the simulation's input for the next step: Cartesian
+/// sticks become joint-velocity references by redundancy resolution; the settings set the
+/// method and speed scale.
+fn apply_control(live: &mut Live) {
+    live.input.speed_scale = live.settings.arm_speed;
+    live.input.method = match live.settings.control_method {
+        ControlMethod::Open => seaarms_core::sim::ControlMethod::OpenLoop,
+        ControlMethod::Closed => seaarms_core::sim::ControlMethod::ClosedLoop,
+    };
+    let releasing = live.sim.time_s() < live.release_until_s;
+    for arm in [LEFT, RIGHT] {
+        if releasing {
+            live.input.arms[arm].jaw = 1.0;
+        }
+        live.input.arms[arm].joint_velocity_ref = match live.settings.control_mode {
+            ControlMode::Joint => None,
+            ControlMode::Cartesian => Some(cartesian_to_joint_velocity(live, arm)),
+        };
+    }
+}
+
+fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
+    let sim = &live.sim;
+    let mut line = String::with_capacity(1024);
+    let _ = write!(line, "{:.3}", sim.time_s());
+    for arm in [LEFT, RIGHT] {
+        let a = sim.arm(arm);
+        for v in a.q.iter().chain(&a.qd) {
+            let _ = write!(line, ",{v:.6}");
+        }
+        for v in a.p_in.iter().chain(&a.p_out) {
+            let _ = write!(line, ",{v:.0}");
+        }
+        let _ = write!(line, ",{:.4},{}", a.jaw_opening_m, u8::from(a.holding));
+        for v in &a.contact_wrench {
+            let _ = write!(line, ",{v:.2}");
+        }
+    }
+    let o = sim.object().pose.translation.vector;
+    let _ = write!(line, ",{:.5},{:.5},{:.5}", o.x, o.y, o.z);
+    for v in sim.internal_wrench() {
+        let _ = write!(line, ",{v:.2}");
+    }
+    let grasp = sim.grasp_state().as_str();
+    let _ = write!(line, ",{grasp},{}", sim.relief_events());
+    line.push('\n');
+    recorder.send(RecordMsg::Row {
+        id: session.id.clone(),
+        line,
+    });
+
+    let relief = sim.relief_events();
+    if relief > live.relief_recorded {
+        session
+            .overloads
+            .fetch_add(relief - live.relief_recorded, Ordering::Relaxed);
+        recorder.send(RecordMsg::Event {
+            id: session.id.clone(),
+            json: serde_json::json!({"t": sim.time_s(), "event": "relief", "count": relief})
+                .to_string(),
+        });
+    }
+    live.relief_recorded = relief;
+    if grasp != live.last_grasp {
+        recorder.send(RecordMsg::Event {
+            id: session.id.clone(),
+            json: serde_json::json!({"t": sim.time_s(), "event": "grasp", "state": grasp})
+                .to_string(),
+        });
+        live.last_grasp = grasp;
+    }
+}
+
+/// CSV header matching the rows written by the workers.
+pub fn csv_header() -> String {
+    let mut h = String::from("t");
+    for arm in ["left", "right"] {
+        for name in ["q", "qd", "p_in", "p_out"] {
+            for j in 1..=6 {
+                let _ = write!(h, ",{arm}_{name}{j}");
+            }
+        }
+        let _ = write!(h, ",{arm}_jaw_m,{arm}_holding");
+        for c in ["fx", "fy", "fz", "tx", "ty", "tz"] {
+            let _ = write!(h, ",{arm}_contact_{c}");
+        }
+    }
+    h.push_str(",object_x,object_y,object_z");
+    for c in ["fx", "fy", "fz", "tx", "ty", "tz"] {
+        let _ = write!(h, ",internal_{c}");
+    }
+    h.push_str(",grasp,relief_events\n");
+    h
+}

@@ -201,6 +201,19 @@ export class Connection {
       }
       return;
     }
+    if (/session ended/i.test(why)) {
+      this.opts.onEnded?.(why);
+      if (this.role === 'trainee') {
+        this.status('info', 'This session has ended (instructor, idle timeout or server). Starting a new session…');
+        localStorage.removeItem(STORE_KEY);
+        this.hello = null;
+        await new Promise((r) => setTimeout(r, 1500));
+        if (await this.create()) this.open();
+      } else {
+        this.status('error', 'This session has ended.');
+      }
+      return;
+    }
     this.status('error', `Connection lost${why ? ' (' + why + ')' : ''}; reconnecting…`);
     this.resuming = true;
     this.scheduleRetry(() => this.open());

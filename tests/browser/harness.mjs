@@ -37,24 +37,26 @@ async function waitHealthy(url, ms = 20000) {
   throw new Error(`server at ${url} not healthy after ${ms} ms`);
 }
 
+/** Starts the release binary on a free loopback port with a temp data dir; returns {url, stop}. */
+export async function startServer(extraArgs = []) {
+  const bin = process.env.SEAARMS_BIN || join(ROOT, 'target', 'release', 'seaarms');
+  if (!existsSync(bin)) throw new Error(`${bin} missing: run cargo build --release (tests/run.sh does)`);
+  const port = await freePort();
+  const dataDir = mkdtempSync(join(tmpdir(), 'seaarms-data-'));
+  const args = ['--bind', `127.0.0.1:${port}`, '--data-dir', dataDir, '--instructor-token', INSTRUCTOR_TOKEN, ...extraArgs];
+  const proc = spawn(bin, args, { env: { ...process.env, RUST_LOG: 'warn' }, stdio: ['ignore', 'ignore', 'inherit'] });
+  const stop = () => { proc.kill(); rmSync(dataDir, { recursive: true, force: true }); };
+  process.on('exit', stop);
+  const url = `http://127.0.0.1:${port}`;
+  await waitHealthy(url);
+  return { url, stop, proc };
+}
+
 let own = null;
 /** Base URL of the server under test (starting one if tests/run.sh did not). */
 export async function server() {
   if (process.env.SEAARMS_URL) return process.env.SEAARMS_URL;
-  if (own) return own.url;
-  const bin = join(ROOT, 'target', 'release', 'seaarms');
-  if (!existsSync(bin)) throw new Error(`${bin} missing: run cargo build --release (tests/run.sh does)`);
-  const port = await freePort();
-  const dataDir = mkdtempSync(join(tmpdir(), 'seaarms-data-'));
-  const args = ['--bind', `127.0.0.1:${port}`];
-  if (process.env.SEAARMS_DATA_DIR_FLAG !== '0') args.push('--data-dir', dataDir);
-  const proc = spawn(bin, args, {
-    env: { ...process.env, SEAARMS_INSTRUCTOR_TOKEN: INSTRUCTOR_TOKEN, RUST_LOG: 'warn' },
-    stdio: ['ignore', 'ignore', 'inherit'],
-  });
-  own = { url: `http://127.0.0.1:${port}`, proc, dataDir };
-  process.on('exit', () => { proc.kill(); rmSync(dataDir, { recursive: true, force: true }); });
-  await waitHealthy(own.url);
+  if (!own) own = await startServer();
   return own.url;
 }
 

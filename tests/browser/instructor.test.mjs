@@ -4,7 +4,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+import { server, startServer, createSession, openBrowser, until, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
 
 async function instructorPath(url) {
   const r = await fetch(`${url}/instructor`);
@@ -71,5 +71,37 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
   } finally {
     await trainee.close();
     await instr.close();
+  }
+});
+
+test('a session ended by the instructor: the trainee page says so and starts a new one', { timeout: 60000 }, async () => {
+  const url = await server();
+  const b = await openBrowser();
+  try {
+    await b.page.goto(`${url}/`);
+    const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
+    const r = await fetch(`${url}/api/sessions/${id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
+    assert.ok(r.ok, `DELETE: ${r.status}`);
+    await b.page.waitForFunction(() => /session has ended/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
+    const id2 = await until(b.page, (old) => window.__seaarms.connection.open && window.__seaarms.connection.session !== old && window.__seaarms.connection.session, id);
+    assert.notEqual(id2, id);
+    await until(b.page, () => document.querySelector('#banner').hidden);
+    assert.deepEqual(b.errors, []);
+  } finally {
+    await b.close();
+  }
+});
+
+test('the server is full: POST /api/sessions 503 gives a clear message', { timeout: 60000 }, async () => {
+  const full = await startServer(['--max-sessions', '1']); // its own release binary, one seat
+  const b = await openBrowser();
+  try {
+    await createSession(full.url, { label: 'the only seat' });
+    await b.page.goto(`${full.url}/`);
+    await b.page.waitForFunction(() => /server is full/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
+    assert.deepEqual(b.offsite, []);
+  } finally {
+    await b.close();
+    full.stop();
   }
 });

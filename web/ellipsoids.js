@@ -47,8 +47,8 @@ export class Ellipsoids {
     this.polyGroup = new THREE.Group();
     parent.add(this.polyGroup);
     this.polyMat = {
-      left: new THREE.MeshLambertMaterial({ color: ELLIPSOID_COLOURS.left, transparent: true, opacity: 0.18, depthWrite: false, side: THREE.DoubleSide }),
-      right: new THREE.MeshLambertMaterial({ color: ELLIPSOID_COLOURS.right, transparent: true, opacity: 0.18, depthWrite: false, side: THREE.DoubleSide }),
+      left: new THREE.MeshLambertMaterial({ color: ELLIPSOID_COLOURS.left, transparent: true, opacity: 0.3, depthWrite: false, side: THREE.DoubleSide }),
+      right: new THREE.MeshLambertMaterial({ color: ELLIPSOID_COLOURS.right, transparent: true, opacity: 0.3, depthWrite: false, side: THREE.DoubleSide }),
     };
     this.showEllipsoids = true;
   }

@@ -73,10 +73,32 @@ test('scripted grasp: object turns black, light blue, yellow as drawn', { timeou
     await page.evaluate(() => { window.__setButton(4, 0); window.__setButton(6, 0); });
 
     const above = (side, dz) => (st, hello) => { const h = handleWorld(st, hello, side); h[2] += dz; return h; };
-    let e = await driveTo('left', above('left', 0.12), 0.03);
-    e = await driveTo('left', above('left', 0), 0.02);
-    assert.ok(e < 0.03, `left tool within ${e} m of its handle`);
-    await page.evaluate(() => { window.__setButton(7, 1); }); // RT: close
+    const selectArm = async (side) => {
+      const btn = side === 'left' ? 4 : 5; // LB / RB
+      await page.evaluate((i) => window.__setButton(i, 1), btn);
+      await until(page, (s) => window.__seaarms.selectedArm === s, side);
+      await page.evaluate((i) => window.__setButton(i, 0), btn);
+    };
+    /** Opens the jaw, brings the tool point onto its handle, closes; retries if it slips. */
+    const grab = async (side) => {
+      for (let attempt = 1; attempt <= 3; attempt++) {
+        await page.evaluate(() => { window.__setButton(7, 0); window.__setButton(6, 1); }); // LT: open
+        await page.waitForTimeout(900);
+        await page.evaluate(() => { window.__setButton(6, 0); });
+        await driveTo(side, above(side, 0.1), 0.03);
+        const e = await driveTo(side, above(side, 0), 0.015);
+        await page.waitForTimeout(400); // let the hydraulics settle
+        const still = await page.evaluate((s) => window.__seaarms.lastState.arms[s].contact, side);
+        if (e > 0.03 || !still) continue;
+        await page.evaluate(() => { window.__setButton(7, 1); }); // RT: close (kept pressed)
+        try {
+          await until(page, (s) => window.__seaarms.lastState.arms[s].holding, side, 4000);
+          return attempt;
+        } catch { /* slipped out of the capture radius: open and try again */ }
+      }
+      throw new Error(`${side} jaw could not grab its handle`);
+    };
+    await grab('left');
     await until(page, () => window.__seaarms.lastState.grasp === 'one_on_surface', undefined, 20000);
     await page.waitForTimeout(300);
     const black = await snap('one_on_surface');
@@ -86,15 +108,9 @@ test('scripted grasp: object turns black, light blue, yellow as drawn', { timeou
     await setSticks([0, 0, 0]);
     await page.waitForTimeout(300);
     const blue = await snap('one_lifted');
-    await page.evaluate(() => { window.__setButton(7, 0); });
-    // right arm (RB): open, approach its handle, close
-    await page.evaluate(() => { window.__setButton(5, 1); window.__setButton(6, 1); });
-    await page.waitForTimeout(1000);
-    await page.evaluate(() => { window.__setButton(5, 0); window.__setButton(6, 0); });
-    await driveTo('right', above('right', 0.12), 0.03);
-    e = await driveTo('right', above('right', 0), 0.02);
-    assert.ok(e < 0.03, `right tool within ${e} m of its handle`);
-    await page.evaluate(() => { window.__setButton(7, 1); });
+    // right arm (RB); the left jaw, now sent grip 0, stays closed on its handle
+    await selectArm('right');
+    await grab('right');
     await until(page, () => window.__seaarms.lastState.grasp === 'both_holding', undefined, 20000);
     await page.waitForTimeout(300);
     const yellow = await snap('both_holding');

@@ -179,6 +179,7 @@ conn.start(params.get('scenario') ? { scenario: params.get('scenario') } : {});
 
 window.__seaarms = view.debugHooks({
   get connection() { return { session: conn.session?.id, framesReceived: conn.framesReceived, latencyMs: conn.latencyMs, open: !!conn.ws && conn.gotHello }; },
+  get lastReceived() { return conn.latest; },
   get lastInput() { return input.last; },
   get selectedArm() { return selectedArm; },
   statusText() { return $('status').innerText; },

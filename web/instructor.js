@@ -115,6 +115,7 @@ function observe(id) {
     window.__seaarms = view.debugHooks({
       get observed() { return observed; },
       get connection() { return conn ? { session: observed, framesReceived: conn.framesReceived, open: !!conn.ws && conn.gotHello } : null; },
+      get lastReceived() { return conn?.latest; },
       statusText() { return $('status').innerText; },
     });
   }

@@ -42,12 +42,12 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     assert.equal(obs.role, 'observer');
     assert.equal(obs.session, id);
     assert.equal(obs.n, 4);
-    // the observer sees the trainee's motion: both show the same arm state within a few frames
+    // the observer receives the same live stream as the trainee (same sim time within 1 s)
     const [a, b] = await Promise.all([
-      trainee.page.evaluate(() => window.__seaarms.lastState.t),
-      instr.page.evaluate(() => window.__seaarms.lastState.t),
+      trainee.page.evaluate(() => window.__seaarms.lastReceived.t),
+      instr.page.evaluate(() => window.__seaarms.lastReceived.t),
     ]);
-    assert.ok(Math.abs(a - b) < 0.5, `trainee t=${a}, observer t=${b}`);
+    assert.ok(Math.abs(a - b) < 1, `trainee t=${a}, observer t=${b}`);
 
     // message to the trainee
     await instr.page.fill('#act-text', 'Hello from the instructor');

@@ -114,6 +114,9 @@ test('scripted grasp: object turns black, light blue, yellow as drawn', { timeou
     await until(page, () => window.__seaarms.lastState.grasp === 'both_holding', undefined, 20000);
     await page.waitForTimeout(300);
     const yellow = await snap('both_holding');
+    await page.check('#chk-ell'); // the picture for docs/screenshot.png: dual ellipsoid on the object
+    await page.waitForTimeout(500);
+    await page.screenshot({ path: join(ARTIFACTS, 'showcase.png') });
     await page.evaluate(() => { window.__setButton(7, 0); });
     const dual = await page.evaluate(() => ({ dual: window.__seaarms.lastState.dual, text: window.__seaarms.statusText() }));
     console.log(`grasp states seen: ${seen.join(' → ')}`);

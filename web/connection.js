@@ -6,10 +6,12 @@
 const STORE_KEY = 'seaarms.session';
 const BACKOFF_MS = [500, 1000, 2000, 4000, 8000];
 
+/** Absolute WebSocket URL on this page's origin (only the path and query of the server's
+ * `ws_url` are used, so the page also works behind a TLS proxy or another host name). */
 export function wsUrl(pathOrUrl) {
-  if (/^wss?:\/\//.test(pathOrUrl)) return pathOrUrl;
+  const u = new URL(pathOrUrl, location.href);
   const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
-  return `${proto}//${location.host}${pathOrUrl.startsWith('/') ? '' : '/'}${pathOrUrl}`;
+  return `${proto}//${location.host}${u.pathname}${u.search}`;
 }
 
 async function jsonOrError(resp) {

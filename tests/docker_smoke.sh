@@ -15,6 +15,9 @@ for c in podman runc debootstrap; do command -v $c >/dev/null || need+=("$c"); d
 if [ ${#need[@]} -gt 0 ]; then apt-get update -qq && apt-get install -y -qq "${need[@]}" >/dev/null; fi
 cargo build --release --quiet --bin seaarms
 mkdir -p "$work"
+# This sandbox refuses setrlimit inside containers: run without podman's default ulimits.
+printf '[containers]\ndefault_ulimits = []\n' > "$work/containers.conf"
+export CONTAINERS_CONF="$work/containers.conf"
 if ! podman image exists localhost/debian-base:bookworm; then
   rm -rf "$work/rootfs"
   debootstrap --variant=minbase bookworm "$work/rootfs" >/dev/null
@@ -32,7 +35,7 @@ podman build -q --format docker --runtime runc --build-arg RUNTIME_IMAGE=localho
   -f "$ctx/Runtime" -t localhost/seaarms-smoke "$ctx" >/dev/null
 podman rm -f seaarms-smoke >/dev/null 2>&1 || true
 podman volume rm -f seaarms-smoke-data >/dev/null 2>&1 || true
-podman run -d --runtime runc --ulimit host --name seaarms-smoke --network host \
+podman run -d --runtime runc --name seaarms-smoke --network host \
   -e SEAARMS_BIND="127.0.0.1:$port" -e SEAARMS_INSTRUCTOR_TOKEN=smoke \
   -v seaarms-smoke-data:/var/lib/seaarms/data localhost/seaarms-smoke >/dev/null
 trap 'podman rm -f seaarms-smoke >/dev/null 2>&1 || true' EXIT

@@ -1,0 +1,215 @@
+// Shared test harness: the real release binary (started by tests/run.sh, which exports
+// SEAARMS_URL; started here on a free loopback port when it is not set) and real headless
+// Chromium (Debian /usr/bin/chromium driven by playwright-core; no downloaded browsers).
+
+import { chromium } from 'playwright-core';
+import { spawn } from 'node:child_process';
+import { mkdtempSync, mkdirSync, rmSync, existsSync } from 'node:fs';
+import { tmpdir } from 'node:os';
+import { join, dirname } from 'node:path';
+import { fileURLToPath } from 'node:url';
+import net from 'node:net';
+
+const here = dirname(fileURLToPath(import.meta.url));
+export const ROOT = join(here, '..', '..');
+export const ARTIFACTS = join(here, 'artifacts');
+export const INSTRUCTOR_TOKEN = process.env.SEAARMS_INSTRUCTOR_TOKEN || 'test-token';
+mkdirSync(ARTIFACTS, { recursive: true });
+
+export const CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
+  '--disable-background-networking', '--disable-component-update', '--disable-sync',
+  '--use-angle=swiftshader', '--enable-unsafe-swiftshader'];
+
+async function freePort() {
+  return new Promise((resolve, reject) => {
+    const s = net.createServer();
+    s.listen(0, '127.0.0.1', () => { const p = s.address().port; s.close(() => resolve(p)); });
+    s.on('error', reject);
+  });
+}
+
+async function waitHealthy(url, ms = 20000) {
+  const t0 = Date.now();
+  while (Date.now() - t0 < ms) {
+    try { const r = await fetch(`${url}/healthz`); if (r.ok) return; } catch { /* not yet */ }
+    await new Promise((r) => setTimeout(r, 100));
+  }
+  throw new Error(`server at ${url} not healthy after ${ms} ms`);
+}
+
+/** Starts the release binary on a free loopback port with a temp data dir; returns {url, stop}. */
+export async function startServer(extraArgs = []) {
+  const bin = process.env.SEAARMS_BIN || join(ROOT, 'target', 'release', 'seaarms');
+  if (!existsSync(bin)) throw new Error(`${bin} missing: run cargo build --release (tests/run.sh does)`);
+  const port = await freePort();
+  const dataDir = mkdtempSync(join(tmpdir(), 'seaarms-data-'));
+  const args = ['--bind', `127.0.0.1:${port}`, '--data-dir', dataDir, '--instructor-token', INSTRUCTOR_TOKEN, ...extraArgs];
+  const proc = spawn(bin, args, { env: { ...process.env, RUST_LOG: 'warn' }, stdio: ['ignore', 'ignore', 'inherit'] });
+  const stop = () => { proc.kill(); rmSync(dataDir, { recursive: true, force: true }); };
+  process.on('exit', stop);
+  const url = `http://127.0.0.1:${port}`;
+  await waitHealthy(url);
+  return { url, stop, proc };
+}
+
+let own = null;
+/** Base URL of the server under test (starting one if tests/run.sh did not). */
+export async function server() {
+  if (process.env.SEAARMS_URL) return process.env.SEAARMS_URL;
+  if (!own) own = await startServer();
+  return own.url;
+}
+
+/**
+ * A fresh browser (persistent context in a temp profile) and page. Any request that is not to
+ * the loopback server is aborted and recorded in `offsite`; console errors and page errors are
+ * recorded in `errors`.
+ */
+export async function openBrowser({ viewport = { width: 1280, height: 800 }, initScript } = {}) {
+  const profile = mkdtempSync(join(tmpdir(), 'seaarms-chromium-'));
+  const context = await chromium.launchPersistentContext(profile, {
+    executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
+    headless: true,
+    args: CHROMIUM_ARGS,
+    viewport,
+  });
+  const offsite = [];
+  const errors = [];
+  await context.route('**/*', (route) => {
+    const u = new URL(route.request().url());
+    if (u.protocol === 'data:' || u.hostname === '127.0.0.1' || u.hostname === 'localhost') return route.continue();
+    offsite.push(route.request().url());
+    return route.abort();
+  });
+  if (initScript) await context.addInitScript(initScript);
+  const page = context.pages()[0] || await context.newPage();
+  page.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+  page.on('pageerror', (e) => errors.push(String(e)));
+  const close = async () => {
+    await context.close();
+    rmSync(profile, { recursive: true, force: true });
+  };
+  return { context, page, offsite, errors, close };
+}
+
+/** Waits until `fn()` (evaluated in the page) is truthy; returns its value. */
+export async function until(page, fn, arg, timeout = 15000) {
+  const h = await page.waitForFunction(fn, arg, { timeout, polling: 50 });
+  return h.jsonValue();
+}
+
+/** RGB of a pixel in a PNG screenshot buffer (decoded by the page itself: no extra packages). */
+export async function decodePng(page, png) {
+  return page.evaluate(async (b64) => {
+    const img = new Image();
+    img.src = `data:image/png;base64,${b64}`;
+    await img.decode();
+    const c = document.createElement('canvas');
+    c.width = img.width; c.height = img.height;
+    const g = c.getContext('2d');
+    g.drawImage(img, 0, 0);
+    const d = g.getImageData(0, 0, img.width, img.height).data;
+    return { width: img.width, height: img.height, data: Array.from(d) };
+  }, png.toString('base64'));
+}
+
+export function hue([r, g, b]) {
+  const mx = Math.max(r, g, b), mn = Math.min(r, g, b);
+  if (mx === mn) return 0;
+  let h;
+  if (mx === r) h = ((g - b) / (mx - mn)) % 6;
+  else if (mx === g) h = (b - r) / (mx - mn) + 2;
+  else h = (r - g) / (mx - mn) + 4;
+  return (h * 60 + 360) % 360;
+}
+
+export function sat([r, g, b]) {
+  const mx = Math.max(r, g, b), mn = Math.min(r, g, b);
+  return mx === 0 ? 0 : (mx - mn) / mx;
+}
+
+/** Classifies a lit colour sample by the page's palette (hue/brightness bands). */
+export function classify(rgb) {
+  const [r, g, b] = rgb;
+  const v = Math.max(r, g, b), s = sat(rgb), h = hue(rgb);
+  if (v < 45) return 'black';
+  if (s < 0.18) return 'grey';
+  if (h >= 190 && h <= 215 && s < 0.7) return 'lightblue';
+  if (h >= 42 && h <= 62) return 'yellow';
+  if (h >= 12 && h < 35) return 'orange';
+  if (h < 10 || h > 345) return 'red';
+  return 'other';
+}
+
+/** Creates a trainee session over the REST API (as the page does). */
+export async function createSession(url, body = {}) {
+  const r = await fetch(`${url}/api/sessions`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify(body) });
+  if (!r.ok) throw new Error(`POST /api/sessions: ${r.status} ${await r.text()}`);
+  return r.json();
+}
+
+/**
+ * Init script: a fake standard-mapping gamepad. `navigator.getGamepads()` returns it once
+ * `window.__connectPad()` has dispatched `gamepadconnected`; tests set `window.__pad.axes[i]`
+ * and `window.__pad.buttons[i].value/pressed`.
+ */
+export const FAKE_GAMEPAD = () => {
+  const buttons = Array.from({ length: 17 }, () => ({ pressed: false, touched: false, value: 0 }));
+  const pad = { id: 'Fake pad (STANDARD GAMEPAD)', index: 0, connected: false, mapping: 'standard', timestamp: 0, axes: [0, 0, 0, 0], buttons };
+  window.__pad = pad;
+  Object.defineProperty(Navigator.prototype, 'getGamepads', { configurable: true, value: () => [pad.connected ? pad : null, null, null, null] });
+  window.__connectPad = () => {
+    pad.connected = true;
+    const e = new Event('gamepadconnected');
+    Object.defineProperty(e, 'gamepad', { value: pad });
+    window.dispatchEvent(e);
+  };
+  window.__setButton = (i, v) => { buttons[i].value = v; buttons[i].pressed = v > 0.5; };
+};
+
+/** Stick value that comes out of the page's dead zone (0.12) as `v`. */
+export function stick(v) {
+  const dz = 0.12;
+  if (Math.abs(v) < 1e-3) return 0;
+  return Math.sign(v) * (dz + Math.min(1, Math.abs(v)) * (1 - dz));
+}
+
+/** JS heap (after a forced GC), DOM nodes, and the page's frame counters, via CDP. */
+export async function sampleMemory(page, cdp) {
+  await cdp.send('HeapProfiler.collectGarbage');
+  const { metrics } = await cdp.send('Performance.getMetrics');
+  const m = Object.fromEntries(metrics.map((x) => [x.name, x.value]));
+  const c = await page.evaluate(() => ({ received: window.__seaarms.connection.framesReceived, drawn: window.__seaarms.statesDrawn, rendered: window.__seaarms.framesRendered, frameHz: window.__seaarms.hello.frame_hz }));
+  return { t: Date.now(), heapMB: m.JSHeapUsedSize / 1048576, nodes: m.Nodes, listeners: m.JSEventListeners, ...c };
+}
+
+/** Runs the trainee page for `seconds` and reports heap growth and frame rates. */
+export async function soak(url, seconds, { log = () => {}, every = 30 } = {}) {
+  const b = await openBrowser();
+  try {
+    await b.page.goto(`${url}/`);
+    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    const cdp = await b.context.newCDPSession(b.page);
+    await cdp.send('Performance.enable');
+    await b.page.waitForTimeout(5000); // warm up (JIT, plots filling their windows)
+    const samples = [await sampleMemory(b.page, cdp)];
+    const t0 = Date.now();
+    while (Date.now() - t0 < seconds * 1000) {
+      await b.page.waitForTimeout(Math.min(every * 1000, seconds * 1000 - (Date.now() - t0)));
+      const s = await sampleMemory(b.page, cdp);
+      samples.push(s);
+      log(s);
+    }
+    const a = samples[0], z = samples[samples.length - 1];
+    const dt = (z.t - a.t) / 1000;
+    return {
+      seconds: dt, samples, errors: b.errors,
+      heapStartMB: a.heapMB, heapEndMB: z.heapMB, heapMaxMB: Math.max(...samples.map((s) => s.heapMB)),
+      nodesStart: a.nodes, nodesEnd: z.nodes,
+      receivedHz: (z.received - a.received) / dt, drawnHz: (z.drawn - a.drawn) / dt, renderedHz: (z.rendered - a.rendered) / dt,
+      frameHz: z.frameHz,
+    };
+  } finally {
+    await b.close();
+  }
+}

@@ -1,0 +1,107 @@
+//! The instructor dashboard lists the trainee's session with a live summary, observes it
+//! read-only in the same 3D view, and its actions reach the trainee (message, pause).
+
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { join } from 'node:path';
+import { server, startServer, createSession, openBrowser, until, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+
+async function instructorPath(url) {
+  const r = await fetch(`${url}/instructor`);
+  return r.ok ? '/instructor' : '/web/instructor.html';
+}
+
+test('instructor dashboard lists the trainee session and shows it live', { timeout: 90000 }, async () => {
+  const url = await server();
+  const trainee = await openBrowser();
+  const instr = await openBrowser();
+  try {
+    await trainee.page.goto(`${url}/`);
+    const id = await until(trainee.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
+
+    // a wrong token is refused with a clear message
+    await instr.page.goto(`${url}${await instructorPath(url)}`);
+    await instr.page.fill('#token', 'not-the-token');
+    await instr.page.click('#token-form button');
+    await instr.page.waitForFunction(() => /wrong instructor token/i.test(document.querySelector('#list-status').textContent));
+
+    await instr.page.fill('#token', INSTRUCTOR_TOKEN);
+    await instr.page.click('#token-form button');
+    const row = `#sessions tr[data-id="${id}"]`;
+    await instr.page.waitForSelector(row, { timeout: 10000 });
+    const t1 = Number(await instr.page.textContent(`${row} td:nth-child(6)`));
+    await instr.page.waitForTimeout(2500);
+    const t2 = Number(await instr.page.textContent(`${row} td:nth-child(6)`));
+    assert.ok(t2 > t1, `summary is live: sim time ${t1} → ${t2}`);
+    assert.match(await instr.page.textContent(`${row} td:nth-child(8)`), /\d\.\d{3} \/ \d\.\d{3}/);
+
+    // observe it read-only in the 3D view
+    await instr.page.click(`${row} button[data-open]`);
+    await until(instr.page, () => window.__seaarms?.statesDrawn > 5);
+    const obs = await instr.page.evaluate(() => ({ role: window.__seaarms.hello.role, session: window.__seaarms.hello.session, n: window.__seaarms.viewports().length }));
+    assert.equal(obs.role, 'observer');
+    assert.equal(obs.session, id);
+    assert.equal(obs.n, 4);
+    // the observer receives the same live stream as the trainee (same sim time within 1 s)
+    const [a, b] = await Promise.all([
+      trainee.page.evaluate(() => window.__seaarms.lastReceived.t),
+      instr.page.evaluate(() => window.__seaarms.lastReceived.t),
+    ]);
+    assert.ok(Math.abs(a - b) < 1, `trainee t=${a}, observer t=${b}`);
+
+    // message to the trainee
+    await instr.page.fill('#act-text', 'Hello from the instructor');
+    await instr.page.click('#instr-actions button[data-act="message"]');
+    await trainee.page.waitForFunction(() => /Hello from the instructor/.test(document.querySelector('#banner').textContent));
+    // pause and resume from the dashboard
+    await instr.page.click('#instr-actions button[data-act="pause"]');
+    await until(trainee.page, () => window.__seaarms.lastState.paused === true);
+    await instr.page.click('#instr-actions button[data-act="resume"]');
+    await until(trainee.page, () => window.__seaarms.lastState.paused === false);
+    // a fault shows on the trainee's status bar
+    await instr.page.selectOption('#act-fault', 'supply_drop');
+    await instr.page.click('#instr-actions button[data-act="fault"]');
+    await trainee.page.waitForFunction(() => /supply_drop/.test(window.__seaarms.statusText()));
+    await instr.page.click('#instr-actions button[data-act="clear_faults"]');
+    await trainee.page.waitForFunction(() => !/supply_drop/.test(window.__seaarms.statusText()));
+    await instr.page.screenshot({ path: join(ARTIFACTS, 'instructor.png') });
+    assert.deepEqual(trainee.errors, []);
+    assert.deepEqual(instr.errors.filter((e) => !/403/.test(e)), [], 'only the deliberate wrong-token 403');
+    assert.deepEqual([...trainee.offsite, ...instr.offsite], []);
+  } finally {
+    await trainee.close();
+    await instr.close();
+  }
+});
+
+test('a session ended by the instructor: the trainee page says so and starts a new one', { timeout: 60000 }, async () => {
+  const url = await server();
+  const b = await openBrowser();
+  try {
+    await b.page.goto(`${url}/`);
+    const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
+    const r = await fetch(`${url}/api/sessions/${id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
+    assert.ok(r.ok, `DELETE: ${r.status}`);
+    await b.page.waitForFunction(() => /session has ended/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
+    const id2 = await until(b.page, (old) => window.__seaarms.connection.open && window.__seaarms.connection.session !== old && window.__seaarms.connection.session, id);
+    assert.notEqual(id2, id);
+    await until(b.page, () => document.querySelector('#banner').hidden);
+    assert.deepEqual(b.errors, []);
+  } finally {
+    await b.close();
+  }
+});
+
+test('the server is full: POST /api/sessions 503 gives a clear message', { timeout: 60000 }, async () => {
+  const full = await startServer(['--max-sessions', '1']); // its own release binary, one seat
+  const b = await openBrowser();
+  try {
+    await createSession(full.url, { label: 'the only seat' });
+    await b.page.goto(`${full.url}/`);
+    await b.page.waitForFunction(() => /server is full/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
+    assert.deepEqual(b.offsite, []);
+  } finally {
+    await b.close();
+    full.stop();
+  }
+});

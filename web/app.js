@@ -1,0 +1,186 @@
+// Trainee page: creates or resumes a session, draws it, sends input. No physics here.
+
+import { View } from './view.js';
+import { Connection } from './connection.js';
+import { Input, MAPPING } from './input.js';
+import { StatusBar } from './status.js';
+import { Plots } from './plots.js';
+
+const $ = (id) => document.getElementById(id);
+const SPEEDS = [0.25, 0.5, 0.75, 1];
+
+const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
+const status = new StatusBar($('status'));
+const plots = new Plots($('plots'));
+const banner = $('banner');
+let bannerTimer = null;
+let selectedArm = localStorage.getItem('seaarms.arm') === 'right' ? 'right' : 'left';
+let settings = { control_mode: 'joint', control_method: 'open', arm_speed: 1 };
+
+function showBanner(kind, text, ms = 0) {
+  clearTimeout(bannerTimer);
+  if (!text) { banner.hidden = true; return; }
+  banner.className = kind === 'error' ? '' : kind;
+  banner.textContent = text;
+  banner.hidden = false;
+  if (ms) bannerTimer = setTimeout(() => { banner.hidden = true; }, ms);
+}
+
+const conn = new Connection({
+  role: 'trainee',
+  onHello(h) {
+    view.setHello(h);
+    settings = { ...h.settings };
+    syncControls();
+    plots.setSession(h.session, conn.session?.control_token);
+    status.role(h.role);
+    if (h.scenario) $('sel-scenario').value = h.scenario;
+  },
+  onState(s) {
+    view.setState(s);
+    plots.add(s, selectedArm);
+    if (s.settings.control_mode !== settings.control_mode || s.settings.control_method !== settings.control_method ||
+        s.settings.arm_speed !== settings.arm_speed) {
+      settings = { ...s.settings };
+      syncControls();
+    }
+  },
+  onPong(ms) { status.latency(ms); },
+  onMessage(m) {
+    status.message(`✉ ${m.from}: ${m.text}`);
+    showBanner('msg', `Message from ${m.from}: ${m.text}`, 15000);
+  },
+  onError(msg) { showBanner('error', msg, 6000); },
+  async onNoSessions() {
+    // a server without the session API: draw a static preview from the analysis API
+    const { previewFrames } = await import('./preview.js');
+    const { hello, state } = await previewFrames();
+    view.setHello(hello);
+    view.setState(state);
+    status.role('preview');
+    showBanner('info', 'Static preview: this server has no session API (POST /api/sessions → 404).', 8000);
+  },
+  onStatus(kind, text) {
+    if (kind === 'ok') showBanner(null, '');
+    else showBanner(kind, text);
+  },
+});
+
+// status bar refresh at 10 Hz from the newest drawn state (text only changes when values do)
+setInterval(() => { if (view.drawn) status.update(view.drawn, { arm: selectedArm }); }, 100);
+
+function syncControls() {
+  $('sel-mode').value = settings.control_mode;
+  $('sel-method').value = settings.control_method;
+  const sp = SPEEDS.reduce((a, b) => (Math.abs(b - settings.arm_speed) < Math.abs(a - settings.arm_speed) ? b : a));
+  $('sel-speed').value = String(sp);
+  $('sel-arm').value = selectedArm;
+}
+
+function sendSettings(patch) {
+  settings = { ...settings, ...patch };
+  conn.send({ type: 'settings', ...patch });
+  syncControls();
+}
+
+function setArm(side) {
+  selectedArm = side;
+  localStorage.setItem('seaarms.arm', side);
+  syncControls();
+}
+
+let paused = false;
+const actions = {
+  toggleMode: () => sendSettings({ control_mode: settings.control_mode === 'joint' ? 'cartesian' : 'joint' }),
+  toggleMethod: () => sendSettings({ control_method: settings.control_method === 'open' ? 'closed' : 'open' }),
+  speed(d) {
+    const i = SPEEDS.indexOf(+$('sel-speed').value);
+    sendSettings({ arm_speed: SPEEDS[Math.max(0, Math.min(SPEEDS.length - 1, i + d))] });
+  },
+  release: () => conn.send({ type: 'release' }),
+  reset: () => conn.send({ type: 'reset' }),
+  pause() {
+    paused = view.drawn ? !view.drawn.paused : !paused;
+    conn.send({ type: paused ? 'pause' : 'resume' });
+  },
+  layout() { view.viewports.cycleLayout(); $('btn-layout').textContent = view.viewports.single ? '4 views' : '1 view'; },
+  help(show) {
+    const h = $('help');
+    h.hidden = show === undefined ? !h.hidden : !show;
+  },
+};
+
+const input = new Input(conn, {
+  arm: () => selectedArm,
+  setArm,
+  mode: () => settings.control_mode,
+  method: () => settings.control_method,
+  actions,
+  onPad: (id) => status.pad(id),
+});
+
+$('sel-arm').addEventListener('change', (e) => setArm(e.target.value));
+$('sel-mode').addEventListener('change', (e) => sendSettings({ control_mode: e.target.value }));
+$('sel-method').addEventListener('change', (e) => sendSettings({ control_method: e.target.value }));
+$('sel-speed').addEventListener('change', (e) => sendSettings({ arm_speed: +e.target.value }));
+$('btn-reset').addEventListener('click', actions.reset);
+$('btn-pause').addEventListener('click', actions.pause);
+$('btn-release').addEventListener('click', actions.release);
+$('btn-layout').addEventListener('click', actions.layout);
+$('btn-help').addEventListener('click', () => actions.help());
+$('btn-new').addEventListener('click', () => {
+  const sc = $('sel-scenario').value;
+  conn.restart(sc ? { scenario: sc } : {});
+});
+$('chk-ell').addEventListener('change', (e) => view.setEllipsoidsVisible(e.target.checked));
+$('chk-poly').addEventListener('change', (e) => view.setPolytopesVisible(e.target.checked));
+$('sel-ell-scale').addEventListener('change', (e) => view.setEllipsoidScale(+e.target.value));
+$('chk-plots').addEventListener('change', (e) => {
+  $('plots').hidden = !e.target.checked;
+  plots.visible = e.target.checked;
+  view.viewports.dirty = true;
+});
+// keep keyboard focus on the page after using a menu, so keys drive the arms again
+for (const el of document.querySelectorAll('#toolbar select')) el.addEventListener('change', () => el.blur());
+setInterval(() => { $('btn-pause').textContent = view.drawn?.paused ? 'Resume' : 'Pause'; }, 250);
+
+$('help').innerHTML = `<h3>Keyboard and gamepad</h3>
+<p>The selected arm (toolbar, <kbd>1</kbd>/<kbd>2</kbd>, LB/RB) follows the sticks. Joint mode: axis i drives
+joint i's valve. Cartesian mode: the axes are the end-effector velocity [vx vy vz wx wy wz] (world frame).
+Closed loop: the axes move the object; both jaws grip together. Dead zone ${Math.round(0.12 * 100)} % on sticks and triggers;
+input is sent at 50 Hz.</p>
+<table><tr><th>Function</th><th>Gamepad (standard mapping)</th><th>Keyboard</th></tr>
+${MAPPING.map(([f, g, k]) => `<tr><td>${f}</td><td>${g}</td><td><kbd>${k}</kbd></td></tr>`).join('')}</table>
+<p>Views: drag the perspective view to orbit, wheel to zoom; ⤢ or double-click shows one large view. Press <kbd>?</kbd> to close.</p>`;
+
+async function loadScenarios() {
+  const sel = $('sel-scenario');
+  try {
+    const r = await fetch('/api/scenarios');
+    if (!r.ok) throw new Error();
+    const body = await r.json();
+    const list = Array.isArray(body) ? body : body.scenarios || [];
+    if (!list.some((s) => (typeof s === 'string' ? s : s.name) === 'training')) list.unshift({ name: 'training', description: 'Free play from the initial position' });
+    sel.innerHTML = list.map((s) => {
+      const name = typeof s === 'string' ? s : s.name || s.id;
+      const title = typeof s === 'string' ? s : s.title || s.description || name;
+      return `<option value="${name}" title="${String(title).replaceAll('"', '&quot;')}">${name}</option>`;
+    }).join('');
+    if (conn.hello?.scenario) sel.value = conn.hello.scenario;
+  } catch {
+    sel.innerHTML = '<option value="">default</option>';
+  }
+}
+
+loadScenarios();
+syncControls();
+const params = new URLSearchParams(location.search);
+conn.start(params.get('scenario') ? { scenario: params.get('scenario') } : {});
+
+window.__seaarms = view.debugHooks({
+  get connection() { return { session: conn.session?.id, framesReceived: conn.framesReceived, latencyMs: conn.latencyMs, open: !!conn.ws && conn.gotHello }; },
+  get lastReceived() { return conn.latest; },
+  get lastInput() { return input.last; },
+  get selectedArm() { return selectedArm; },
+  statusText() { return $('status').innerText; },
+});

@@ -1,0 +1,246 @@
+// Session and WebSocket connection (protocol: server/src/protocol.rs). Creates or resumes a
+// trainee session (id + token kept in localStorage), or joins one read-only as an observer;
+// reconnects with exponential backoff after a drop or a server restart; measures latency with
+// ping/pong. Latest state wins: only the newest frame is kept for drawing.
+
+const STORE_KEY = 'seaarms.session';
+const BACKOFF_MS = [500, 1000, 2000, 4000, 8000];
+
+/** Absolute WebSocket URL on this page's origin (only the path and query of the server's
+ * `ws_url` are used, so the page also works behind a TLS proxy or another host name). */
+export function wsUrl(pathOrUrl) {
+  const u = new URL(pathOrUrl, location.href);
+  const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  return `${proto}//${location.host}${u.pathname}${u.search}`;
+}
+
+async function jsonOrError(resp) {
+  let body = null;
+  try { body = await resp.json(); } catch { /* not JSON */ }
+  return body;
+}
+
+export class Connection {
+  /**
+   * @param opts {role: 'trainee'|'observer', sessionId?, token?, onHello, onState, onMessage,
+   *              onError, onStatus(kind, text), onPong(ms)}
+   */
+  constructor(opts) {
+    this.opts = opts;
+    this.role = opts.role || 'trainee';
+    this.ws = null;
+    this.session = null; // {id, control_token, ws_url}
+    this.hello = null;
+    this.latest = null;
+    this.framesReceived = 0;
+    this.attempt = 0;
+    this.closedByUs = false;
+    this.latencyMs = null;
+    this.gotHello = false;
+    this.pingTimer = null;
+    this.retryTimer = null;
+  }
+
+  status(kind, text) { this.opts.onStatus?.(kind, text); }
+
+  /** Trainee: resume the stored session if the server still has it, else create one. */
+  async start(createOpts = {}) {
+    this.createOpts = createOpts;
+    if (this.role === 'trainee') {
+      let stored = null;
+      try { stored = JSON.parse(localStorage.getItem(STORE_KEY) || 'null'); } catch { stored = null; }
+      if (stored && stored.id && stored.control_token && await this.stillLive(stored)) {
+        this.session = stored;
+        this.resuming = true;
+      } else {
+        if (stored) localStorage.removeItem(STORE_KEY);
+        if (!(await this.create())) return;
+      }
+    } else {
+      this.session = { id: this.opts.sessionId, control_token: this.opts.token,
+        ws_url: `/ws/sessions/${encodeURIComponent(this.opts.sessionId)}?token=${encodeURIComponent(this.opts.token)}&role=observer` };
+    }
+    this.open();
+  }
+
+  /** GET /api/sessions/{id} with the control token: is the stored session still live? */
+  async stillLive(stored) {
+    try {
+      const r = await fetch(`/api/sessions/${encodeURIComponent(stored.id)}`, {
+        headers: { authorization: `Bearer ${stored.control_token}` }, cache: 'no-store' });
+      if (!r.ok) return false;
+      const s = await r.json();
+      return s.status === undefined || s.status === 'live';
+    } catch {
+      return true; // server unreachable: try the socket, which retries with backoff
+    }
+  }
+
+  /** POST /api/sessions; returns false (and retries later) when the server is full or down. */
+  async create(extra = {}) {
+    const body = { ...this.createOpts, ...extra };
+    let resp;
+    try {
+      resp = await fetch('/api/sessions', { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify(body) });
+    } catch {
+      this.status('error', 'Cannot reach the server; retrying…');
+      this.scheduleRetry(() => this.start(this.createOpts));
+      return false;
+    }
+    if (resp.status === 503) {
+      const b = await jsonOrError(resp);
+      this.status('error', `The server is full (${b?.error || 'HTTP 503'}). Retrying in 10 s…`);
+      this.retryTimer = setTimeout(() => this.start(this.createOpts), 10000);
+      return false;
+    }
+    if ((resp.status === 404 || resp.status === 405) && this.opts.onNoSessions) {
+      this.opts.onNoSessions();
+      return false;
+    }
+    if (!resp.ok) {
+      const b = await jsonOrError(resp);
+      this.status('error', `Could not create a session: ${b?.error || 'HTTP ' + resp.status}`);
+      return false;
+    }
+    const s = await resp.json();
+    this.session = { id: s.id, control_token: s.control_token, ws_url: s.ws_url };
+    this.resuming = false;
+    localStorage.setItem(STORE_KEY, JSON.stringify(this.session));
+    return true;
+  }
+
+  /** Ends the current session link and starts a new session (e.g. another scenario). */
+  async restart(extra) {
+    this.close();
+    this.closedByUs = false;
+    this.createOpts = { ...this.createOpts, ...extra };
+    localStorage.removeItem(STORE_KEY);
+    this.session = null;
+    this.hello = null;
+    if (await this.create()) this.open();
+  }
+
+  url() {
+    const s = this.session;
+    const path = s.ws_url || `/ws/sessions/${encodeURIComponent(s.id)}?token=${encodeURIComponent(s.control_token)}`;
+    return wsUrl(path);
+  }
+
+  open() {
+    clearTimeout(this.retryTimer);
+    this.closedByUs = false;
+    this.gotHello = false;
+    this.lastError = null;
+    let ws;
+    try { ws = new WebSocket(this.url()); } catch (e) {
+      this.status('error', `WebSocket: ${e.message}`);
+      return;
+    }
+    this.ws = ws;
+    this.status('info', this.attempt ? `Reconnecting (attempt ${this.attempt + 1})…` : 'Connecting…');
+    ws.onopen = () => {
+      this.pingTimer = setInterval(() => this.send({ type: 'ping', t: performance.now() }), 1000);
+    };
+    ws.onmessage = (ev) => this.onMessage(ev.data);
+    ws.onclose = (ev) => this.onClose(ev);
+    ws.onerror = () => { /* onclose follows and handles it */ };
+  }
+
+  onMessage(text) {
+    let msg;
+    try { msg = JSON.parse(text); } catch { return; }
+    switch (msg.type) {
+      case 'hello':
+        this.hello = msg;
+        this.gotHello = true;
+        this.attempt = 0;
+        this.status('ok', '');
+        this.opts.onHello?.(msg);
+        break;
+      case 'state':
+        this.latest = msg;
+        this.framesReceived++;
+        this.opts.onState?.(msg);
+        break;
+      case 'pong':
+        this.latencyMs = performance.now() - msg.t;
+        this.opts.onPong?.(this.latencyMs);
+        break;
+      case 'message':
+        this.opts.onMessage?.(msg);
+        break;
+      case 'error':
+        this.lastError = msg.message;
+        this.opts.onError?.(msg.message);
+        break;
+      default:
+        break;
+    }
+  }
+
+  async onClose(ev) {
+    clearInterval(this.pingTimer);
+    this.ws = null;
+    if (this.closedByUs) return;
+    const why = this.lastError || ev.reason || '';
+    if (!this.gotHello) {
+      // Refused before hello: wrong token, ended session, or the server is down.
+      const up = await fetch('/healthz', { cache: 'no-store' }).then((r) => r.ok).catch(() => false);
+      if (!up) {
+        this.status('error', 'Server unreachable; reconnecting…');
+        this.scheduleRetry(() => this.open());
+        return;
+      }
+      if (this.role === 'trainee') {
+        this.status('info', `${this.resuming ? 'The stored session has ended' : 'Session refused'}${why ? ': ' + why : ''}. Starting a new session…`);
+        localStorage.removeItem(STORE_KEY);
+        this.resuming = false;
+        if (this.hello || this.attempt > 3) await new Promise((r) => setTimeout(r, 1000));
+        this.attempt++;
+        if (await this.create()) this.open();
+      } else {
+        this.status('error', `Cannot observe this session${why ? ': ' + why : ' (ended, or wrong instructor token)'}.`);
+      }
+      return;
+    }
+    if (/session ended/i.test(why)) {
+      this.opts.onEnded?.(why);
+      if (this.role === 'trainee') {
+        this.status('info', 'This session has ended (instructor, idle timeout or server). Starting a new session…');
+        localStorage.removeItem(STORE_KEY);
+        this.hello = null;
+        await new Promise((r) => setTimeout(r, 1500));
+        if (await this.create()) this.open();
+      } else {
+        this.status('error', 'This session has ended.');
+      }
+      return;
+    }
+    this.status('error', `Connection lost${why ? ' (' + why + ')' : ''}; reconnecting…`);
+    this.resuming = true;
+    this.scheduleRetry(() => this.open());
+  }
+
+  scheduleRetry(fn) {
+    const ms = BACKOFF_MS[Math.min(this.attempt, BACKOFF_MS.length - 1)];
+    this.attempt++;
+    clearTimeout(this.retryTimer);
+    this.retryTimer = setTimeout(fn, ms);
+  }
+
+  send(obj) {
+    if (this.ws && this.ws.readyState === WebSocket.OPEN && this.gotHello) {
+      this.ws.send(JSON.stringify(obj));
+      return true;
+    }
+    return false;
+  }
+
+  close() {
+    this.closedByUs = true;
+    clearTimeout(this.retryTimer);
+    clearInterval(this.pingTimer);
+    if (this.ws) this.ws.close(1000, 'bye');
+    this.ws = null;
+  }
+}

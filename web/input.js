@@ -1,0 +1,178 @@
+// Operator input: the Gamepad API (standard mapping) with a keyboard fallback covering the
+// same functions. Sampled and sent at a steady 50 Hz with increasing sequence numbers:
+// {"type":"input","seq":n,"arms":{"left":{"axes":[6],"grip":g},"right":{...}},"object":[6]?}.
+// Joint mode: axis i drives joint i of the selected arm. Cartesian mode: the same axes are
+// [vx, vy, vz, wx, wy, wz] of its end-effector. Closed loop: they drive the object instead.
+
+export const SEND_HZ = 50;
+export const DEAD_ZONE = 0.12;
+
+/** Keyboard: each pair drives axis i (+, −). */
+export const KEY_AXES = [
+  ['KeyQ', 'KeyA'], ['KeyW', 'KeyS'], ['KeyE', 'KeyD'], ['KeyR', 'KeyF'], ['KeyT', 'KeyG'], ['KeyU', 'KeyJ'],
+];
+export const JOINT_NAMES = ['swing', 'shoulder', 'elbow', 'pitch', 'yaw', 'rotate'];
+export const CART_NAMES = ['vx', 'vy', 'vz', 'wx', 'wy', 'wz'];
+
+/** Gamepad (standard mapping) → axis i: [source, sign]. Sources: axes a0..a3, d-pad pairs. */
+export const PAD_AXES = [
+  { label: 'left stick X', get: (p) => p.axes[0] ?? 0 },
+  { label: 'left stick Y (up = +)', get: (p) => -(p.axes[1] ?? 0) },
+  { label: 'right stick Y (up = +)', get: (p) => -(p.axes[3] ?? 0) },
+  { label: 'd-pad up / down', get: (p) => btn(p, 12) - btn(p, 13) },
+  { label: 'right stick X', get: (p) => p.axes[2] ?? 0 },
+  { label: 'd-pad right / left', get: (p) => btn(p, 15) - btn(p, 14) },
+];
+
+/** Documented mapping (also in README "Keyboard and gamepad" and the help overlay). */
+export const MAPPING = [
+  // [function, gamepad, keyboard]
+  ['Axis 1: swing (joint) / vx (Cartesian)', 'left stick X', 'Q / A'],
+  ['Axis 2: shoulder / vy', 'left stick Y (up = +)', 'W / S'],
+  ['Axis 3: elbow / vz', 'right stick Y (up = +)', 'E / D'],
+  ['Axis 4: pitch / wx', 'd-pad up / down', 'R / F'],
+  ['Axis 5: yaw / wy', 'right stick X', 'T / G'],
+  ['Axis 6: rotate / wz', 'd-pad right / left', 'U / J'],
+  ['Grip: close / open', 'RT (close) / LT (open)', 'Z (close) / X (open)'],
+  ['Select left / right arm', 'LB / RB', '1 / 2'],
+  ['Control mode joint ↔ Cartesian', 'Y', 'M'],
+  ['Open ↔ closed loop', 'X', 'L'],
+  ['Arm speed − / +', '—', '- / ='],
+  ['Release (open both jaws)', 'B', 'B'],
+  ['Initial position (reset)', 'Back / Select', 'I'],
+  ['Pause / resume', 'Start', 'P'],
+  ['Slow (30 %) while held', 'A', 'Shift'],
+  ['Four views ↔ one view', '—', 'V'],
+  ['Help overlay', '—', '? or H'],
+];
+
+function btn(p, i) { const b = p.buttons[i]; return b ? (typeof b === 'object' ? b.value : b) : 0; }
+function pressed(p, i) { const b = p.buttons[i]; return !!b && (typeof b === 'object' ? b.pressed || b.value > 0.5 : b > 0.5); }
+
+/** Scaled radial dead zone on a value in [−1, 1]. */
+export function deadZone(v) {
+  const a = Math.abs(v);
+  if (!(a > DEAD_ZONE)) return 0;
+  return Math.sign(v) * Math.min(1, (a - DEAD_ZONE) / (1 - DEAD_ZONE));
+}
+
+export class Input {
+  /**
+   * @param conn Connection (send)
+   * @param ui {arm(): 'left'|'right', setArm(side), mode(): 'joint'|'cartesian',
+   *            method(): 'open'|'closed', actions: {toggleMode, toggleMethod, speed(d), release,
+   *            reset, pause, layout, help}}
+   */
+  constructor(conn, ui) {
+    this.conn = conn;
+    this.ui = ui;
+    this.seq = 0;
+    this.keys = new Set();
+    this.padIndex = null;
+    this.prevButtons = [];
+    this.last = null; // last message sent, for tests and the status bar
+    this.enabled = true;
+    window.addEventListener('keydown', (e) => this.onKey(e, true));
+    window.addEventListener('keyup', (e) => this.onKey(e, false));
+    window.addEventListener('blur', () => this.keys.clear());
+    window.addEventListener('gamepadconnected', (e) => { this.padIndex = e.gamepad.index; ui.onPad?.(e.gamepad.id); });
+    window.addEventListener('gamepaddisconnected', (e) => { if (this.padIndex === e.gamepad.index) this.padIndex = null; ui.onPad?.(null); });
+    this.timer = setInterval(() => this.tick(), 1000 / SEND_HZ);
+  }
+
+  onKey(e, down) {
+    const t = e.target;
+    if (t && (t.tagName === 'INPUT' || t.tagName === 'SELECT' || t.tagName === 'TEXTAREA')) return;
+    if (e.ctrlKey || e.metaKey || e.altKey) return;
+    if (down) {
+      if (!this.keys.has(e.code)) this.onPress(e);
+      this.keys.add(e.code);
+    } else {
+      this.keys.delete(e.code);
+    }
+    if (KEY_AXES.flat().includes(e.code) || e.code === 'KeyZ' || e.code === 'KeyX') e.preventDefault();
+  }
+
+  onPress(e) {
+    const a = this.ui.actions;
+    switch (e.code) {
+      case 'Digit1': this.ui.setArm('left'); break;
+      case 'Digit2': this.ui.setArm('right'); break;
+      case 'KeyM': a.toggleMode(); break;
+      case 'KeyL': a.toggleMethod(); break;
+      case 'Minus': a.speed(-1); break;
+      case 'Equal': a.speed(+1); break;
+      case 'KeyB': a.release(); break;
+      case 'KeyI': a.reset(); break;
+      case 'KeyP': a.pause(); break;
+      case 'KeyV': a.layout(); break;
+      case 'KeyH': a.help(); break;
+      default:
+        if (e.key === '?') a.help();
+        else if (e.key === 'Escape') a.help(false);
+    }
+  }
+
+  pad() {
+    if (this.padIndex === null || !navigator.getGamepads) return null;
+    const pads = navigator.getGamepads();
+    const p = pads && pads[this.padIndex];
+    return p && p.connected !== false ? p : null;
+  }
+
+  /** Current [axes(6), grip] from the keyboard and the gamepad. */
+  sample() {
+    const axes = [0, 0, 0, 0, 0, 0];
+    let grip = 0;
+    const slowKey = this.keys.has('ShiftLeft') || this.keys.has('ShiftRight');
+    KEY_AXES.forEach(([plus, minus], i) => { axes[i] += (this.keys.has(plus) ? 1 : 0) - (this.keys.has(minus) ? 1 : 0); });
+    if (this.keys.has('KeyZ')) grip -= 1;
+    if (this.keys.has('KeyX')) grip += 1;
+    let slow = slowKey;
+    const p = this.pad();
+    if (p) {
+      PAD_AXES.forEach((m, i) => { axes[i] += deadZone(m.get(p)); });
+      grip += deadZone(btn(p, 6)) - deadZone(btn(p, 7)); // LT opens, RT closes
+      if (pressed(p, 0)) slow = true;
+      this.padButtons(p);
+    }
+    const k = slow ? 0.3 : 1;
+    for (let i = 0; i < 6; i++) axes[i] = Math.max(-1, Math.min(1, axes[i] * k));
+    return { axes, grip: Math.max(-1, Math.min(1, grip)) };
+  }
+
+  /** Edge-triggered gamepad buttons. */
+  padButtons(p) {
+    const a = this.ui.actions;
+    const now = p.buttons.map((_, i) => pressed(p, i));
+    const edge = (i) => now[i] && !this.prevButtons[i];
+    if (edge(4)) this.ui.setArm('left');
+    if (edge(5)) this.ui.setArm('right');
+    if (edge(3)) a.toggleMode();
+    if (edge(2)) a.toggleMethod();
+    if (edge(1)) a.release();
+    if (edge(8)) a.reset();
+    if (edge(9)) a.pause();
+    this.prevButtons = now;
+  }
+
+  tick() {
+    if (!this.enabled) return;
+    const { axes, grip } = this.sample();
+    const arm = this.ui.arm();
+    const zero = { axes: [0, 0, 0, 0, 0, 0], grip: 0 };
+    const msg = { type: 'input', seq: this.seq + 1, arms: { left: zero, right: zero } };
+    if (this.ui.method() === 'closed') {
+      msg.object = axes;
+      msg.arms = { left: { axes: zero.axes, grip }, right: { axes: zero.axes, grip } };
+    } else {
+      msg.arms[arm] = { axes, grip };
+    }
+    if (this.conn.send(msg)) {
+      this.seq++;
+      this.last = msg;
+    }
+  }
+
+  stop() { clearInterval(this.timer); }
+}

@@ -1,0 +1,186 @@
+// Instructor dashboard: sign in with the instructor token, list every session with its live
+// summary (polls GET /api/sessions), observe one read-only in the same 3D view (observer
+// WebSocket), and act on it (POST /api/sessions/{id}/actions).
+
+import { View } from './view.js';
+import { Connection } from './connection.js';
+import { StatusBar, fmt } from './status.js';
+
+const $ = (id) => document.getElementById(id);
+const TOKEN_KEY = 'seaarms.instructor_token';
+const POLL_MS = 1000;
+/** Default size of each fault when the value box is empty (server ranges in README). */
+const FAULT_DEFAULTS = { supply_drop: 3.0e6, stuck_valve: 0.5, leak: 5e-10, air: 0.3 };
+
+let token = sessionStorage.getItem(TOKEN_KEY) || '';
+let sessions = [];
+let observed = null; // session id
+let conn = null;
+let view = null;
+let status = null;
+let pollTimer = null;
+
+$('token').value = token;
+
+function setListStatus(text, bad = false) {
+  const el = $('list-status');
+  el.textContent = text;
+  el.className = bad ? 'bad' : '';
+}
+
+function banner(kind, text) {
+  const b = $('banner');
+  if (!text) { b.hidden = true; return; }
+  b.className = kind === 'error' ? '' : kind;
+  b.textContent = text;
+  b.hidden = false;
+}
+
+const esc = (s) => String(s ?? '').replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
+
+/** One row of GET /api/sessions: {id, status, label, scenario, sim_seconds, grasp?, paused?,
+ * trainees?, measures?: [left, right], overload_count, faults?}. */
+function summary(s) {
+  const w = (i) => (s.measures && s.measures[i] ? fmt(s.measures[i].yoshikawa, 3) : '—');
+  return {
+    id: s.id,
+    status: s.status || 'live',
+    label: s.label ?? '',
+    scenario: s.scenario ?? '',
+    clients: s.status === 'ended' ? (s.end_reason || 'ended') : `${s.trainees ?? 0} trainee(s)${s.paused ? ', paused' : ''}`,
+    t: s.sim_seconds === undefined ? '' : Number(s.sim_seconds).toFixed(1),
+    grasp: s.grasp ?? '',
+    w: `${w(0)} / ${w(1)}`,
+    warn: [...(s.faults || []), s.overload_count ? `${s.overload_count} overload(s)` : ''].filter(Boolean).join(', '),
+  };
+}
+
+function renderList() {
+  const tb = document.querySelector('#sessions tbody');
+  tb.innerHTML = sessions.map((s) => {
+    const r = summary(s);
+    const btn = r.status === 'live' ? `<button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button>` : '';
+    return `<tr data-id="${esc(r.id)}" data-status="${esc(r.status)}" class="${r.id === observed ? 'open' : ''}"><td>${esc(r.id)}</td><td>${esc(r.status)}</td><td>${esc(r.label)}</td>
+      <td>${esc(r.scenario)}</td><td>${esc(r.clients)}</td><td>${esc(r.t)}</td><td>${esc(r.grasp)}</td><td>${esc(r.w)}</td>
+      <td class="warn">${esc(r.warn)}</td><td>${btn}</td></tr>`;
+  }).join('') || '<tr><td colspan="10">no sessions</td></tr>';
+}
+
+async function poll() {
+  if (!token) return;
+  try {
+    const r = await fetch('/api/sessions', { headers: { authorization: `Bearer ${token}` }, cache: 'no-store' });
+    if (r.status === 401 || r.status === 403) {
+      setListStatus('Wrong instructor token.', true);
+      sessions = [];
+      renderList();
+      return;
+    }
+    if (!r.ok) { setListStatus(`GET /api/sessions: HTTP ${r.status}`, true); return; }
+    const body = await r.json();
+    sessions = Array.isArray(body) ? body : body.sessions || [];
+    setListStatus(`${sessions.length} session(s) · ${new Date().toLocaleTimeString()}`);
+    renderList();
+  } catch {
+    setListStatus('Server unreachable; retrying…', true);
+  }
+}
+
+function startPolling() {
+  clearInterval(pollTimer);
+  poll();
+  pollTimer = setInterval(poll, POLL_MS);
+}
+
+$('token-form').addEventListener('submit', (e) => {
+  e.preventDefault();
+  token = $('token').value.trim();
+  sessionStorage.setItem(TOKEN_KEY, token);
+  startPolling();
+});
+
+document.querySelector('#sessions tbody').addEventListener('click', (e) => {
+  const id = e.target?.dataset?.open;
+  if (id) observe(id);
+});
+
+function observe(id) {
+  if (conn) conn.close();
+  observed = id;
+  renderList();
+  if (!view) {
+    view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
+    status = new StatusBar($('status'));
+    setInterval(() => { if (view.drawn) status.update(view.drawn, { arm: '—' }); }, 100);
+    window.__seaarms = view.debugHooks({
+      get observed() { return observed; },
+      get connection() { return conn ? { session: observed, framesReceived: conn.framesReceived, open: !!conn.ws && conn.gotHello } : null; },
+      get lastReceived() { return conn?.latest; },
+      statusText() { return $('status').innerText; },
+    });
+  }
+  $('instr-actions').hidden = false;
+  $('obs-title').textContent = `session ${id}`;
+  $('act-csv').href = `/api/sessions/${encodeURIComponent(id)}/log.csv?token=${encodeURIComponent(token)}`;
+  conn = new Connection({
+    role: 'observer', sessionId: id, token,
+    onHello(h) { view.setHello(h); status.role(h.role); if (h.scenario) $('act-scenario').value = h.scenario; },
+    onState(s) { view.setState(s); },
+    onPong(ms) { status.latency(ms); },
+    onMessage(m) { status.message(`✉ ${m.from}: ${m.text}`); },
+    onError(msg) { banner('error', msg); },
+    onStatus(kind, text) { banner(kind, kind === 'ok' ? '' : text); },
+  });
+  conn.start();
+}
+
+async function act(type) {
+  if (!observed) return;
+  const body = { type };
+  if (type === 'scenario') body.scenario = $('act-scenario').value;
+  if (type === 'fault') {
+    body.fault = $('act-fault').value;
+    body.arm = $('act-arm').value;
+    if ($('act-joint').value !== '') body.joint = +$('act-joint').value;
+    const v = $('act-value').value.trim();
+    body.value = v === '' ? FAULT_DEFAULTS[body.fault] : +v;
+    if ((body.fault === 'stuck_valve' || body.fault === 'leak') && body.joint === undefined) body.joint = 1;
+  }
+  if (type === 'message') body.text = $('act-text').value;
+  const out = $('act-result');
+  try {
+    const r = await fetch(`/api/sessions/${encodeURIComponent(observed)}/actions`, {
+      method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${token}` }, body: JSON.stringify(body),
+    });
+    let b = null;
+    try { b = await r.json(); } catch { /* empty body */ }
+    out.textContent = r.ok ? `${type}: ok` : `${type}: ${b?.error || 'HTTP ' + r.status}`;
+    out.className = r.ok ? '' : 'bad';
+    if (r.ok && type === 'message') $('act-text').value = '';
+  } catch {
+    out.textContent = `${type}: server unreachable`;
+    out.className = 'bad';
+  }
+}
+
+for (const b of document.querySelectorAll('#instr-actions button[data-act]')) {
+  b.addEventListener('click', () => act(b.dataset.act));
+}
+
+(async () => {
+  try {
+    const r = await fetch('/api/scenarios');
+    if (!r.ok) throw new Error();
+    const body = await r.json();
+    const list = Array.isArray(body) ? body : body.scenarios || [];
+    if (!list.some((s) => (typeof s === 'string' ? s : s.name) === 'training')) list.unshift({ name: 'training' });
+    $('act-scenario').innerHTML = list.map((s) => {
+      const name = typeof s === 'string' ? s : s.name || s.id;
+      return `<option value="${esc(name)}">${esc(name)}</option>`;
+    }).join('');
+  } catch { /* no scenarios endpoint */ }
+})();
+
+if (token) startPolling();
+const want = new URLSearchParams(location.search).get('session');
+if (want && token) observe(want);

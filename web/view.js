@@ -1,0 +1,146 @@
+// The 3D view shared by the trainee page and the instructor dashboard: world, both arms,
+// ellipsoids, four viewports, the draw loop (latest state wins: each animation frame draws the
+// newest state once), the optional polytope fetcher, and read-only debug hooks for tests.
+
+import { World, GRASP_COLOURS } from './scene.js';
+import { Arm, ARM_COLOUR } from './arms.js';
+import { Ellipsoids, ELLIPSOID_COLOURS } from './ellipsoids.js';
+import { Viewports } from './viewports.js';
+
+const SIDES = ['left', 'right'];
+const POLYTOPE_PERIOD_MS = 1000;
+
+export class View {
+  constructor({ canvas, viewportsEl, legendEl }) {
+    this.world = new World(canvas);
+    this.viewports = new Viewports(this.world, viewportsEl);
+    this.ellipsoids = new Ellipsoids(this.world.root);
+    this.arms = null;
+    this.hello = null;
+    this.pending = null; // newest undrawn state
+    this.drawn = null; // last drawn state
+    this.statesDrawn = 0;
+    this.firstStateFrameAt = null; // ms after navigation: first frame with the arms drawn
+    this.legendEl = legendEl;
+    this.polytopes = false;
+    this.lastFrameAt = -Infinity;
+    const want = Number(new URLSearchParams(location.search).get('maxfps'));
+    this.maxFps = want > 0 ? want : (this.world.software ? 20 : 120);
+    this.polyBusy = false;
+    this.legend();
+    const loop = () => {
+      this.frame();
+      this.raf = requestAnimationFrame(loop);
+    };
+    this.raf = requestAnimationFrame(loop);
+  }
+
+  legend() {
+    if (!this.legendEl) return;
+    const sw = (c) => `<span class="sw" style="background:#${c.toString(16).padStart(6, '0')}"></span>`;
+    this.legendEl.innerHTML =
+      `ellipsoids ${sw(ELLIPSOID_COLOURS.left)}left ${sw(ELLIPSOID_COLOURS.right)}right ${sw(ELLIPSOID_COLOURS.dual)}dual` +
+      ` — 1 m/s drawn as ${this.ellipsoids.scale} m<br>object ${sw(GRASP_COLOURS.free)}free ${sw(GRASP_COLOURS.one_on_surface)}one holding, on surface` +
+      ` ${sw(GRASP_COLOURS.one_lifted)}one lifted ${sw(GRASP_COLOURS.one_holding_other_contact)}one holds, other touches ${sw(GRASP_COLOURS.both_holding)}both holding`;
+  }
+
+  setHello(hello) {
+    this.hello = hello;
+    if (this.arms) for (const a of this.arms) a.dispose();
+    this.world.setup(hello);
+    this.arms = hello.arms.map((spec, i) => new Arm(spec, this.world.root, SIDES[i]));
+    this.viewports.setCentre(World.workCentre(hello));
+    this.pending = null;
+    for (const s of SIDES) this.ellipsoids.setPolytope(s, null);
+  }
+
+  setState(state) { this.pending = state; }
+
+  setEllipsoidScale(s) {
+    this.ellipsoids.scale = s;
+    this.legend();
+    if (this.drawn) { this.ellipsoids.update(this.drawn); this.viewports.dirty = true; }
+  }
+
+  setEllipsoidsVisible(v) { this.ellipsoids.setVisible(v); this.viewports.dirty = true; }
+
+  setPolytopesVisible(v) {
+    this.polytopes = v;
+    this.ellipsoids.setPolytopesVisible(v);
+    clearInterval(this.polyTimer);
+    if (v) {
+      this.fetchPolytopes();
+      this.polyTimer = setInterval(() => this.fetchPolytopes(), POLYTOPE_PERIOD_MS);
+    }
+    this.viewports.dirty = true;
+  }
+
+  /** Velocity polytopes at the current q from POST /api/analysis (server-computed). */
+  async fetchPolytopes() {
+    if (this.polyBusy || !this.hello || !this.drawn) return;
+    this.polyBusy = true;
+    try {
+      await Promise.all(SIDES.map(async (side, i) => {
+        const spec = this.hello.arms[i];
+        const resp = await fetch('/api/analysis', {
+          method: 'POST', headers: { 'content-type': 'application/json' },
+          body: JSON.stringify({ robot: spec.model, q: this.drawn.arms[side].q, polytope: true }),
+        });
+        if (!resp.ok) return;
+        const a = await resp.json();
+        if (this.polytopes) this.ellipsoids.setPolytope(side, a.polytope, spec.base.rotation);
+      }));
+      if (this.drawn) this.ellipsoids.update(this.drawn);
+      this.viewports.dirty = true;
+    } catch { /* next period retries */ } finally {
+      this.polyBusy = false;
+    }
+  }
+
+  frame() {
+    // A CPU rasterizer draws at most 20 fps (the newest state each time), leaving CPU to the
+    // page's input timer; ?maxfps=N overrides.
+    const now = performance.now();
+    if (now - this.lastFrameAt < 1000 / this.maxFps - 4) return;
+    this.lastFrameAt = now;
+    const s = this.pending;
+    if (s && this.arms) {
+      this.pending = null;
+      this.arms[0].update(s.arms.left);
+      this.arms[1].update(s.arms.right);
+      this.world.update(s);
+      this.ellipsoids.update(s);
+      this.drawn = s;
+      this.statesDrawn++;
+      this.viewports.dirty = true;
+    }
+    if (this.viewports.render() && this.drawn && this.firstStateFrameAt === null) {
+      this.firstStateFrameAt = performance.now();
+    }
+  }
+
+  /** Read-only hooks for the browser tests. */
+  debugHooks(extra = {}) {
+    const v = this;
+    const hooks = {
+      get hello() { return v.hello; },
+      get lastState() { return v.drawn; },
+      get statesDrawn() { return v.statesDrawn; },
+      get framesRendered() { return v.viewports.frames; },
+      get renderMs() { return v.viewports.renderMs; },
+      get firstFrameAt() { return v.viewports.firstFrameAt; },
+      get firstStateFrameAt() { return v.firstStateFrameAt; },
+      drawnJointAngles() { return v.arms ? v.arms.map((a) => a.q.slice()) : null; },
+      drawnJawCentres() { return v.arms ? v.arms.map((a) => a.drawnJawCentre()) : null; },
+      drawnJawGaps() { return v.arms ? v.arms.map((a) => a.drawnJawGap()) : null; },
+      drawnObjectColour() { return v.world.objectMaterial.color.getHex(); },
+      drawnObjectPosition() { return v.world.object ? [...v.world.object.matrix.elements.slice(12, 15)] : null; },
+      drawnEllipsoidRadii(which) { return v.ellipsoids.drawnRadii(which); },
+      project(view, p) { return v.viewports.project(view, p); },
+      viewports() { return v.viewports.views.map((x) => ({ name: x.name, rect: x.el.getBoundingClientRect().toJSON(), visible: !v.viewports.single || v.viewports.single === x.name })); },
+      colours: { arm: ARM_COLOUR, grasp: GRASP_COLOURS },
+    };
+    // keep the extra getters live (a spread would read them once)
+    return Object.freeze(Object.defineProperties(hooks, Object.getOwnPropertyDescriptors(extra)));
+  }
+}

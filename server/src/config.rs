@@ -67,9 +67,9 @@ pub enum Command {
     /// Exit 0 when the server answers `/healthz` (the container's HEALTHCHECK; the runtime
     /// image has no curl).
     Healthcheck {
-        /// URL to probe.
-        #[arg(long, default_value = "http://127.0.0.1:8080/healthz")]
-        url: String,
+        /// URL to probe (default: `/healthz` at the configured bind address, 0.0.0.0 → 127.0.0.1).
+        #[arg(long)]
+        url: Option<String>,
     },
 }
 

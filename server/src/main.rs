@@ -58,6 +58,13 @@ async fn main() -> anyhow::Result<()> {
             Ok(())
         }
         Some(Command::Healthcheck { url }) => {
+            let url = url.unwrap_or_else(|| {
+                let mut addr = cli.serve.bind;
+                if addr.ip().is_unspecified() {
+                    addr.set_ip(std::net::Ipv4Addr::LOCALHOST.into());
+                }
+                format!("http://{addr}/healthz")
+            });
             let resp = reqwest::Client::builder()
                 .timeout(std::time::Duration::from_secs(2))
                 .build()?

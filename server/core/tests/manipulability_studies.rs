@@ -64,7 +64,11 @@ fn single_arm_sweeps_reach_the_boundary() {
                 .expect("present")
                 .parameter
         );
-        assert!((1.25..1.5).contains(&boundary), "{z}: boundary {boundary}");
+        // Table 1-1: reach 1.5 m (the straight arm at z = 0 is on the elbow's limit).
+        assert!(
+            boundary > 1.25 && boundary <= 1.5 + 1e-9,
+            "{z}: boundary {boundary}"
+        );
         // Isotropy falls towards the boundary (Lim §4.3.1.1).
         let reach: Vec<&&StudyRow> = s.iter().filter(|r| r.reachable).collect();
         let near = reach.last().expect("reachable").single.expect("m").isotropy;
@@ -78,7 +82,13 @@ fn single_arm_sweeps_reach_the_boundary() {
     check_rows_hit_targets(&model, &rows);
     for x in ["x=0.90", "x=1.20", "x=1.40"] {
         let s: Vec<&StudyRow> = rows.iter().filter(|r| r.series == x).collect();
-        assert!(s[0].reachable && !s.last().expect("rows").reachable, "{x}");
+        // With the horizontal approach of the sweep, the pitch range (±57.5°) keeps the
+        // lowest points at X = 0.9 out of reach; every series has reachable rows and ends
+        // at the top of the workspace.
+        assert!(
+            s.iter().any(|r| r.reachable) && !s.last().expect("rows").reachable,
+            "{x}"
+        );
     }
 }
 

@@ -52,6 +52,10 @@ pub async fn run(
             }
         }
     });
+    // TCP_NODELAY: frames are small and frequent; Nagle + delayed ACK would hold them back.
+    let listener = axum::serve::ListenerExt::tap_io(listener, |tcp: &mut tokio::net::TcpStream| {
+        let _ = tcp.set_nodelay(true);
+    });
     let result = axum::serve(listener, app::app(state))
         .with_graceful_shutdown(shutdown)
         .await;

@@ -196,7 +196,7 @@ async fn client(
     seed: u64,
 ) -> ClientStats {
     let mut stats = ClientStats::default();
-    let (ws, _) = match tokio_tungstenite::connect_async(&url).await {
+    let (ws, _) = match tokio_tungstenite::connect_async_with_config(&url, None, true).await {
         Ok(c) => c,
         Err(e) => {
             stats.errors.push(format!("connect: {e}"));

@@ -22,6 +22,6 @@ USER 10001:10001
 WORKDIR /var/lib/seaarms
 EXPOSE 8080
 HEALTHCHECK --interval=10s --timeout=3s --start-period=5s --retries=3 \
-    CMD ["/usr/local/bin/seaarms", "healthcheck", "--url", "http://127.0.0.1:8080/healthz"]
+    CMD ["/usr/local/bin/seaarms", "healthcheck"]
 ENTRYPOINT ["/usr/local/bin/seaarms"]
 CMD ["serve"]

@@ -2,6 +2,8 @@
 //! and every error path (unknown robot, wrong q length, non-finite numbers, malformed JSON,
 //! bodies over 64 KiB) answered with a 4xx and a JSON `{"error": ...}` body.
 
+#![allow(clippy::unwrap_used)]
+
 use serde_json::{Value, json};
 
 struct Server {
@@ -276,6 +278,63 @@ async fn bad_input_gets_a_clear_json_error() {
     )
     .await;
     assert_eq!(st, 200);
+}
+
+/// Jun §3 over HTTP: the optimal posture reaches the target (violation ≤ 1e-6 m) and a
+/// target outside the workspace is a 422 that says so; studies and the workspace map answer.
+#[tokio::test]
+async fn optimal_posture_and_studies() {
+    let s = start().await;
+    // ORION at the paper's example posture: its tool point is the target.
+    let q: Vec<f64> = [-15.3f64, 49.6, -31.0, 75.5, 85.2, -18.0]
+        .iter()
+        .map(|d| d.to_radians())
+        .collect();
+    let (_, a) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": "orion", "q": q}).to_string(),
+    )
+    .await;
+    let target = a["pose"]["position"].clone();
+    let (st, p) = post(
+        &s,
+        "/api/optimal-posture",
+        json!({"robot": "orion", "target_position": target, "alpha": 0.0}).to_string(),
+    )
+    .await;
+    assert_eq!(st, 200, "{p}");
+    assert!(p["constraint_violation_m"].as_f64().unwrap() <= 1e-6);
+    assert!(
+        p["jlm"].as_f64().unwrap() > 0.09,
+        "JLM-optimal beats the example posture's 0.09 (Jun Fig. 4c: 0.33)"
+    );
+    let (st, e) = post(
+        &s,
+        "/api/optimal-posture",
+        json!({"robot": "orion", "target_position": [3, 0, 0], "alpha": 0.5}).to_string(),
+    )
+    .await;
+    assert_error(st, &e, 422, "outside the workspace");
+    let (st, e) = post(
+        &s,
+        "/api/optimal-posture",
+        json!({"robot": "orion", "target_position": [0.5, 0, 0], "alpha": 2}).to_string(),
+    )
+    .await;
+    assert_error(st, &e, 400, "alpha");
+    let (st, list) = get(&s, "/api/studies").await;
+    assert_eq!(st, 200);
+    assert!(
+        list.as_array()
+            .unwrap()
+            .iter()
+            .any(|x| x["name"] == "dual-distance")
+    );
+    let (st, d) = post(&s, "/api/studies/dual-distance", "".into()).await;
+    assert_eq!(st, 200, "{d}");
+    let (st, e) = post(&s, "/api/studies/nope", "".into()).await;
+    assert_error(st, &e, 404, "unknown study");
 }
 
 #[tokio::test]

@@ -3,6 +3,8 @@
 //! messages get an error and never hurt the session; a stalled client does not slow another
 //! session; records survive a restart; the cap answers 503; OpenAPI lists every route.
 
+#![allow(clippy::unwrap_used)]
+
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
@@ -242,6 +244,51 @@ async fn stick_input_moves_the_joint_and_observers_see_it_read_only() {
     assert_eq!(r.status().as_u16(), 204);
     let m = next_of(&mut ws, "message", Duration::from_secs(5)).await;
     assert_eq!(m["text"], "ease off the shoulder");
+    s.stop().await;
+}
+
+/// Cartesian mode (redundancy resolution, Jun eq. 21): an "up" stick raises the left
+/// end-effector while its x and y barely move.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cartesian_mode_moves_the_end_effector_along_the_stick() {
+    let s = start().await;
+    let (_, c) = create(&s, json!({"control_mode": "cartesian"})).await;
+    let (id, tok) = (
+        c["id"].as_str().unwrap(),
+        c["control_token"].as_str().unwrap(),
+    );
+    let mut ws = connect(&s, id, &format!("token={tok}")).await.unwrap();
+    let hello = next_of(&mut ws, "hello", Duration::from_secs(5)).await;
+    assert_eq!(hello["settings"]["control_mode"], "cartesian");
+    let first = next_of(&mut ws, "state", Duration::from_secs(5)).await;
+    let p0: Vec<f64> = first["arms"]["left"]["pose"]["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    for seq in 1..=30u64 {
+        send(
+            &mut ws,
+            json!({"type": "input", "seq": seq, "arms": {"left": {"axes": [0, 0, 0.5, 0, 0, 0]}}}),
+        )
+        .await;
+        tokio::time::sleep(Duration::from_millis(40)).await;
+    }
+    let later = state_after(&mut ws, first["t"].as_f64().unwrap() + 1.2).await;
+    let p1: Vec<f64> = later["arms"]["left"]["pose"]["position"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    let dz = p1[2] - p0[2];
+    let dxy = ((p1[0] - p0[0]).powi(2) + (p1[1] - p0[1]).powi(2)).sqrt();
+    assert!(dz > 0.04, "end-effector rose only {dz} m");
+    assert!(
+        dxy < 0.5 * dz,
+        "sideways drift {dxy} m for a vertical command (rise {dz} m)"
+    );
     s.stop().await;
 }
 

@@ -89,6 +89,9 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/robots/{name}"),
     ("post", "/api/analysis"),
     ("post", "/api/analysis/dual"),
+    ("post", "/api/optimal-posture"),
+    ("get", "/api/studies"),
+    ("post", "/api/studies/{name}"),
     ("get", "/api/scenarios"),
     ("post", "/api/scenarios/{name}/run"),
     ("get", "/api/scenarios/runs/{run}"),
@@ -133,6 +136,9 @@ pub fn app(state: AppState) -> Router {
         .route("/api/robots/{name}", get(api::robots::get))
         .route("/api/analysis", post(api::analysis::single))
         .route("/api/analysis/dual", post(api::analysis::dual))
+        .route("/api/optimal-posture", post(api::optimize::posture))
+        .route("/api/studies", get(api::optimize::studies))
+        .route("/api/studies/{name}", post(api::optimize::study))
         .route("/api/scenarios", get(api::scenarios::list))
         .route("/api/scenarios/{name}/run", post(api::scenarios::run))
         .route("/api/scenarios/runs/{run}", get(api::scenarios::download))

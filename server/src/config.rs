@@ -33,12 +33,43 @@ pub enum Command {
     },
     /// Load-test a running server: N trainee sessions with random sticks plus M observers.
     Load(crate::load::LoadArgs),
+    /// Optimal deploy posture (Jun §3): prints {q, tomm, jlm, objective, …} as JSON.
+    OptimalPosture {
+        /// Built-in robot name.
+        #[arg(long, default_value = "magnum")]
+        robot: String,
+        /// Tool-point target x,y,z in the base frame (m).
+        #[arg(
+            long,
+            value_delimiter = ',',
+            allow_negative_numbers = true,
+            required = true
+        )]
+        target: Vec<f64>,
+        /// Weight of TOMM against JLM, in [0, 1].
+        #[arg(long, default_value_t = 0.8)]
+        alpha: f64,
+        /// Initial candidates.
+        #[arg(long, default_value_t = 8)]
+        starts: usize,
+    },
+    /// Run a manipulability study of Lim §4.3 (or the workspace map); prints JSON.
+    Study {
+        /// `single-x`, `single-z`, `single-pitch-yaw`, `dual-x`, `dual-pitch-yaw`, `dual-distance`, `workspace-map`.
+        name: String,
+        /// Parameters as a JSON object.
+        #[arg(long)]
+        params: Option<String>,
+        /// Write the CSV here.
+        #[arg(long)]
+        out: Option<PathBuf>,
+    },
     /// Exit 0 when the server answers `/healthz` (the container's HEALTHCHECK; the runtime
     /// image has no curl).
     Healthcheck {
-        /// URL to probe.
-        #[arg(long, default_value = "http://127.0.0.1:8080/healthz")]
-        url: String,
+        /// URL to probe (default: `/healthz` at the configured bind address, 0.0.0.0 → 127.0.0.1).
+        #[arg(long)]
+        url: Option<String>,
     },
 }
 

@@ -4,6 +4,7 @@
 //! * [`config`]: command line / environment (one `clap` struct).
 //! * [`app`]: shared state and the router.
 //! * [`api`]: HTTP handlers and their wire types.
+//! * [`analysis_ext`]: optimal posture and manipulability studies (request/response types).
 //! * [`robots`]: built-in model registry and `"robot"` field resolution.
 //! * [`json`]: the JSON extractor whose rejections are JSON errors.
 //! * [`protocol`]: WebSocket wire types (the page contract).
@@ -13,6 +14,7 @@
 //! * [`metrics`]: Prometheus counters; [`load`]: the `seaarms load` client.
 //! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
 
+pub mod analysis_ext;
 pub mod api;
 pub mod app;
 pub mod assets;

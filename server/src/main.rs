@@ -24,7 +24,47 @@ async fn main() -> anyhow::Result<()> {
             println!("{}", serde_json::to_string_pretty(&summary)?);
             Ok(())
         }
+        Some(Command::OptimalPosture {
+            robot,
+            target,
+            alpha,
+            starts,
+        }) => {
+            let robots = seaarms::robots::Robots::load()?;
+            let model = robots
+                .get(&robot)
+                .ok_or_else(|| anyhow::anyhow!("unknown robot `{robot}`"))?;
+            anyhow::ensure!(target.len() == 3, "--target takes x,y,z");
+            let req = seaarms::analysis_ext::OptimalPostureRequest {
+                target_position: [target[0], target[1], target[2]],
+                alpha,
+                rows: None,
+                starts: Some(starts),
+            };
+            let result = seaarms::analysis_ext::optimal_posture(&model, &req)?;
+            println!("{}", serde_json::to_string_pretty(&result)?);
+            Ok(())
+        }
+        Some(Command::Study { name, params, out }) => {
+            let params: serde_json::Value = match params {
+                Some(p) => serde_json::from_str(&p)?,
+                None => serde_json::Value::Null,
+            };
+            let (doc, csv) = seaarms::analysis_ext::run_study(&name, &params)?;
+            if let Some(path) = out {
+                std::fs::write(&path, csv)?;
+            }
+            println!("{}", serde_json::to_string_pretty(&doc)?);
+            Ok(())
+        }
         Some(Command::Healthcheck { url }) => {
+            let url = url.unwrap_or_else(|| {
+                let mut addr = cli.serve.bind;
+                if addr.ip().is_unspecified() {
+                    addr.set_ip(std::net::Ipv4Addr::LOCALHOST.into());
+                }
+                format!("http://{addr}/healthz")
+            });
             let resp = reqwest::Client::builder()
                 .timeout(std::time::Duration::from_secs(2))
                 .build()?

@@ -146,4 +146,43 @@ mod tests {
             Err(ScenarioError::Unknown(_))
         ));
     }
+
+    #[test]
+    fn case1_gives_csv_and_summary_json() {
+        let (summary, csv) = run_scenario("case1-single-arm").expect("run");
+        let header = csv.lines().next().expect("header");
+        for col in [
+            "t_s",
+            "left_q1_rad",
+            "right_qd6_rad_s",
+            "left_u2",
+            "left_p_in2_pa",
+            "left_p_out2_pa",
+            "left_contact_fx_n",
+            "internal_fx_n",
+            "object_z_m",
+            "grasp_state",
+            "dual_yoshikawa",
+        ] {
+            assert!(header.split(',').any(|h| h == col), "missing column {col}");
+        }
+        assert_eq!(csv.lines().count(), summary.rows + 1);
+        assert!(summary.rows > 3900);
+        let json = serde_json::to_value(&summary).expect("json");
+        for key in [
+            "peak_line_pressure_pa",
+            "peak_internal_force_n",
+            "peak_internal_torque_nm",
+            "relief_events",
+            "object_lift_m",
+            "final_grasp_state",
+            "sim_seconds",
+            "wall_seconds",
+            "realtime_factor",
+        ] {
+            assert!(json.get(key).is_some(), "missing {key}");
+        }
+        assert_eq!(json["final_grasp_state"], "free");
+        assert!(summary.realtime_factor > 1.0);
+    }
 }

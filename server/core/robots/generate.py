@@ -1,4 +1,6 @@
-import json, math
+"""Writes the built-in robot files from the tables below (angles in degrees here, radians in the JSON)."""
+import json, math, os
+HERE = os.path.dirname(os.path.abspath(__file__))
 r = math.radians
 def j(kind="revolute", a=0.0, alpha=0.0, d=0.0, theta=0.0, lim=None, vel=None, name=None, twist=None):
     o = {}
@@ -16,13 +18,13 @@ models = {
   "dh": "standard",
   "joints": [
     j(a=L["l1"], alpha=90, lim=(-25, 25), vel=20, name="swing"),
-    j(a=L["l2"], alpha=0, lim=(0, 90), vel=20, name="shoulder"),
-    j(a=L["l3"], alpha=0, lim=(-135, -5), vel=30, name="elbow"),
-    j(a=L["l4"], alpha=-90, lim=(-10, 105), vel=30, name="pitch"),
+    j(a=L["l2"], alpha=0, lim=(-5, 85), vel=20, name="shoulder"),
+    j(a=L["l3"], alpha=0, lim=(-130, 0), vel=30, name="elbow"),
+    j(a=L["l4"], alpha=-90, lim=(-57.5, 57.5), vel=30, name="pitch"),
     j(a=L["l5"], alpha=90, twist="y", lim=(-60, 60), vel=30, name="yaw"),
     j(d=L["l6"], vel=150, name="rotate"),
   ],
-  "notes": "The thesis prints no link lengths. Chosen: l1=0.10 (swing axis to shoulder), l2=0.56 (shoulder to elbow, cf. the comparable Oberon 7 arm's 0.556 m), l3=0.50 (elbow to pitch), l4=0.12 (pitch to yaw), l5=0.10 (yaw to rotate), l6=0.12 (rotate to jaw centre) m: total 1.50 m = the Table 1-1 reach. Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg) placed by a grid search so that every point of the case-study workspace (X 0.9-1.4 m, Z 0-0.5 m, Y 0) is reachable with 5 deg of margin: swing -25..25, shoulder 0..90 (upper arm from horizontal to vertical), elbow -135..-5 (never fully straight, so the elbow singularity stays outside the range), pitch -10..105, yaw -60..60 deg; rotate is continuous (no limits).",
+  "notes": "The thesis prints no link lengths. Chosen: l1=0.10 (swing axis to shoulder), l2=0.56 (shoulder to elbow, cf. the comparable Oberon 7 arm's 0.556 m), l3=0.50 (elbow to pitch), l4=0.12 (pitch to yaw), l5=0.10 (yaw to rotate), l6=0.12 (rotate to jaw centre) m: total 1.50 m = the Table 1-1 reach. Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg) placed so that every point of the case-study workspace (X 0.9-1.4 m, Z 0-0.5 m, Y 0) is reachable within them (grid search; checked by tests/magnum_kinematics.rs) and the Table 1-1 full-extension posture q = 0 is inside: swing -25..25, shoulder -5..85, elbow -130..0 (straight at its upper limit: the full-extension posture of Table 1-1 lies on the boundary), pitch -57.5..57.5 (symmetric), yaw -60..60 deg; rotate is continuous (no limits).",
  },
  "orion": {
   "name": "orion",
@@ -92,5 +94,5 @@ models = {
 for n, m in models.items():
     for jj in m["joints"]:
         if "max_velocity" not in jj: jj["max_velocity"] = 1.0
-    json.dump(m, open(f"/work/main/server/core/robots/{n}.json", "w"), indent=2)
-    open(f"/work/main/server/core/robots/{n}.json", "a").write("\n")
+    json.dump(m, open(os.path.join(HERE, f"{n}.json"), "w"), indent=2)
+    open(os.path.join(HERE, f"{n}.json"), "a").write("\n")

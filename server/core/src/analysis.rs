@@ -50,7 +50,7 @@ pub fn analyze(model: &Model, q: &[f64], rows: Option<&[usize]>) -> Result<Analy
     jacobian(model, &mut data, q);
     let j = &data.jacobian;
     let svd = full_svd(j)?;
-    let full = measures_from_svd(&svd, j.ncols());
+    let full = measures_from_svd(&svd);
     let subspaces = subspaces_from_svd(&svd);
     let translational = measures(&j.select_rows(&TRANSLATIONAL_ROWS))?;
     let rotational = measures(&j.select_rows(&ROTATIONAL_ROWS))?;
@@ -60,11 +60,18 @@ pub fn analyze(model: &Model, q: &[f64], rows: Option<&[usize]>) -> Result<Analy
     };
     let mut grad = vec![0.0; model.dof()];
     jlm_gradient(model, q, &mut grad);
+    let pose = data.end_effector();
+    let jacobian_end_effector = jacobian_in_end_effector_frame(&data);
+    let KinData {
+        joint_frames,
+        jacobian,
+        ..
+    } = data;
     Ok(Analysis {
-        pose: data.end_effector(),
-        jacobian_end_effector: jacobian_in_end_effector_frame(&data),
-        joint_frames: data.joint_frames.clone(),
-        jacobian: data.jacobian,
+        pose,
+        jacobian_end_effector,
+        joint_frames,
+        jacobian,
         full,
         translational,
         rotational,

@@ -15,6 +15,11 @@
 //! * [`grasp`]: the object, seabed contact, grasp matrices W, W⁺, V, grasp state (Lim eqs 3.39–3.47).
 //! * [`control`]: open loop, joint-velocity servo, closed-loop cooperative control.
 //! * [`sim`]: the whole-system [`sim::Simulation`] stepped at 1 ms, and scripted scenarios.
+//! * [`optimize`]: TOMM/JLM objective and gradients; optimal posture by multi-start SLSQP (Jun §3).
+//! * [`redundancy`]: task-oriented redundancy resolution, task priority, damping, velocity
+//!   limits, feedback form (Jun eqs 19–24, Kilic eqs 0.2–0.10); allocation-free steps.
+//! * [`studies`]: Lim §4.3 manipulability case studies (single and dual arm) as rows, and a
+//!   workspace map of translational measures.
 
 pub mod analysis;
 pub mod error;
@@ -29,7 +34,10 @@ pub mod sim;
 pub mod kinematics;
 pub mod manipulability;
 pub mod model;
+pub mod optimize;
+pub mod redundancy;
 pub mod robots;
+pub mod studies;
 
 pub use error::Error;
 pub use model::{Joint, JointKind, Model, ModelSpec};

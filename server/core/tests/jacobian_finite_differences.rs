@@ -2,6 +2,8 @@
 //! kinematics (linear rows: d p / d q; angular rows: the rotation-vector rate of R·R₀ᵀ), and
 //! the end-effector-frame Jacobian is the base one rotated by Rᵀ.
 
+#![allow(clippy::unwrap_used)]
+
 mod common;
 
 use nalgebra::{DMatrix, Matrix3};

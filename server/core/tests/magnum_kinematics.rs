@@ -1,6 +1,8 @@
 //! Magnum forward kinematics equals Lim eq. 3.9; closed-form IK (eqs 3.10–3.19) round-trips;
 //! the case-study workspace (Lim §4.3.1: X 0.9–1.4 m, Z 0–0.5 m) is reachable within limits.
 
+#![allow(clippy::unwrap_used)]
+
 mod common;
 
 use nalgebra::{Matrix3, Vector3};

@@ -2,6 +2,8 @@
 //! Πσ = √det(JJᵀ), sorted non-negative σ, ellipsoid volume coefficient (eq. 2.18), force
 //! measures reciprocal, and the dual-arm ellipsoid of two identical arms (eq. 3.68).
 
+#![allow(clippy::unwrap_used)]
+
 mod common;
 
 use nalgebra::{DMatrix, Rotation3, Vector3};
@@ -9,7 +11,7 @@ use proptest::prelude::*;
 use seaarms_core::kinematics::jacobian_at;
 use seaarms_core::manipulability::measures::ellipsoid_volume_coefficient;
 use seaarms_core::manipulability::{
-    dual_measures, jlm, jlm_gradient, measures, select_rows, svd_with,
+    dual_measures, full_svd, jlm, jlm_gradient, measures, select_rows, subspaces_from_svd,
 };
 
 proptest! {
@@ -23,7 +25,8 @@ proptest! {
         let j_eq = DMatrix::from_row_slice(2, 2, &[-s1 - s12, -s12, c1 + c12, c12]);
         prop_assert!((&j - &j_eq).abs().max() < 1e-12);
         let m = measures(&j).unwrap();
-        prop_assert!((m.yoshikawa - q2.sin().abs()).abs() < 1e-12);
+        // Absolute accuracy ~1e-11 near q2 = 0: σ₂ comes from λ₂ of JJᵀ (see `measures`).
+        prop_assert!((m.yoshikawa - q2.sin().abs()).abs() < 1e-10);
         let c2 = q2.cos();
         let root = (5.0 + 12.0 * c2 + 8.0 * c2 * c2).sqrt();
         let l1 = (3.0 + 2.0 * c2 + root) / 2.0;
@@ -55,21 +58,57 @@ proptest! {
         }
         // Each axis uᵢ satisfies JJᵀuᵢ = σᵢ²uᵢ.
         let jjt = &j * j.transpose();
-        for (s, u) in m.singular_values.iter().zip(&m.ellipsoid.axes) {
-            let u = nalgebra::DVector::from_column_slice(u);
+        for (s, u) in m.singular_values.iter().zip(m.ellipsoid.axes.column_iter()) {
+            let u = u.into_owned();
             prop_assert!((&jjt * &u - &u * (s * s)).norm() < 1e-9);
         }
     }
 
-    /// The eigen route (σ = √λ(JJᵀ)) used by `measures` agrees with a full SVD of J.
+    /// The two routes to σ — `measures` (eigen of JJᵀ, m×m) and `full_svd` (eigen of JᵀJ,
+    /// n×n) — agree, and both satisfy Σσᵢ² = ‖J‖_F² (trace identity).
     #[test]
-    fn eigen_route_agrees_with_the_svd(vals in proptest::collection::vec(-2.0f64..2.0, 6 * 9), rows in 1usize..=6, extra in 0usize..=3) {
+    fn eigen_routes_agree_and_keep_the_frobenius_norm(vals in proptest::collection::vec(-2.0f64..2.0, 6 * 9), rows in 1usize..=6, extra in 0usize..=3) {
         let cols = rows + extra;
         let j = DMatrix::from_fn(rows, cols, |r, c| vals[r * 9 + c]);
-        let by_eig = measures(&j).unwrap();
-        let svd = svd_with(&j, false).unwrap();
-        for (a, b) in by_eig.singular_values.iter().zip(svd.sigma.iter()) {
-            prop_assert!((a - b).abs() < 1e-7 * (1.0 + svd.sigma[0]), "{:?} vs {}", by_eig.singular_values, svd.sigma);
+        let by_jjt = measures(&j).unwrap();
+        let by_jtj = full_svd(&j).unwrap();
+        let fro2 = j.norm_squared();
+        for (a, b) in by_jjt.singular_values.iter().zip(by_jtj.sigma.iter()) {
+            prop_assert!((a - b).abs() < 1e-7 * (1.0 + by_jtj.sigma[0]), "{:?} vs {}", by_jjt.singular_values, by_jtj.sigma);
+        }
+        let s2: f64 = by_jjt.singular_values.iter().map(|s| s * s).sum();
+        prop_assert!((s2 - fro2).abs() < 1e-9 * (1.0 + fro2));
+    }
+
+    /// The analysis's full decomposition is an SVD: U and V orthogonal, σ sorted and ≥ 0,
+    /// J = UΣVᵀ (which with orthogonal U, V fixes σ uniquely), Σσᵢ² = ‖J‖_F², and a
+    /// rank-deficient J has its null space found (J·N = 0).
+    #[test]
+    fn full_decomposition_is_an_svd(vals in proptest::collection::vec(-2.0f64..2.0, 6 * 8), cols in 2usize..=8, drop_rank in proptest::bool::ANY) {
+        let mut j = DMatrix::from_fn(6, cols, |r, c| vals[r * 8 + c]);
+        if drop_rank && cols >= 3 {
+            // Make the last column a combination of the first two.
+            let last = j.column(0) * 0.7 - j.column(1) * 1.3;
+            j.set_column(cols - 1, &last);
+        }
+        let ours = full_svd(&j).unwrap();
+        for w in ours.sigma.as_slice().windows(2) {
+            prop_assert!(w[0] >= w[1] && w[1] >= 0.0);
+        }
+        let s2: f64 = ours.sigma.iter().map(|s| s * s).sum();
+        prop_assert!((s2 - j.norm_squared()).abs() < 1e-9 * (1.0 + j.norm_squared()));
+        let (m, n) = (6, cols);
+        prop_assert!((ours.u.transpose() * &ours.u - DMatrix::identity(m, m)).abs().max() < 1e-9);
+        prop_assert!((ours.v.transpose() * &ours.v - DMatrix::identity(n, n)).abs().max() < 1e-9);
+        let mut s = DMatrix::zeros(m, n);
+        for i in 0..m.min(n) {
+            s[(i, i)] = ours.sigma[i];
+        }
+        prop_assert!((&ours.u * s * ours.v.transpose() - &j).abs().max() < 1e-7);
+        let sub = subspaces_from_svd(&ours);
+        prop_assert!((&j * &sub.null_space).abs().max() < 1e-6 || sub.null_space.ncols() == 0);
+        if drop_rank && (3..=6).contains(&cols) {
+            prop_assert!(sub.null_space.ncols() >= 1, "a dependent column leaves a null space");
         }
     }
 

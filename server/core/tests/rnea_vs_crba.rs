@@ -6,7 +6,9 @@
 mod common;
 
 use nalgebra::{DMatrix, DVector, Vector3};
-use seaarms_core::dynamics::{DynData, Inertials, crba, rnea, tool_bias_acceleration};
+use seaarms_core::dynamics::{
+    DynData, Inertials, crba, rnea, tool_bias_acceleration, tool_bias_from_rnea,
+};
 use seaarms_core::kinematics::{KinData, forward_kinematics, jacobian, jacobian_at};
 
 const G: Vector3<f64> = Vector3::new(0.0, 0.0, -9.81);
@@ -129,6 +131,18 @@ fn bias_acceleration_matches_finite_difference() {
     for q in postures(10) {
         forward_kinematics(&m, &mut kin, &q);
         let jb = tool_bias_acceleration(&m, &kin, &qd, &[0.0; 6], &mut d);
+        let inr = Inertials::magnum(&m).expect("inertials");
+        let mut tau = [0.0; 6];
+        rnea(&m, &inr, &kin, &qd, &[0.0; 6], &G, 0.0, &mut tau, &mut d);
+        let from_rnea = tool_bias_from_rnea(&m, &kin, &G, &d);
+        for r in 0..6 {
+            assert!(
+                (jb[r] - from_rnea[r]).abs() < 1e-9,
+                "row {r}: {} vs {}",
+                jb[r],
+                from_rnea[r]
+            );
+        }
         let eps = 1e-6;
         let jv =
             |q: &[f64; 6]| -> DVector<f64> { jacobian_at(&m, q) * DVector::from_column_slice(&qd) };

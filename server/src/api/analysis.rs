@@ -10,7 +10,7 @@ use seaarms_core::model::Model;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
-use super::wire::{MeasuresOut, PoseOut, rows};
+use super::wire::{MeasuresOut, PoseOut, columns, rows};
 use crate::app::AppState;
 use crate::error::ApiError;
 use crate::json::ApiJson;
@@ -153,12 +153,12 @@ pub async fn single(
         },
         jlm: a.jlm,
         jlm_gradient: a.jlm_gradient,
-        null_space: a.subspaces.null_space,
+        null_space: columns(&a.subspaces.null_space),
         subspaces: SubspacesOut {
             rank: a.subspaces.rank,
-            generating: a.subspaces.generating,
-            range: a.subspaces.range,
-            unreachable: a.subspaces.unreachable,
+            generating: columns(&a.subspaces.generating),
+            range: columns(&a.subspaces.range),
+            unreachable: columns(&a.subspaces.unreachable),
         },
         polytope,
     }))

@@ -3,6 +3,7 @@
 
 pub mod analysis;
 pub mod openapi;
+pub mod optimize;
 pub mod robots;
 pub mod scenarios;
 pub mod wire;

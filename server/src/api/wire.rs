@@ -29,6 +29,13 @@ impl From<&Isometry3<f64>> for PoseOut {
     }
 }
 
+/// The columns of a matrix, each as a list (bases of subspaces, ellipsoid axes).
+pub fn columns(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
+    m.column_iter()
+        .map(|c| c.iter().copied().collect())
+        .collect()
+}
+
 /// A matrix as a list of rows.
 pub fn rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
     (0..m.nrows())
@@ -51,7 +58,7 @@ impl From<&Ellipsoid> for EllipsoidOut {
     fn from(e: &Ellipsoid) -> EllipsoidOut {
         EllipsoidOut {
             radii: e.radii.clone(),
-            axes: e.axes.clone(),
+            axes: columns(&e.axes),
             volume: e.volume,
         }
     }

@@ -22,6 +22,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 use axum::extract::ws::Utf8Bytes;
 use seaarms_core::Model;
 use seaarms_core::kinematics::KinData;
+use seaarms_core::redundancy::{Redundancy, RedundancyParams};
 use seaarms_core::sim::{Input, SimParams, Simulation};
 use tokio::sync::watch;
 
@@ -150,6 +151,8 @@ pub struct Live {
     pub last_grasp: &'static str,
     /// Both jaws are driven open until this simulated time (release/drop).
     pub release_until_s: f64,
+    /// Redundancy resolvers for Cartesian mode, one per arm (preallocated).
+    pub redundancy: [Redundancy; 2],
 }
 
 /// One trainee's session.
@@ -315,6 +318,10 @@ impl SessionManager {
             relief_recorded: 0,
             last_grasp: "free",
             release_until_s: 0.0,
+            redundancy: [
+                Redundancy::new(&models[0], RedundancyParams::default()),
+                Redundancy::new(&models[1], RedundancyParams::default()),
+            ],
         };
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);

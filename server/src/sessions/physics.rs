@@ -136,7 +136,7 @@ pub fn step_session(
             todo = MAX_CATCH_UP_STEPS;
         }
         for _ in 0..todo {
-            apply_control(live);
+            apply_control(live, &session.models);
             live.sim.step(&live.input);
             live.steps_since_origin += 1;
             metrics.steps.fetch_add(1, Ordering::Relaxed);
@@ -169,7 +169,7 @@ pub fn step_session(
 /// Turns the latest commands into the simulation's input for the next step: Cartesian
 /// sticks become joint-velocity references by redundancy resolution; the settings set the
 /// method and speed scale.
-fn apply_control(live: &mut Live) {
+fn apply_control(live: &mut Live, models: &[Arc<seaarms_core::Model>; 2]) {
     live.input.speed_scale = live.settings.arm_speed;
     live.input.method = match live.settings.control_method {
         ControlMethod::Open => seaarms_core::sim::ControlMethod::OpenLoop,
@@ -182,7 +182,7 @@ fn apply_control(live: &mut Live) {
         }
         live.input.arms[arm].joint_velocity_ref = match live.settings.control_mode {
             ControlMode::Joint => None,
-            ControlMode::Cartesian => Some(cartesian_to_joint_velocity(live, arm)),
+            ControlMode::Cartesian => Some(cartesian_to_joint_velocity(live, models, arm)),
         };
     }
 }

@@ -2,7 +2,7 @@
 //! joint frames, end-effector poses, translational manipulability ellipsoids and measures
 //! per arm and dual (Lim eqs 3.62, 3.68; Hong eq. 4.1), JLM (Jun eq. 16), forces, warnings.
 
-use nalgebra::{DMatrix, Isometry3, Matrix6, Vector6};
+use nalgebra::{DMatrix, Isometry3, Matrix6};
 use seaarms_core::kinematics::forward_kinematics;
 use seaarms_core::manipulability::{Measures, dual_measures, jlm, measures};
 use seaarms_core::sim::{LEFT, RIGHT};
@@ -27,7 +27,8 @@ fn ellipsoid(m: &Measures) -> EllipsoidFrame {
     let mut axes = [[0.0; 3]; 3];
     for i in 0..3 {
         radii[i] = m.singular_values.get(i).copied().unwrap_or(0.0);
-        if let Some(a) = m.ellipsoid.axes.get(i) {
+        if i < m.ellipsoid.axes.ncols() && m.ellipsoid.axes.nrows() >= 3 {
+            let a = m.ellipsoid.axes.column(i);
             axes[i] = [a[0], a[1], a[2]];
         }
     }
@@ -48,74 +49,79 @@ fn translational(j: &Matrix6<f64>) -> DMatrix<f64> {
     DMatrix::from_fn(3, 6, |r, c| j[(r, c)])
 }
 
+/// One arm's frame and its translational Jacobian (world), with its warnings.
+fn arm_frame(
+    session: &Session,
+    live: &mut Live,
+    arm: usize,
+    name: &str,
+    warnings: &mut Vec<String>,
+) -> (ArmFrame, DMatrix<f64>) {
+    let sim = &live.sim;
+    let model = &session.models[arm];
+    let state = sim.arm(arm);
+    let jt = translational(sim.jacobian_world(arm));
+    let m = measures(&jt)
+        .unwrap_or_else(|_| Measures::from_spectrum(&[0.0; 3], &DMatrix::identity(3, 3), 0.0));
+    if m.isotropy < NEAR_SINGULAR_ISOTROPY {
+        warnings.push(format!("near_singularity:{name}"));
+    }
+    for (i, (q, joint)) in state.q.iter().zip(&model.joints).enumerate() {
+        if joint.is_limited() {
+            let span = joint.limits[1] - joint.limits[0];
+            if q - joint.limits[0] < NEAR_LIMIT_FRACTION * span
+                || joint.limits[1] - q < NEAR_LIMIT_FRACTION * span
+            {
+                warnings.push(format!("near_joint_limit:{name}:{i}"));
+            }
+        }
+    }
+    for (i, open) in state.relief_open.iter().enumerate() {
+        if *open {
+            warnings.push(format!("relief:{name}:{i}"));
+        }
+    }
+    let base: Isometry3<f64> = sim.params().arms[arm].base;
+    forward_kinematics(model, &mut live.kin[arm], &state.q);
+    let joint_frames = live.kin[arm]
+        .joint_frames
+        .iter()
+        .map(|f| PoseOut::from(&(base * f)))
+        .collect();
+    let w = state.contact_wrench;
+    let frame = ArmFrame {
+        q: state.q,
+        qd: state.qd,
+        p_in: state.p_in,
+        p_out: state.p_out,
+        jaw_opening_m: state.jaw_opening_m,
+        holding: state.holding,
+        contact: state.contact,
+        pose: (&sim.end_effector(arm)).into(),
+        joint_frames,
+        ellipsoid: ellipsoid(&m),
+        measures: measures_frame(&m, Some(jlm(model, &state.q))),
+        contact_force_n: [w[0], w[1], w[2]],
+        contact_torque_nm: [w[3], w[4], w[5]],
+        relief_open: state.relief_open,
+    };
+    (frame, jt)
+}
+
 /// Builds the frame for the session's current state.
 pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
-    let sim = &live.sim;
     let mut warnings = Vec::new();
-    let mut jt = [DMatrix::zeros(3, 6), DMatrix::zeros(3, 6)];
-    let mut arms = Vec::with_capacity(2);
-    for (arm, name) in [(LEFT, "left"), (RIGHT, "right")] {
-        let model = &session.models[arm];
-        let state = sim.arm(arm);
-        jt[arm] = translational(sim.jacobian_world(arm));
-        let m = measures(&jt[arm]).unwrap_or_else(|_| zero_measures());
-        let p_jlm = jlm(model, &state.q);
-        if m.isotropy < NEAR_SINGULAR_ISOTROPY {
-            warnings.push(format!("near_singularity:{name}"));
-        }
-        for (i, (q, joint)) in state.q.iter().zip(&model.joints).enumerate() {
-            if joint.is_limited() {
-                let span = joint.limits[1] - joint.limits[0];
-                if q - joint.limits[0] < NEAR_LIMIT_FRACTION * span
-                    || joint.limits[1] - q < NEAR_LIMIT_FRACTION * span
-                {
-                    warnings.push(format!("near_joint_limit:{name}:{i}"));
-                }
-            }
-        }
-        for (i, open) in state.relief_open.iter().enumerate() {
-            if *open {
-                warnings.push(format!("relief:{name}:{i}"));
-            }
-        }
-        let base: Isometry3<f64> = sim.params().arms[arm].base;
-        forward_kinematics(model, &mut live.kin[arm], &state.q);
-        let joint_frames = live.kin[arm]
-            .joint_frames
-            .iter()
-            .map(|f| PoseOut::from(&(base * f)))
-            .collect();
-        let w = state.contact_wrench;
-        arms.push(ArmFrame {
-            q: state.q,
-            qd: state.qd,
-            p_in: state.p_in,
-            p_out: state.p_out,
-            jaw_opening_m: state.jaw_opening_m,
-            holding: state.holding,
-            contact: state.contact,
-            pose: (&sim.end_effector(arm)).into(),
-            joint_frames,
+    let (left, jl) = arm_frame(session, live, LEFT, "left", &mut warnings);
+    let (right, jr) = arm_frame(session, live, RIGHT, "right", &mut warnings);
+    let sim = &live.sim;
+    let dual = if left.holding && right.holding {
+        dual_measures(&jl, &jr).ok().map(|m| DualFrame {
             ellipsoid: ellipsoid(&m),
-            measures: measures_frame(&m, Some(p_jlm)),
-            contact_force_n: [w[0], w[1], w[2]],
-            contact_torque_nm: [w[3], w[4], w[5]],
-            relief_open: state.relief_open,
-        });
-    }
-    let both = sim.arm(LEFT).holding && sim.arm(RIGHT).holding;
-    let dual = if both {
-        dual_measures(&jt[LEFT], &jt[RIGHT])
-            .ok()
-            .map(|m| DualFrame {
-                ellipsoid: ellipsoid(&m),
-                measures: measures_frame(&m, None),
-            })
+            measures: measures_frame(&m, None),
+        })
     } else {
         None
     };
-    let right = arms.pop().unwrap_or_else(|| unreachable_arm());
-    let left = arms.pop().unwrap_or_else(|| unreachable_arm());
     let object = sim.object();
     let v = object.velocity;
     let internal = sim.internal_wrench();
@@ -140,68 +146,36 @@ pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
     }
 }
 
-fn zero_measures() -> Measures {
-    Measures::from_spectrum(&[0.0; 3], &DMatrix::identity(3, 3), 0.0)
-}
-
-fn unreachable_arm() -> ArmFrame {
-    // Both arms are always pushed above; this keeps the code free of panics regardless.
-    ArmFrame {
-        q: [0.0; 6],
-        qd: [0.0; 6],
-        p_in: [0.0; 6],
-        p_out: [0.0; 6],
-        jaw_opening_m: 0.0,
-        holding: false,
-        contact: false,
-        pose: (&Isometry3::identity()).into(),
-        joint_frames: Vec::new(),
-        ellipsoid: EllipsoidFrame {
-            radii: [0.0; 3],
-            axes: [[0.0; 3]; 3],
-        },
-        measures: MeasuresFrame {
-            yoshikawa: 0.0,
-            isotropy: 0.0,
-            hong: 0.0,
-            condition_number: None,
-            jlm: None,
-        },
-        contact_force_n: [0.0; 3],
-        contact_torque_nm: [0.0; 3],
-        relief_open: [false; 6],
-    }
-}
-
 /// Cartesian mode: the stick command (fractions of the maximum end-effector speeds, world
-/// frame) to a joint-velocity reference by damped least squares on the world Jacobian,
-/// q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ (Nakamura; Kilic eq. 0.2 with a damped pseudo-inverse), with λ = 0.05
-/// so the reference stays bounded near singularities.
-pub fn cartesian_to_joint_velocity(live: &Live, arm: usize) -> [f64; 6] {
+/// frame) to a joint-velocity reference by task-oriented redundancy resolution (Jun eq. 21):
+/// translational rows when the angular sticks are idle, so the three spare DOF keep the arm
+/// away from joint limits and singularities (P = α·TOMM + (1−α)·JLM rises in the null space);
+/// all six rows otherwise. Damped near singularities; joint-velocity limits respected.
+pub fn cartesian_to_joint_velocity(
+    live: &mut Live,
+    models: &[std::sync::Arc<seaarms_core::Model>; 2],
+    arm: usize,
+) -> [f64; 6] {
     let cmd = live.cartesian[arm];
-    let xdot = Vector6::new(
-        cmd[0] * CARTESIAN_MAX_LINEAR_M_S,
-        cmd[1] * CARTESIAN_MAX_LINEAR_M_S,
-        cmd[2] * CARTESIAN_MAX_LINEAR_M_S,
-        cmd[3] * CARTESIAN_MAX_ANGULAR_RAD_S,
-        cmd[4] * CARTESIAN_MAX_ANGULAR_RAD_S,
-        cmd[5] * CARTESIAN_MAX_ANGULAR_RAD_S,
-    );
-    if xdot.iter().all(|v| *v == 0.0) {
+    if cmd.iter().all(|v| *v == 0.0) {
         return [0.0; 6];
     }
-    let j = live.sim.jacobian_world(arm);
-    let lambda2 = 0.05 * 0.05;
-    let a = j * j.transpose() + Matrix6::identity() * lambda2;
-    match a.cholesky() {
-        Some(ch) => {
-            let qd = j.transpose() * ch.solve(&xdot);
-            let mut out = [0.0; 6];
-            for (o, v) in out.iter_mut().zip(qd.iter()) {
-                *o = if v.is_finite() { *v } else { 0.0 };
-            }
-            out
+    // World → arm base frame (velocities rotate only).
+    let r = live.sim.params().arms[arm].base.rotation.inverse();
+    let lin = r * nalgebra::Vector3::new(cmd[0], cmd[1], cmd[2]) * CARTESIAN_MAX_LINEAR_M_S;
+    let ang = r * nalgebra::Vector3::new(cmd[3], cmd[4], cmd[5]) * CARTESIAN_MAX_ANGULAR_RAD_S;
+    let q = live.sim.arm(arm).q;
+    let full = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
+    let (rows, rdot): (&[usize], &[f64]) = if ang.norm() == 0.0 {
+        (&[0, 1, 2], &full[..3])
+    } else {
+        (&[0, 1, 2, 3, 4, 5], &full[..])
+    };
+    let mut out = [0.0; 6];
+    if let Ok(qd) = live.redundancy[arm].step(&models[arm], &q, rdot, rows, 1e-3) {
+        for (o, v) in out.iter_mut().zip(qd) {
+            *o = if v.is_finite() { *v } else { 0.0 };
         }
-        None => [0.0; 6],
     }
+    out
 }

@@ -339,6 +339,24 @@ pub fn crba(model: &Model, inertials: &Inertials, kin: &KinData, data: &mut DynD
     }
 }
 
+/// The same J̇q̇ read from the forward pass of a preceding [`rnea`] call made with q̈ = 0 and
+/// gravity `gravity` (saves a second forward pass inside the step): linear accelerations there
+/// include the fictitious base acceleration −g, which is removed here.
+pub fn tool_bias_from_rnea(
+    model: &Model,
+    kin: &KinData,
+    gravity: &Vector3<f64>,
+    data: &DynData,
+) -> [f64; 6] {
+    let n = model.dof();
+    let p = kin.joint_frames[n - 1].translation.vector;
+    let r = kin.tool_point - p;
+    let w = data.omega[n - 1];
+    let wd = data.omega_dot[n - 1];
+    let a = data.acc[n - 1] + gravity + wd.cross(&r) + w.cross(&w.cross(&r));
+    [a.x, a.y, a.z, wd.x, wd.y, wd.z]
+}
+
 /// Tool-point bias acceleration J̇(q,q̇)q̇ (6: linear, angular; base frame): the tool's
 /// acceleration when q̈ = 0, without gravity. Overwrites the forward-pass fields of `data`.
 pub fn tool_bias_acceleration(

@@ -7,7 +7,8 @@
 //! * [`valve_flow`]: turbulent orifice flow with the sign logic of eq. 3.48.
 //! * [`update_chambers`]: one backward-Euler step of the chamber continuity equations
 //!   (3.49–3.50, 3.56) including relief flow, piston leakage and the cavitation floor.
-//! * [`JawParams`]: the jaw function (Table 1-1: 7.5 cm, 10.2 cm/s, 150 kgf).
+//! * [`JawParams`]: the jaw function (Table 1-1: 7.5 cm, 10.2 cm/s, 150 kgf), modelled as a
+//!   flow-limited actuator (opening rate ∝ command) with a clamp force, not a chamber model.
 //!
 //! Pressures are gauge pressures relative to the return line (Pa); the return line is at
 //! `return_pa` (0 by default). A chamber never goes below 0 Pa: below that the oil would
@@ -405,20 +406,12 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
         let p = p.max(0.0);
         return (p, p > hp.relief_pa);
     }
-    let (g0, _) = g(0.0);
-    let r0 = -ch.p0 - ch.c * g0;
-    if r0 >= 0.0 {
-        return (0.0, false); // cavitation floor
-    }
+    // Newton from P0: the first iterate is the linearly implicit Euler step, usually within
+    // a fraction of a pascal of the root. Bracketing keeps it safe where the orifice law bends.
     let mut lo = 0.0;
-    let mut hi = (ch.p0 + ch.c * g0).max(0.0) + 1.0;
-    // Start from the explicit-Euler estimate (exact when the flows barely change).
-    let (gs, _) = g(ch.p0);
-    let mut p = ch.p0 + ch.c * gs;
-    if !(p > lo && p < hi) {
-        p = ch.p0.clamp(lo, hi);
-    }
-    for _ in 0..40 {
+    let mut hi = f64::INFINITY;
+    let mut p = ch.p0.max(0.0);
+    for _ in 0..60 {
         let (gp, dg) = g(p);
         let r = p - ch.p0 - ch.c * gp;
         if r.abs() < 0.1 {
@@ -429,10 +422,20 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
         } else {
             lo = p;
         }
-        let dr = 1.0 - ch.c * dg;
-        let mut next = p - r / dr;
+        let mut next = p - r / (1.0 - ch.c * dg);
+        if next <= 0.0 && lo == 0.0 {
+            // The root may lie below zero: then the chamber cavitates (floor at 0).
+            let (g0, _) = g(0.0);
+            if -ch.p0 - ch.c * g0 >= 0.0 {
+                return (0.0, false);
+            }
+        }
         if !(next > lo && next < hi) {
-            next = 0.5 * (lo + hi);
+            next = if hi.is_finite() {
+                0.5 * (lo + hi)
+            } else {
+                2.0 * p.max(1.0e3)
+            };
         }
         p = next;
         if hi - lo < 0.1 {

@@ -25,13 +25,16 @@ pub fn dual_shape_matrix(j1: &DMatrix<f64>, j2: &DMatrix<f64>) -> Result<DMatrix
     let sum = &m1 + &m2;
     let m = match sum.clone().cholesky() {
         Some(ch) => &m1 * ch.solve(&m2),
-        // Both arms lose the same direction: use the pseudo-inverse of the sum.
+        // Both arms lose the same direction: pseudo-inverse of the (symmetric PSD) sum from
+        // its eigen decomposition, eigenvalues below 1e-12·λ_max dropped.
         None => {
-            let pinv = sum.pseudo_inverse(1e-12).map_err(|_| Error::NotConverged {
-                what: "pseudo-inverse",
-                iterations: 0,
-                residual: f64::NAN,
-            })?;
+            let eig = SymmetricEigen::new(sum);
+            let lmax = eig.eigenvalues.iter().fold(0.0f64, |a, &b| a.max(b));
+            let inv = eig
+                .eigenvalues
+                .map(|l| if l > 1e-12 * lmax { 1.0 / l } else { 0.0 });
+            let pinv =
+                &eig.eigenvectors * DMatrix::from_diagonal(&inv) * eig.eigenvectors.transpose();
             &m1 * pinv * &m2
         }
     };

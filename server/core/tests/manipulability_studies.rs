@@ -1,0 +1,252 @@
+//! Lim 2005 §4.3 case studies: every reachable row's posture puts the tool at its target;
+//! sweeps end at the workspace boundary; identical parallel arms give a smaller dual-arm
+//! Yoshikawa with the same isotropy (§4.3.2.1); the dual-arm Yoshikawa is highest when the
+//! end-effectors are parallel (§4.3.2.3, Fig. 4-75); the workspace map is NaN-free.
+
+mod common;
+
+use seaarms_core::kinematics::end_effector_pose;
+use seaarms_core::studies::{
+    DistanceSweep, DualSetup, MapSpec, PitchYaw, StudyRow, SweepX, SweepZ, dual_distance,
+    dual_pitch_yaw, dual_x, orientation, single_pitch_yaw, single_x, single_z, workspace_map,
+};
+
+fn check_rows_hit_targets(model: &seaarms_core::Model, rows: &[StudyRow]) {
+    for r in rows.iter().filter(|r| r.reachable) {
+        let q = r.q.as_ref().expect("q of a reachable row");
+        let pose = end_effector_pose(model, q);
+        let p = pose.translation.vector;
+        let d = ((p.x - r.position[0]).powi(2)
+            + (p.y - r.position[1]).powi(2)
+            + (p.z - r.position[2]).powi(2))
+        .sqrt();
+        assert!(d <= 1e-6, "{} {}: tool {d:e} m off", r.series, r.parameter);
+        let want = orientation(model, r.pitch_deg, r.yaw_deg);
+        if !r.series.contains("swing") {
+            assert!(
+                pose.rotation.angle_to(&want) <= 1e-6,
+                "{} {}: orientation off",
+                r.series,
+                r.parameter
+            );
+        }
+        let s = r.single.expect("measures");
+        assert!(s.yoshikawa.is_finite() && (0.0..=1.0).contains(&s.isotropy));
+        assert!((s.hong - s.yoshikawa * s.isotropy).abs() <= 1e-12);
+    }
+}
+
+/// §4.3.1.1 / §4.3.1.2: sweeps start inside the case-study workspace and stop at the boundary.
+#[test]
+fn single_arm_sweeps_reach_the_boundary() {
+    let model = common::builtin("magnum");
+    let rows = single_x(&model, &SweepX::default()).expect("x sweep");
+    check_rows_hit_targets(&model, &rows);
+    for z in ["z=0.00", "z=0.20", "z=0.40", "z=0.50"] {
+        let s: Vec<&StudyRow> = rows.iter().filter(|r| r.series == z).collect();
+        assert!(s.iter().any(|r| r.reachable), "{z} has reachable rows");
+        let last = s.last().expect("rows");
+        assert!(!last.reachable, "{z} ends at the boundary");
+        let boundary = s
+            .iter()
+            .filter(|r| r.reachable)
+            .map(|r| r.parameter)
+            .fold(0.0, f64::max);
+        println!(
+            "{z}: boundary X {boundary:.2} m, max Yoshikawa at X {:.2}",
+            s.iter()
+                .filter(|r| r.reachable)
+                .max_by(|a, b| a
+                    .single
+                    .expect("present")
+                    .yoshikawa
+                    .total_cmp(&b.single.expect("present").yoshikawa))
+                .expect("present")
+                .parameter
+        );
+        // Table 1-1: reach 1.5 m (the straight arm at z = 0 is on the elbow's limit).
+        assert!(
+            boundary > 1.25 && boundary <= 1.5 + 1e-9,
+            "{z}: boundary {boundary}"
+        );
+        // Isotropy falls towards the boundary (Lim §4.3.1.1).
+        let reach: Vec<&&StudyRow> = s.iter().filter(|r| r.reachable).collect();
+        let near = reach.last().expect("reachable").single.expect("m").isotropy;
+        let max_iso = reach
+            .iter()
+            .map(|r| r.single.expect("m").isotropy)
+            .fold(0.0, f64::max);
+        assert!(near < max_iso);
+    }
+    let rows = single_z(&model, &SweepZ::default()).expect("z sweep");
+    check_rows_hit_targets(&model, &rows);
+    for x in ["x=0.90", "x=1.20", "x=1.40"] {
+        let s: Vec<&StudyRow> = rows.iter().filter(|r| r.series == x).collect();
+        // With the horizontal approach of the sweep, the pitch range (±57.5°) keeps the
+        // lowest points at X = 0.9 out of reach; every series has reachable rows and ends
+        // at the top of the workspace.
+        assert!(
+            s.iter().any(|r| r.reachable) && !s.last().expect("rows").reachable,
+            "{x}"
+        );
+    }
+}
+
+/// §4.3.1.3 and §4.3.2.2: pitch and yaw rows at six points; the fixed left arm's measures do
+/// not change while the right arm turns.
+#[test]
+fn pitch_yaw_rows_are_consistent() {
+    let model = common::builtin("magnum");
+    let spec = PitchYaw::default();
+    let single = single_pitch_yaw(&model, &spec).expect("single");
+    check_rows_hit_targets(&model, &single);
+    assert_eq!(single.len(), 6 * (13 + 13));
+    assert!(single.iter().filter(|r| r.reachable).count() >= single.len() / 2);
+    let dual = dual_pitch_yaw(&model, &spec, &DualSetup::default()).expect("dual");
+    check_rows_hit_targets(&model, &dual);
+    for (s, d) in single.iter().zip(&dual) {
+        if let (Some(a), Some(b)) = (s.single, d.single) {
+            assert!(
+                (a.yoshikawa - b.yoshikawa).abs() <= 1e-12,
+                "right arm = single arm"
+            );
+        }
+    }
+    for point in ["A", "F"] {
+        let left: Vec<f64> = dual
+            .iter()
+            .filter(|r| r.series.starts_with(point) && r.reachable)
+            .map(|r| r.left.expect("left").yoshikawa)
+            .collect();
+        assert!(left.windows(2).all(|w| (w[0] - w[1]).abs() <= 1e-12));
+    }
+}
+
+/// §4.3.2.1: identical parallel arms: the dual ellipsoid is the single one scaled by 1/√2, so
+/// the dual Yoshikawa is below the single arm's (by 2^{-3/2}) and the isotropy is equal.
+#[test]
+fn parallel_identical_arms_lower_yoshikawa_equal_isotropy() {
+    let model = common::builtin("magnum");
+    let rows = dual_x(&model, &SweepX::default(), &DualSetup::default()).expect("dual x");
+    let mut n = 0;
+    for r in rows.iter().filter(|r| r.reachable) {
+        let (s, d) = (r.single.expect("single"), r.dual.expect("dual"));
+        assert!(d.yoshikawa < s.yoshikawa);
+        assert!(
+            (d.yoshikawa - s.yoshikawa * 2f64.powf(-1.5)).abs() <= 1e-9 * s.yoshikawa.max(1e-9)
+        );
+        assert!(
+            (d.isotropy - s.isotropy).abs() <= 1e-6,
+            "{} vs {}",
+            d.isotropy,
+            s.isotropy
+        );
+        assert!((r.distance_m.expect("distance") - 1.0).abs() <= 1e-9);
+        n += 1;
+    }
+    assert!(n > 100);
+}
+
+/// §4.3.2.3: at X = 1.0, 1.2, 1.4 the dual-arm Yoshikawa is highest at δ = 0, where the arms are
+/// parallel (distance = base spacing), and falls as the end-effectors approach each other.
+#[test]
+fn dual_yoshikawa_is_highest_when_the_arms_are_parallel() {
+    let model = common::builtin("magnum");
+    let rows =
+        dual_distance(&model, &DistanceSweep::default(), &DualSetup::default()).expect("distance");
+    for x in ["x=1.00 swing", "x=1.20 swing", "x=1.40 swing"] {
+        let s: Vec<&StudyRow> = rows
+            .iter()
+            .filter(|r| r.series == x && r.reachable)
+            .collect();
+        let all: Vec<String> = rows
+            .iter()
+            .filter(|r| r.series == x && !r.reachable)
+            .map(|r| format!("{}", r.parameter))
+            .collect();
+        assert_eq!(s.len(), 51, "{x}: unreachable {all:?}");
+        let best = s
+            .iter()
+            .max_by(|a, b| {
+                a.dual
+                    .expect("present")
+                    .yoshikawa
+                    .total_cmp(&b.dual.expect("present").yoshikawa)
+            })
+            .expect("present");
+        assert!(
+            best.parameter.abs() < 1e-9,
+            "{x}: best at swing {}",
+            best.parameter
+        );
+        assert!((best.distance_m.expect("present") - 1.0).abs() < 1e-9);
+        // Swinging towards each other (δ > 0): the distance first shrinks and the dual
+        // Yoshikawa decreases monotonically with δ (at X = 1.4 the end-effectors cross near
+        // δ = 21°, so the distance grows again; the relative angle 2δ still grows).
+        let closer: Vec<(f64, f64)> = s
+            .iter()
+            .filter(|r| r.parameter >= 0.0)
+            .map(|r| {
+                (
+                    r.distance_m.expect("present"),
+                    r.dual.expect("present").yoshikawa,
+                )
+            })
+            .collect();
+        assert!(closer.windows(2).all(|w| w[1].1 < w[0].1), "{x}");
+        assert!(
+            closer[1].0 < closer[0].0 && closer[5].0 < closer[1].0,
+            "{x}"
+        );
+        let iso: Vec<f64> = s
+            .iter()
+            .map(|r| r.dual.expect("present").isotropy)
+            .collect();
+        println!(
+            "{x}: dual Yoshikawa {:.4} at parallel, {:.4} at distance {:.3} m; isotropy {:.3}..{:.3}",
+            best.dual.expect("present").yoshikawa,
+            s.last().expect("present").dual.expect("present").yoshikawa,
+            s.last().expect("present").distance_m.expect("present"),
+            iso.iter().cloned().fold(f64::INFINITY, f64::min),
+            iso.iter().cloned().fold(0.0, f64::max)
+        );
+    }
+}
+
+/// Workspace map: NaN-free, unreachable cells marked, reachable cells' measures valid; the
+/// case-study window at the nominal orientation and ORION position-only.
+#[test]
+fn workspace_map_is_nan_free() {
+    let model = common::builtin("magnum");
+    let spec = MapSpec {
+        nx: 30,
+        nz: 30,
+        ..MapSpec::case_study(&model)
+    };
+    let map = workspace_map(&model, &spec).expect("map");
+    assert_eq!(map.cells.len(), 900);
+    let reachable = map.cells.iter().filter(|c| c.measures.is_some()).count();
+    assert!(reachable > 100 && reachable < 900, "{reachable}");
+    for c in &map.cells {
+        assert!(c.x.is_finite() && c.z.is_finite());
+        if let Some(m) = c.measures {
+            assert!(
+                m.yoshikawa.is_finite() && m.yoshikawa >= 0.0 && (0.0..=1.0).contains(&m.isotropy)
+            );
+        }
+    }
+    let orion = common::builtin("orion");
+    let spec = MapSpec {
+        x_range: [-1.5, 1.5],
+        z_range: [-1.5, 1.5],
+        nx: 15,
+        nz: 15,
+        y: 0.0,
+        orientation: None,
+    };
+    let map = workspace_map(&orion, &spec).expect("map");
+    assert!(
+        map.cells.iter().any(|c| c.measures.is_some())
+            && map.cells.iter().any(|c| c.measures.is_none())
+    );
+}

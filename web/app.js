@@ -51,15 +51,6 @@ const conn = new Connection({
     showBanner('msg', `Message from ${m.from}: ${m.text}`, 15000);
   },
   onError(msg) { showBanner('error', msg, 6000); },
-  async onNoSessions() {
-    // a server without the session API: draw a static preview from the analysis API
-    const { previewFrames } = await import('./preview.js');
-    const { hello, state } = await previewFrames();
-    view.setHello(hello);
-    view.setState(state);
-    status.role('preview');
-    showBanner('info', 'Static preview: this server has no session API (POST /api/sessions → 404).', 8000);
-  },
   onStatus(kind, text) {
     if (kind === 'ok') showBanner(null, '');
     else showBanner(kind, text);

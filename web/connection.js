@@ -93,10 +93,6 @@ export class Connection {
       this.retryTimer = setTimeout(() => this.start(this.createOpts), 10000);
       return false;
     }
-    if ((resp.status === 404 || resp.status === 405) && this.opts.onNoSessions) {
-      this.opts.onNoSessions();
-      return false;
-    }
     if (!resp.ok) {
       const b = await jsonOrError(resp);
       this.status('error', `Could not create a session: ${b?.error || 'HTTP ' + resp.status}`);

@@ -16,6 +16,7 @@ export const GRASP_COLOURS = {
 };
 
 export const BACKGROUND = 0x0d2438;
+const SOFTWARE_PIXEL_RATIO = 0.6;
 
 /** Sets a Matrix4 from a server pose {position:[3], rotation: 3×3 rows}. */
 export function poseToMatrix(pose, m = new THREE.Matrix4()) {
@@ -47,7 +48,9 @@ export class World {
     this.software = softwareRenderer();
     // multisampling in a software rasterizer (SwiftShader, llvmpipe) costs more than it shows
     this.renderer = new THREE.WebGLRenderer({ canvas, antialias: !this.software, powerPreference: 'high-performance' });
-    this.renderer.setPixelRatio(this.software ? 1 : Math.min(window.devicePixelRatio || 1, 1.5));
+    // ?pr=N overrides the pixel ratio (a CPU rasterizer draws at reduced resolution by default)
+    const pr = Number(new URLSearchParams(location.search).get('pr'));
+    this.renderer.setPixelRatio(pr > 0 ? pr : this.software ? SOFTWARE_PIXEL_RATIO : Math.min(window.devicePixelRatio || 1, 1.5));
     this.renderer.setClearColor(BACKGROUND, 1);
     this.renderer.setScissorTest(true);
     this.scene = new THREE.Scene();

@@ -25,7 +25,7 @@ export class View {
     this.polytopes = false;
     this.lastFrameAt = -Infinity;
     const want = Number(new URLSearchParams(location.search).get('maxfps'));
-    this.maxFps = want > 0 ? want : (this.world.software ? 20 : 120);
+    this.maxFps = want > 0 ? want : (this.world.software ? 15 : 120);
     this.polyBusy = false;
     this.legend();
     const loop = () => {
@@ -98,7 +98,7 @@ export class View {
   }
 
   frame() {
-    // A CPU rasterizer draws at most 20 fps (the newest state each time), leaving CPU to the
+    // A CPU rasterizer draws at most 15 fps (the newest state each time), leaving CPU to the
     // page's input timer; ?maxfps=N overrides.
     const now = performance.now();
     if (now - this.lastFrameAt < 1000 / this.maxFps - 4) return;

@@ -45,6 +45,7 @@ export async function startServer(extraArgs = []) {
   const dataDir = mkdtempSync(join(tmpdir(), 'seaarms-data-'));
   const args = ['--bind', `127.0.0.1:${port}`, '--data-dir', dataDir, '--instructor-token', INSTRUCTOR_TOKEN, ...extraArgs];
   const proc = spawn(bin, args, { env: { ...process.env, RUST_LOG: 'warn' }, stdio: ['ignore', 'ignore', 'inherit'] });
+  proc.unref(); // a test file's process may exit while its server runs; 'exit' stops it
   const stop = () => { proc.kill(); rmSync(dataDir, { recursive: true, force: true }); };
   process.on('exit', stop);
   const url = `http://127.0.0.1:${port}`;

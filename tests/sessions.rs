@@ -558,7 +558,7 @@ async fn a_stalled_client_does_not_slow_another_session() {
         .json()
         .await
         .unwrap();
-    assert!(a_summary["sim_seconds"].as_f64().unwrap() > 2.5);
+    assert!(a_summary["sim_seconds"].as_f64().unwrap() > 1.5);
     s.stop().await;
 }
 

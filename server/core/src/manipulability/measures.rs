@@ -18,6 +18,24 @@ pub struct FullSvd {
     pub tolerance: f64,
 }
 
+/// A Jacobian must be non-empty and finite.
+fn check_jacobian(j: &DMatrix<f64>) -> Result<(), Error> {
+    if j.is_empty() {
+        return Err(Error::SizeMismatch {
+            what: "jacobian",
+            input: 0,
+            required: 1,
+        });
+    }
+    if let Some(index) = j.iter().position(|v| !v.is_finite()) {
+        return Err(Error::NonFinite {
+            what: "jacobian",
+            index,
+        });
+    }
+    Ok(())
+}
+
 /// Relative rank tolerance of the eigenvalue routes: σ ≤ this·σ₁ counts as zero. Squaring
 /// J into JᵀJ or JJᵀ leaves σᵢ an absolute error near √(nε)·σ₁ ≈ 4·10⁻⁸σ₁ for n ≤ 7, so the
 /// threshold is set four times above that.
@@ -31,19 +49,7 @@ pub const EIGEN_RANK_TOLERANCE: f64 = 1.5e-7;
 /// Rank tolerance: [`EIGEN_RANK_TOLERANCE`]·σ₁.
 pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
     let (m, n) = j.shape();
-    if m == 0 || n == 0 {
-        return Err(Error::SizeMismatch {
-            what: "jacobian",
-            input: 0,
-            required: 1,
-        });
-    }
-    if let Some(index) = j.iter().position(|v| !v.is_finite()) {
-        return Err(Error::NonFinite {
-            what: "jacobian",
-            index,
-        });
-    }
+    check_jacobian(j)?;
     let (lambda, vectors): (Vec<f64>, DMatrix<f64>) = if n == 6 {
         let mut jtj = nalgebra::Matrix6::zeros();
         for r in j.row_iter() {
@@ -206,19 +212,7 @@ impl Measures {
 /// within that of a singularity is reported as singular. For m > n, [`full_svd`].
 pub fn measures(j: &DMatrix<f64>) -> Result<Measures, Error> {
     let (m, n) = j.shape();
-    if m == 0 || n == 0 {
-        return Err(Error::SizeMismatch {
-            what: "jacobian",
-            input: 0,
-            required: 1,
-        });
-    }
-    if let Some(index) = j.iter().position(|v| !v.is_finite()) {
-        return Err(Error::NonFinite {
-            what: "jacobian",
-            index,
-        });
-    }
+    check_jacobian(j)?;
     if m > n {
         return Ok(measures_from_svd(&full_svd(j)?));
     }

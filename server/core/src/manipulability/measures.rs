@@ -81,6 +81,17 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
     let mut u_r = DMatrix::zeros(m, rank);
     for i in 0..rank {
         u_r.column_mut(i).gemv(1.0 / sigma[i], j, &v.column(i), 0.0);
+        // Modified Gram–Schmidt against the earlier columns: for σᵢ close to the tolerance,
+        // Jvᵢ/σᵢ carries an error of order ε·σ₁/σᵢ that would spoil U's orthogonality.
+        for k in 0..i {
+            let d = u_r.column(k).dot(&u_r.column(i));
+            let uk = u_r.column(k).into_owned();
+            u_r.column_mut(i).axpy(-d, &uk, 1.0);
+        }
+        let norm = u_r.column(i).norm();
+        if norm > 0.0 {
+            u_r.column_mut(i).unscale_mut(norm);
+        }
     }
     Ok(FullSvd {
         u: complete_basis(&u_r),

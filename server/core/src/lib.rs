@@ -11,6 +11,7 @@
 //! * [`ik`]: Magnum closed-form IK (Lim eqs 3.10–3.19) and damped-least-squares IK.
 //! * [`manipulability`]: ellipsoid measures, JLM, dual-arm ellipsoid, velocity polytopes.
 //! * [`dynamics`]: link inertials, RNEA, CRBA, tool bias acceleration (Lim eq. 3.38).
+//! * [`linalg`]: fixed-size Cholesky for the step's small SPD systems.
 //! * [`hydraulics`]: valves, cylinders, relief, linkage Ĵ(q), Magnum sizing (Lim eqs 3.48–3.56).
 //! * [`grasp`]: the object, seabed contact, grasp matrices W, W⁺, V, grasp state (Lim eqs 3.39–3.47).
 //! * [`control`]: open loop, joint-velocity servo, closed-loop cooperative control.
@@ -32,6 +33,7 @@ pub mod hydraulics;
 pub mod sim;
 
 pub mod kinematics;
+pub mod linalg;
 pub mod manipulability;
 pub mod model;
 pub mod optimize;

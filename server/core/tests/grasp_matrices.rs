@@ -4,7 +4,8 @@
 
 use nalgebra::{SVector, Vector3, Vector6};
 use seaarms_core::grasp::{
-    GraspState, decompose, grasp_matrix, grasp_pinv_equal_share, internal_basis,
+    GraspState, decompose, grasp_block, grasp_matrix, grasp_pinv_equal_share, grasp_point_twist,
+    internal_basis, internal_wrench, mobility_block, wrench_at_com,
 };
 
 fn radii() -> [Vector3<f64>; 2] {
@@ -82,4 +83,49 @@ fn grasp_state_colour_code() {
         BothHolding
     );
     assert_eq!(BothHolding.colour(), "yellow");
+}
+
+/// The step's structured products (eq. 3.40 blocks applied without forming them) equal the
+/// explicit matrix products: Wⁱᵀt, WⁱF and Wⁱᵀ·M⁻¹·Wᵏ with M⁻¹ = diag(I/m, Q).
+#[test]
+fn structured_grasp_products_equal_explicit_matrices() {
+    let r = radii();
+    let t = Vector6::new(0.1, -0.2, 0.3, 0.4, -0.5, 0.6);
+    let f = Vector6::new(10.0, -20.0, 30.0, 4.0, -5.0, 6.0);
+    let q = nalgebra::Matrix3::new(2.0, 0.1, -0.2, 0.1, 3.0, 0.3, -0.2, 0.3, 4.0);
+    let mut m_inv = nalgebra::Matrix6::zeros();
+    m_inv
+        .fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(nalgebra::Matrix3::identity() / 50.0));
+    m_inv.fixed_view_mut::<3, 3>(3, 3).copy_from(&q);
+    for ri in &r {
+        let w = grasp_block(ri);
+        assert!((grasp_point_twist(ri, &t) - w.transpose() * t).norm() < 1e-14);
+        assert!((wrench_at_com(ri, &f) - w * f).norm() < 1e-12);
+        for rk in &r {
+            let explicit = w.transpose() * m_inv * grasp_block(rk);
+            let b = mobility_block(ri, rk, 1.0 / 50.0, &q);
+            assert!((b - explicit).abs().max() < 1e-14, "{b} vs {explicit}");
+        }
+    }
+}
+
+/// The step's closed-form internal wrench equals the least-squares F_int = V⁺(I − W⁺W)F_c of
+/// `decompose` (eq. 3.41) for arbitrary contact wrench pairs.
+#[test]
+fn closed_form_internal_wrench_equals_least_squares() {
+    let r = radii();
+    for k in 0..20 {
+        let fc = SVector::<f64, 12>::from_fn(|i, _| 100.0 * ((k * 12 + i) as f64 * 0.7).sin());
+        let (_, fint) = decompose(&r, &fc);
+        let pair = [
+            Vector6::from_fn(|i, _| fc[i]),
+            Vector6::from_fn(|i, _| fc[6 + i]),
+        ];
+        let ours = internal_wrench(&r, &pair);
+        assert!(
+            (ours - fint).norm() < 1e-10 * (1.0 + fint.norm()),
+            "{ours} vs {fint}"
+        );
+    }
 }

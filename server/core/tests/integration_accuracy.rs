@@ -1,4 +1,4 @@
-//! The 1 ms step with its default sub-steps (2) reproduces a finely sub-stepped reference (32
+//! The 1 ms step with its default sub-steps (1) reproduces a finely sub-stepped reference (32
 //! sub-steps, h = 31 µs): joint angles and line pressures of case study 1's first joints and
 //! of the dual-arm grasp-and-lift agree, so the chosen integration is accurate, not only stable.
 

@@ -7,7 +7,7 @@ mod common;
 
 use nalgebra::{DMatrix, DVector, Vector3};
 use seaarms_core::dynamics::{
-    DynData, Inertials, crba, rnea, tool_bias_acceleration, tool_bias_from_rnea,
+    DynData, Inertials, crba, rnea, step_terms, tool_bias_acceleration, tool_bias_from_rnea,
 };
 use seaarms_core::kinematics::{KinData, forward_kinematics, jacobian, jacobian_at};
 
@@ -232,4 +232,45 @@ fn jacobian_used_by_dynamics_is_the_kinematics_one() {
     let q = [0.1, 0.2, -0.3, 0.4, -0.5, 0.6];
     jacobian(&m, &mut kin, &q);
     assert_eq!(kin.jacobian, jacobian_at(&m, &q));
+}
+
+/// The fused step routine (`step_terms`) against the separate reference implementations it
+/// fuses: H = `crba`, C q̇ + G = `rnea` at q̈ = 0 (with and without buoyancy), J̇q̇ =
+/// `tool_bias_acceleration`, at 50 postures with joint rates up to 2 rad/s.
+#[test]
+fn fused_step_terms_equal_rnea_crba_and_bias() {
+    let m = common::builtin("magnum");
+    let inr = Inertials::magnum(&m).expect("inertials");
+    let mut kin = KinData::new(&m);
+    let mut d = DynData::new(&m);
+    for (k, q) in postures(50).into_iter().enumerate() {
+        let qd: [f64; 6] = core::array::from_fn(|j| 2.0 * ((k * 7 + j * 3) as f64).sin());
+        forward_kinematics(&m, &mut kin, &q);
+        crba(&m, &inr, &kin, &mut d);
+        let h_ref = d.mass_matrix.clone();
+        let jb = tool_bias_acceleration(&m, &kin, &qd, &[0.0; 6], &mut d);
+        for rho in [0.0, 1025.0] {
+            let mut tau = [0.0; 6];
+            rnea(&m, &inr, &kin, &qd, &[0.0; 6], &G, rho, &mut tau, &mut d);
+            let t = step_terms::<6>(&m, &inr, &kin, &qd, &G, rho);
+            let scale = h_ref.amax();
+            for r in 0..6 {
+                for c in 0..6 {
+                    assert!(
+                        (t.mass_matrix[(r, c)] - h_ref[(r, c)]).abs() < 1e-12 * scale,
+                        "H[{r},{c}]"
+                    );
+                }
+                assert!(
+                    (t.bias[r] - tau[r]).abs() < 1e-10 * (1.0 + tau[r].abs()),
+                    "bias {r}: {} vs {}",
+                    t.bias[r],
+                    tau[r]
+                );
+            }
+            for r in 0..6 {
+                assert!((t.tool_bias[r] - jb[r]).abs() < 1e-10 * (1.0 + jb[r].abs()));
+            }
+        }
+    }
 }

@@ -14,6 +14,7 @@ use nalgebra::{Isometry3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
 use crate::grasp::grasp_block;
 use crate::hydraulics::N_ACT;
+use crate::linalg::Cholesky;
 
 /// Controller gains (documented defaults in [`Default`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -85,7 +86,7 @@ pub fn joint_servo(
 /// Damped-least-squares solve q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ for a 6×6 Jacobian.
 pub fn dls(j: &Matrix6<f64>, xd: &Vector6<f64>, lambda: f64) -> Vector6<f64> {
     let a = j * j.transpose() + Matrix6::identity() * (lambda * lambda);
-    match a.cholesky() {
+    match Cholesky::factor(&a) {
         Some(ch) => j.transpose() * ch.solve(xd),
         None => Vector6::zeros(),
     }

@@ -7,11 +7,14 @@
 //! * [`crba`]: composite-rigid-body mass matrix H (Featherstone ch. 6), computed independently
 //!   of [`rnea`] from composite inertias, so the two can be checked against each other.
 //! * [`tool_bias_acceleration`]: J̇q̇ of the tool point, from the RNEA forward pass.
+//! * [`step_terms`]: H, C q̇ + G and J̇q̇ together in one pass over the links, on the stack —
+//!   what the 1 kHz step needs; the same formulas as [`rnea`] and [`crba`], which stay the
+//!   readable reference implementations it is tested against.
 //!
 //! All functions use the joint frames of a [`KinData`] already filled by
 //! [`crate::kinematics::forward_kinematics`] (or `jacobian`) for the same q, and allocate nothing.
 
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 
 use crate::Error;
 use crate::kinematics::KinData;
@@ -374,4 +377,128 @@ pub fn tool_bias_acceleration(
     let wd = data.omega_dot[n - 1];
     let a = data.acc[n - 1] + wd.cross(&r) + w.cross(&w.cross(&r));
     [a.x, a.y, a.z, wd.x, wd.y, wd.z]
+}
+
+/// Everything the simulation step needs from the rigid-body model at one (q, q̇) (Lim eq. 3.38).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepTerms<const N: usize> {
+    /// Joint-space mass matrix H(q) (CRBA).
+    pub mass_matrix: SMatrix<f64, N, N>,
+    /// C(q, q̇)q̇ + G(q), buoyancy included: the RNEA torques at q̈ = 0.
+    pub bias: SVector<f64, N>,
+    /// Tool-point J̇q̇ (linear; angular), base frame, without gravity.
+    pub tool_bias: [f64; 6],
+}
+
+/// [`rnea`] at q̈ = 0, [`crba`] and [`tool_bias_from_rnea`] fused: every link's rotation
+/// matrix, axis, COM offset and world inertia R·I·Rᵀ is formed once and shared by the
+/// forward pass, the backward (force) pass and the composite-inertia accumulation, with all
+/// scratch in fixed-size arrays (Featherstone 2008 ch. 5–6). `kin` must hold the frames for
+/// q; `qd` the joint rates.
+///
+/// # Panics
+/// If the model, its inertials or `kin` have fewer than `N` joints (the simulation checks the
+/// model's size when it is built).
+pub fn step_terms<const N: usize>(
+    model: &Model,
+    inertials: &Inertials,
+    kin: &KinData,
+    qd: &[f64; N],
+    gravity: &Vector3<f64>,
+    buoyancy_density_kgm3: f64,
+) -> StepTerms<N> {
+    let joints = &model.joints[..N];
+    let links = &inertials.links[..N];
+    let frames = &kin.joint_frames[..N];
+    let mut z = [Vector3::zeros(); N];
+    let mut p = [Vector3::zeros(); N];
+    let mut c = [Vector3::zeros(); N];
+    let mut ic = [Matrix3::zeros(); N];
+    let mut revolute = [true; N];
+    for i in 0..N {
+        let r = frames[i].rotation.to_rotation_matrix().into_inner();
+        z[i] = r * joints[i].axis.into_inner();
+        p[i] = frames[i].translation.vector;
+        c[i] = r * links[i].com_m;
+        ic[i] = r * links[i].inertia_kgm2 * r.transpose();
+        revolute[i] = joints[i].kind == JointKind::Revolute;
+    }
+    // Forward pass with q̈ = 0 and gravity as a fictitious base acceleration (see `rnea`).
+    let mut w_of = [Vector3::zeros(); N];
+    let mut wd_of = [Vector3::zeros(); N];
+    let mut a_of = [Vector3::zeros(); N];
+    let (mut w, mut wd, mut a) = (Vector3::zeros(), Vector3::zeros(), -gravity);
+    let mut p_prev = Vector3::zeros();
+    for i in 0..N {
+        let d = p[i] - p_prev;
+        let mut ai = a + wd.cross(&d) + w.cross(&w.cross(&d));
+        let zq = z[i] * qd[i];
+        if revolute[i] {
+            wd += w.cross(&zq);
+            w += zq;
+        } else {
+            ai += 2.0 * w.cross(&zq);
+        }
+        a = ai;
+        p_prev = p[i];
+        w_of[i] = w;
+        wd_of[i] = wd;
+        a_of[i] = a;
+    }
+    // Backward pass: link forces and moments (RNEA) and composite bodies (CRBA).
+    let mut bias = SVector::<f64, N>::zeros();
+    let (mut f_next, mut n_next, mut p_next) = (Vector3::zeros(), Vector3::zeros(), p[N - 1]);
+    let (mut m_acc, mut h_acc, mut i_acc) = (0.0, Vector3::zeros(), Matrix3::zeros());
+    let mut comp = [(0.0, Vector3::zeros(), Matrix3::zeros()); N];
+    for i in (0..N).rev() {
+        let link = &links[i];
+        let (w, wd, ci) = (w_of[i], wd_of[i], c[i]);
+        let ac = a_of[i] + wd.cross(&ci) + w.cross(&w.cross(&ci));
+        let fb = -gravity * (buoyancy_density_kgm3 * link.volume_m3);
+        let fi = ac * link.mass_kg - fb;
+        let f = fi + f_next;
+        let iw = ic[i] * w;
+        let m = ic[i] * wd + w.cross(&iw) + ci.cross(&fi) + n_next + (p_next - p[i]).cross(&f_next);
+        bias[i] = if revolute[i] {
+            z[i].dot(&m)
+        } else {
+            z[i].dot(&f)
+        };
+        (f_next, n_next, p_next) = (f, m, p[i]);
+        // Composite inertia about the base origin; parallel axis I_O = I_c + m(|x|²1 − x xᵀ).
+        let x = p[i] + ci;
+        m_acc += link.mass_kg;
+        h_acc += x * link.mass_kg;
+        i_acc +=
+            ic[i] + (Matrix3::identity() * x.norm_squared() - x * x.transpose()) * link.mass_kg;
+        comp[i] = (m_acc, h_acc, i_acc);
+    }
+    // Mass matrix columns, as in `crba`.
+    let mut h = SMatrix::<f64, N, N>::zeros();
+    for j in 0..N {
+        let (m, hj, io) = comp[j];
+        let (zj, pj) = (z[j], p[j]);
+        let (f, n0) = if revolute[j] {
+            (zj.cross(&(hj - pj * m)), io * zj - hj.cross(&zj.cross(&pj)))
+        } else {
+            (zj * m, hj.cross(&zj))
+        };
+        for i in 0..=j {
+            let hij = if revolute[i] {
+                z[i].dot(&(n0 - p[i].cross(&f)))
+            } else {
+                z[i].dot(&f)
+            };
+            h[(i, j)] = hij;
+            h[(j, i)] = hij;
+        }
+    }
+    let r = kin.tool_point - p[N - 1];
+    let (w, wd) = (w_of[N - 1], wd_of[N - 1]);
+    let acc = a_of[N - 1] + gravity + wd.cross(&r) + w.cross(&w.cross(&r));
+    StepTerms {
+        mass_matrix: h,
+        bias,
+        tool_bias: [acc.x, acc.y, acc.z, wd.x, wd.y, wd.z],
+    }
 }

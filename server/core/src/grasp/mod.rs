@@ -139,6 +139,44 @@ pub fn grasp_block(r: &Vector3<f64>) -> Matrix6<f64> {
     w
 }
 
+/// Wⁱᵀ·t: the velocity of grasp point i (at r from the COM) for the object twist
+/// t = [v; ω]: [v + ω×r; ω] — [`grasp_block`] transposed, applied without forming it.
+#[inline]
+pub fn grasp_point_twist(r: &Vector3<f64>, t: &Vector6<f64>) -> Vector6<f64> {
+    let w = Vector3::new(t[3], t[4], t[5]);
+    let v = Vector3::new(t[0], t[1], t[2]) + w.cross(r);
+    Vector6::new(v.x, v.y, v.z, w.x, w.y, w.z)
+}
+
+/// Wⁱ·F: the wrench at the COM of wrench F = [f; m] applied at grasp point i: [f; m + r×f] —
+/// [`grasp_block`] applied without forming it.
+#[inline]
+pub fn wrench_at_com(r: &Vector3<f64>, f: &Vector6<f64>) -> Vector6<f64> {
+    let fl = Vector3::new(f[0], f[1], f[2]);
+    let m = Vector3::new(f[3], f[4], f[5]) + r.cross(&fl);
+    Vector6::new(fl.x, fl.y, fl.z, m.x, m.y, m.z)
+}
+
+/// Wⁱᵀ·M⁻¹·Wᵏ (6×6) for the object mobility M⁻¹ = diag(1/m·I, Q) (Q = world inverse inertia),
+/// in 3×3 blocks with Sⁱ = [rⁱ]×: [[1/m·I − SⁱQSᵏ, −SⁱQ], [QSᵏ, Q]].
+pub fn mobility_block(
+    ri: &Vector3<f64>,
+    rk: &Vector3<f64>,
+    inv_mass: f64,
+    q: &Matrix3<f64>,
+) -> Matrix6<f64> {
+    let si = skew(ri);
+    let qsk = q * skew(rk);
+    let siq = si * q;
+    let mut b = Matrix6::zeros();
+    b.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(Matrix3::identity() * inv_mass - si * qsk));
+    b.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-siq));
+    b.fixed_view_mut::<3, 3>(3, 0).copy_from(&qsk);
+    b.fixed_view_mut::<3, 3>(3, 3).copy_from(q);
+    b
+}
+
 /// W = [W¹ W²] (6×12, eq. 3.40) for grasp points at r¹, r² from the COM.
 pub fn grasp_matrix(r: &[Vector3<f64>; 2]) -> SMatrix<f64, 6, 12> {
     let mut w = SMatrix::<f64, 6, 12>::zeros();
@@ -187,11 +225,31 @@ pub fn decompose(r: &[Vector3<f64>; 2], fc: &SVector<f64, 12>) -> (Vector6<f64>,
     let fext = w * fc;
     let rest = fc - wp * fext;
     let vtv = v.transpose() * v;
-    let fint = match vtv.cholesky() {
+    let fint = match crate::linalg::Cholesky::factor(&vtv) {
         Some(ch) => ch.solve(&(v.transpose() * rest)),
         None => Vector6::zeros(),
     };
     (fext, fint)
+}
+
+/// F_int of [`decompose`] for two grasps without forming W, W⁺ or V (the step computes it every
+/// millisecond). With ρ = (I − W⁺W)F_c, ρⁱ = aⁱBⁱF_int for V's blocks aⁱBⁱ (eq. 3.47:
+/// a¹ = −1, a² = 1, Bⁱ = [I 0; −Rⁱ I], Bⁱ⁻¹ = [I 0; Rⁱ I]); ρ lies in the range of V, so
+/// F_int = ½(B²⁻¹ρ² − B¹⁻¹ρ¹) exactly, the mean of the two arms' readings.
+pub fn internal_wrench(r: &[Vector3<f64>; 2], fc: &[Vector6<f64>; 2]) -> Vector6<f64> {
+    let f = |i: usize| Vector3::new(fc[i][0], fc[i][1], fc[i][2]);
+    let m = |i: usize| Vector3::new(fc[i][3], fc[i][4], fc[i][5]);
+    // External wrench at the COM (eq. 3.40) and each arm's equal share of it (eq. 3.46).
+    let fe = f(0) + f(1);
+    let me = m(0) + m(1) + r[0].cross(&f(0)) + r[1].cross(&f(1));
+    let mut out = Vector6::zeros();
+    for (i, sign) in [(0, -0.5), (1, 0.5)] {
+        let rho_f = f(i) - fe * 0.5;
+        let rho_m = m(i) - (me - r[i].cross(&fe)) * 0.5;
+        let b_inv_m = rho_m + r[i].cross(&rho_f);
+        out += Vector6::new(rho_f.x, rho_f.y, rho_f.z, b_inv_m.x, b_inv_m.y, b_inv_m.z) * sign;
+    }
+    out
 }
 
 /// Grasp state, with the colour code of Lim §4.1 (Fig. 4-4).

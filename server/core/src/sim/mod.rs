@@ -5,8 +5,8 @@
 //! The hydraulics are stiff: the orifice law makes ∂q/∂P unbounded as ΔP → 0 (time constants
 //! down to ~0.1 ms near stall or at the relief setting), relief valves are steeper still, and
 //! the oil-column stiffness of the small wrist motors puts hydraulic resonances near
-//! 150 Hz. An explicit 1 ms step blows up. Each 1 ms step is therefore split into
-//! [`StepParams::substeps`] sub-steps (default 2, h = 0.5 ms) and within each:
+//! 150 Hz. An explicit 1 ms step blows up. Each 1 ms step (optionally split into
+//! [`StepParams::substeps`] sub-steps; default 1, h = 1 ms, the thesis's own step) is:
 //!
 //! 1. chamber pressures: **backward Euler**, each chamber solved exactly in its own pressure
 //!    (safeguarded Newton; orifice, relief and cavitation floor included) — unconditionally
@@ -14,7 +14,7 @@
 //! 2. joints: **semi-implicit (symplectic) Euler** with the viscous actuator damping treated
 //!    implicitly ((H + hD)q̈ = T − Cq̇ − G − Dq̇ − JᵀF_c); the remaining hydraulic spring
 //!    (ω_h ≈ 900 rad/s at most — the wrist rotate motor on its 0.15 L hoses — so
-//!    ω_h·h ≲ 0.45) is well inside the symplectic-Euler stability limit of 2;
+//!    ω_h·h ≲ 0.9) is inside the symplectic-Euler stability limit of 2;
 //! 3. closed kinematic chain (jaws holding the object): contact wrenches from an exact
 //!    acceleration-level constraint solve (12×12 SPD system) with Baumgarte position/velocity
 //!    stabilization, so the grasp does not drift;
@@ -47,6 +47,7 @@ use crate::dynamics::{self, DynData, Inertials};
 use crate::grasp::{self, GraspState, ObjectParams};
 use crate::hydraulics::{self, Faults, HydraulicParams, N_ACT};
 use crate::kinematics::{self, KinData};
+use crate::linalg::Cholesky;
 use crate::model::Model;
 
 /// Index of the left arm in every per-arm array.
@@ -65,10 +66,12 @@ type V12 = SVector<f64, 12>;
 pub struct StepParams {
     /// Step length (s): 0.001, the thesis's integration step (Lim §4.2).
     pub dt_s: f64,
-    /// Sub-steps per step: 2 (h = 0.5 ms; see the module docs). The 10-minute random-input
-    /// soak (tests/stability_soak.rs) passes at this setting, and trajectories agree with a
-    /// 32-sub-step reference to 0.1 mrad (tests/integration_accuracy.rs); even 1 sub-step is
-    /// stable. More sub-steps cost time linearly.
+    /// Sub-steps per step: 1 (h = 1 ms, as the thesis; see the module docs). The 10-minute
+    /// random-input soak (tests/stability_soak.rs) passes at this setting, and trajectories
+    /// agree with a 32-sub-step reference (h = 31 µs) to 0.31 mrad and 74 kPa over case 1's
+    /// first 12 s, 0.23 mrad and 18 µm of object height over case 4's first 27 s
+    /// (tests/integration_accuracy.rs; 2 sub-steps: about a third of those errors at twice the
+    /// cost). More sub-steps cost time linearly.
     pub substeps: usize,
     /// Gravity, world frame (m/s²): (0, 0, −9.81).
     pub gravity: Vector3<f64>,
@@ -96,7 +99,7 @@ impl Default for StepParams {
     fn default() -> Self {
         StepParams {
             dt_s: 1.0e-3,
-            substeps: 2,
+            substeps: 1,
             gravity: Vector3::new(0.0, 0.0, -9.81),
             buoyancy: false,
             water_density_kgm3: 1025.0,
@@ -624,24 +627,21 @@ impl Simulation {
     }
 
     fn state_is_finite(&self) -> bool {
+        // x·0 is 0 for finite x and NaN for ±∞ or NaN, so one NaN test at the end covers
+        // every value (straight-line arithmetic instead of a branch per value).
         let s = &self.state;
-        let arms_ok = s.arms.iter().all(|a| {
-            a.q.iter()
-                .chain(&a.qd)
-                .chain(&a.p_in)
-                .chain(&a.p_out)
-                .chain(&a.contact_wrench)
-                .all(|v| v.is_finite())
-        });
+        let z = |v: &[f64]| v.iter().fold(0.0, |acc, x| acc + x * 0.0);
+        let mut probe = 0.0;
+        for a in &s.arms {
+            probe += z(&a.q) + z(&a.qd) + z(&a.p_in) + z(&a.p_out) + z(&a.contact_wrench);
+        }
         let o = &s.object;
-        arms_ok
-            && o.pose.translation.vector.iter().all(|v| v.is_finite())
-            && o.pose.rotation.coords.iter().all(|v| v.is_finite())
-            && o.velocity
-                .iter()
-                .chain(o.angular_velocity.iter())
-                .all(|v| v.is_finite())
-            && s.internal.iter().all(|v| v.is_finite())
+        probe += z(o.pose.translation.vector.as_slice())
+            + z(o.pose.rotation.coords.as_slice())
+            + z(o.velocity.as_slice())
+            + z(o.angular_velocity.as_slice())
+            + z(&s.internal);
+        !probe.is_nan()
     }
 
     #[allow(clippy::needless_range_loop)] // per-arm arrays indexed in parallel read clearer
@@ -652,8 +652,8 @@ impl Simulation {
         // ---- jaws and grasp transitions (kinematics are current for the state's q) ----
         for i in 0..2 {
             let contact = self.in_contact(i);
-            let op = self.params.object;
-            let jaw = self.params.arms[i].hydraulics.jaw;
+            let op = &self.params.object;
+            let jaw = &self.params.arms[i].hydraulics.jaw;
             let cmd = finite_or(input.arms[i].jaw, 0.0).clamp(-1.0, 1.0) * speed;
             let tool = self.work[i].tool;
             let obj = self.state.object.pose;
@@ -783,7 +783,7 @@ impl Simulation {
         } else {
             0.0
         };
-        let mut chol: [Option<nalgebra::Cholesky<f64, nalgebra::Const<6>>>; 2] = [None, None];
+        let mut chol: [Option<Cholesky<N_ACT>>; 2] = [None, None];
         let mut bias = [Vector6::zeros(); 2];
         let mut damp = [[0.0; N_ACT]; 2];
         let mut y = [Matrix6::zeros(); 2];
@@ -797,32 +797,18 @@ impl Simulation {
             let ap = &self.params.arms[i];
             let model = &self.models[i];
             let a = &self.state.arms[i];
-            let w = &mut self.work[i];
+            let w = &self.work[i];
             let gb = ap.base.rotation.inverse() * sp.gravity;
-            let mut tau = [0.0; N_ACT];
-            dynamics::rnea(
-                model,
-                &ap.inertials,
-                &w.kin,
-                &a.qd,
-                &[0.0; N_ACT],
-                &gb,
-                rho,
-                &mut tau,
-                &mut w.dynd,
-            );
-            dynamics::crba(model, &ap.inertials, &w.kin, &mut w.dynd);
-            // J̇q̇ from the forward pass of the RNEA call above (q̈ = 0).
-            let jb = dynamics::tool_bias_from_rnea(model, &w.kin, &gb, &w.dynd);
+            // H, C q̇ + G and J̇q̇ (q̈ = 0) in one pass (eq. 3.38).
+            let terms =
+                dynamics::step_terms::<N_ACT>(model, &ap.inertials, &w.kin, &a.qd, &gb, rho);
+            let jb = terms.tool_bias;
             let rm = ap.base.rotation.to_rotation_matrix();
             let l = rm * Vector3::new(jb[0], jb[1], jb[2]);
             let an = rm * Vector3::new(jb[3], jb[4], jb[5]);
             jdqd[i] = Vector6::new(l.x, l.y, l.z, an.x, an.y, an.z);
-            let mut m = Matrix6::zeros();
+            let mut m = terms.mass_matrix;
             for r in 0..N_ACT {
-                for c in 0..N_ACT {
-                    m[(r, c)] = w.dynd.mass_matrix[(r, c)];
-                }
                 let act = &ap.hydraulics.actuators[r];
                 let (x, jh) = act.linkage.coordinate(a.q[r]);
                 x0[i][r] = x;
@@ -834,16 +820,17 @@ impl Simulation {
                     // End stop engaged at the start of the step: implicit spring-damper.
                     m[(r, r)] += h * sp.stop_damping + h * h * sp.stop_stiffness;
                 }
-                bias[i][r] = tau[r] + sp.joint_drag * a.qd[r] * a.qd[r].abs()
+                bias[i][r] = terms.bias[r] + sp.joint_drag * a.qd[r] * a.qd[r].abs()
                     - 2.0 * sp.joint_drag * a.qd[r].abs() * a.qd[r];
             }
-            chol[i] = m.cholesky();
-            if let Some(ch) = &chol[i] {
-                y[i] = ch.solve(&w.jw.transpose());
+            chol[i] = Cholesky::factor(&m);
+            if let (Some(ch), true) = (&chol[i], a.holding) {
+                // H̃⁻¹Jᵀ: only a holding arm enters the constraint solve.
+                y[i] = ch.solve_columns(&w.jw.transpose());
             }
         }
         // Object inertia (world) and its inverse.
-        let op = self.params.object;
+        let op = &self.params.object;
         let rot = self.state.object.pose.rotation.to_rotation_matrix();
         let ib = op.inertia_body();
         let iw: Matrix3<f64> = rot.matrix() * ib * rot.matrix().transpose();
@@ -864,7 +851,6 @@ impl Simulation {
                 });
         // Constraint system.
         let r = self.grasp_radii();
-        let wb = [grasp::grasp_block(&r[0]), grasp::grasp_block(&r[1])];
         let mut big = M12::identity();
         let active = [
             holding[0] && chol[0].is_some(),
@@ -878,7 +864,7 @@ impl Simulation {
                 if !active[k] {
                     continue;
                 }
-                let mut blk = wb[i].transpose() * mo_inv * wb[k];
+                let mut blk = grasp::mobility_block(&r[i], &r[k], 1.0 / op.mass_kg, &iw_inv);
                 if i == k {
                     blk += self.work[i].jw * y[i] + Matrix6::identity() * sp.constraint_compliance;
                 }
@@ -886,7 +872,7 @@ impl Simulation {
             }
         }
         let big_ch = if active[0] || active[1] {
-            big.cholesky()
+            Cholesky::factor(&big)
         } else {
             None
         };
@@ -970,8 +956,7 @@ impl Simulation {
             }
             // Object free acceleration: gravity, seabed, gyroscopic.
             let o = self.state.object;
-            let (sea, normal) =
-                grasp::seabed_wrench(&op, &o.pose, &o.velocity, &o.angular_velocity);
+            let (sea, normal) = grasp::seabed_wrench(op, &o.pose, &o.velocity, &o.angular_velocity);
             let gyro = o.angular_velocity.cross(&(iw * o.angular_velocity));
             let wrench = Vector6::new(
                 obj_weight.x + sea[0],
@@ -997,9 +982,11 @@ impl Simulation {
                         continue;
                     }
                     let qd = Vector6::from(self.state.arms[i].qd);
-                    let ev = self.work[i].jw * qd - wb[i].transpose() * vo;
+                    let ev = self.work[i].jw * qd - grasp::grasp_point_twist(&r[i], &vo);
                     let ci = c_const[i] - ev * kd;
-                    let bi = self.work[i].jw * qdd_free[i] - wb[i].transpose() * acc_o - ci;
+                    let bi = self.work[i].jw * qdd_free[i]
+                        - grasp::grasp_point_twist(&r[i], &acc_o)
+                        - ci;
                     b.fixed_rows_mut::<6>(6 * i).copy_from(&bi);
                 }
                 let f = ch.solve(&b);
@@ -1010,7 +997,7 @@ impl Simulation {
                     let fi: Vector6<f64> = f.fixed_rows::<6>(6 * i).into();
                     fc[i] = fi;
                     qdd_free[i] -= y[i] * fi;
-                    acc_o += mo_inv * (wb[i] * fi);
+                    acc_o += mo_inv * grasp::wrench_at_com(&r[i], &fi);
                 }
             }
             // Semi-implicit Euler.
@@ -1057,10 +1044,7 @@ impl Simulation {
             };
         }
         self.state.internal = if active[0] && active[1] {
-            let mut f = V12::zeros();
-            f.fixed_rows_mut::<6>(0).copy_from(&fc[0]);
-            f.fixed_rows_mut::<6>(6).copy_from(&fc[1]);
-            let (_, fint) = grasp::decompose(&r, &f);
+            let fint = grasp::internal_wrench(&r, &fc);
             [fint[0], fint[1], fint[2], fint[3], fint[4], fint[5]]
         } else {
             [0.0; 6]

@@ -1,0 +1,77 @@
+//! Runs N one-millisecond steps (default 10 000) of the whole system in one of three
+//! situations — `free` (both arms moving open loop), `holding` (both jaws on the object,
+//! open loop) or `coop` (closed-loop cooperative lift) — a fixed workload for instruction
+//! counting with `valgrind --tool=callgrind`, repeatable where wall-clock timing is not.
+//! `cargo build --release --example step_loop; valgrind --tool=callgrind --collect-atstart=no
+//! --toggle-collect='*step_loop::run*' target/release/examples/step_loop coop 1000`.
+
+use seaarms_core::sim::scenario::{Scenario, scenario};
+use seaarms_core::sim::{ControlMethod, Input, SimParams, Simulation};
+use seaarms_core::{Model, ModelSpec, robots};
+
+fn magnum() -> Model {
+    let text = robots::builtin_text("magnum").expect("magnum");
+    let spec: ModelSpec = serde_json::from_str(text).expect("json");
+    Model::from_spec(&spec).expect("model")
+}
+
+/// Steps `case4-dual-closed-loop` until both jaws hold.
+fn holding_sim(m: &Model) -> Simulation {
+    let sc: Scenario = scenario("case4-dual-closed-loop", m, m).expect("scenario");
+    let mut sim = Simulation::new(m.clone(), m.clone(), sc.params.clone()).expect("sim");
+    let mut t = 0.0;
+    for seg in &sc.segments {
+        if sim.arm(0).holding && sim.arm(1).holding {
+            break;
+        }
+        let n = (seg.duration_s / 1e-3).round() as usize;
+        for _ in 0..n {
+            let inp = sc.input_at(&sim, seg, t);
+            sim.step(&inp);
+            t += 1e-3;
+        }
+    }
+    sim
+}
+
+/// The measured loop (callgrind: `--collect-atstart=no --toggle-collect='*step_loop::run*'`
+/// counts only this, not the set-up).
+#[inline(never)]
+fn run(sim: &mut Simulation, input: &Input, n: usize) {
+    for _ in 0..n {
+        sim.step(input);
+    }
+}
+
+fn main() {
+    let mut args = std::env::args().skip(1);
+    let what = args.next().unwrap_or_else(|| "coop".into());
+    let n: usize = args.next().and_then(|s| s.parse().ok()).unwrap_or(10_000);
+    let m = magnum();
+    let (mut sim, input) = match what.as_str() {
+        "free" => {
+            let params = SimParams::case_study(&m, &m).expect("params");
+            let mut input = Input::default();
+            input.arms[0].valves = [0.5, 0.5, -0.5, 0.5, 0.5, 1.0];
+            input.arms[1].valves = [-0.5, 0.5, -0.5, 0.5, -0.5, -1.0];
+            (Simulation::new(m.clone(), m, params).expect("sim"), input)
+        }
+        "holding" => (holding_sim(&m), Input::default()),
+        _ => (
+            holding_sim(&m),
+            Input {
+                method: ControlMethod::ClosedLoop,
+                object_velocity: [0.0, 0.0, 0.02, 0.0, 0.0, 0.0],
+                ..Input::default()
+            },
+        ),
+    };
+    let t0 = std::time::Instant::now();
+    run(&mut sim, &input, n);
+    let el = t0.elapsed();
+    println!(
+        "{what}: {n} steps, {:.3} µs/step, z = {:.4}",
+        el.as_secs_f64() * 1e6 / n as f64,
+        sim.object().pose.translation.vector.z
+    );
+}

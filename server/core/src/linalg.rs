@@ -3,6 +3,9 @@
 //! matrix) kept in plain arrays, so that factor and solves compile to straight-line loops
 //! without the generic machinery of a library decomposition.
 
+// Triangular loops index several arrays by the same counters; iterators would hide that.
+#![allow(clippy::needless_range_loop)]
+
 use nalgebra::{SMatrix, SVector};
 
 /// A = L·Lᵀ with L lower triangular (Golub & Van Loan, Matrix Computations, 4th ed., Alg. 4.2.2,

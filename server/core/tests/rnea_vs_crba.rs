@@ -268,8 +268,8 @@ fn fused_step_terms_equal_rnea_crba_and_bias() {
                     tau[r]
                 );
             }
-            for r in 0..6 {
-                assert!((t.tool_bias[r] - jb[r]).abs() < 1e-10 * (1.0 + jb[r].abs()));
+            for (ours, reference) in t.tool_bias.iter().zip(&jb) {
+                assert!((ours - reference).abs() < 1e-10 * (1.0 + reference.abs()));
             }
         }
     }

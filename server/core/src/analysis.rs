@@ -1,7 +1,7 @@
 //! One-call analysis of a posture: pose, Jacobians, every measure, JLM, SVD subspaces.
 //! This is what `POST /api/analysis` returns and what the analysis benchmark times.
 
-use nalgebra::{DMatrix, Isometry3};
+use nalgebra::{DMatrix, Isometry3, IsometryMatrix3};
 
 use crate::Error;
 use crate::kinematics::{KinData, jacobian, jacobian_in_end_effector_frame};
@@ -22,7 +22,7 @@ pub struct Analysis {
     /// End-effector pose (tool point, flange orientation), base frame.
     pub pose: Isometry3<f64>,
     /// Joint frames after their motion, base frame.
-    pub joint_frames: Vec<Isometry3<f64>>,
+    pub joint_frames: Vec<IsometryMatrix3<f64>>,
     /// 6×n geometric Jacobian, base frame, rows vx vy vz wx wy wz.
     pub jacobian: DMatrix<f64>,
     /// The same in the end-effector frame.

@@ -4,7 +4,7 @@
 //! [`forward_kinematics`] / [`jacobian`] fill it without allocating, so they can run inside
 //! the 1 kHz step.
 
-use nalgebra::{DMatrix, Isometry3, Matrix3, Point3, Vector3};
+use nalgebra::{DMatrix, Isometry3, IsometryMatrix3, Matrix3, Rotation3, UnitQuaternion, Vector3};
 
 use crate::model::{JointKind, Model};
 
@@ -12,8 +12,9 @@ use crate::model::{JointKind, Model};
 #[derive(Debug, Clone)]
 pub struct KinData {
     /// Pose of each joint's frame after its motion, base frame (its z axis is the joint axis
-    /// for every DH convention; its origin lies on the axis).
-    pub joint_frames: Vec<Isometry3<f64>>,
+    /// for every DH convention; its origin lies on the axis). Rotations are matrices: the
+    /// dynamics and the Jacobian read axes and rotate inertias with them directly.
+    pub joint_frames: Vec<IsometryMatrix3<f64>>,
     /// Pose of the last link frame (flange), base frame.
     pub flange: Isometry3<f64>,
     /// Tool point (the Jacobian's reference point), base frame (m).
@@ -27,7 +28,7 @@ impl KinData {
     pub fn new(model: &Model) -> KinData {
         let n = model.dof();
         KinData {
-            joint_frames: vec![Isometry3::identity(); n],
+            joint_frames: vec![IsometryMatrix3::identity(); n],
             flange: Isometry3::identity(),
             tool_point: Vector3::zeros(),
             jacobian: DMatrix::zeros(6, n),
@@ -43,16 +44,33 @@ impl KinData {
 /// Forward kinematics of every frame. `q` must have `model.dof()` entries (unchecked here;
 /// validate at the edge with [`Model::check_q`]).
 pub fn forward_kinematics(model: &Model, data: &mut KinData, q: &[f64]) {
-    let mut t = Isometry3::identity();
+    // Rotation matrix and origin of the current frame, composed joint by joint.
+    let mut r = Matrix3::identity();
+    let mut p = Vector3::zeros();
     for ((joint, frame), &qi) in model.joints.iter().zip(data.joint_frames.iter_mut()).zip(q) {
-        t = t * joint.origin * joint.motion(qi);
-        *frame = t;
+        p += r * joint.origin.translation.vector;
+        r *= joint.origin.rotation.matrix();
+        match joint.kind {
+            JointKind::Revolute => r = joint.rotate_frame(&r, qi),
+            JointKind::Prismatic => p += r * (joint.axis.into_inner() * (qi + joint.offset)),
+        }
+        *frame = IsometryMatrix3::from_parts(p.into(), Rotation3::from_matrix_unchecked(r));
     }
-    data.flange = t * model.flange;
-    data.tool_point = data
-        .flange
-        .transform_point(&Point3::from(model.tool))
-        .coords;
+    p += r * model.flange.translation.vector;
+    r *= model.flange.rotation.matrix();
+    data.tool_point = p + r * model.tool;
+    data.flange = Isometry3::from_parts(
+        p.into(),
+        UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)),
+    );
+}
+
+/// A joint frame as a quaternion isometry (for output and for callers that compose poses).
+pub fn frame_isometry(frame: &IsometryMatrix3<f64>) -> Isometry3<f64> {
+    Isometry3::from_parts(
+        frame.translation,
+        UnitQuaternion::from_rotation_matrix(&frame.rotation),
+    )
 }
 
 /// Forward kinematics followed by the geometric Jacobian (Lim §2.3; RX90 report part II:

@@ -103,7 +103,7 @@ fn gravity_torques_equal_jacobian_transpose_statics() {
             // Truncated chain 0..=i with the tool at link i's COM.
             let mut sub = m.clone();
             sub.joints.truncate(i + 1);
-            sub.flange = nalgebra::Isometry3::identity();
+            sub.flange = nalgebra::IsometryMatrix3::identity();
             sub.tool = link.com_m;
             let j = jacobian_at(&sub, &q[..=i]);
             let w = G * link.mass_kg;

@@ -1,7 +1,7 @@
 //! JSON shapes shared by several routes (measures, ellipsoids, poses, polytopes).
 //! Infinite values are `null`, never NaN.
 
-use nalgebra::{DMatrix, Isometry3, Matrix3};
+use nalgebra::{DMatrix, Isometry3, IsometryMatrix3, Matrix3};
 use seaarms_core::manipulability::{Ellipsoid, Measures};
 use serde::Serialize;
 
@@ -14,10 +14,8 @@ pub struct PoseOut {
     pub rotation: [[f64; 3]; 3],
 }
 
-impl From<&Isometry3<f64>> for PoseOut {
-    fn from(t: &Isometry3<f64>) -> PoseOut {
-        let r: Matrix3<f64> = t.rotation.to_rotation_matrix().into_inner();
-        let p = t.translation.vector;
+impl PoseOut {
+    fn new(r: &Matrix3<f64>, p: &nalgebra::Vector3<f64>) -> PoseOut {
         PoseOut {
             position: [p.x, p.y, p.z],
             rotation: [
@@ -26,6 +24,21 @@ impl From<&Isometry3<f64>> for PoseOut {
                 [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
             ],
         }
+    }
+}
+
+impl From<&Isometry3<f64>> for PoseOut {
+    fn from(t: &Isometry3<f64>) -> PoseOut {
+        PoseOut::new(
+            t.rotation.to_rotation_matrix().matrix(),
+            &t.translation.vector,
+        )
+    }
+}
+
+impl From<&IsometryMatrix3<f64>> for PoseOut {
+    fn from(t: &IsometryMatrix3<f64>) -> PoseOut {
+        PoseOut::new(t.rotation.matrix(), &t.translation.vector)
     }
 }
 

@@ -83,10 +83,11 @@ fn arm_frame(
     }
     let base: Isometry3<f64> = sim.params().arms[arm].base;
     forward_kinematics(model, &mut live.kin[arm], &state.q);
+    let base_m = seaarms_core::model::as_matrix_isometry(&base);
     let joint_frames = live.kin[arm]
         .joint_frames
         .iter()
-        .map(|f| PoseOut::from(&(base * f)))
+        .map(|f| PoseOut::from(&(base_m * f)))
         .collect();
     let w = state.contact_wrench;
     let frame = ArmFrame {

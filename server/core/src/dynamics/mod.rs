@@ -267,8 +267,8 @@ pub fn rnea(
         let w = data.omega[i];
         let wd = data.omega_dot[i];
         let ac = data.acc[i] + wd.cross(&r) + w.cross(&w.cross(&r));
-        let rot = frame.rotation.to_rotation_matrix();
-        let ic = rot.matrix() * link.inertia_kgm2 * rot.matrix().transpose();
+        let rot = frame.rotation.matrix();
+        let ic = rot * link.inertia_kgm2 * rot.transpose();
         // Net force on the link, less the buoyant force (which acts upward, against gravity).
         let fb = -gravity * (buoyancy_density_kgm3 * link.volume_m3);
         let fi = ac * link.mass_kg - fb;
@@ -302,8 +302,8 @@ pub fn crba(model: &Model, inertials: &Inertials, kin: &KinData, data: &mut DynD
         data.origins[i] = frame.translation.vector;
         let link = &inertials.links[i];
         let c = frame.transform_point(&link.com_m.into()).coords;
-        let rot = frame.rotation.to_rotation_matrix();
-        let ic = rot.matrix() * link.inertia_kgm2 * rot.matrix().transpose();
+        let rot = frame.rotation.matrix();
+        let ic = rot * link.inertia_kgm2 * rot.transpose();
         // Parallel axis: I_O = I_c + m([c]ᵀ[c]).
         let sc = skew(&c);
         m_acc += link.mass_kg;
@@ -416,7 +416,7 @@ pub fn step_terms<const N: usize>(
     let mut ic = [Matrix3::zeros(); N];
     let mut revolute = [true; N];
     for i in 0..N {
-        let r = frames[i].rotation.to_rotation_matrix().into_inner();
+        let r = frames[i].rotation.matrix();
         z[i] = r * joints[i].axis.into_inner();
         p[i] = frames[i].translation.vector;
         c[i] = r * links[i].com_m;

@@ -47,8 +47,8 @@ impl<const N: usize> Cholesky<N> {
         positive.then_some(Cholesky { l, inv_diag })
     }
 
-    /// x with A·x = b.
-    pub fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+    /// L⁻¹·b (forward substitution).
+    pub fn forward(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
         let mut y = [0.0; N];
         for i in 0..N {
             let mut s = b[i];
@@ -57,14 +57,36 @@ impl<const N: usize> Cholesky<N> {
             }
             y[i] = s * self.inv_diag[i];
         }
+        SVector::from(y)
+    }
+
+    /// L⁻ᵀ·y (back substitution).
+    pub fn backward(&self, y: &SVector<f64, N>) -> SVector<f64, N> {
+        let mut x = [0.0; N];
         for i in (0..N).rev() {
             let mut s = y[i];
             for k in i + 1..N {
-                s -= self.l[k][i] * y[k];
+                s -= self.l[k][i] * x[k];
             }
-            y[i] = s * self.inv_diag[i];
+            x[i] = s * self.inv_diag[i];
         }
-        SVector::from(y)
+        SVector::from(x)
+    }
+
+    /// x with A·x = b.
+    pub fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+        self.backward(&self.forward(b))
+    }
+
+    /// L⁻¹·B, column by column. With Z = L⁻¹·Jᵀ, J·A⁻¹·Jᵀ = ZᵀZ and A⁻¹·Jᵀ·f = L⁻ᵀ·(Z·f): one
+    /// triangular solve per column instead of two.
+    pub fn forward_columns<const K: usize>(&self, b: &SMatrix<f64, N, K>) -> SMatrix<f64, N, K> {
+        let mut x = SMatrix::<f64, N, K>::zeros();
+        for c in 0..K {
+            let col: SVector<f64, N> = b.column(c).into_owned();
+            x.set_column(c, &self.forward(&col));
+        }
+        x
     }
 
     /// X with A·X = B, column by column.
@@ -115,6 +137,11 @@ mod tests {
             let bm = Matrix6::from_fn(|r, c| (r as f64 + 1.0) * (c as f64 - 2.5));
             let xm = ours.solve_columns(&bm);
             assert!((a * xm - bm).norm() < 1e-9 * bm.norm() * a.norm());
+            // Congruence through the half solve: B·A⁻¹·Bᵀ = ZᵀZ with Z = L⁻¹Bᵀ.
+            let z = ours.forward_columns(&bm.transpose());
+            let reference = bm * a.try_inverse().expect("invertible") * bm.transpose();
+            assert!((z.transpose() * z - reference).norm() < 1e-8 * reference.norm());
+            assert!((ours.backward(&ours.forward(&b)) - x).norm() < 1e-12 * x.norm());
             let a12: SMatrix<f64, 12, 12> = spd(seed + 100, 1e-6);
             let b12 = SVector::<f64, 12>::from_fn(|i, _| (i as f64).cos());
             let x12 = Cholesky::factor(&a12).expect("SPD").solve(&b12);

@@ -407,7 +407,23 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
         return (p, p > hp.relief_pa);
     }
     // Newton from P0: the first iterate is the linearly implicit Euler step, usually within
-    // a fraction of a pascal of the root. Bracketing keeps it safe where the orifice law bends.
+    // a fraction of a pascal of the root. Fast path: that iterate, accepted when its residual
+    // is below tolerance and it lies where the safeguarded loop below would have taken it
+    // (same result, without the loop's bookkeeping).
+    let p0 = ch.p0.max(0.0);
+    let (g0, dg0) = g(p0);
+    let r0 = p0 - ch.p0 - ch.c * g0;
+    if r0.abs() < 0.1 {
+        return (p0, p0 > hp.relief_pa);
+    }
+    let p1 = p0 - r0 / (1.0 - ch.c * dg0);
+    if p1 > 0.0 && (if r0 > 0.0 { p1 < p0 } else { p1 > p0 }) {
+        let (g1, _) = g(p1);
+        if (p1 - ch.p0 - ch.c * g1).abs() < 0.1 {
+            return (p1, p1 > hp.relief_pa);
+        }
+    }
+    // Bracketing keeps it safe where the orifice law bends.
     let mut lo = 0.0;
     let mut hi = f64::INFINITY;
     let mut p = ch.p0.max(0.0);

@@ -786,6 +786,7 @@ impl Simulation {
         let mut chol: [Option<Cholesky<N_ACT>>; 2] = [None, None];
         let mut bias = [Vector6::zeros(); 2];
         let mut damp = [[0.0; N_ACT]; 2];
+        // Z = L⁻¹Jᵀ per holding arm (see below).
         let mut y = [Matrix6::zeros(); 2];
         let mut jdqd = [Vector6::zeros(); 2];
         // Actuator coordinate x, Ĵ and q at the start of the step; within the step
@@ -825,8 +826,9 @@ impl Simulation {
             }
             chol[i] = Cholesky::factor(&m);
             if let (Some(ch), true) = (&chol[i], a.holding) {
-                // H̃⁻¹Jᵀ: only a holding arm enters the constraint solve.
-                y[i] = ch.solve_columns(&w.jw.transpose());
+                // Z = L⁻¹Jᵀ (H̃ = LLᵀ): J·H̃⁻¹·Jᵀ = ZᵀZ, H̃⁻¹Jᵀf = L⁻ᵀ(Zf). Only a holding
+                // arm enters the constraint solve.
+                y[i] = ch.forward_columns(&w.jw.transpose());
             }
         }
         // Object inertia (world) and its inverse.
@@ -866,7 +868,7 @@ impl Simulation {
                 }
                 let mut blk = grasp::mobility_block(&r[i], &r[k], 1.0 / op.mass_kg, &iw_inv);
                 if i == k {
-                    blk += self.work[i].jw * y[i] + Matrix6::identity() * sp.constraint_compliance;
+                    blk += y[i].tr_mul(&y[i]) + Matrix6::identity() * sp.constraint_compliance;
                 }
                 big.fixed_view_mut::<6, 6>(6 * i, 6 * k).copy_from(&blk);
             }
@@ -996,7 +998,9 @@ impl Simulation {
                     }
                     let fi: Vector6<f64> = f.fixed_rows::<6>(6 * i).into();
                     fc[i] = fi;
-                    qdd_free[i] -= y[i] * fi;
+                    if let Some(ch) = &chol[i] {
+                        qdd_free[i] -= ch.backward(&(y[i] * fi));
+                    }
                     acc_o += mo_inv * grasp::wrench_at_com(&r[i], &fi);
                 }
             }

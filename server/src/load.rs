@@ -196,7 +196,12 @@ async fn client(
     seed: u64,
 ) -> ClientStats {
     let mut stats = ClientStats::default();
-    let (ws, _) = match tokio_tungstenite::connect_async_with_config(&url, None, true).await {
+    // State frames are a few KiB: a 16 KiB read buffer instead of tungstenite's 128 KiB one
+    // (re-zeroed on reads) keeps the load client's own CPU use down on a shared machine.
+    let config = tokio_tungstenite::tungstenite::protocol::WebSocketConfig::default()
+        .read_buffer_size(16 * 1024);
+    let (ws, _) = match tokio_tungstenite::connect_async_with_config(&url, Some(config), true).await
+    {
         Ok(c) => c,
         Err(e) => {
             stats.errors.push(format!("connect: {e}"));

@@ -148,7 +148,11 @@ pub fn step_session(
     if now >= live.next_frame {
         live.frame_seq += 1;
         let frame = build_frame(session, live);
-        match serde_json::to_string(&ServerMessage::State(Box::new(frame))) {
+        // Sized for a typical frame (≈ 5 KiB) so serialization does not keep reallocating.
+        let mut buf = Vec::with_capacity(8 * 1024);
+        match serde_json::to_writer(&mut buf, &ServerMessage::State(Box::new(frame)))
+            .map(|()| String::from_utf8(buf).unwrap_or_default())
+        {
             Ok(json) => {
                 let seq = live.frame_seq;
                 session.frames.send_replace(Some(Frame {

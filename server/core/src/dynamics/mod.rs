@@ -473,19 +473,24 @@ pub fn step_terms<const N: usize>(
             ic[i] + (Matrix3::identity() * x.norm_squared() - x * x.transpose()) * link.mass_kg;
         comp[i] = (m_acc, h_acc, i_acc);
     }
-    // Mass matrix columns, as in `crba`.
+    // Mass matrix columns, as in `crba`. With the axis moment μᵢ = zᵢ × pᵢ (Plücker
+    // coordinates of the axis), zᵢ·(n₀ − pᵢ × f) = zᵢ·n₀ − μᵢ·f: two dot products per entry.
+    let mut mu = [Vector3::zeros(); N];
+    for i in 0..N {
+        mu[i] = z[i].cross(&p[i]);
+    }
     let mut h = SMatrix::<f64, N, N>::zeros();
     for j in 0..N {
         let (m, hj, io) = comp[j];
-        let (zj, pj) = (z[j], p[j]);
+        let zj = z[j];
         let (f, n0) = if revolute[j] {
-            (zj.cross(&(hj - pj * m)), io * zj - hj.cross(&zj.cross(&pj)))
+            (zj.cross(&(hj - p[j] * m)), io * zj - hj.cross(&mu[j]))
         } else {
             (zj * m, hj.cross(&zj))
         };
         for i in 0..=j {
             let hij = if revolute[i] {
-                z[i].dot(&(n0 - p[i].cross(&f)))
+                z[i].dot(&n0) - mu[i].dot(&f)
             } else {
                 z[i].dot(&f)
             };

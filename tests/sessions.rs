@@ -148,6 +148,23 @@ async fn stick_input_moves_the_joint_and_observers_see_it_read_only() {
             .contains(&format!("/ws/sessions/{id}?token={token}"))
     );
 
+    assert!(c["ws_url"].as_str().unwrap().starts_with("ws://"));
+    // Behind a TLS proxy (X-Forwarded-Proto: https) the page is told to use wss://.
+    let proxied: Value = reqwest::Client::new()
+        .post(format!("{}/api/sessions", s.base))
+        .header("x-forwarded-proto", "https")
+        .json(&json!({"label": "via-proxy"}))
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap();
+    assert!(
+        proxied["ws_url"].as_str().unwrap().starts_with("wss://"),
+        "{proxied}"
+    );
+
     let mut ws = connect(&s, id, &format!("token={token}")).await.unwrap();
     let hello = next_of(&mut ws, "hello", Duration::from_secs(5)).await;
     assert_eq!(hello["role"], "trainee");

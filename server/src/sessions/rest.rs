@@ -125,8 +125,16 @@ pub async fn create(
         .get(header::HOST)
         .and_then(|h| h.to_str().ok())
         .unwrap_or("127.0.0.1:8080");
+    // Behind a TLS-terminating proxy (classroom deployments) the page must use wss://.
+    let scheme = match headers
+        .get("x-forwarded-proto")
+        .and_then(|h| h.to_str().ok())
+    {
+        Some(p) if p.eq_ignore_ascii_case("https") => "wss",
+        _ => "ws",
+    };
     let ws_url = format!(
-        "ws://{host}/ws/sessions/{}?token={}",
+        "{scheme}://{host}/ws/sessions/{}?token={}",
         session.id, session.control_token
     );
     let body = Created {

@@ -36,6 +36,7 @@
 //! * Buoyancy (optional) uses the mean link density; drag is an optional quadratic joint term.
 
 pub mod scenario;
+pub mod sci;
 
 use nalgebra::{
     Isometry3, Matrix3, Matrix6, SMatrix, SVector, Translation3, UnitQuaternion, Vector3, Vector6,

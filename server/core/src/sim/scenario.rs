@@ -431,23 +431,44 @@ impl Row {
 
     /// Values as strings, in header order.
     pub fn values(&self) -> Vec<String> {
-        let f = |x: f64| format!("{x:.6e}");
-        let mut v = vec![format!("{:.3}", self.t_s), self.stage.to_string()];
+        let mut line = String::new();
+        self.write_csv(&mut line);
+        line.split(',').map(str::to_string).collect()
+    }
+
+    /// Appends this row as one CSV line (no newline), fields in [`Row::header`] order: times
+    /// with 3 decimals, numbers as `{:.6e}` (via [`super::sci::push_sci6`]), names verbatim
+    /// (stage letters and grasp-state names contain no commas or quotes).
+    pub fn write_csv(&self, out: &mut String) {
+        use std::fmt::Write;
+        let f = |out: &mut String, x: f64| {
+            out.push(',');
+            super::sci::push_sci6(out, x);
+        };
+        let _ = write!(out, "{:.3},{}", self.t_s, self.stage);
         for i in 0..2 {
-            v.extend(self.q[i].iter().map(|&x| f(x)));
-            v.extend(self.qd[i].iter().map(|&x| f(x)));
-            v.extend(self.u[i].iter().map(|&x| f(x)));
-            v.push(f(self.jaw_m[i]));
-            for k in 0..N_ACT {
-                v.push(f(self.p_in[i][k]));
-                v.push(f(self.p_out[i][k]));
+            for &x in self.q[i].iter().chain(&self.qd[i]).chain(&self.u[i]) {
+                f(out, x);
             }
-            v.extend(self.contact[i].iter().map(|&x| f(x)));
+            f(out, self.jaw_m[i]);
+            for k in 0..N_ACT {
+                f(out, self.p_in[i][k]);
+                f(out, self.p_out[i][k]);
+            }
+            for &x in &self.contact[i] {
+                f(out, x);
+            }
         }
-        v.extend(self.internal.iter().map(|&x| f(x)));
-        v.extend(self.object_xyz.iter().map(|&x| f(x)));
-        v.extend(self.object_rpy.iter().map(|&x| f(x)));
-        v.push(self.grasp.as_str().into());
+        for &x in self
+            .internal
+            .iter()
+            .chain(&self.object_xyz)
+            .chain(&self.object_rpy)
+        {
+            f(out, x);
+        }
+        out.push(',');
+        out.push_str(self.grasp.as_str());
         for x in [
             self.yoshikawa[0],
             self.isotropy[0],
@@ -456,9 +477,8 @@ impl Row {
             self.dual_yoshikawa,
             self.dual_isotropy,
         ] {
-            v.push(f(x));
+            f(out, x);
         }
-        v
     }
 }
 

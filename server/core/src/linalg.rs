@@ -22,8 +22,12 @@ impl<const N: usize> Cholesky<N> {
     /// Factors `a` (only its lower triangle is read). `None` unless every pivot is positive
     /// and finite, i.e. unless `a` is numerically positive definite.
     pub fn factor(a: &SMatrix<f64, N, N>) -> Option<Self> {
-        let mut l = [[0.0; N]; N];
-        let mut inv_diag = [0.0; N];
+        // Built in place (no copy of the factor on return).
+        let mut out = Cholesky {
+            l: [[0.0; N]; N],
+            inv_diag: [0.0; N],
+        };
+        let Cholesky { l, inv_diag } = &mut out;
         // Branch-free inside (the loops unroll); one verdict at the end. NaN fails `d > 0`.
         let mut positive = true;
         for j in 0..N {
@@ -44,7 +48,7 @@ impl<const N: usize> Cholesky<N> {
                 l[i][j] = s * inv;
             }
         }
-        positive.then_some(Cholesky { l, inv_diag })
+        positive.then_some(out)
     }
 
     /// L⁻¹·b (forward substitution).

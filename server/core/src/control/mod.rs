@@ -85,7 +85,13 @@ pub fn joint_servo(
 
 /// Damped-least-squares solve q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ for a 6×6 Jacobian.
 pub fn dls(j: &Matrix6<f64>, xd: &Vector6<f64>, lambda: f64) -> Vector6<f64> {
-    let a = j * j.transpose() + Matrix6::identity() * (lambda * lambda);
+    // Lower triangle of JJᵀ + λ²I only: the factorization reads no more.
+    let mut a = Matrix6::identity() * (lambda * lambda);
+    for c in 0..6 {
+        for r in c..6 {
+            a[(r, c)] += j.row(r).dot(&j.row(c));
+        }
+    }
     match Cholesky::factor(&a) {
         Some(ch) => j.transpose() * ch.solve(xd),
         None => Vector6::zeros(),

@@ -863,7 +863,8 @@ impl Simulation {
             if !active[i] {
                 continue;
             }
-            for k in 0..2 {
+            // The factorization reads the lower triangle only: blocks (0,0), (1,0), (1,1).
+            for k in 0..=i {
                 if !active[k] {
                     continue;
                 }

@@ -11,8 +11,56 @@
 //! Rotation formulas: Golub & Van Loan, *Matrix Computations* (4th ed.) §8.6.3 and §8.6.4;
 //! stopping rule and sweep limit: LAPACK `dgesvj` (Drmač & Veselić 2008).
 
-/// Scratch capacity (entries) kept on the stack; larger problems use the heap.
-pub(crate) const STACK: usize = 64;
+/// Scratch capacity (entries) kept on the stack; larger problems use the heap. 64 covers
+/// every shape up to 7×7 (k·l vectors; k² rotations plus k norms).
+const STACK: usize = 64;
+
+/// Runs `f` on `len` zeroed scratch entries: on the stack when `len` ≤ [`STACK`].
+pub(crate) fn with_scratch<T: Copy + Default, R>(len: usize, f: impl FnOnce(&mut [T]) -> R) -> R {
+    if len <= STACK {
+        f(&mut [T::default(); STACK][..len])
+    } else {
+        f(&mut vec![T::default(); len])
+    }
+}
+
+/// One-sided Jacobi SVD of the `k` vectors of length `l` in `a` (see [`orthogonalize`],
+/// which scales them first with [`scale_pow2`]): on return `sigma[i]` is the length of vector
+/// `order[i]` of the rotated `a` (in the input's units), descending, and column i of `w`
+/// (k×k, column-major) is the matching column of the accumulated rotations.
+pub(crate) fn decompose(
+    a: &mut [f64],
+    l: usize,
+    w: &mut [f64],
+    sigma: &mut [f64],
+    order: &mut [usize],
+) {
+    let k = sigma.len();
+    let unscale = scale_pow2(a);
+    with_scratch(k * k + k, |scratch: &mut [f64]| {
+        let (rot, lengths) = scratch.split_at_mut(k * k);
+        for i in 0..k {
+            rot[i * k + i] = 1.0;
+        }
+        orthogonalize(a, l, rot, k);
+        for (n, v) in lengths.iter_mut().zip(a.chunks_exact(l)) {
+            *n = dot(v, v).sqrt();
+        }
+        // Insertion sort of the indices, descending (k is a handful).
+        for i in 0..k {
+            let mut j = i;
+            while j > 0 && lengths[order[j - 1]] < lengths[i] {
+                order[j] = order[j - 1];
+                j -= 1;
+            }
+            order[j] = i;
+        }
+        for (i, &o) in order.iter().enumerate() {
+            sigma[i] = lengths[o] * unscale;
+            w[i * k..(i + 1) * k].copy_from_slice(&rot[o * k..(o + 1) * k]);
+        }
+    });
+}
 
 /// Sweep limit (as `dgesvj`); a 6×6 Jacobian typically needs 5–7 sweeps.
 const MAX_SWEEPS: usize = 30;
@@ -51,7 +99,8 @@ fn sweeps_dyn(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
 
 #[inline(always)]
 fn sweeps_impl(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
-    let tol = (l as f64).sqrt() * f64::EPSILON;
+    // (√l·ε)², compared with γ²/(αβ) to avoid a square root per pair.
+    let tol2 = (l as f64) * f64::EPSILON * f64::EPSILON;
     // Squared norms dₚ = ‖aₚ‖², recomputed at the start of every sweep and updated through
     // a rotation as α − tγ, β + tγ (exact in exact arithmetic; GVL §8.6.4); recomputed
     // whenever that update cancels (as LAPACK dgesvj does), so each dₚ stays correct to
@@ -78,20 +127,24 @@ fn sweeps_impl(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
                 let (alpha, beta) = (d[p], d[q]);
                 let gamma = dot(x, y);
                 // Also skips zero vectors (γ = 0).
-                if gamma.abs() <= tol * (alpha * beta).sqrt() {
+                if gamma * gamma <= tol2 * (alpha * beta) {
                     continue;
                 }
+                // The rotation diagonalising [[α, γ], [γ, β]] (GVL Algorithm 8.5.1): tan θ =
+                // t, the smaller root of t² + 2ζt − 1 = 0 with ζ = (β − α)/2γ, so |θ| ≤ π/4.
+                // Written without ζ: with δ = β − α, r = √(δ² + 4γ²), h = |δ| + r and
+                // g = 2γ·sign δ, t = g/h, cos θ = √(h/2r) and sin θ = t·cos θ — one square
+                // root fewer on the critical path, and no overflow of ζ² when γ ≪ |δ|.
+                let delta = beta - alpha;
+                let r = (delta * delta + 4.0 * gamma * gamma).sqrt();
+                if r == 0.0 {
+                    continue; // both vectors below the square root of the smallest normal
+                }
                 rotated = true;
-                // GVL Algorithm 8.5.1 (symmetric Schur 2×2) on [[α, γ], [γ, β]]: t is the
-                // smaller root of t² + 2ζt − 1 = 0, so the rotation angle is ≤ π/4.
-                let zeta = (beta - alpha) / (2.0 * gamma);
-                let t = if zeta.abs() < 1e150 {
-                    zeta.signum() / (zeta.abs() + (1.0 + zeta * zeta).sqrt())
-                } else {
-                    0.5 / zeta
-                };
-                let c = 1.0 / (1.0 + t * t).sqrt();
-                let s = c * t;
+                let h = delta.abs() + r;
+                let t = 2.0 * gamma * 1f64.copysign(delta) / h;
+                let c = (h / (2.0 * r)).sqrt();
+                let s = t * c;
                 rotate(x, y, c, s);
                 let (wh, wt) = w.split_at_mut(q * k);
                 rotate(&mut wh[p * k..(p + 1) * k], &mut wt[..k], c, s);
@@ -147,38 +200,6 @@ pub(crate) fn scale_pow2(x: &mut [f64]) -> f64 {
         *v *= scale;
     }
     f64::from_bits(((1023 + (e + 1)) as u64) << 52)
-}
-
-/// Euclidean norms of the `k` vectors of length `l` in `a`, written to `out`.
-pub(crate) fn norms(a: &[f64], l: usize, out: &mut [f64]) {
-    for (o, v) in out.iter_mut().zip(a.chunks_exact(l)) {
-        *o = v.iter().map(|x| x * x).sum::<f64>().sqrt();
-    }
-}
-
-/// Sorts `sigma` (k entries) descending, moving vector p of `a` (length l) and column p of
-/// `w` (k×k) along with it. Selection sort: k is at most a handful.
-pub(crate) fn sort_descending(sigma: &mut [f64], a: &mut [f64], l: usize, w: &mut [f64]) {
-    let k = sigma.len();
-    for p in 0..k {
-        let mut best = p;
-        for q in p + 1..k {
-            if sigma[q] > sigma[best] {
-                best = q;
-            }
-        }
-        if best != p {
-            sigma.swap(p, best);
-            swap_blocks(a, l, p, best);
-            swap_blocks(w, k, p, best);
-        }
-    }
-}
-
-/// Swaps blocks p < q of length `len` in `x`.
-fn swap_blocks(x: &mut [f64], len: usize, p: usize, q: usize) {
-    let (head, tail) = x.split_at_mut(q * len);
-    head[p * len..(p + 1) * len].swap_with_slice(&mut tail[..len]);
 }
 
 /// Completes the `r` orthonormal leading columns of the l×l column-major `q` to an orthogonal

@@ -48,15 +48,6 @@ fn check_jacobian(j: &DMatrix<f64>) -> Result<(), Error> {
 /// route (JᵀJ) needed for its own round-off, kept so that the reported rank does not change.
 pub const RANK_TOLERANCE: f64 = 1.5e-7;
 
-/// Scratch vectors for [`jacobi::orthogonalize`]: on the stack when small.
-fn with_scratch<R>(len: usize, f: impl FnOnce(&mut [f64]) -> R) -> R {
-    if len <= jacobi::STACK {
-        f(&mut [0.0; jacobi::STACK][..len])
-    } else {
-        f(&mut vec![0.0; len])
-    }
-}
-
 /// Full SVD of `j` (m×n) by one-sided Jacobi rotations ([`jacobi`]; Hestenes 1958,
 /// Demmel & Veselić 1992): the shorter family of vectors of J — its columns when m ≥ n, its
 /// rows when m < n — is rotated until mutually orthogonal. The accumulated rotations are V
@@ -70,11 +61,10 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
     check_jacobian(j)?;
     let wide = m < n;
     let (k, l) = if wide { (m, n) } else { (n, m) };
-    let mut w = DMatrix::<f64>::identity(k, k);
+    let mut w = DMatrix::<f64>::zeros(k, k);
     let mut sigma = DVector::<f64>::zeros(m);
     let mut q = DMatrix::<f64>::zeros(l, l);
-    let mut scale = 1.0;
-    let rank = with_scratch(k * l, |a| {
+    let rank = jacobi::with_scratch(k * l, |a: &mut [f64]| {
         if wide {
             // a holds the rows of J: vector p is row p.
             for (p, row) in a.chunks_exact_mut(l).enumerate() {
@@ -86,28 +76,28 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
             // Column-major storage: vector p is column p.
             a.copy_from_slice(j.as_slice());
         }
-        scale = jacobi::scale_pow2(a);
-        jacobi::orthogonalize(a, l, w.as_mut_slice(), k);
-        let s = &mut sigma.as_mut_slice()[..k];
-        jacobi::norms(a, l, s);
-        jacobi::sort_descending(s, a, l, w.as_mut_slice());
-        let tol = RANK_TOLERANCE * s[0];
-        let rank = s.iter().filter(|&&x| x > tol).count();
-        for (p, (dst, src)) in q
-            .as_mut_slice()
-            .chunks_exact_mut(l)
-            .zip(a.chunks_exact(l))
-            .take(rank)
-            .enumerate()
-        {
-            for (d, x) in dst.iter_mut().zip(src) {
-                *d = x / s[p];
+        jacobi::with_scratch(k, |order: &mut [usize]| {
+            let s = &mut sigma.as_mut_slice()[..k];
+            jacobi::decompose(a, l, w.as_mut_slice(), s, order);
+            let tol = RANK_TOLERANCE * s[0];
+            let rank = s.iter().filter(|&&x| x > tol).count();
+            // The normalised vectors, in σ order (lengths recomputed in a's scaled units).
+            for (dst, &o) in q
+                .as_mut_slice()
+                .chunks_exact_mut(l)
+                .zip(order.iter())
+                .take(rank)
+            {
+                let src = &a[o * l..(o + 1) * l];
+                let norm = src.iter().map(|x| x * x).sum::<f64>().sqrt();
+                for (d, x) in dst.iter_mut().zip(src) {
+                    *d = x / norm;
+                }
             }
-        }
-        rank
+            rank
+        })
     });
     jacobi::complete_columns(q.as_mut_slice(), l, rank);
-    sigma.scale_mut(scale);
     let (u, v) = if wide { (w, q) } else { (q, w) };
     Ok(FullSvd {
         u,
@@ -271,24 +261,19 @@ pub fn row_measures(j: &DMatrix<f64>, rows: &[usize]) -> Result<Measures, Error>
 /// check), by one-sided Jacobi on its rows.
 fn wide_measures(j: &DMatrix<f64>, m: usize, row: impl Fn(usize) -> usize) -> Measures {
     let n = j.ncols();
-    let mut u = DMatrix::<f64>::identity(m, m);
+    let mut u = DMatrix::<f64>::zeros(m, m);
     let mut sigma = vec![0.0; m];
-    let mut scale = 1.0;
-    with_scratch(m * n, |a| {
+    jacobi::with_scratch(m * n, |a: &mut [f64]| {
         for (p, v) in a.chunks_exact_mut(n).enumerate() {
             let r = row(p);
             for (c, x) in v.iter_mut().enumerate() {
                 *x = j[(r, c)];
             }
         }
-        scale = jacobi::scale_pow2(a);
-        jacobi::orthogonalize(a, n, u.as_mut_slice(), m);
-        jacobi::norms(a, n, &mut sigma);
-        jacobi::sort_descending(&mut sigma, a, n, u.as_mut_slice());
+        jacobi::with_scratch(m, |order: &mut [usize]| {
+            jacobi::decompose(a, n, u.as_mut_slice(), &mut sigma, order);
+        });
     });
-    for s in &mut sigma {
-        *s *= scale;
-    }
     let tol = RANK_TOLERANCE * sigma[0];
     Measures::from_owned_spectrum(sigma, u, tol)
 }

@@ -119,46 +119,26 @@ fn sweeps_impl(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
         for (dp, v) in d.iter_mut().zip(a.chunks_exact(l)) {
             *dp = dot(v, v);
         }
-        for q in 1..k {
-            let (head, tail) = a.split_at_mut(q * l);
-            let y = &mut tail[..l];
-            for p in 0..q {
-                let x = &mut head[p * l..(p + 1) * l];
-                let (alpha, beta) = (d[p], d[q]);
-                let gamma = dot(x, y);
-                // Also skips zero vectors (γ = 0).
-                if gamma * gamma <= tol2 * (alpha * beta) {
-                    continue;
+        if k % 2 == 0 {
+            // Round-robin ("tournament") ordering (Brent & Luk 1985; GVL §8.6.4, parallel
+            // ordering): each round rotates k/2 disjoint pairs, whose work is independent,
+            // so the processor overlaps the long square-root/division chain of one rotation
+            // with the next. Every pair once per sweep; it converges as the cyclic order.
+            for round in 0..k - 1 {
+                for seat in 0..k / 2 {
+                    let (i, j) = (
+                        tournament_seat(seat, round, k),
+                        tournament_seat(k - 1 - seat, round, k),
+                    );
+                    rotated |= rotate_pair(a, l, w, k, d, tol2, i.min(j), i.max(j));
                 }
-                // The rotation diagonalising [[α, γ], [γ, β]] (GVL Algorithm 8.5.1): tan θ =
-                // t, the smaller root of t² + 2ζt − 1 = 0 with ζ = (β − α)/2γ, so |θ| ≤ π/4.
-                // Written without ζ: with δ = β − α, r = √(δ² + 4γ²), h = |δ| + r and
-                // g = 2γ·sign δ, t = g/h, cos θ = √(h/2r) and sin θ = t·cos θ — one square
-                // root fewer on the critical path, and no overflow of ζ² when γ ≪ |δ|.
-                let delta = beta - alpha;
-                let r = (delta * delta + 4.0 * gamma * gamma).sqrt();
-                if r == 0.0 {
-                    continue; // both vectors below the square root of the smallest normal
+            }
+        } else {
+            // Odd k (3 rows): every pair shares a vector with the previous one anyway.
+            for q in 1..k {
+                for p in 0..q {
+                    rotated |= rotate_pair(a, l, w, k, d, tol2, p, q);
                 }
-                rotated = true;
-                let h = delta.abs() + r;
-                let t = 2.0 * gamma * 1f64.copysign(delta) / h;
-                let c = (h / (2.0 * r)).sqrt();
-                let s = t * c;
-                rotate(x, y, c, s);
-                let (wh, wt) = w.split_at_mut(q * k);
-                rotate(&mut wh[p * k..(p + 1) * k], &mut wt[..k], c, s);
-                let (new_p, new_q) = (alpha - t * gamma, beta + t * gamma);
-                d[p] = if new_p < 1e-4 * alpha {
-                    dot(x, x)
-                } else {
-                    new_p
-                };
-                d[q] = if new_q < 1e-4 * beta {
-                    dot(y, y)
-                } else {
-                    new_q
-                };
             }
         }
         if !rotated {
@@ -166,6 +146,71 @@ fn sweeps_impl(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
         }
     }
     MAX_SWEEPS
+}
+
+/// One Jacobi step on vectors p < q of `a` (see [`sweeps_impl`]); returns whether it rotated.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn rotate_pair(
+    a: &mut [f64],
+    l: usize,
+    w: &mut [f64],
+    k: usize,
+    d: &mut [f64],
+    tol2: f64,
+    p: usize,
+    q: usize,
+) -> bool {
+    let (head, tail) = a.split_at_mut(q * l);
+    let y = &mut tail[..l];
+    let x = &mut head[p * l..(p + 1) * l];
+    let (alpha, beta) = (d[p], d[q]);
+    let gamma = dot(x, y);
+    // Also skips zero vectors (γ = 0).
+    if gamma * gamma <= tol2 * (alpha * beta) {
+        return false;
+    }
+    // The rotation diagonalising [[α, γ], [γ, β]] (GVL Algorithm 8.5.1): tan θ = t, the
+    // smaller root of t² + 2ζt − 1 = 0 with ζ = (β − α)/2γ, so |θ| ≤ π/4. Written without ζ:
+    // with δ = β − α, r = √(δ² + 4γ²), h = |δ| + r and g = 2γ·sign δ, t = g/h,
+    // cos θ = √(h/2r) and sin θ = t·cos θ — one square root fewer on the critical path, and
+    // no overflow of ζ² when γ ≪ |δ|.
+    let delta = beta - alpha;
+    let r = (delta * delta + 4.0 * gamma * gamma).sqrt();
+    if r == 0.0 {
+        return false; // both vectors below the square root of the smallest normal
+    }
+    let h = delta.abs() + r;
+    let t = 2.0 * gamma * 1f64.copysign(delta) / h;
+    let c = (h / (2.0 * r)).sqrt();
+    let s = t * c;
+    rotate(x, y, c, s);
+    let (wh, wt) = w.split_at_mut(q * k);
+    rotate(&mut wh[p * k..(p + 1) * k], &mut wt[..k], c, s);
+    let (new_p, new_q) = (alpha - t * gamma, beta + t * gamma);
+    d[p] = if new_p < 1e-4 * alpha {
+        dot(x, x)
+    } else {
+        new_p
+    };
+    d[q] = if new_q < 1e-4 * beta {
+        dot(y, y)
+    } else {
+        new_q
+    };
+    true
+}
+
+/// The player at seat `seat` in round `round` of a round-robin tournament of `players`
+/// (even): player 0 stays at seat 0, the others move one seat along per round; seats s and
+/// players − 1 − s play each other.
+#[inline(always)]
+fn tournament_seat(seat: usize, round: usize, players: usize) -> usize {
+    if seat == 0 {
+        0
+    } else {
+        1 + (seat - 1 + players - 1 - round) % (players - 1)
+    }
 }
 
 /// x·y.

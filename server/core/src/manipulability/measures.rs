@@ -51,8 +51,9 @@ pub const RANK_TOLERANCE: f64 = 1.5e-7;
 /// Full SVD of `j` (m×n) by one-sided Jacobi rotations ([`jacobi`]; Hestenes 1958,
 /// Demmel & Veselić 1992): the shorter family of vectors of J — its columns when m ≥ n, its
 /// rows when m < n — is rotated until mutually orthogonal. The accumulated rotations are V
-/// (resp. U), the vector lengths are σ and the normalised vectors the first rank columns of
-/// U (resp. V), completed to an orthogonal matrix by Gram–Schmidt on unit vectors. No
+/// (resp. U), the vector lengths are σ and the normalised vectors the leading columns of U
+/// (resp. V), completed to an orthogonal matrix by Gram–Schmidt on unit vectors where a
+/// vector is zero (or shorter than 10⁻⁶⁰σ₁). No
 /// squaring of J, so σ keeps full relative accuracy, and no heap beyond the outputs for
 /// min(m,n)·max(m,n) ≤ 64.
 /// Rank tolerance: [`RANK_TOLERANCE`]·σ₁.
@@ -64,7 +65,7 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
     let mut w = DMatrix::<f64>::zeros(k, k);
     let mut sigma = DVector::<f64>::zeros(m);
     let mut q = DMatrix::<f64>::zeros(l, l);
-    let rank = jacobi::with_scratch(k * l, |a: &mut [f64]| {
+    let kept = jacobi::with_scratch(k * l, |a: &mut [f64]| {
         if wide {
             // a holds the rows of J: vector p is row p.
             for (p, row) in a.chunks_exact_mut(l).enumerate() {
@@ -79,14 +80,19 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
         jacobi::with_scratch(k, |order: &mut [usize]| {
             let s = &mut sigma.as_mut_slice()[..k];
             jacobi::decompose(a, l, w.as_mut_slice(), s, order);
-            let tol = RANK_TOLERANCE * s[0];
-            let rank = s.iter().filter(|&&x| x > tol).count();
-            // The normalised vectors, in σ order (lengths recomputed in a's scaled units).
+            // Every vector that is not negligible is normalised, including those below the
+            // rank tolerance: Jacobi leaves them orthogonal to the others to working
+            // precision relative to their own length, so UΣVᵀ = J holds to round-off. Only
+            // vectors shorter than 10⁻⁶⁰σ₁ — where the products of squares in the stopping
+            // test could underflow, so that orthogonality is no longer checked — and zero
+            // ones are replaced by the completion.
+            let negligible = 1e-60 * s[0];
+            let kept = s.iter().filter(|&&x| x > negligible).count();
             for (dst, &o) in q
                 .as_mut_slice()
                 .chunks_exact_mut(l)
                 .zip(order.iter())
-                .take(rank)
+                .take(kept)
             {
                 let src = &a[o * l..(o + 1) * l];
                 let norm = src.iter().map(|x| x * x).sum::<f64>().sqrt();
@@ -94,10 +100,10 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
                     *d = x / norm;
                 }
             }
-            rank
+            kept
         })
     });
-    jacobi::complete_columns(q.as_mut_slice(), l, rank);
+    jacobi::complete_columns(q.as_mut_slice(), l, kept);
     let (u, v) = if wide { (w, q) } else { (q, w) };
     Ok(FullSvd {
         u,

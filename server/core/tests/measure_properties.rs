@@ -195,3 +195,34 @@ fn jlm_is_one_at_mid_range_and_zero_at_a_limit() {
     at[2] = model.joints[2].limits[1];
     assert_eq!(jlm(&model, &at), 0.0);
 }
+
+/// With joint 2 at its upper limit the JLM is 0 and so is its whole gradient: every other
+/// joint's ∂p/∂qᵢ carries the zero factor of joint 2 (Jun eq. 16), and joint 2's own is that
+/// of a factor clamped at 0. A step inside the limit makes them finite again, against
+/// central differences.
+#[test]
+fn jlm_gradient_at_a_limit_is_zero() {
+    let model = common::builtin("orion");
+    let mid: Vec<f64> = model
+        .joints
+        .iter()
+        .map(|j| 0.3 * j.limits[0] + 0.7 * j.limits[1])
+        .collect();
+    let mut at = mid.clone();
+    at[2] = model.joints[2].limits[1];
+    let mut g = vec![1.0; 6];
+    jlm_gradient(&model, &at, &mut g);
+    assert!(g.iter().all(|x| *x == 0.0), "{g:?}");
+    at[2] -= 1e-3;
+    jlm_gradient(&model, &at, &mut g);
+    assert!(g.iter().all(|x| *x != 0.0), "{g:?}");
+    for i in 0..6 {
+        let h = 1e-7;
+        let mut qp = at.clone();
+        qp[i] += h;
+        let mut qm = at.clone();
+        qm[i] -= h;
+        let fd = (jlm(&model, &qp) - jlm(&model, &qm)) / (2.0 * h);
+        assert!((fd - g[i]).abs() < 1e-6, "joint {i}: {fd} vs {}", g[i]);
+    }
+}

@@ -5,7 +5,9 @@ use nalgebra::{DMatrix, Isometry3};
 
 use crate::Error;
 use crate::kinematics::{KinData, jacobian, jacobian_in_end_effector_frame};
-use crate::manipulability::{Measures, Subspaces, full_svd, jlm, jlm_gradient, row_measures};
+use crate::manipulability::{
+    Measures, Subspaces, full_svd, jlm, jlm_gradient, row_measures, row_measures_pair,
+};
 use crate::model::Model;
 
 /// Rows vx vy vz of the 6×n Jacobian.
@@ -47,8 +49,8 @@ pub fn analyze(model: &Model, q: &[f64], rows: Option<&[usize]>) -> Result<Analy
     jacobian(model, &mut data, q);
     let j = &data.jacobian;
     let (full, subspaces) = full_svd(j)?.into_measures_and_subspaces();
-    let translational = row_measures(j, &TRANSLATIONAL_ROWS)?;
-    let rotational = row_measures(j, &ROTATIONAL_ROWS)?;
+    let [translational, rotational] =
+        row_measures_pair(j, [&TRANSLATIONAL_ROWS, &ROTATIONAL_ROWS])?;
     let task = match rows {
         Some(r) => Some(row_measures(j, r)?),
         None => None,

@@ -7,11 +7,13 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod common;
+
 use nalgebra::DMatrix;
 use proptest::prelude::*;
 use seaarms_core::manipulability::measures::complete_basis;
 use seaarms_core::manipulability::{
-    FullSvd, full_svd, measures, row_measures, select_rows, subspaces_from_svd,
+    FullSvd, full_svd, measures, row_measures, row_measures_pair, select_rows, subspaces_from_svd,
 };
 
 /// Singular values from nalgebra's SVD, sorted descending.
@@ -170,6 +172,24 @@ proptest! {
         }
     }
 
+    /// `row_measures_pair` (two selections swept in lockstep) gives exactly the two
+    /// `row_measures`, also when one selection converges sweeps before the other, and when
+    /// the selections differ in size or exceed the columns (the separate fallback).
+    #[test]
+    fn row_measures_pair_equals_two_row_measures(
+        vals in proptest::collection::vec(-2.0f64..2.0, 100),
+        exps in proptest::collection::vec(-8i32..=8, 20),
+        n in 1usize..=8,
+        a in proptest::sample::subsequence(vec![0usize, 1, 2, 3, 4, 5], 1..=4),
+        b in proptest::sample::subsequence(vec![0usize, 1, 2, 3, 4, 5], 1..=4),
+        scale_rows in proptest::bool::ANY,
+    ) {
+        let j = random_matrix(&vals, &exps, 6, n, false, scale_rows, false);
+        let [ma, mb] = row_measures_pair(&j, [&a, &b]).unwrap();
+        prop_assert_eq!(ma, row_measures(&j, &a).unwrap());
+        prop_assert_eq!(mb, row_measures(&j, &b).unwrap());
+    }
+
     /// Relative accuracy (Demmel & Veselić 1992, Thm 4.2 and §4): for J = QD, Q orthogonal
     /// to working precision and D diagonal, JᵀJ = D(QᵀQ)D and every σᵢ(J) = |dᵢ|(1 + O(ε)),
     /// however small — σ down to 2⁻⁶⁰σ₁ ≈ 10⁻¹⁸σ₁ to 1e-13 relative. (The eigenvalues of JᵀJ
@@ -313,5 +333,41 @@ fn complete_basis_extends_to_an_orthogonal_matrix() {
             .abs()
             .max();
         assert!(err <= 1e-14, "r = {r}: {err:e}");
+    }
+}
+
+/// The analysis's translational and rotational measures (computed as a lockstep pair) equal
+/// `row_measures` of rows 0–2 and 3–5 of its Jacobian, for every built-in 6-DOF arm at a few
+/// postures, and its full measures those of `full_svd`.
+#[test]
+fn analysis_measures_equal_the_separate_routes() {
+    use seaarms_core::analysis::analyze;
+    use seaarms_core::manipulability::measures_from_svd;
+    for name in ["magnum", "rx90", "orion", "puma560"] {
+        let model = common::builtin(name);
+        for t in [0.2, 0.5, 0.8] {
+            let q: Vec<f64> = model
+                .joints
+                .iter()
+                .enumerate()
+                .map(|(i, j)| {
+                    let (lo, hi) = (j.limits[0].max(-3.0), j.limits[1].min(3.0));
+                    lo + (hi - lo) * (t + 0.07 * i as f64).fract()
+                })
+                .collect();
+            let a = analyze(&model, &q, Some(&[0, 1, 5])).unwrap();
+            let j = &a.jacobian;
+            assert_eq!(
+                a.translational,
+                row_measures(j, &[0, 1, 2]).unwrap(),
+                "{name}"
+            );
+            assert_eq!(a.rotational, row_measures(j, &[3, 4, 5]).unwrap(), "{name}");
+            assert_eq!(
+                a.task.unwrap(),
+                measures(&select_rows(j, &[0, 1, 5]).unwrap()).unwrap()
+            );
+            assert_eq!(a.full, measures_from_svd(&full_svd(j).unwrap()), "{name}");
+        }
     }
 }

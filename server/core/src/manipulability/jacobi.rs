@@ -24,40 +24,62 @@ pub(crate) fn with_scratch<T: Copy + Default, R>(len: usize, f: impl FnOnce(&mut
     }
 }
 
-/// One-sided Jacobi SVD of the `k` vectors of length `l` in `a` (see [`orthogonalize`],
-/// which scales them first with [`scale_pow2`]): on return `sigma[i]` is the length of vector
-/// `order[i]` of the rotated `a` (in the input's units), descending, and column i of `w`
-/// (k×k, column-major) is the matching column of the accumulated rotations.
+/// One-sided Jacobi SVD of `groups` independent problems of g vectors of length `l` each,
+/// stored one after another in `a` (g = `sigma.len()`/`groups`; see [`orthogonalize`]; each
+/// group is first scaled with [`scale_pow2`]). On return, for group G and i < g,
+/// `sigma[G·g + i]` is the length of vector G·g + `order[G·g + i]` of the rotated `a` (in the
+/// input's units), descending within the group, and column i of the G-th g×g column-major
+/// block of `w` is the matching column of that group's accumulated rotations.
 pub(crate) fn decompose(
     a: &mut [f64],
     l: usize,
+    groups: usize,
     w: &mut [f64],
     sigma: &mut [f64],
     order: &mut [usize],
 ) {
     let k = sigma.len();
-    let unscale = scale_pow2(a);
-    with_scratch(k * k + k, |scratch: &mut [f64]| {
-        let (rot, lengths) = scratch.split_at_mut(k * k);
-        for i in 0..k {
-            rot[i * k + i] = 1.0;
+    let g = k / groups;
+    assert!(g * groups == k && a.len() == k * l && w.len() == groups * g * g);
+    let mut unscale = [1.0; 2];
+    let mut unscale_heap;
+    let unscale: &mut [f64] = if groups <= 2 {
+        &mut unscale[..groups]
+    } else {
+        unscale_heap = vec![1.0; groups];
+        &mut unscale_heap
+    };
+    for (u, block) in unscale.iter_mut().zip(a.chunks_exact_mut(g * l)) {
+        *u = scale_pow2(block);
+    }
+    with_scratch(groups * g * g + k, |scratch: &mut [f64]| {
+        let (rot, lengths) = scratch.split_at_mut(groups * g * g);
+        for block in rot.chunks_exact_mut(g * g) {
+            for i in 0..g {
+                block[i * g + i] = 1.0;
+            }
         }
-        orthogonalize(a, l, rot, k);
+        orthogonalize(a, l, groups, rot, k);
         for (n, v) in lengths.iter_mut().zip(a.chunks_exact(l)) {
             *n = dot(v, v).sqrt();
         }
-        // Insertion sort of the indices, descending (k is a handful).
-        for i in 0..k {
-            let mut j = i;
-            while j > 0 && lengths[order[j - 1]] < lengths[i] {
-                order[j] = order[j - 1];
-                j -= 1;
+        for grp in 0..groups {
+            let len = &lengths[grp * g..(grp + 1) * g];
+            let ord = &mut order[grp * g..(grp + 1) * g];
+            // Insertion sort of the indices, descending (g is a handful).
+            for i in 0..g {
+                let mut j = i;
+                while j > 0 && len[ord[j - 1]] < len[i] {
+                    ord[j] = ord[j - 1];
+                    j -= 1;
+                }
+                ord[j] = i;
             }
-            order[j] = i;
-        }
-        for (i, &o) in order.iter().enumerate() {
-            sigma[i] = lengths[o] * unscale;
-            w[i * k..(i + 1) * k].copy_from_slice(&rot[o * k..(o + 1) * k]);
+            let (src, dst) = (&rot[grp * g * g..], &mut w[grp * g * g..]);
+            for (i, &o) in ord.iter().enumerate() {
+                sigma[grp * g + i] = len[o] * unscale[grp];
+                dst[i * g..(i + 1) * g].copy_from_slice(&src[o * g..(o + 1) * g]);
+            }
         }
     });
 }
@@ -66,39 +88,51 @@ pub(crate) fn decompose(
 const MAX_SWEEPS: usize = 30;
 
 /// Rotates the `k` vectors of length `l` stored one after another in `a` (vector p is
-/// `a[p·l..(p+1)·l]`) until every pair satisfies |aₚ·a_q| ≤ √l·ε·‖aₚ‖‖a_q‖ (`dgesvj`'s
-/// stopping rule). The same rotations are applied to the columns of `w` (k×k column-major,
-/// the identity on entry), so that A_in·W = A_out. Returns the number of sweeps run, the
-/// last one being the sweep that found nothing left to rotate.
+/// `a[p·l..(p+1)·l]`), which form `groups` independent problems of g = k/`groups`
+/// consecutive vectors, until every pair within a group satisfies
+/// |aₚ·a_q| ≤ √l·ε·‖aₚ‖‖a_q‖ (`dgesvj`'s stopping rule). The same rotations are applied to
+/// the columns of `w` (`groups` g×g column-major blocks, identities on entry), so that
+/// A_in·W = A_out group by group. Returns the number of sweeps run, the last one being the
+/// sweep that found nothing left to rotate.
+///
+/// Several groups are swept in lockstep (pair (p, q) of every group, then the next pair) so
+/// that their independent rotations overlap in the processor — the analysis's translational
+/// and rotational rows are two 3-vector problems whose own pairs all depend on each other.
 ///
 /// The entries of `a` should be scaled to at most about 1 in magnitude (see [`scale_pow2`])
 /// so that the squared norms can neither overflow nor underflow needlessly.
-pub(crate) fn orthogonalize(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
-    assert!(a.len() == k * l && w.len() == k * k, "orthogonalize: sizes");
-    // Monomorphised copies for the analysis's shapes (6×6 Jacobian, 3×6 row selections):
-    // with the lengths known the loops unroll and vectorise.
-    match (k, l) {
-        (6, 6) => sweeps::<6>(a, 6, w),
-        (3, 6) => sweeps::<3>(a, 6, w),
-        (6, 7) => sweeps::<6>(a, 7, w),
-        _ => sweeps_dyn(a, l, w, k),
+pub(crate) fn orthogonalize(
+    a: &mut [f64],
+    l: usize,
+    groups: usize,
+    w: &mut [f64],
+    k: usize,
+) -> usize {
+    let g = k / groups;
+    assert!(
+        g * groups == k && a.len() == k * l && w.len() == groups * g * g,
+        "orthogonalize: sizes"
+    );
+    // Monomorphised copies for the analysis's shapes (6×6 Jacobian, 3×6 row selections,
+    // alone or as the translational/rotational pair): with the lengths known the loops
+    // unroll and vectorise.
+    match (g, l, groups) {
+        (6, 6, 1) => sweeps_impl(&mut a[..36], 6, 1, &mut w[..36], 6),
+        (3, 6, 1) => sweeps_impl(&mut a[..18], 6, 1, &mut w[..9], 3),
+        (3, 6, 2) => sweeps_impl(&mut a[..36], 6, 2, &mut w[..18], 3),
+        (6, 7, 1) => sweeps_impl(&mut a[..42], 7, 1, &mut w[..36], 6),
+        _ => sweeps_dyn(a, l, groups, w, g),
     }
 }
 
-fn sweeps<const K: usize>(a: &mut [f64], l: usize, w: &mut [f64]) -> usize {
-    match l {
-        6 => sweeps_impl(&mut a[..K * 6], 6, &mut w[..K * K], K),
-        7 => sweeps_impl(&mut a[..K * 7], 7, &mut w[..K * K], K),
-        _ => sweeps_impl(a, l, w, K),
-    }
+fn sweeps_dyn(a: &mut [f64], l: usize, groups: usize, w: &mut [f64], g: usize) -> usize {
+    sweeps_impl(a, l, groups, w, g)
 }
 
-fn sweeps_dyn(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
-    sweeps_impl(a, l, w, k)
-}
-
+/// [`orthogonalize`] for `groups` groups of `g` vectors.
 #[inline(always)]
-fn sweeps_impl(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
+fn sweeps_impl(a: &mut [f64], l: usize, groups: usize, w: &mut [f64], g: usize) -> usize {
+    let k = groups * g;
     // (√l·ε)², compared with γ²/(αβ) to avoid a square root per pair.
     let tol2 = (l as f64) * f64::EPSILON * f64::EPSILON;
     // Squared norms dₚ = ‖aₚ‖², recomputed at the start of every sweep and updated through
@@ -119,25 +153,25 @@ fn sweeps_impl(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
         for (dp, v) in d.iter_mut().zip(a.chunks_exact(l)) {
             *dp = dot(v, v);
         }
-        if k % 2 == 0 {
+        if g % 2 == 0 {
             // Round-robin ("tournament") ordering (Brent & Luk 1985; GVL §8.6.4, parallel
-            // ordering): each round rotates k/2 disjoint pairs, whose work is independent,
+            // ordering): each round rotates g/2 disjoint pairs, whose work is independent,
             // so the processor overlaps the long square-root/division chain of one rotation
             // with the next. Every pair once per sweep; it converges as the cyclic order.
-            for round in 0..k - 1 {
-                for seat in 0..k / 2 {
+            for round in 0..g - 1 {
+                for seat in 0..g / 2 {
                     let (i, j) = (
-                        tournament_seat(seat, round, k),
-                        tournament_seat(k - 1 - seat, round, k),
+                        tournament_seat(seat, round, g),
+                        tournament_seat(g - 1 - seat, round, g),
                     );
-                    rotated |= rotate_pair(a, l, w, k, d, tol2, i.min(j), i.max(j));
+                    rotated |= step(a, l, groups, w, g, d, tol2, i.min(j), i.max(j));
                 }
             }
         } else {
-            // Odd k (3 rows): every pair shares a vector with the previous one anyway.
-            for q in 1..k {
+            // Odd g (3 rows): every pair shares a vector with the previous one anyway.
+            for q in 1..g {
                 for p in 0..q {
-                    rotated |= rotate_pair(a, l, w, k, d, tol2, p, q);
+                    rotated |= step(a, l, groups, w, g, d, tol2, p, q);
                 }
             }
         }
@@ -148,23 +182,48 @@ fn sweeps_impl(a: &mut [f64], l: usize, w: &mut [f64], k: usize) -> usize {
     MAX_SWEEPS
 }
 
-/// One Jacobi step on vectors p < q of `a` (see [`sweeps_impl`]); returns whether it rotated.
+/// Pair (p, q), p < q, of every group (see [`sweeps_impl`]); whether any rotated.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn rotate_pair(
+fn step(
     a: &mut [f64],
     l: usize,
+    groups: usize,
     w: &mut [f64],
-    k: usize,
+    g: usize,
     d: &mut [f64],
     tol2: f64,
     p: usize,
     q: usize,
 ) -> bool {
-    let (head, tail) = a.split_at_mut(q * l);
-    let y = &mut tail[..l];
-    let x = &mut head[p * l..(p + 1) * l];
-    let (alpha, beta) = (d[p], d[q]);
+    let mut rotated = false;
+    for grp in 0..groups {
+        let base = grp * g;
+        let (head, tail) = a.split_at_mut((base + q) * l);
+        let y = &mut tail[..l];
+        let x = &mut head[(base + p) * l..(base + p + 1) * l];
+        let block = &mut w[grp * g * g..(grp + 1) * g * g];
+        let (wh, wt) = block.split_at_mut(q * g);
+        let (wx, wy) = (&mut wh[p * g..(p + 1) * g], &mut wt[..g]);
+        let (dh, dt) = d.split_at_mut(base + q);
+        rotated |= rotate_pair(x, y, wx, wy, &mut dh[base + p], &mut dt[0], tol2);
+    }
+    rotated
+}
+
+/// One Jacobi step on the vectors x, y with squared norms `dx`, `dy` (updated), applying
+/// the rotation also to the accumulator columns `wx`, `wy`; returns whether it rotated.
+#[inline(always)]
+fn rotate_pair(
+    x: &mut [f64],
+    y: &mut [f64],
+    wx: &mut [f64],
+    wy: &mut [f64],
+    dx: &mut f64,
+    dy: &mut f64,
+    tol2: f64,
+) -> bool {
+    let (alpha, beta) = (*dx, *dy);
     let gamma = dot(x, y);
     // Also skips zero vectors (γ = 0).
     if gamma * gamma <= tol2 * (alpha * beta) {
@@ -185,18 +244,17 @@ fn rotate_pair(
     let c = (h / (2.0 * r)).sqrt();
     let s = t * c;
     rotate(x, y, c, s);
-    let (wh, wt) = w.split_at_mut(q * k);
-    rotate(&mut wh[p * k..(p + 1) * k], &mut wt[..k], c, s);
-    let (new_p, new_q) = (alpha - t * gamma, beta + t * gamma);
-    d[p] = if new_p < 1e-4 * alpha {
+    rotate(wx, wy, c, s);
+    let (new_x, new_y) = (alpha - t * gamma, beta + t * gamma);
+    *dx = if new_x < 1e-4 * alpha {
         dot(x, x)
     } else {
-        new_p
+        new_x
     };
-    d[q] = if new_q < 1e-4 * beta {
+    *dy = if new_y < 1e-4 * beta {
         dot(y, y)
     } else {
-        new_q
+        new_y
     };
     true
 }

@@ -79,7 +79,7 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
         }
         jacobi::with_scratch(k, |order: &mut [usize]| {
             let s = &mut sigma.as_mut_slice()[..k];
-            jacobi::decompose(a, l, w.as_mut_slice(), s, order);
+            jacobi::decompose(a, l, 1, w.as_mut_slice(), s, order);
             // Every vector that is not negligible is normalised, including those below the
             // rank tolerance: Jacobi leaves them orthogonal to the others to working
             // precision relative to their own length, so UΣVᵀ = J holds to round-off. Only
@@ -263,6 +263,45 @@ pub fn row_measures(j: &DMatrix<f64>, rows: &[usize]) -> Result<Measures, Error>
     Ok(wide_measures(j, rows.len(), |p| rows[p]))
 }
 
+/// [`row_measures`] of two row selections of the same size at once (the analysis's
+/// translational and rotational rows), with identical results: the two independent Jacobi
+/// problems are swept in lockstep, so the processor overlaps their rotations, which within
+/// one 3-row problem all depend on each other.
+pub fn row_measures_pair(j: &DMatrix<f64>, rows: [&[usize]; 2]) -> Result<[Measures; 2], Error> {
+    check_rows(j, rows[0])?;
+    check_rows(j, rows[1])?;
+    check_jacobian(j)?;
+    let (g, n) = (rows[0].len(), j.ncols());
+    if rows[1].len() != g || g > n {
+        return Ok([row_measures(j, rows[0])?, row_measures(j, rows[1])?]);
+    }
+    let k = 2 * g;
+    jacobi::with_scratch(k * n + 2 * g * g + k, |scratch: &mut [f64]| {
+        let (a, rest) = scratch.split_at_mut(k * n);
+        let (w, sigma) = rest.split_at_mut(2 * g * g);
+        for (v, &r) in a
+            .chunks_exact_mut(n)
+            .zip(rows[0].iter().chain(rows[1].iter()))
+        {
+            for (c, x) in v.iter_mut().enumerate() {
+                *x = j[(r, c)];
+            }
+        }
+        jacobi::with_scratch(k, |order: &mut [usize]| {
+            jacobi::decompose(a, n, 2, w, sigma, order);
+        });
+        let measures = |grp: usize| {
+            let tol = RANK_TOLERANCE * sigma[grp * g];
+            Measures::from_owned_spectrum(
+                sigma[grp * g..(grp + 1) * g].to_vec(),
+                DMatrix::from_column_slice(g, g, &w[grp * g * g..(grp + 1) * g * g]),
+                tol,
+            )
+        };
+        Ok([measures(0), measures(1)])
+    })
+}
+
 /// Measures of the m×n matrix whose row p is row `row(p)` of `j`, for m ≤ n (the callers
 /// check), by one-sided Jacobi on its rows.
 fn wide_measures(j: &DMatrix<f64>, m: usize, row: impl Fn(usize) -> usize) -> Measures {
@@ -277,7 +316,7 @@ fn wide_measures(j: &DMatrix<f64>, m: usize, row: impl Fn(usize) -> usize) -> Me
             }
         }
         jacobi::with_scratch(m, |order: &mut [usize]| {
-            jacobi::decompose(a, n, u.as_mut_slice(), &mut sigma, order);
+            jacobi::decompose(a, n, 1, u.as_mut_slice(), &mut sigma, order);
         });
     });
     let tol = RANK_TOLERANCE * sigma[0];

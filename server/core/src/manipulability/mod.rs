@@ -16,6 +16,6 @@ pub use dual::{dual_measures, dual_shape_matrix};
 pub use jlm::{jlm, jlm_gradient};
 pub use measures::{
     Ellipsoid, FullSvd, Measures, Subspaces, full_svd, measures, measures_from_svd, row_measures,
-    select_rows, subspaces, subspaces_from_svd,
+    row_measures_pair, select_rows, subspaces, subspaces_from_svd,
 };
 pub use polytope::{Polytope, convex_hull, dual_velocity_polytope, velocity_polytope};

@@ -8,8 +8,15 @@
 //! J is well conditioned up to a diagonal scaling of its vectors (Demmel & Veselić 1992,
 //! "Jacobi's method is more accurate than QR", SIAM J. Matrix Anal. Appl. 13(4), §4), and it
 //! needs no bidiagonalisation, no eigen solve and no heap storage for the sizes used here.
-//! Rotation formulas: Golub & Van Loan, *Matrix Computations* (4th ed.) §8.6.3 and §8.6.4;
-//! stopping rule and sweep limit: LAPACK `dgesvj` (Drmač & Veselić 2008).
+//!
+//! Rotation formulas: Golub & Van Loan, *Matrix Computations* (4th ed.) §8.5.2 (Algorithm
+//! 8.5.1, symmetric Schur) and §8.6.3–8.6.4 (one-sided Jacobi, orderings); stopping rule,
+//! sweep limit and the norm-update safeguard: LAPACK `dgesvj` (Drmač & Veselić 2008). The
+//! pair orderings are chosen for instruction-level parallelism: round-robin for an even
+//! number of vectors (Brent & Luk 1985), and independent problems swept in lockstep.
+//!
+//! Vectors shorter than about 10⁻⁶⁰ of the longest are beyond the reach of the squared
+//! norms and products in the stopping test and count as zero (see `full_svd`).
 
 /// Scratch capacity (entries) kept on the stack; larger problems use the heap. 64 covers
 /// every shape up to 7×7 (k·l vectors; k² rotations plus k norms).

@@ -37,15 +37,17 @@ fn check_jacobian(j: &DMatrix<f64>) -> Result<(), Error> {
     Ok(())
 }
 
-/// Relative rank tolerance of the Jacobi routes: σ ≤ this·σ₁ counts as zero.
+/// Relative rank tolerance of every route ([`full_svd`], [`measures`], [`row_measures`]):
+/// σ ≤ this·σ₁ counts as zero.
 ///
 /// The one-sided Jacobi SVD itself is accurate to a few ε·σ₁ (relatively accurate, even),
 /// so this is a modelling choice rather than a round-off floor: a Jacobian computed from
 /// joint angles is only as good as those angles, and a posture whose smallest σ is below
-/// 1.5·10⁻⁷σ₁ (about 0.01 mdeg of joint motion from the singular posture at unit lever arms)
-/// is reported as singular — rank, null space, infinite condition number and force
-/// measures — rather than as conditioned 10⁷. The value is the one the earlier eigenvalue
-/// route (JᵀJ) needed for its own round-off, kept so that the reported rank does not change.
+/// 1.5·10⁻⁷σ₁ (about 0.01 millidegree of joint motion from the singular posture at unit
+/// lever arms) is reported as singular — rank, null space, infinite condition number and
+/// force measures — rather than as conditioned 10⁷. It is the value the earlier eigenvalue
+/// route through JᵀJ needed for its own round-off, kept so that the reported rank of the
+/// full Jacobian does not change (that route's `measures` used √(mε)σ₁ ≈ 3·10⁻⁸σ₁).
 pub const RANK_TOLERANCE: f64 = 1.5e-7;
 
 /// Full SVD of `j` (m×n) by one-sided Jacobi rotations ([`jacobi`]; Hestenes 1958,
@@ -53,9 +55,8 @@ pub const RANK_TOLERANCE: f64 = 1.5e-7;
 /// rows when m < n — is rotated until mutually orthogonal. The accumulated rotations are V
 /// (resp. U), the vector lengths are σ and the normalised vectors the leading columns of U
 /// (resp. V), completed to an orthogonal matrix by Gram–Schmidt on unit vectors where a
-/// vector is zero (or shorter than 10⁻⁶⁰σ₁). No
-/// squaring of J, so σ keeps full relative accuracy, and no heap beyond the outputs for
-/// min(m,n)·max(m,n) ≤ 64.
+/// vector is zero (or shorter than 10⁻⁶⁰σ₁). No squaring of J, so σ keeps full relative
+/// accuracy, and no heap beyond the outputs up to 7×7.
 /// Rank tolerance: [`RANK_TOLERANCE`]·σ₁.
 pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
     let (m, n) = j.shape();

@@ -160,7 +160,12 @@ fn sweeps_impl(a: &mut [f64], l: usize, groups: usize, w: &mut [f64], g: usize) 
         for (dp, v) in d.iter_mut().zip(a.chunks_exact(l)) {
             *dp = dot(v, v);
         }
-        if g % 2 == 0 {
+        if g == 6 {
+            // The 6-vector tournament from a table (the seat arithmetic below, at compile time).
+            for &(p, q) in &ROUND_ROBIN_6 {
+                rotated |= step(a, l, groups, w, g, d, tol2, p, q);
+            }
+        } else if g % 2 == 0 {
             // Round-robin ("tournament") ordering (Brent & Luk 1985; GVL §8.6.4, parallel
             // ordering): each round rotates g/2 disjoint pairs, whose work is independent,
             // so the processor overlaps the long square-root/division chain of one rotation
@@ -266,11 +271,32 @@ fn rotate_pair(
     true
 }
 
+/// The 15 pairs (p < q) of the round-robin order for 6 vectors, round by round.
+const ROUND_ROBIN_6: [(usize, usize); 15] = {
+    let mut pairs = [(0, 0); 15];
+    let mut n = 0;
+    let mut round = 0;
+    while round < 5 {
+        let mut seat = 0;
+        while seat < 3 {
+            let (i, j) = (
+                tournament_seat(seat, round, 6),
+                tournament_seat(5 - seat, round, 6),
+            );
+            pairs[n] = if i < j { (i, j) } else { (j, i) };
+            n += 1;
+            seat += 1;
+        }
+        round += 1;
+    }
+    pairs
+};
+
 /// The player at seat `seat` in round `round` of a round-robin tournament of `players`
 /// (even): player 0 stays at seat 0, the others move one seat along per round; seats s and
 /// players − 1 − s play each other.
 #[inline(always)]
-fn tournament_seat(seat: usize, round: usize, players: usize) -> usize {
+const fn tournament_seat(seat: usize, round: usize, players: usize) -> usize {
     if seat == 0 {
         0
     } else {
@@ -346,6 +372,49 @@ pub(crate) fn complete_columns(q: &mut [f64], l: usize, r: usize) {
         let norm = x.iter().map(|v| v * v).sum::<f64>().sqrt();
         for v in x.iter_mut() {
             *v /= norm;
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every sweep order visits each pair p < q exactly once, and a round-robin round's
+    /// pairs are disjoint (Brent & Luk 1985).
+    #[test]
+    fn round_robin_visits_every_pair_once_in_disjoint_rounds() {
+        for players in [2usize, 4, 6, 8] {
+            let mut seen = vec![false; players * players];
+            for round in 0..players - 1 {
+                let mut busy = vec![false; players];
+                for seat in 0..players / 2 {
+                    let (i, j) = (
+                        tournament_seat(seat, round, players),
+                        tournament_seat(players - 1 - seat, round, players),
+                    );
+                    let (p, q) = (i.min(j), i.max(j));
+                    assert!(p < q && q < players);
+                    assert!(!busy[p] && !busy[q], "round {round} not disjoint");
+                    busy[p] = true;
+                    busy[q] = true;
+                    assert!(!seen[p * players + q], "pair ({p}, {q}) twice");
+                    seen[p * players + q] = true;
+                }
+            }
+            let pairs = seen.iter().filter(|&&x| x).count();
+            assert_eq!(pairs, players * (players - 1) / 2);
+        }
+        let mut seen = [false; 36];
+        for (n, &(p, q)) in ROUND_ROBIN_6.iter().enumerate() {
+            assert!(p < q && q < 6 && !seen[p * 6 + q]);
+            seen[p * 6 + q] = true;
+            // Rounds of three disjoint pairs.
+            let round = &ROUND_ROBIN_6[n / 3 * 3..n / 3 * 3 + 3];
+            let count = round
+                .iter()
+                .filter(|&&(a, b)| a == p || b == p || a == q || b == q);
+            assert_eq!(count.count(), 1);
         }
     }
 }

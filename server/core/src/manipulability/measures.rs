@@ -50,7 +50,7 @@ fn check_jacobian(j: &DMatrix<f64>) -> Result<(), Error> {
 /// full Jacobian does not change (that route's `measures` used √(mε)σ₁ ≈ 3·10⁻⁸σ₁).
 pub const RANK_TOLERANCE: f64 = 1.5e-7;
 
-/// Full SVD of `j` (m×n) by one-sided Jacobi rotations ([`jacobi`]; Hestenes 1958,
+/// Full SVD of `j` (m×n) by one-sided Jacobi rotations (module `jacobi`; Hestenes 1958,
 /// Demmel & Veselić 1992): the shorter family of vectors of J — its columns when m ≥ n, its
 /// rows when m < n — is rotated until mutually orthogonal. The accumulated rotations are V
 /// (resp. U), the vector lengths are σ and the normalised vectors the leading columns of U
@@ -115,7 +115,7 @@ pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
 }
 
 /// Extends the orthonormal columns of `b` (k×r, r ≤ k) to a k×k orthogonal matrix by
-/// Gram–Schmidt on unit vectors ([`jacobi::complete_columns`]).
+/// Gram–Schmidt on unit vectors (`jacobi::complete_columns`).
 pub fn complete_basis(b: &DMatrix<f64>) -> DMatrix<f64> {
     let (k, r) = b.shape();
     if r >= k {
@@ -242,7 +242,7 @@ impl Measures {
 /// Measures of a Jacobian (any m×n, e.g. a row selection).
 ///
 /// For m ≤ n (every task selection of a 6-row Jacobian) the m rows of J are rotated by
-/// one-sided Jacobi until orthogonal ([`jacobi`]): the accumulated rotations are U (the
+/// one-sided Jacobi until orthogonal (`jacobi`): the accumulated rotations are U (the
 /// ellipsoid axes) and the row lengths are σ; V is never formed. For m > n, [`full_svd`].
 /// Rank tolerance: [`RANK_TOLERANCE`]·σ₁, as [`full_svd`].
 pub fn measures(j: &DMatrix<f64>) -> Result<Measures, Error> {

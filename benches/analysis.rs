@@ -7,7 +7,7 @@ use std::hint::black_box;
 use criterion::{Criterion, criterion_group, criterion_main};
 use seaarms_core::analysis::analyze;
 use seaarms_core::kinematics::{KinData, jacobian};
-use seaarms_core::manipulability::{measures, select_rows};
+use seaarms_core::manipulability::{measures, row_measures_pair, select_rows};
 use seaarms_core::{Model, ModelSpec, robots};
 
 fn model(name: &str) -> Model {
@@ -36,7 +36,13 @@ fn bench(c: &mut Criterion) {
     c.bench_function("translational measures (3x6)", |b| {
         b.iter(|| measures(black_box(&jt)).expect("measures"))
     });
+    let jfull = data.jacobian.clone();
+    c.bench_function("translational + rotational measures (lockstep pair)", |b| {
+        b.iter(|| row_measures_pair(black_box(&jfull), [&[0, 1, 2], &[3, 4, 5]]).expect("measures"))
+    });
     let j6 = data.jacobian.clone();
+    // One-sided Jacobi (ours) against nalgebra's Golub–Kahan SVD and the eigen solve of JJᵀ
+    // that the analysis used before.
     c.bench_function("full SVD with U and V (6x6, dynamic)", |b| {
         b.iter(|| seaarms_core::manipulability::full_svd(black_box(&j6)).expect("svd"))
     });

@@ -6,8 +6,7 @@ use nalgebra::{DMatrix, Isometry3, IsometryMatrix3};
 use crate::Error;
 use crate::kinematics::{KinData, jacobian, jacobian_in_end_effector_frame};
 use crate::manipulability::{
-    Measures, Subspaces, full_svd, jlm, jlm_gradient, measures, measures_from_svd, select_rows,
-    subspaces_from_svd,
+    Measures, Subspaces, full_svd, jlm, jlm_gradient, row_measures, row_measures_pair,
 };
 use crate::model::Model;
 
@@ -49,13 +48,11 @@ pub fn analyze(model: &Model, q: &[f64], rows: Option<&[usize]>) -> Result<Analy
     let mut data = KinData::new(model);
     jacobian(model, &mut data, q);
     let j = &data.jacobian;
-    let svd = full_svd(j)?;
-    let full = measures_from_svd(&svd);
-    let subspaces = subspaces_from_svd(&svd);
-    let translational = measures(&j.select_rows(&TRANSLATIONAL_ROWS))?;
-    let rotational = measures(&j.select_rows(&ROTATIONAL_ROWS))?;
+    let (full, subspaces) = full_svd(j)?.into_measures_and_subspaces();
+    let [translational, rotational] =
+        row_measures_pair(j, [&TRANSLATIONAL_ROWS, &ROTATIONAL_ROWS])?;
     let task = match rows {
-        Some(r) => Some(measures(&select_rows(j, r)?)?),
+        Some(r) => Some(row_measures(j, r)?),
         None => None,
     };
     let mut grad = vec![0.0; model.dof()];

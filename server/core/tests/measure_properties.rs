@@ -25,7 +25,9 @@ proptest! {
         let j_eq = DMatrix::from_row_slice(2, 2, &[-s1 - s12, -s12, c1 + c12, c12]);
         prop_assert!((&j - &j_eq).abs().max() < 1e-12);
         let m = measures(&j).unwrap();
-        // Absolute accuracy ~1e-11 near q2 = 0: σ₂ comes from λ₂ of JJᵀ (see `measures`).
+        // Near q2 = 0, σ₂ and w = σ₁σ₂ are accurate to a few ε·σ₁ (the rounding of J itself:
+        // `measures` rotates J's rows instead of squaring them). Within the rank tolerance,
+        // |q2| ≲ 1e-7 (chance ~1e-7 per case), σ₂ is reported as 0 and w would miss by ≤ 1e-7.
         prop_assert!((m.yoshikawa - q2.sin().abs()).abs() < 1e-10);
         let c2 = q2.cos();
         let root = (5.0 + 12.0 * c2 + 8.0 * c2 * c2).sqrt();
@@ -64,19 +66,20 @@ proptest! {
         }
     }
 
-    /// The two routes to σ — `measures` (eigen of JJᵀ, m×m) and `full_svd` (eigen of JᵀJ,
-    /// n×n) — agree, and both satisfy Σσᵢ² = ‖J‖_F² (trace identity).
+    /// The two routes to σ — `measures` (J's rows rotated, U accumulated) and `full_svd`
+    /// (J's columns rotated when it is tall or square, V accumulated) — agree, and both
+    /// satisfy Σσᵢ² = ‖J‖_F² (trace identity).
     #[test]
-    fn eigen_routes_agree_and_keep_the_frobenius_norm(vals in proptest::collection::vec(-2.0f64..2.0, 6 * 9), rows in 1usize..=6, extra in 0usize..=3) {
+    fn row_and_column_routes_agree_and_keep_the_frobenius_norm(vals in proptest::collection::vec(-2.0f64..2.0, 6 * 9), rows in 1usize..=6, extra in 0usize..=3) {
         let cols = rows + extra;
         let j = DMatrix::from_fn(rows, cols, |r, c| vals[r * 9 + c]);
-        let by_jjt = measures(&j).unwrap();
-        let by_jtj = full_svd(&j).unwrap();
+        let by_measures = measures(&j).unwrap();
+        let by_svd = full_svd(&j).unwrap();
         let fro2 = j.norm_squared();
-        for (a, b) in by_jjt.singular_values.iter().zip(by_jtj.sigma.iter()) {
-            prop_assert!((a - b).abs() < 1e-7 * (1.0 + by_jtj.sigma[0]), "{:?} vs {}", by_jjt.singular_values, by_jtj.sigma);
+        for (a, b) in by_measures.singular_values.iter().zip(by_svd.sigma.iter()) {
+            prop_assert!((a - b).abs() < 1e-7 * (1.0 + by_svd.sigma[0]), "{:?} vs {}", by_measures.singular_values, by_svd.sigma);
         }
-        let s2: f64 = by_jjt.singular_values.iter().map(|s| s * s).sum();
+        let s2: f64 = by_measures.singular_values.iter().map(|s| s * s).sum();
         prop_assert!((s2 - fro2).abs() < 1e-9 * (1.0 + fro2));
     }
 
@@ -194,4 +197,35 @@ fn jlm_is_one_at_mid_range_and_zero_at_a_limit() {
     let mut at = mid.clone();
     at[2] = model.joints[2].limits[1];
     assert_eq!(jlm(&model, &at), 0.0);
+}
+
+/// With joint 2 at its upper limit the JLM is 0 and so is its whole gradient: every other
+/// joint's ∂p/∂qᵢ carries the zero factor of joint 2 (Jun eq. 16), and joint 2's own is that
+/// of a factor clamped at 0. A step inside the limit makes them finite again, against
+/// central differences.
+#[test]
+fn jlm_gradient_at_a_limit_is_zero() {
+    let model = common::builtin("orion");
+    let mid: Vec<f64> = model
+        .joints
+        .iter()
+        .map(|j| 0.3 * j.limits[0] + 0.7 * j.limits[1])
+        .collect();
+    let mut at = mid.clone();
+    at[2] = model.joints[2].limits[1];
+    let mut g = vec![1.0; 6];
+    jlm_gradient(&model, &at, &mut g);
+    assert!(g.iter().all(|x| *x == 0.0), "{g:?}");
+    at[2] -= 1e-3;
+    jlm_gradient(&model, &at, &mut g);
+    assert!(g.iter().all(|x| *x != 0.0), "{g:?}");
+    for i in 0..6 {
+        let h = 1e-7;
+        let mut qp = at.clone();
+        qp[i] += h;
+        let mut qm = at.clone();
+        qm[i] -= h;
+        let fd = (jlm(&model, &qp) - jlm(&model, &qm)) / (2.0 * h);
+        assert!((fd - g[i]).abs() < 1e-6, "joint {i}: {fd} vs {}", g[i]);
+    }
 }

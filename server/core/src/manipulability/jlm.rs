@@ -26,26 +26,33 @@ pub fn jlm(model: &Model, q: &[f64]) -> f64 {
         .product()
 }
 
+/// Factor 1 − xᵢ² of joint i in the JLM, clamped at 0 (1 for an unlimited joint).
+fn factor(lo: f64, hi: f64, q: f64) -> f64 {
+    normalized(lo, hi, q).map_or(1.0, |x| (1.0 - x * x).max(0.0))
+}
+
 /// ∂p/∂q (length n), written into `grad`: ∂p/∂qᵢ = −2xᵢDᵢ·Π_{j≠i}(1 − xⱼ²), computed without
-/// division so it stays finite at the limits.
+/// division so it stays finite at the limits (the products of the other factors from a
+/// prefix and a suffix pass: O(n)).
 pub fn jlm_gradient(model: &Model, q: &[f64], grad: &mut [f64]) {
     let n = model.dof();
+    // First pass: grad[i] = Π_{j>i} fⱼ.
+    let mut suffix = 1.0;
+    for i in (0..n).rev() {
+        grad[i] = suffix;
+        let [lo, hi] = model.joints[i].limits;
+        suffix *= factor(lo, hi, q[i]);
+    }
+    // Second pass: times Π_{j<i} fⱼ, times −2xᵢDᵢ.
+    let mut prefix = 1.0;
     for i in 0..n {
-        let ji = &model.joints[i];
-        let Some(xi) = normalized(ji.limits[0], ji.limits[1], q[i]) else {
-            grad[i] = 0.0;
-            continue;
+        let [lo, hi] = model.joints[i].limits;
+        let others = prefix * grad[i];
+        grad[i] = match normalized(lo, hi, q[i]) {
+            // Clamped factor: flat outside the limits.
+            Some(xi) if 1.0 - xi * xi > 0.0 => -2.0 * xi * (2.0 / (hi - lo)) * others,
+            _ => 0.0, // unlimited, or at/beyond a limit
         };
-        if 1.0 - xi * xi <= 0.0 {
-            grad[i] = 0.0; // clamped factor: flat outside the limits
-            continue;
-        }
-        let di = 2.0 / (ji.limits[1] - ji.limits[0]);
-        let others: f64 = (0..n)
-            .filter(|&k| k != i)
-            .filter_map(|k| normalized(model.joints[k].limits[0], model.joints[k].limits[1], q[k]))
-            .map(|x| (1.0 - x * x).max(0.0))
-            .product();
-        grad[i] = -2.0 * xi * di * others;
+        prefix *= factor(lo, hi, q[i]);
     }
 }

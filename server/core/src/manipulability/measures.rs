@@ -1,7 +1,8 @@
 //! Singular-value measures of a Jacobian (Lim §2.4, §3.5; Jun §2.1; RX90 report part VI).
 
-use nalgebra::{DMatrix, DVector, SymmetricEigen};
+use nalgebra::{DMatrix, DVector};
 
+use super::jacobi;
 use crate::Error;
 
 /// Full singular value decomposition J = U Σ Vᵀ with U m×m, V n×n, σ sorted descending and
@@ -27,7 +28,7 @@ fn check_jacobian(j: &DMatrix<f64>) -> Result<(), Error> {
             required: 1,
         });
     }
-    if let Some(index) = j.iter().position(|v| !v.is_finite()) {
+    if let Some(index) = j.as_slice().iter().position(|v| !v.is_finite()) {
         return Err(Error::NonFinite {
             what: "jacobian",
             index,
@@ -36,87 +37,93 @@ fn check_jacobian(j: &DMatrix<f64>) -> Result<(), Error> {
     Ok(())
 }
 
-/// Relative rank tolerance of the eigenvalue routes: σ ≤ this·σ₁ counts as zero. Squaring
-/// J into JᵀJ or JJᵀ leaves σᵢ an absolute error near √(nε)·σ₁ ≈ 4·10⁻⁸σ₁ for n ≤ 7, so the
-/// threshold is set four times above that.
-pub const EIGEN_RANK_TOLERANCE: f64 = 1.5e-7;
+/// Relative rank tolerance of every route ([`full_svd`], [`measures`], [`row_measures`]):
+/// σ ≤ this·σ₁ counts as zero.
+///
+/// The one-sided Jacobi SVD itself is accurate to a few ε·σ₁ (relatively accurate, even),
+/// so this is a modelling choice rather than a round-off floor: a Jacobian computed from
+/// joint angles is only as good as those angles, and a posture whose smallest σ is below
+/// 1.5·10⁻⁷σ₁ (about 0.01 millidegree of joint motion from the singular posture at unit
+/// lever arms) is reported as singular — rank, null space, infinite condition number and
+/// force measures — rather than as conditioned 10⁷. It is the value the earlier eigenvalue
+/// route through JᵀJ needed for its own round-off, kept so that the reported rank of the
+/// full Jacobian does not change (that route's `measures` used √(mε)σ₁ ≈ 3·10⁻⁸σ₁).
+pub const RANK_TOLERANCE: f64 = 1.5e-7;
 
-/// Full SVD of `j` (m×n) from the symmetric eigenproblem JᵀJ = VΛVᵀ: σᵢ = √λᵢ, the columns of
-/// V as they come, uᵢ = Jvᵢ/σᵢ for σᵢ above the tolerance, and the remaining columns of U
-/// completed to an orthonormal basis. One n×n eigen solve (stack-allocated for n = 6) gives
-/// everything the analysis needs — measures, null space, range — at about a third of the
-/// instructions of a Golub–Kahan SVD.
-/// Rank tolerance: [`EIGEN_RANK_TOLERANCE`]·σ₁.
+/// Full SVD of `j` (m×n) by one-sided Jacobi rotations (module `jacobi`; Hestenes 1958,
+/// Demmel & Veselić 1992): the shorter family of vectors of J — its columns when m ≥ n, its
+/// rows when m < n — is rotated until mutually orthogonal. The accumulated rotations are V
+/// (resp. U), the vector lengths are σ and the normalised vectors the leading columns of U
+/// (resp. V), completed to an orthogonal matrix by Gram–Schmidt on unit vectors where a
+/// vector is zero (or shorter than 10⁻⁶⁰σ₁). No squaring of J, so σ keeps full relative
+/// accuracy, and no heap beyond the outputs up to 7×7.
+/// Rank tolerance: [`RANK_TOLERANCE`]·σ₁.
 pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
     let (m, n) = j.shape();
     check_jacobian(j)?;
-    let (lambda, vectors): (Vec<f64>, DMatrix<f64>) = if n == 6 {
-        let mut jtj = nalgebra::Matrix6::zeros();
-        for r in j.row_iter() {
-            let v = nalgebra::Vector6::new(r[0], r[1], r[2], r[3], r[4], r[5]);
-            jtj += v * v.transpose();
+    let wide = m < n;
+    let (k, l) = if wide { (m, n) } else { (n, m) };
+    let mut w = DMatrix::<f64>::zeros(k, k);
+    let mut sigma = DVector::<f64>::zeros(m);
+    let mut q = DMatrix::<f64>::zeros(l, l);
+    let kept = jacobi::with_scratch(k * l, |a: &mut [f64]| {
+        if wide {
+            // a holds the rows of J: vector p is row p.
+            for (p, row) in a.chunks_exact_mut(l).enumerate() {
+                for (x, &v) in row.iter_mut().zip(j.row(p).iter()) {
+                    *x = v;
+                }
+            }
+        } else {
+            // Column-major storage: vector p is column p.
+            a.copy_from_slice(j.as_slice());
         }
-        let eig = nalgebra::SymmetricEigen::new(jtj);
-        (
-            eig.eigenvalues.iter().copied().collect(),
-            DMatrix::from_column_slice(6, 6, eig.eigenvectors.as_slice()),
-        )
-    } else {
-        let eig = SymmetricEigen::new(j.transpose() * j);
-        (eig.eigenvalues.iter().copied().collect(), eig.eigenvectors)
-    };
-    let mut order: Vec<usize> = (0..n).collect();
-    order.sort_by(|&a, &b| lambda[b].total_cmp(&lambda[a]));
-    let mut v = DMatrix::zeros(n, n);
-    for (dst, &src) in order.iter().enumerate() {
-        v.set_column(dst, &vectors.column(src));
-    }
-    let k = m.min(n);
-    let mut sigma = DVector::zeros(m);
-    for i in 0..k {
-        sigma[i] = lambda[order[i]].max(0.0).sqrt();
-    }
-    let tolerance = EIGEN_RANK_TOLERANCE * sigma[0];
-    let rank = (0..k).filter(|&i| sigma[i] > tolerance).count();
-    let mut u_r = DMatrix::zeros(m, rank);
-    for i in 0..rank {
-        u_r.column_mut(i).gemv(1.0 / sigma[i], j, &v.column(i), 0.0);
-        // Modified Gram–Schmidt against the earlier columns: for σᵢ close to the tolerance,
-        // Jvᵢ/σᵢ carries an error of order ε·σ₁/σᵢ that would spoil U's orthogonality.
-        for k in 0..i {
-            let d = u_r.column(k).dot(&u_r.column(i));
-            let uk = u_r.column(k).into_owned();
-            u_r.column_mut(i).axpy(-d, &uk, 1.0);
-        }
-        let norm = u_r.column(i).norm();
-        if norm > 0.0 {
-            u_r.column_mut(i).unscale_mut(norm);
-        }
-    }
+        jacobi::with_scratch(k, |order: &mut [usize]| {
+            let s = &mut sigma.as_mut_slice()[..k];
+            jacobi::decompose(a, l, 1, w.as_mut_slice(), s, order);
+            // Every vector that is not negligible is normalised, including those below the
+            // rank tolerance: Jacobi leaves them orthogonal to the others to working
+            // precision relative to their own length, so UΣVᵀ = J holds to round-off. Only
+            // vectors shorter than 10⁻⁶⁰σ₁ — where the products of squares in the stopping
+            // test could underflow, so that orthogonality is no longer checked — and zero
+            // ones are replaced by the completion.
+            let negligible = 1e-60 * s[0];
+            let kept = s.iter().filter(|&&x| x > negligible).count();
+            for (dst, &o) in q
+                .as_mut_slice()
+                .chunks_exact_mut(l)
+                .zip(order.iter())
+                .take(kept)
+            {
+                let src = &a[o * l..(o + 1) * l];
+                let norm = src.iter().map(|x| x * x).sum::<f64>().sqrt();
+                for (d, x) in dst.iter_mut().zip(src) {
+                    *d = x / norm;
+                }
+            }
+            kept
+        })
+    });
+    jacobi::complete_columns(q.as_mut_slice(), l, kept);
+    let (u, v) = if wide { (w, q) } else { (q, w) };
     Ok(FullSvd {
-        u: complete_basis(&u_r),
+        u,
+        tolerance: RANK_TOLERANCE * sigma[0],
         sigma,
         v,
-        tolerance,
     })
 }
 
-/// Extends the orthonormal columns of `b` (k×r, r ≤ k) to a k×k orthogonal matrix, using the
-/// eigenvectors of the projector I − BBᵀ onto the complement.
+/// Extends the orthonormal columns of `b` (k×r, r ≤ k) to a k×k orthogonal matrix by
+/// Gram–Schmidt on unit vectors (`jacobi::complete_columns`).
 pub fn complete_basis(b: &DMatrix<f64>) -> DMatrix<f64> {
     let (k, r) = b.shape();
     if r >= k {
         return b.columns(0, k).into_owned();
     }
-    let p = DMatrix::identity(k, k) - b * b.transpose();
-    let eig = SymmetricEigen::new(p);
-    let mut idx: Vec<usize> = (0..k).collect();
-    idx.sort_by(|&a, &c| eig.eigenvalues[c].total_cmp(&eig.eigenvalues[a]));
     let mut out = DMatrix::zeros(k, k);
     out.columns_mut(0, r).copy_from(b);
-    for (dst, &src) in idx.iter().take(k - r).enumerate() {
-        out.set_column(r + dst, &eig.eigenvectors.column(src));
-    }
+    jacobi::complete_columns(out.as_mut_slice(), k, r);
     out
 }
 
@@ -156,7 +163,7 @@ pub struct Ellipsoid {
 /// Every single-Jacobian measure of the source documents for one row selection.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Measures {
-    /// σ₁ ≥ … ≥ σ_m ≥ 0 (m = number of rows).
+    /// σ₁ ≥ … ≥ σ_m ≥ 0 (m = number of rows); σ at or below the rank tolerance are 0.
     pub singular_values: Vec<f64>,
     /// Number of σ above the tolerance.
     pub rank: usize,
@@ -178,22 +185,40 @@ pub struct Measures {
 
 impl Measures {
     /// Measures from a spectrum: `sigma` descending (m entries), `u` m×m with matching columns.
+    /// σ at or below `tolerance` count as zero and are reported as 0.
     pub fn from_spectrum(sigma: &[f64], u: &DMatrix<f64>, tolerance: f64) -> Measures {
+        Measures::from_owned_spectrum(
+            sigma.to_vec(),
+            u.columns(0, sigma.len()).into_owned(),
+            tolerance,
+        )
+    }
+
+    /// [`Measures::from_spectrum`] taking ownership (`u` is exactly m×m).
+    fn from_owned_spectrum(mut sigma: Vec<f64>, u: DMatrix<f64>, tolerance: f64) -> Measures {
         let m = sigma.len();
+        // σ at or below the tolerance are numerically zero: they are reported as 0, so that
+        // a rank-deficient Jacobian has w = isotropy = Hong = 0 exactly rather than
+        // round-off of order ε·σ₁ (the rank decision and these measures agree).
+        for s in &mut sigma {
+            if *s <= tolerance {
+                *s = 0.0;
+            }
+        }
         let rank = sigma.iter().filter(|&&s| s > tolerance).count();
         let full = rank == m;
         let s_max = sigma.first().copied().unwrap_or(0.0);
         let s_min = sigma.last().copied().unwrap_or(0.0);
         let w: f64 = sigma.iter().product();
         let isotropy = if s_max > 0.0 { s_min / s_max } else { 0.0 };
-        let axes = u.columns(0, m).into_owned();
         let c_m = ellipsoid_volume_coefficient(m);
         let force_radii: Vec<Option<f64>> = sigma
             .iter()
             .map(|&s| if s > tolerance { Some(1.0 / s) } else { None })
             .collect();
+        let radii = sigma.iter().map(|&s| Some(s)).collect();
         Measures {
-            singular_values: sigma.to_vec(),
+            singular_values: sigma,
             rank,
             yoshikawa: w,
             condition_number: full.then(|| s_max / s_min),
@@ -201,13 +226,13 @@ impl Measures {
             hong: w * isotropy,
             force_manipulability: full.then(|| 1.0 / w),
             ellipsoid: Ellipsoid {
-                radii: sigma.iter().map(|&s| Some(s)).collect(),
-                axes: axes.clone(),
+                radii,
+                axes: u.clone(),
                 volume: Some(c_m * w),
             },
             force_ellipsoid: Ellipsoid {
                 radii: force_radii,
-                axes,
+                axes: u,
                 volume: full.then(|| c_m / w),
             },
         }
@@ -216,71 +241,120 @@ impl Measures {
 
 /// Measures of a Jacobian (any m×n, e.g. a row selection).
 ///
-/// For m ≤ n (every task selection of a 6-row Jacobian) the spectrum comes from the
-/// symmetric eigenproblem JJᵀ = UΛUᵀ, σᵢ = √λᵢ — Yoshikawa's own route (w = √det JJᵀ, Lim
-/// eq. 2.19) and several times faster than a general SVD. Squaring costs accuracy only for
-/// σᵢ below √ε·σ₁ ≈ 1.5·10⁻⁸σ₁, so the rank tolerance on this path is √(mε)·σ₁: a posture
-/// within that of a singularity is reported as singular. For m > n, [`full_svd`].
+/// For m ≤ n (every task selection of a 6-row Jacobian) the m rows of J are rotated by
+/// one-sided Jacobi until orthogonal (`jacobi`): the accumulated rotations are U (the
+/// ellipsoid axes) and the row lengths are σ; V is never formed. For m > n, [`full_svd`].
+/// Rank tolerance: [`RANK_TOLERANCE`]·σ₁, as [`full_svd`].
 pub fn measures(j: &DMatrix<f64>) -> Result<Measures, Error> {
-    let (m, n) = j.shape();
     check_jacobian(j)?;
-    if m > n {
+    if j.nrows() > j.ncols() {
         return Ok(measures_from_svd(&full_svd(j)?));
     }
-    let (lambda, vectors): (Vec<f64>, DMatrix<f64>) = if m == 3 {
-        // Static 3×3 path: JJᵀ as a sum of column outer products, no heap.
-        let mut a = nalgebra::Matrix3::zeros();
-        for c in j.column_iter() {
-            let v = nalgebra::Vector3::new(c[0], c[1], c[2]);
-            a += v * v.transpose();
-        }
-        let eig = nalgebra::SymmetricEigen::new(a);
-        (
-            eig.eigenvalues.iter().copied().collect(),
-            DMatrix::from_column_slice(3, 3, eig.eigenvectors.as_slice()),
-        )
-    } else {
-        let eig = SymmetricEigen::new(j * j.transpose());
-        (eig.eigenvalues.iter().copied().collect(), eig.eigenvectors)
-    };
-    let mut order: Vec<usize> = (0..m).collect();
-    order.sort_by(|&a, &b| lambda[b].total_cmp(&lambda[a]));
-    let sigma: Vec<f64> = order.iter().map(|&i| lambda[i].max(0.0).sqrt()).collect();
-    let mut u = DMatrix::zeros(m, m);
-    for (dst, &src) in order.iter().enumerate() {
-        u.set_column(dst, &vectors.column(src));
+    Ok(wide_measures(j, j.nrows(), |p| p))
+}
+
+/// Measures of the rows `rows` of `j` (Jun eq. 9), as [`measures`] of [`select_rows`] but
+/// without forming the selection.
+pub fn row_measures(j: &DMatrix<f64>, rows: &[usize]) -> Result<Measures, Error> {
+    check_rows(j, rows)?;
+    check_jacobian(j)?;
+    if rows.len() > j.ncols() {
+        return Ok(measures_from_svd(&full_svd(&j.select_rows(rows))?));
     }
-    let tol = ((m as f64) * f64::EPSILON).sqrt() * sigma[0];
-    Ok(Measures::from_spectrum(&sigma, &u, tol))
+    Ok(wide_measures(j, rows.len(), |p| rows[p]))
+}
+
+/// [`row_measures`] of two row selections of the same size at once (the analysis's
+/// translational and rotational rows), with identical results: the two independent Jacobi
+/// problems are swept in lockstep, so the processor overlaps their rotations, which within
+/// one 3-row problem all depend on each other.
+pub fn row_measures_pair(j: &DMatrix<f64>, rows: [&[usize]; 2]) -> Result<[Measures; 2], Error> {
+    check_rows(j, rows[0])?;
+    check_rows(j, rows[1])?;
+    check_jacobian(j)?;
+    let (g, n) = (rows[0].len(), j.ncols());
+    if rows[1].len() != g || g > n {
+        return Ok([row_measures(j, rows[0])?, row_measures(j, rows[1])?]);
+    }
+    let k = 2 * g;
+    jacobi::with_scratch(k * n + 2 * g * g + k, |scratch: &mut [f64]| {
+        let (a, rest) = scratch.split_at_mut(k * n);
+        let (w, sigma) = rest.split_at_mut(2 * g * g);
+        for (v, &r) in a
+            .chunks_exact_mut(n)
+            .zip(rows[0].iter().chain(rows[1].iter()))
+        {
+            for (c, x) in v.iter_mut().enumerate() {
+                *x = j[(r, c)];
+            }
+        }
+        jacobi::with_scratch(k, |order: &mut [usize]| {
+            jacobi::decompose(a, n, 2, w, sigma, order);
+        });
+        let measures = |grp: usize| {
+            let tol = RANK_TOLERANCE * sigma[grp * g];
+            Measures::from_owned_spectrum(
+                sigma[grp * g..(grp + 1) * g].to_vec(),
+                DMatrix::from_column_slice(g, g, &w[grp * g * g..(grp + 1) * g * g]),
+                tol,
+            )
+        };
+        Ok([measures(0), measures(1)])
+    })
+}
+
+/// Measures of the m×n matrix whose row p is row `row(p)` of `j`, for m ≤ n (the callers
+/// check), by one-sided Jacobi on its rows.
+fn wide_measures(j: &DMatrix<f64>, m: usize, row: impl Fn(usize) -> usize) -> Measures {
+    let n = j.ncols();
+    let mut u = DMatrix::<f64>::zeros(m, m);
+    let mut sigma = vec![0.0; m];
+    jacobi::with_scratch(m * n, |a: &mut [f64]| {
+        for (p, v) in a.chunks_exact_mut(n).enumerate() {
+            let r = row(p);
+            for (c, x) in v.iter_mut().enumerate() {
+                *x = j[(r, c)];
+            }
+        }
+        jacobi::with_scratch(m, |order: &mut [usize]| {
+            jacobi::decompose(a, n, 1, u.as_mut_slice(), &mut sigma, order);
+        });
+    });
+    let tol = RANK_TOLERANCE * sigma[0];
+    Measures::from_owned_spectrum(sigma, u, tol)
 }
 
 /// Measures from an SVD already computed of an m×`n` Jacobian.
 pub fn measures_from_svd(svd: &FullSvd) -> Measures {
-    Measures::from_spectrum(svd.sigma.as_slice(), &svd.u, svd.tolerance)
+    Measures::from_owned_spectrum(svd.sigma.as_slice().to_vec(), svd.u.clone(), svd.tolerance)
 }
 
 /// The rows of `j` listed in `rows` (Jun eq. 9: the task-oriented Jacobian).
 pub fn select_rows(j: &DMatrix<f64>, rows: &[usize]) -> Result<DMatrix<f64>, Error> {
+    check_rows(j, rows)?;
+    Ok(j.select_rows(rows))
+}
+
+/// `rows` must be a non-empty list of distinct rows of `j`.
+fn check_rows(j: &DMatrix<f64>, rows: &[usize]) -> Result<(), Error> {
     if rows.is_empty() {
         return Err(Error::InvalidRows {
             reason: "at least one row is needed".into(),
         });
     }
-    let mut seen = [false; 64];
-    for &r in rows {
+    for (i, &r) in rows.iter().enumerate() {
         if r >= j.nrows() {
             return Err(Error::InvalidRows {
                 reason: format!("row {r} is out of range 0..{}", j.nrows()),
             });
         }
-        if seen[r] {
+        if rows[..i].contains(&r) {
             return Err(Error::InvalidRows {
                 reason: format!("row {r} is repeated"),
             });
         }
-        seen[r] = true;
     }
-    Ok(j.select_rows(rows))
+    Ok(())
 }
 
 /// The four fundamental subspaces from the SVD (RX90 report part VI), each an orthonormal
@@ -307,22 +381,57 @@ pub fn subspaces(j: &DMatrix<f64>) -> Result<Subspaces, Error> {
 /// Subspaces from a full SVD (with `v`).
 pub fn subspaces_from_svd(svd: &FullSvd) -> Subspaces {
     let (m, n) = (svd.u.nrows(), svd.v.nrows());
-    let tol = svd.tolerance;
-    let rank = svd
-        .sigma
-        .iter()
-        .take(m.min(n))
-        .filter(|&&s| s > tol)
-        .count();
-    let cols = |mat: &DMatrix<f64>, range: std::ops::Range<usize>| -> DMatrix<f64> {
-        mat.columns(range.start, range.end - range.start)
-            .into_owned()
-    };
+    let rank = svd.rank();
     Subspaces {
         rank,
-        null_space: cols(&svd.v, rank..n),
-        generating: cols(&svd.v, 0..rank),
-        range: cols(&svd.u, 0..rank),
-        unreachable: cols(&svd.u, rank..m),
+        null_space: columns(&svd.v, rank..n),
+        generating: columns(&svd.v, 0..rank),
+        range: columns(&svd.u, 0..rank),
+        unreachable: columns(&svd.u, rank..m),
+    }
+}
+
+/// Columns `range` of `mat` (a contiguous copy of its column-major storage).
+fn columns(mat: &DMatrix<f64>, range: std::ops::Range<usize>) -> DMatrix<f64> {
+    let r = mat.nrows();
+    DMatrix::from_column_slice(
+        r,
+        range.len(),
+        &mat.as_slice()[range.start * r..range.end * r],
+    )
+}
+
+impl FullSvd {
+    /// Number of σ above the tolerance.
+    pub fn rank(&self) -> usize {
+        let k = self.u.nrows().min(self.v.nrows());
+        self.sigma
+            .iter()
+            .take(k)
+            .filter(|&&s| s > self.tolerance)
+            .count()
+    }
+
+    /// [`measures_from_svd`] and [`subspaces_from_svd`] at once, reusing the storage of U
+    /// and V instead of copying it where possible.
+    pub fn into_measures_and_subspaces(self) -> (Measures, Subspaces) {
+        let (m, n) = (self.u.nrows(), self.v.nrows());
+        let rank = self.rank();
+        let null_space = columns(&self.v, rank..n);
+        let generating = if rank == n {
+            self.v
+        } else {
+            columns(&self.v, 0..rank)
+        };
+        let subspaces = Subspaces {
+            rank,
+            null_space,
+            generating,
+            range: columns(&self.u, 0..rank),
+            unreachable: columns(&self.u, rank..m),
+        };
+        let measures =
+            Measures::from_owned_spectrum(Vec::from(self.sigma.data), self.u, self.tolerance);
+        (measures, subspaces)
     }
 }

@@ -7,6 +7,7 @@
 //! * [`polytope`]: velocity polytopes, single and dual (Kilic §3.2).
 
 pub mod dual;
+mod jacobi;
 pub mod jlm;
 pub mod measures;
 pub mod polytope;
@@ -14,7 +15,7 @@ pub mod polytope;
 pub use dual::{dual_measures, dual_shape_matrix};
 pub use jlm::{jlm, jlm_gradient};
 pub use measures::{
-    Ellipsoid, FullSvd, Measures, Subspaces, full_svd, measures, measures_from_svd, select_rows,
-    subspaces, subspaces_from_svd,
+    Ellipsoid, FullSvd, Measures, Subspaces, full_svd, measures, measures_from_svd, row_measures,
+    row_measures_pair, select_rows, subspaces, subspaces_from_svd,
 };
 pub use polytope::{Polytope, convex_hull, dual_velocity_polytope, velocity_polytope};

@@ -26,24 +26,31 @@ fn scaled(a: f64, e: i32) -> Option<f64> {
 
 /// Appends `x` as `format!("{x:.6e}")` would.
 pub fn push_sci6(out: &mut String, x: f64) {
-    if let Some((negative, m, e)) = digits(x) {
-        if negative {
-            out.push('-');
-        }
-        let lead = (m / 1_000_000) as u8;
-        out.push(char::from(b'0' + lead));
-        out.push('.');
-        let mut rest = m % 1_000_000;
-        let mut frac = [b'0'; 6];
-        for d in frac.iter_mut().rev() {
-            *d = b'0' + (rest % 10) as u8;
-            rest /= 10;
-        }
-        out.push_str(std::str::from_utf8(&frac).unwrap_or("000000"));
-        let _ = write!(out, "e{e}");
-    } else {
+    let Some((negative, m, e)) = digits(x) else {
         let _ = write!(out, "{x:.6e}");
+        return;
+    };
+    if negative {
+        out.push('-');
     }
+    let digit = |d: u64| char::from(b'0' + (d % 10) as u8);
+    out.push(digit(m / 1_000_000));
+    out.push('.');
+    for p in [100_000, 10_000, 1_000, 100, 10, 1] {
+        out.push(digit(m / p));
+    }
+    out.push('e');
+    if e < 0 {
+        out.push('-');
+    }
+    let a = e.unsigned_abs() as u64;
+    if a >= 100 {
+        out.push(digit(a / 100));
+    }
+    if a >= 10 {
+        out.push(digit(a / 10));
+    }
+    out.push(digit(a));
 }
 
 /// (sign, 7-digit mantissa, exponent), or `None` where the standard formatter decides.
@@ -52,7 +59,10 @@ fn digits(x: f64) -> Option<(bool, u64, i32)> {
         return None;
     }
     let a = x.abs();
-    let mut e = a.log10().floor() as i32;
+    // ⌊log₁₀ a⌋ from the binary exponent (within one; corrected below). Subnormals are
+    // below the exact-power range anyway.
+    let e2 = ((a.to_bits() >> 52) & 0x7ff) as i32 - 1023;
+    let mut e = (e2 as f64 * std::f64::consts::LOG10_2).floor() as i32;
     let mut s = scaled(a, e)?;
     // log10 can be off by one next to a power of ten.
     if s < 1e6 {

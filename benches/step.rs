@@ -5,35 +5,10 @@
 use std::hint::black_box;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use seaarms_core::sim::scenario::{Scenario, scenario};
 use seaarms_core::sim::{ControlMethod, Input, SimParams, Simulation};
-use seaarms_core::{Model, ModelSpec, robots};
+mod common;
 
-fn magnum() -> Model {
-    let text = robots::builtin_text("magnum").expect("magnum");
-    let spec: ModelSpec = serde_json::from_str(text).expect("json");
-    Model::from_spec(&spec).expect("model")
-}
-
-/// A simulation advanced to the point of `case4-dual-closed-loop` where both jaws hold.
-fn holding_sim() -> Simulation {
-    let m = magnum();
-    let sc: Scenario = scenario("case4-dual-closed-loop", &m, &m).expect("scenario");
-    let mut sim = Simulation::new(m.clone(), m, sc.params.clone()).expect("sim");
-    let mut t = 0.0;
-    for seg in &sc.segments {
-        if sim.arm(0).holding && sim.arm(1).holding {
-            break;
-        }
-        let n = (seg.duration_s / 1e-3).round() as usize;
-        for _ in 0..n {
-            let inp = sc.input_at(&sim, seg, t);
-            sim.step(&inp);
-            t += 1e-3;
-        }
-    }
-    sim
-}
+use common::{holding_sim, magnum};
 
 fn bench_step(c: &mut Criterion) {
     let m = magnum();
@@ -50,7 +25,7 @@ fn bench_step(c: &mut Criterion) {
             free.step(black_box(&moving));
         })
     });
-    let base = holding_sim();
+    let base = holding_sim(&m);
     let mut held = base.clone();
     let hold = Input::default();
     c.bench_function("step_both_holding_open_loop", |b| {

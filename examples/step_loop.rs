@@ -6,34 +6,11 @@
 //! `cargo build --release --example step_loop; valgrind --tool=callgrind --collect-atstart=no
 //! --toggle-collect='*step_loop::run*' target/release/examples/step_loop coop 1000`.
 
-use seaarms_core::sim::scenario::{Scenario, scenario};
 use seaarms_core::sim::{ControlMethod, Input, SimParams, Simulation};
-use seaarms_core::{Model, ModelSpec, robots};
+#[path = "../benches/common/mod.rs"]
+mod common;
 
-fn magnum() -> Model {
-    let text = robots::builtin_text("magnum").expect("magnum");
-    let spec: ModelSpec = serde_json::from_str(text).expect("json");
-    Model::from_spec(&spec).expect("model")
-}
-
-/// Steps `case4-dual-closed-loop` until both jaws hold.
-fn holding_sim(m: &Model) -> Simulation {
-    let sc: Scenario = scenario("case4-dual-closed-loop", m, m).expect("scenario");
-    let mut sim = Simulation::new(m.clone(), m.clone(), sc.params.clone()).expect("sim");
-    let mut t = 0.0;
-    for seg in &sc.segments {
-        if sim.arm(0).holding && sim.arm(1).holding {
-            break;
-        }
-        let n = (seg.duration_s / 1e-3).round() as usize;
-        for _ in 0..n {
-            let inp = sc.input_at(&sim, seg, t);
-            sim.step(&inp);
-            t += 1e-3;
-        }
-    }
-    sim
-}
+use common::{holding_sim, magnum};
 
 /// The measured loop (callgrind: `--collect-atstart=no --toggle-collect='*step_loop::run*'`
 /// counts only this, not the set-up).

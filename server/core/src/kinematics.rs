@@ -65,14 +65,6 @@ pub fn forward_kinematics(model: &Model, data: &mut KinData, q: &[f64]) {
     );
 }
 
-/// A joint frame as a quaternion isometry (for output and for callers that compose poses).
-pub fn frame_isometry(frame: &IsometryMatrix3<f64>) -> Isometry3<f64> {
-    Isometry3::from_parts(
-        frame.translation,
-        UnitQuaternion::from_rotation_matrix(&frame.rotation),
-    )
-}
-
 /// Forward kinematics followed by the geometric Jacobian (Lim §2.3; RX90 report part II:
 /// column k = [a_k × (P_n − P_k); a_k] for revolute joints, [a_k; 0] for prismatic ones).
 pub fn jacobian(model: &Model, data: &mut KinData, q: &[f64]) {

@@ -92,16 +92,6 @@ impl<const N: usize> Cholesky<N> {
         }
         x
     }
-
-    /// X with A·X = B, column by column.
-    pub fn solve_columns<const K: usize>(&self, b: &SMatrix<f64, N, K>) -> SMatrix<f64, N, K> {
-        let mut x = SMatrix::<f64, N, K>::zeros();
-        for c in 0..K {
-            let col: SVector<f64, N> = b.column(c).into_owned();
-            x.set_column(c, &self.solve(&col));
-        }
-        x
-    }
 }
 
 #[cfg(test)]
@@ -139,7 +129,9 @@ mod tests {
             let x = ours.solve(&b);
             assert!((a * x - b).norm() < 1e-9 * b.norm() * a.norm());
             let bm = Matrix6::from_fn(|r, c| (r as f64 + 1.0) * (c as f64 - 2.5));
-            let xm = ours.solve_columns(&bm);
+            let xm = Matrix6::from_columns(&core::array::from_fn::<_, 6, _>(|c| {
+                ours.solve(&bm.column(c).into_owned())
+            }));
             assert!((a * xm - bm).norm() < 1e-9 * bm.norm() * a.norm());
             // Congruence through the half solve: B·A⁻¹·Bᵀ = ZᵀZ with Z = L⁻¹Bᵀ.
             let z = ours.forward_columns(&bm.transpose());

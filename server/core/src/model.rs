@@ -11,7 +11,7 @@
 //! and the fixed part after it, so joint `i`'s fixed part becomes joint `i+1`'s `origin`, and
 //! the last one becomes the model's `flange`.
 
-use nalgebra::{Isometry3, IsometryMatrix3, Matrix3, Rotation3, Translation3, Unit, Vector3};
+use nalgebra::{Isometry3, IsometryMatrix3, Matrix3, Rotation3, Unit, Vector3};
 use serde::{Deserialize, Serialize};
 
 use crate::Error;
@@ -47,21 +47,6 @@ pub struct Joint {
 }
 
 impl Joint {
-    /// Transform of this joint's motion for joint value `q` (offset included).
-    pub fn motion(&self, q: f64) -> IsometryMatrix3<f64> {
-        let v = q + self.offset;
-        match self.kind {
-            JointKind::Revolute => IsometryMatrix3::from_parts(
-                Translation3::identity(),
-                Rotation3::from_axis_angle(&self.axis, v),
-            ),
-            JointKind::Prismatic => IsometryMatrix3::from_parts(
-                Translation3::from(self.axis.into_inner() * v),
-                Rotation3::identity(),
-            ),
-        }
-    }
-
     /// `r`·R(axis, q + offset): a frame's rotation followed by this revolute joint's motion.
     /// For the z axis of every DH convention only two columns change (c·r₀ + s·r₁,
     /// −s·r₀ + c·r₁), which is what forward kinematics spends its time on.

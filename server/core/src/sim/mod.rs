@@ -788,7 +788,7 @@ impl Simulation {
         let mut bias = [Vector6::zeros(); 2];
         let mut damp = [[0.0; N_ACT]; 2];
         // Z = L⁻¹Jᵀ per holding arm (see below).
-        let mut y = [Matrix6::zeros(); 2];
+        let mut z = [Matrix6::zeros(); 2];
         let mut jdqd = [Vector6::zeros(); 2];
         // Actuator coordinate x, Ĵ and q at the start of the step; within the step
         // x = x₀ + Ĵ·(q − q₀) (the linkage curvature changes x by < 1 µm over 1 ms).
@@ -829,7 +829,7 @@ impl Simulation {
             if let (Some(ch), true) = (&chol[i], a.holding) {
                 // Z = L⁻¹Jᵀ (H̃ = LLᵀ): J·H̃⁻¹·Jᵀ = ZᵀZ, H̃⁻¹Jᵀf = L⁻ᵀ(Zf). Only a holding
                 // arm enters the constraint solve.
-                y[i] = ch.forward_columns(&w.jw.transpose());
+                z[i] = ch.forward_columns(&w.jw.transpose());
             }
         }
         // Object inertia (world) and its inverse.
@@ -870,7 +870,7 @@ impl Simulation {
                 }
                 let mut blk = grasp::mobility_block(&r[i], &r[k], 1.0 / op.mass_kg, &iw_inv);
                 if i == k {
-                    blk += y[i].tr_mul(&y[i]) + Matrix6::identity() * sp.constraint_compliance;
+                    blk += z[i].tr_mul(&z[i]) + Matrix6::identity() * sp.constraint_compliance;
                 }
                 big.fixed_view_mut::<6, 6>(6 * i, 6 * k).copy_from(&blk);
             }
@@ -1001,7 +1001,7 @@ impl Simulation {
                     let fi: Vector6<f64> = f.fixed_rows::<6>(6 * i).into();
                     fc[i] = fi;
                     if let Some(ch) = &chol[i] {
-                        qdd_free[i] -= ch.backward(&(y[i] * fi));
+                        qdd_free[i] -= ch.backward(&(z[i] * fi));
                     }
                     acc_o += mo_inv * grasp::wrench_at_com(&r[i], &fi);
                 }

@@ -429,13 +429,6 @@ impl Row {
         h
     }
 
-    /// Values as strings, in header order.
-    pub fn values(&self) -> Vec<String> {
-        let mut line = String::new();
-        self.write_csv(&mut line);
-        line.split(',').map(str::to_string).collect()
-    }
-
     /// Appends this row as one CSV line (no newline), fields in [`Row::header`] order: times
     /// with 3 decimals, numbers as `{:.6e}` (via [`super::sci::push_sci6`]), names verbatim
     /// (stage letters and grasp-state names contain no commas or quotes).

@@ -49,7 +49,7 @@ pub fn forward_kinematics(model: &Model, data: &mut KinData, q: &[f64]) {
     let mut p = Vector3::zeros();
     for ((joint, frame), &qi) in model.joints.iter().zip(data.joint_frames.iter_mut()).zip(q) {
         p += r * joint.origin.translation.vector;
-        r *= joint.origin.rotation.matrix();
+        r = joint.origin_rotation.after(&r);
         match joint.kind {
             JointKind::Revolute => r = joint.rotate_frame(&r, qi),
             JointKind::Prismatic => p += r * (joint.axis.into_inner() * (qi + joint.offset)),
@@ -57,7 +57,7 @@ pub fn forward_kinematics(model: &Model, data: &mut KinData, q: &[f64]) {
         *frame = IsometryMatrix3::from_parts(p.into(), Rotation3::from_matrix_unchecked(r));
     }
     p += r * model.flange.translation.vector;
-    r *= model.flange.rotation.matrix();
+    r = model.flange_rotation.after(&r);
     data.tool_point = p + r * model.tool;
     data.flange = Isometry3::from_parts(
         p.into(),

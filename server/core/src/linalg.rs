@@ -1,4 +1,4 @@
-//! Small dense factorizations for the 1 kHz step: a fixed-size Cholesky factor of a symmetric
+//! Small dense factorizations for the 1 kHz step: a fixed-size factor of a symmetric
 //! positive definite N×N matrix (the arms' 6×6 mass matrices, the 12×12 grasp constraint
 //! matrix) kept in plain arrays, so that factor and solves compile to straight-line loops
 //! without the generic machinery of a library decomposition.
@@ -8,81 +8,120 @@
 
 use nalgebra::{SMatrix, SVector};
 
-/// A = L·Lᵀ with L lower triangular (Golub & Van Loan, Matrix Computations, 4th ed., Alg. 4.2.2,
-/// the outer-product/column form), for a fixed N.
+/// A = L·D·Lᵀ with L unit lower triangular and D diagonal positive, i.e. the Cholesky
+/// factorization A = L̃·L̃ᵀ with L̃ = L·D^½ (Golub & Van Loan, Matrix Computations, 4th ed.,
+/// §4.1.2 and Alg. 4.2.2), for a fixed N.
+///
+/// The LDLᵀ recurrence is used instead of the square-root form because it keeps the square
+/// root off the critical path: each row waits only for one division (1/D of the row
+/// before), and the √D_j needed by the half solves ([`Cholesky::forward`], [`Cholesky::backward`])
+/// are computed independently of the recurrence. Rows are built left to right (Crout
+/// order), so a row depends on the rows above it only.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Cholesky<const N: usize> {
-    /// Row-major lower triangle of L (entries above the diagonal are zero).
+    /// Row-major strictly lower part of the unit lower triangular L (the diagonal is 1 and
+    /// is not stored; entries on and above it are zero and never read).
     l: [[f64; N]; N],
-    /// 1 / L[i][i].
-    inv_diag: [f64; N],
+    /// 1 / D_j.
+    inv_d: [f64; N],
+    /// 1 / √D_j (the diagonal of L̃⁻¹ up to the unit factor).
+    inv_sqrt_d: [f64; N],
 }
 
 impl<const N: usize> Cholesky<N> {
-    /// Factors `a` (only its lower triangle is read). `None` unless every pivot is positive
-    /// and finite, i.e. unless `a` is numerically positive definite.
+    /// Factors `a` (only its lower triangle is read). `None` unless every pivot D_j is
+    /// positive and finite, i.e. unless `a` is numerically positive definite.
     pub fn factor(a: &SMatrix<f64, N, N>) -> Option<Self> {
         // Built in place (no copy of the factor on return).
         let mut out = Cholesky {
             l: [[0.0; N]; N],
-            inv_diag: [0.0; N],
+            inv_d: [0.0; N],
+            inv_sqrt_d: [0.0; N],
         };
-        let Cholesky { l, inv_diag } = &mut out;
+        let Cholesky {
+            l,
+            inv_d,
+            inv_sqrt_d,
+        } = &mut out;
         // Branch-free inside (the loops unroll); one verdict at the end. NaN fails `d > 0`.
         let mut positive = true;
-        for j in 0..N {
-            let mut d = a[(j, j)];
-            for k in 0..j {
-                d -= l[j][k] * l[j][k];
-            }
-            positive &= d > 0.0 && d < f64::INFINITY;
-            let ljj = d.sqrt();
-            let inv = 1.0 / ljj;
-            l[j][j] = ljj;
-            inv_diag[j] = inv;
-            for i in j + 1..N {
+        for i in 0..N {
+            // u[j] = L[i][j]·D_j, the row before scaling (Crout: a_ij − Σ_k<j u_k·L[j][k]).
+            let mut u = [0.0; N];
+            for j in 0..i {
                 let mut s = a[(i, j)];
                 for k in 0..j {
-                    s -= l[i][k] * l[j][k];
+                    s -= u[k] * l[j][k];
                 }
-                l[i][j] = s * inv;
+                u[j] = s;
+                l[i][j] = s * inv_d[j];
             }
+            let mut d = a[(i, i)];
+            for k in 0..i {
+                d -= u[k] * l[i][k];
+            }
+            positive &= d > 0.0 && d < f64::INFINITY;
+            inv_d[i] = 1.0 / d;
+        }
+        // Off the recurrence's critical path: independent square roots.
+        for i in 0..N {
+            inv_sqrt_d[i] = inv_d[i].sqrt();
         }
         positive.then_some(out)
     }
 
-    /// L⁻¹·b (forward substitution).
-    pub fn forward(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+    /// L⁻¹·b with L unit lower triangular.
+    #[inline]
+    fn unit_forward(&self, b: &SVector<f64, N>) -> [f64; N] {
         let mut y = [0.0; N];
         for i in 0..N {
             let mut s = b[i];
             for k in 0..i {
                 s -= self.l[i][k] * y[k];
             }
-            y[i] = s * self.inv_diag[i];
+            y[i] = s;
         }
-        SVector::from(y)
+        y
     }
 
-    /// L⁻ᵀ·y (back substitution).
-    pub fn backward(&self, y: &SVector<f64, N>) -> SVector<f64, N> {
-        let mut x = [0.0; N];
+    /// L⁻ᵀ·y with L unit lower triangular.
+    #[inline]
+    fn unit_backward(&self, mut x: [f64; N]) -> SVector<f64, N> {
         for i in (0..N).rev() {
-            let mut s = y[i];
+            let mut s = x[i];
             for k in i + 1..N {
                 s -= self.l[k][i] * x[k];
             }
-            x[i] = s * self.inv_diag[i];
+            x[i] = s;
         }
         SVector::from(x)
     }
 
-    /// x with A·x = b.
-    pub fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
-        self.backward(&self.forward(b))
+    /// L̃⁻¹·b = D^-½·L⁻¹·b (forward substitution with the Cholesky factor L̃ = L·D^½).
+    pub fn forward(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+        let mut y = self.unit_forward(b);
+        for i in 0..N {
+            y[i] *= self.inv_sqrt_d[i];
+        }
+        SVector::from(y)
     }
 
-    /// L⁻¹·B, column by column. With Z = L⁻¹·Jᵀ, J·A⁻¹·Jᵀ = ZᵀZ and A⁻¹·Jᵀ·f = L⁻ᵀ·(Z·f): one
+    /// L̃⁻ᵀ·y = L⁻ᵀ·D^-½·y (back substitution with the Cholesky factor).
+    pub fn backward(&self, y: &SVector<f64, N>) -> SVector<f64, N> {
+        let x: [f64; N] = core::array::from_fn(|i| y[i] * self.inv_sqrt_d[i]);
+        self.unit_backward(x)
+    }
+
+    /// x with A·x = b: L⁻ᵀ·D⁻¹·L⁻¹·b.
+    pub fn solve(&self, b: &SVector<f64, N>) -> SVector<f64, N> {
+        let mut y = self.unit_forward(b);
+        for i in 0..N {
+            y[i] *= self.inv_d[i];
+        }
+        self.unit_backward(y)
+    }
+
+    /// L̃⁻¹·B, column by column. With Z = L̃⁻¹·Jᵀ, J·A⁻¹·Jᵀ = ZᵀZ and A⁻¹·Jᵀ·f = L̃⁻ᵀ·(Z·f): one
     /// triangular solve per column instead of two.
     pub fn forward_columns<const K: usize>(&self, b: &SMatrix<f64, N, K>) -> SMatrix<f64, N, K> {
         let mut x = SMatrix::<f64, N, K>::zeros();
@@ -122,7 +161,14 @@ mod tests {
             let l = theirs.l();
             for i in 0..6 {
                 for j in 0..=i {
-                    assert!((ours.l[i][j] - l[(i, j)]).abs() < 1e-12, "L[{i},{j}]");
+                    // L̃ = L·D^½ (unit L, stored 1/√D).
+                    let sqrt_d = 1.0 / ours.inv_sqrt_d[j];
+                    let ours_ij = if i == j {
+                        sqrt_d
+                    } else {
+                        ours.l[i][j] * sqrt_d
+                    };
+                    assert!((ours_ij - l[(i, j)]).abs() < 1e-12, "L[{i},{j}]");
                 }
             }
             let b = Vector6::new(1.0, -2.0, 3.0, 0.5, -0.25, 4.0);

@@ -36,6 +36,8 @@ pub struct Joint {
     /// Fixed transform from the previous joint's moving frame (or the base) to this joint's frame
     /// (rotation stored as a matrix: forward kinematics multiplies matrices).
     pub origin: IsometryMatrix3<f64>,
+    /// `origin`'s rotation in the form forward kinematics applies it.
+    pub origin_rotation: FixedRotation,
     /// Motion axis, unit, in this joint's frame (z for every DH convention).
     pub axis: Unit<Vector3<f64>>,
     /// Added to q before the motion: DH θ for revolute joints, DH d for prismatic ones.
@@ -83,6 +85,8 @@ pub struct Model {
     pub joints: Vec<Joint>,
     /// Fixed transform from the last joint's moving frame to the last link frame.
     pub flange: IsometryMatrix3<f64>,
+    /// `flange`'s rotation in the form forward kinematics applies it.
+    pub flange_rotation: FixedRotation,
     /// Tool point in the last link frame (m); zero when the reference point is the flange origin.
     pub tool: Vector3<f64>,
     /// The specification this model was built from (returned by the API).
@@ -108,6 +112,19 @@ impl Model {
             return Err(Error::NonFinite { what: "q", index });
         }
         Ok(())
+    }
+
+    /// The same robot with its base frame placed at `base`: forward kinematics, Jacobians and
+    /// the dynamics then come out in the frame `base` is given in (e.g. the world of a
+    /// two-arm simulation) with no transformation afterwards.
+    pub fn based_at(&self, base: &Isometry3<f64>) -> Model {
+        let mut m = self.clone();
+        if let Some(first) = m.joints.first_mut() {
+            let (origin, form) = FixedRotation::of(&(as_matrix_isometry(base) * first.origin));
+            first.origin = origin;
+            first.origin_rotation = form;
+        }
+        m
     }
 
     /// Lower and upper position limits as two vectors.
@@ -180,10 +197,12 @@ impl Model {
                     }
                 }
             };
+            let (origin, origin_rotation) = FixedRotation::of(&as_matrix_isometry(&origin));
             joints.push(Joint {
                 name,
                 kind: js.kind,
-                origin: as_matrix_isometry(&origin),
+                origin,
+                origin_rotation,
                 axis: z,
                 offset,
                 limits: [lo, hi],
@@ -202,14 +221,84 @@ impl Model {
             }
             None => Vector3::zeros(),
         };
+        let (flange, flange_rotation) = FixedRotation::of(&as_matrix_isometry(&pending));
         Ok(Model {
             name: spec.name.clone(),
             source: spec.source.clone().unwrap_or_default(),
             joints,
-            flange: as_matrix_isometry(&pending),
+            flange,
+            flange_rotation,
             tool,
             spec: spec.clone(),
         })
+    }
+}
+
+/// A fixed rotation of the chain (a joint's origin, the flange) in the form forward kinematics
+/// applies it. DH twists of 0 and ±90° — most of them — only permute and negate the columns
+/// of the frame they follow: R·M is then a shuffle of R's columns instead of a 3×3 product.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FixedRotation {
+    /// M = I.
+    Identity,
+    /// Column k of R·M is `sign[k]` × column `col[k]` of R (M a signed permutation).
+    Permutation {
+        /// Source column of R for each column of the product.
+        col: [usize; 3],
+        /// ±1.
+        sign: [f64; 3],
+    },
+    /// Any other rotation M.
+    General(Matrix3<f64>),
+}
+
+impl FixedRotation {
+    /// Entries this close to 0 or ±1 are taken as exact: a 90° twist built through a
+    /// quaternion comes out with round-off of ~1e-16 in its zero entries.
+    pub const SNAP: f64 = 1e-12;
+
+    /// Classifies the rotation of `t`; returns `t` with that rotation snapped to exact 0/±1
+    /// entries when it is a signed permutation (a change below [`Self::SNAP`]), and the form.
+    pub fn of(t: &IsometryMatrix3<f64>) -> (IsometryMatrix3<f64>, FixedRotation) {
+        let m = t.rotation.matrix();
+        let mut col = [0; 3];
+        let mut sign = [0.0; 3];
+        let mut exact = Matrix3::zeros();
+        for k in 0..3 {
+            // Column k of M must be ±e_c for one c.
+            let unit: Vec<usize> = (0..3)
+                .filter(|&r| (m[(r, k)].abs() - 1.0).abs() < Self::SNAP)
+                .collect();
+            let zeros = (0..3).filter(|&r| m[(r, k)].abs() < Self::SNAP).count();
+            if unit.len() != 1 || zeros != 2 {
+                return (*t, FixedRotation::General(*m));
+            }
+            col[k] = unit[0];
+            sign[k] = m[(unit[0], k)].signum();
+            exact[(unit[0], k)] = sign[k];
+        }
+        let snapped =
+            IsometryMatrix3::from_parts(t.translation, Rotation3::from_matrix_unchecked(exact));
+        let form = if exact == Matrix3::identity() {
+            FixedRotation::Identity
+        } else {
+            FixedRotation::Permutation { col, sign }
+        };
+        (snapped, form)
+    }
+
+    /// R·M.
+    #[inline]
+    pub fn after(&self, r: &Matrix3<f64>) -> Matrix3<f64> {
+        match self {
+            FixedRotation::Identity => *r,
+            FixedRotation::Permutation { col, sign } => Matrix3::from_columns(&[
+                r.column(col[0]) * sign[0],
+                r.column(col[1]) * sign[1],
+                r.column(col[2]) * sign[2],
+            ]),
+            FixedRotation::General(m) => r * m,
+        }
     }
 }
 
@@ -352,5 +441,70 @@ impl JointSpec {
             }
         }
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// R·M through [`FixedRotation::after`] equals the matrix product for twists of 0, ±90°,
+    /// 180° about x and y (signed permutations) and for a general angle; the snapped matrix
+    /// differs from the quaternion-built one by round-off only.
+    #[test]
+    fn fixed_rotation_matches_the_matrix_product() {
+        let r = Rotation3::from_euler_angles(0.3, -1.1, 2.0).into_inner();
+        let cases = [
+            (rx(0.0), "identity"),
+            (rx(std::f64::consts::FRAC_PI_2), "perm"),
+            (rx(-std::f64::consts::FRAC_PI_2), "perm"),
+            (ry(std::f64::consts::FRAC_PI_2), "perm"),
+            (rx(std::f64::consts::PI), "perm"),
+            (rx(0.7), "general"),
+            (rz(0.2) * rx(std::f64::consts::FRAC_PI_2), "general"),
+        ];
+        for (t, expect) in cases {
+            let m = as_matrix_isometry(&t);
+            let (snapped, form) = FixedRotation::of(&m);
+            let kind = match form {
+                FixedRotation::Identity => "identity",
+                FixedRotation::Permutation { .. } => "perm",
+                FixedRotation::General(_) => "general",
+            };
+            assert_eq!(kind, expect, "{t:?}");
+            let exact = r * m.rotation.matrix();
+            assert!((form.after(&r) - exact).norm() < 1e-15);
+            assert!((snapped.rotation.matrix() - m.rotation.matrix()).norm() < 1e-15);
+            assert_eq!(snapped.translation, m.translation);
+        }
+    }
+
+    /// A model placed at a base gives the base-frame results composed with the base:
+    /// tool pose T_world = B·T and Jacobian blockdiag(R_B, R_B)·J (Magnum, Lim Table 3-1).
+    #[test]
+    fn based_at_composes_the_base() {
+        let spec: ModelSpec =
+            serde_json::from_str(crate::robots::builtin_text("magnum").unwrap()).expect("parses");
+        let m = Model::from_spec(&spec).expect("builds");
+        let base = Isometry3::from_parts(
+            nalgebra::Translation3::new(0.3, 1.0, -0.2),
+            nalgebra::UnitQuaternion::from_euler_angles(0.1, -0.4, 0.9),
+        );
+        let placed = m.based_at(&base);
+        let q = [0.2, 0.7, -1.2, 0.3, -0.5, 1.0];
+        let t = crate::kinematics::end_effector_pose(&m, &q);
+        let tw = crate::kinematics::end_effector_pose(&placed, &q);
+        let expect = base * t;
+        assert!((tw.translation.vector - expect.translation.vector).norm() < 1e-14);
+        assert!(tw.rotation.angle_to(&expect.rotation) < 1e-12);
+        let j = crate::kinematics::jacobian_at(&m, &q);
+        let jw = crate::kinematics::jacobian_at(&placed, &q);
+        let rb = base.rotation.to_rotation_matrix().into_inner();
+        for k in 0..6 {
+            let lin: Vector3<f64> = rb * j.fixed_view::<3, 1>(0, k);
+            let ang: Vector3<f64> = rb * j.fixed_view::<3, 1>(3, k);
+            assert!((jw.fixed_view::<3, 1>(0, k) - lin).norm() < 1e-14);
+            assert!((jw.fixed_view::<3, 1>(3, k) - ang).norm() < 1e-14);
+        }
     }
 }

@@ -310,6 +310,8 @@ struct ArmWork {
 /// preallocated workspaces).
 #[derive(Debug, Clone)]
 pub struct Simulation {
+    /// The arm models with their bases composed in ([`Model::based_at`]): joint frames,
+    /// Jacobians, tool poses and the dynamics are all in the world frame.
     models: [Model; 2],
     params: SimParams,
     state: State,
@@ -416,8 +418,13 @@ impl Simulation {
             coop_ref: Isometry3::identity(),
             internal: [0.0; 6],
         };
+        // Bases composed into the models: kinematics and dynamics come out in the world frame.
+        let models = [
+            left.based_at(&params.arms[LEFT].base),
+            right.based_at(&params.arms[RIGHT].base),
+        ];
         let mut sim = Simulation {
-            models: [left, right],
+            models,
             params,
             state,
             work,
@@ -453,7 +460,6 @@ impl Simulation {
             // Pressures that hold the arm still: A_I P_I − A_O P_O = G/Ĵ, mean half supply.
             let w = &mut self.work[i];
             kinematics::jacobian(model, &mut w.kin, &a.q);
-            let gb = ap.base.rotation.inverse() * g;
             let mut tau = [0.0; N_ACT];
             let rho = if self.params.step.buoyancy {
                 self.params.step.water_density_kgm3
@@ -466,7 +472,7 @@ impl Simulation {
                 &w.kin,
                 &[0.0; N_ACT],
                 &[0.0; N_ACT],
-                &gb,
+                &g,
                 rho,
                 &mut tau,
                 &mut w.dynd,
@@ -507,21 +513,11 @@ impl Simulation {
 
     fn update_kinematics(&mut self) {
         for i in 0..2 {
-            let base = self.params.arms[i].base;
+            // The models carry their bases: these are world-frame results.
             let w = &mut self.work[i];
             kinematics::jacobian(&self.models[i], &mut w.kin, &self.state.arms[i].q);
-            w.tool = base * w.kin.end_effector();
-            let r = base.rotation.to_rotation_matrix();
-            let rm = r.matrix();
-            for k in 0..N_ACT {
-                let col = w.kin.jacobian.column(k);
-                let lin = rm * Vector3::new(col[0], col[1], col[2]);
-                let ang = rm * Vector3::new(col[3], col[4], col[5]);
-                for r in 0..3 {
-                    w.jw[(r, k)] = lin[r];
-                    w.jw[(r + 3, k)] = ang[r];
-                }
-            }
+            w.tool = w.kin.end_effector();
+            w.jw.copy_from(&w.kin.jacobian);
         }
     }
 
@@ -534,10 +530,6 @@ impl Simulation {
     /// Parameters (read-only).
     pub fn params(&self) -> &SimParams {
         &self.params
-    }
-    /// The two arm models.
-    pub fn models(&self) -> &[Model; 2] {
-        &self.models
     }
     /// Fault injection of arm `arm` (0 left, 1 right); changes apply from the next step.
     pub fn faults_mut(&mut self, arm: usize) -> &mut Faults {
@@ -800,15 +792,16 @@ impl Simulation {
             let model = &self.models[i];
             let a = &self.state.arms[i];
             let w = &self.work[i];
-            let gb = ap.base.rotation.inverse() * sp.gravity;
-            // H, C q̇ + G and J̇q̇ (q̈ = 0) in one pass (eq. 3.38).
-            let terms =
-                dynamics::step_terms::<N_ACT>(model, &ap.inertials, &w.kin, &a.qd, &gb, rho);
-            let jb = terms.tool_bias;
-            let rm = ap.base.rotation.to_rotation_matrix();
-            let l = rm * Vector3::new(jb[0], jb[1], jb[2]);
-            let an = rm * Vector3::new(jb[3], jb[4], jb[5]);
-            jdqd[i] = Vector6::new(l.x, l.y, l.z, an.x, an.y, an.z);
+            // H, C q̇ + G and J̇q̇ (q̈ = 0) in one pass (eq. 3.38), world frame.
+            let terms = dynamics::step_terms::<N_ACT>(
+                model,
+                &ap.inertials,
+                &w.kin,
+                &a.qd,
+                &sp.gravity,
+                rho,
+            );
+            jdqd[i] = Vector6::from(terms.tool_bias);
             let mut m = terms.mass_matrix;
             for r in 0..N_ACT {
                 let act = &ap.hydraulics.actuators[r];

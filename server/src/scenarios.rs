@@ -85,15 +85,18 @@ pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioErr
     let sc = scenario::scenario(name, &m, &m)?;
     // Rows are written straight into one buffer (Row::write_csv): every field is a number or
     // a fixed identifier, so no CSV quoting is needed.
-    let mut text = Row::header().join(",");
-    text.push('\n');
+    let mut text = Row::header().join(",").into_bytes();
+    text.push(b'\n');
     let mut rows = 0usize;
     let t0 = Instant::now();
     let s = scenario::run(&sc, &m, &m, |r| {
         r.write_csv(&mut text);
-        text.push('\n');
+        text.push(b'\n');
         rows += 1;
     })?;
+    // Numbers, identifiers and commas only: always valid UTF-8.
+    let text = String::from_utf8(text)
+        .unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned());
     let wall = t0.elapsed().as_secs_f64();
     Ok((
         ScenarioSummary {

@@ -429,13 +429,13 @@ impl Row {
         h
     }
 
-    /// Appends this row as one CSV line (no newline), fields in [`Row::header`] order: times
+    /// Appends this row as one CSV line (UTF-8 bytes, no newline), fields in [`Row::header`] order: times
     /// with 3 decimals, numbers as `{:.6e}` (via [`super::sci::push_sci6`]), names verbatim
     /// (stage letters and grasp-state names contain no commas or quotes).
-    pub fn write_csv(&self, out: &mut String) {
-        use std::fmt::Write;
-        let f = |out: &mut String, x: f64| {
-            out.push(',');
+    pub fn write_csv(&self, out: &mut Vec<u8>) {
+        use std::io::Write;
+        let f = |out: &mut Vec<u8>, x: f64| {
+            out.push(b',');
             super::sci::push_sci6(out, x);
         };
         let _ = write!(out, "{:.3},{}", self.t_s, self.stage);
@@ -460,8 +460,8 @@ impl Row {
         {
             f(out, x);
         }
-        out.push(',');
-        out.push_str(self.grasp.as_str());
+        out.push(b',');
+        out.extend_from_slice(self.grasp.as_str().as_bytes());
         for x in [
             self.yoshikawa[0],
             self.isotropy[0],

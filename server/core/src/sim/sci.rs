@@ -9,8 +9,6 @@
 //! decision is left to the standard formatter, as are zero, non-finite values and
 //! magnitudes outside 10⁻¹⁶ … 10²⁸.
 
-use std::fmt::Write;
-
 /// 10⁰ … 10²², all exact in f64.
 const POW10: [f64; 23] = [
     1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
@@ -24,33 +22,54 @@ fn scaled(a: f64, e: i32) -> Option<f64> {
     Some(if k >= 0 { a / p } else { a * p })
 }
 
-/// Appends `x` as `format!("{x:.6e}")` would.
-pub fn push_sci6(out: &mut String, x: f64) {
-    let Some((negative, m, e)) = digits(x) else {
+/// Appends `x` as `format!("{x:.6e}")` would, as UTF-8 bytes.
+pub fn push_sci6(out: &mut Vec<u8>, x: f64) {
+    // Zeros are common in the CSV (forces while not holding, idle inputs).
+    if x == 0.0 {
+        let text: &[u8] = if x.is_sign_negative() {
+            b"-0.000000e0"
+        } else {
+            b"0.000000e0"
+        };
+        out.extend_from_slice(text);
+        return;
+    }
+    let Some((negative, mut m, e)) = digits(x) else {
+        use std::io::Write;
         let _ = write!(out, "{x:.6e}");
         return;
     };
+    // "-d.dddddde-ddd" at most: assembled on the stack, appended once.
+    let mut buf = [0u8; 16];
+    let mut n = 0;
     if negative {
-        out.push('-');
+        buf[0] = b'-';
+        n = 1;
     }
-    let digit = |d: u64| char::from(b'0' + (d % 10) as u8);
-    out.push(digit(m / 1_000_000));
-    out.push('.');
-    for p in [100_000, 10_000, 1_000, 100, 10, 1] {
-        out.push(digit(m / p));
+    // Seven digits, least significant first, into buf[n], buf[n+2..n+8] (the point at n+1).
+    for i in (0..7).rev() {
+        let d = b'0' + (m % 10) as u8;
+        m /= 10;
+        buf[if i == 0 { n } else { n + 1 + i }] = d;
     }
-    out.push('e');
+    buf[n + 1] = b'.';
+    buf[n + 8] = b'e';
+    n += 9;
     if e < 0 {
-        out.push('-');
+        buf[n] = b'-';
+        n += 1;
     }
-    let a = e.unsigned_abs() as u64;
+    let a = e.unsigned_abs();
     if a >= 100 {
-        out.push(digit(a / 100));
+        buf[n] = b'0' + (a / 100) as u8;
+        n += 1;
     }
     if a >= 10 {
-        out.push(digit(a / 10));
+        buf[n] = b'0' + (a / 10 % 10) as u8;
+        n += 1;
     }
-    out.push(digit(a));
+    buf[n] = b'0' + (a % 10) as u8;
+    out.extend_from_slice(&buf[..n + 1]);
 }
 
 /// (sign, 7-digit mantissa, exponent), or `None` where the standard formatter decides.
@@ -62,7 +81,8 @@ fn digits(x: f64) -> Option<(bool, u64, i32)> {
     // ⌊log₁₀ a⌋ from the binary exponent (within one; corrected below). Subnormals are
     // below the exact-power range anyway.
     let e2 = ((a.to_bits() >> 52) & 0x7ff) as i32 - 1023;
-    let mut e = (e2 as f64 * std::f64::consts::LOG10_2).floor() as i32;
+    // ⌊e2·log₁₀2⌋ in integers (78913/2¹⁸ ≈ log₁₀2, as in Ryū; an arithmetic shift floors).
+    let mut e = (e2 * 78_913) >> 18;
     let mut s = scaled(a, e)?;
     // log10 can be off by one next to a power of ten.
     if s < 1e6 {
@@ -72,10 +92,16 @@ fn digits(x: f64) -> Option<(bool, u64, i32)> {
         e += 1;
         s = scaled(a, e)?;
     }
-    if !(1e6..1e7).contains(&s) || (s - s.floor() - 0.5).abs() < 1e-6 {
+    if !(1e6..1e7).contains(&s) {
         return None;
     }
-    let mut m = s.round() as u64;
+    // s ∈ [10⁶, 10⁷): truncation is ⌊s⌋ and s + 0.5 is exact (ulp(s) ≤ 2⁻²⁹), so these are
+    // floor and round-half-up without library calls.
+    let whole = s as u64;
+    if (s - whole as f64 - 0.5).abs() < 1e-6 {
+        return None;
+    }
+    let mut m = (s + 0.5) as u64;
     if m == 10_000_000 {
         m = 1_000_000;
         e += 1;
@@ -88,9 +114,9 @@ mod tests {
     use super::*;
 
     fn ours(x: f64) -> String {
-        let mut s = String::new();
+        let mut s = Vec::new();
         push_sci6(&mut s, x);
-        s
+        String::from_utf8(s).expect("ASCII")
     }
 
     /// Identical text to the standard library's `{:.6e}` (the reference) over random values

@@ -133,6 +133,55 @@ impl<const N: usize> Cholesky<N> {
     }
 }
 
+/// The Cholesky factor of a symmetric positive definite 2B×2B matrix given by its lower
+/// blocks, [[A₀₀, A₁₀ᵀ], [A₁₀, A₁₁]] = L̃·L̃ᵀ with L̃ = [[L̃₀₀, 0], [L̃₁₀, L̃₁₁]] (block
+/// Cholesky, Golub & Van Loan §4.2.9): L̃₀₀ = chol(A₀₀), W = L̃₁₀ᵀ = L̃₀₀⁻¹·A₁₀ᵀ,
+/// L̃₁₁ = chol(A₁₁ − WᵀW). The same factor as [`Cholesky`] of the whole matrix, computed
+/// from fixed B×B pieces whose loops unroll (the grasp constraint system of two arms).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BlockCholesky<const B: usize> {
+    l00: Cholesky<B>,
+    /// W = L̃₁₀ᵀ.
+    w: SMatrix<f64, B, B>,
+    l11: Cholesky<B>,
+}
+
+impl<const B: usize> BlockCholesky<B> {
+    /// Factors the matrix with lower blocks `a00`, `a10`, `a11` (only the lower triangles of
+    /// the diagonal blocks are read). `None` unless it is numerically positive definite.
+    pub fn factor(
+        a00: &SMatrix<f64, B, B>,
+        a10: &SMatrix<f64, B, B>,
+        a11: &SMatrix<f64, B, B>,
+    ) -> Option<Self> {
+        let l00 = Cholesky::factor(a00)?;
+        let w = l00.forward_columns(&a10.transpose());
+        // Schur complement A₁₁ − WᵀW, lower triangle only.
+        let mut s = *a11;
+        for c in 0..B {
+            for r in c..B {
+                s[(r, c)] -= w.column(r).dot(&w.column(c));
+            }
+        }
+        let l11 = Cholesky::factor(&s)?;
+        Some(BlockCholesky { l00, w, l11 })
+    }
+
+    /// (x₀, x₁) with A·[x₀; x₁] = [b₀; b₁]: y₀ = L̃₀₀⁻¹b₀, y₁ = L̃₁₁⁻¹(b₁ − Wᵀy₀),
+    /// x₁ = L̃₁₁⁻ᵀy₁, x₀ = L̃₀₀⁻ᵀ(y₀ − W·x₁).
+    pub fn solve(
+        &self,
+        b0: &SVector<f64, B>,
+        b1: &SVector<f64, B>,
+    ) -> (SVector<f64, B>, SVector<f64, B>) {
+        let y0 = self.l00.forward(b0);
+        let y1 = self.l11.forward(&(b1 - self.w.tr_mul(&y0)));
+        let x1 = self.l11.backward(&y1);
+        let x0 = self.l00.backward(&(y0 - self.w * x1));
+        (x0, x1)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -180,7 +229,18 @@ mod tests {
             }));
             assert!((a * xm - bm).norm() < 1e-9 * bm.norm() * a.norm());
             // Congruence through the half solve: B·A⁻¹·Bᵀ = ZᵀZ with Z = L⁻¹Bᵀ.
-            let z = ours.forward_columns(&bm.transpose());
+            let z = ours.forward_transposed(&bm);
+            let g = gram_lower(&z);
+            for r in 0..6 {
+                for c in 0..6 {
+                    let expect = if r >= c {
+                        (z.transpose() * z)[(r, c)]
+                    } else {
+                        0.0
+                    };
+                    assert!((g[(r, c)] - expect).abs() < 1e-12 * expect.abs().max(1.0));
+                }
+            }
             let reference = bm * a.try_inverse().expect("invertible") * bm.transpose();
             assert!((z.transpose() * z - reference).norm() < 1e-8 * reference.norm());
             assert!((ours.backward(&ours.forward(&b)) - x).norm() < 1e-12 * x.norm());
@@ -190,6 +250,34 @@ mod tests {
             let x12_ref = a12.cholesky().expect("SPD").solve(&b12);
             assert!((x12 - x12_ref).norm() < 1e-8 * x12_ref.norm());
         }
+    }
+
+    /// The block factor solves the same systems as the whole-matrix factor (and nalgebra's
+    /// Cholesky, the independent reference) and refuses what they refuse.
+    #[test]
+    fn block_factor_agrees_with_the_whole_matrix() {
+        for seed in 1..40 {
+            let a: SMatrix<f64, 12, 12> = spd(seed + 300, 1e-4);
+            let a00: Matrix6<f64> = a.fixed_view::<6, 6>(0, 0).into_owned();
+            let a10: Matrix6<f64> = a.fixed_view::<6, 6>(6, 0).into_owned();
+            let a11: Matrix6<f64> = a.fixed_view::<6, 6>(6, 6).into_owned();
+            let blk = BlockCholesky::factor(&a00, &a10, &a11).expect("SPD");
+            let b = SVector::<f64, 12>::from_fn(|i, _| (i as f64 * 0.7).sin() + 0.1);
+            let b0: Vector6<f64> = b.fixed_rows::<6>(0).into_owned();
+            let b1: Vector6<f64> = b.fixed_rows::<6>(6).into_owned();
+            let (x0, x1) = blk.solve(&b0, &b1);
+            let x_ref = a.cholesky().expect("SPD").solve(&b);
+            let x_whole = Cholesky::factor(&a).expect("SPD").solve(&b);
+            for i in 0..6 {
+                assert!((x0[i] - x_ref[i]).abs() < 1e-9 * x_ref.norm());
+                assert!((x1[i] - x_ref[i + 6]).abs() < 1e-9 * x_ref.norm());
+                assert!((x0[i] - x_whole[i]).abs() < 1e-9 * x_ref.norm());
+            }
+        }
+        // Indefinite in the Schur complement only: A₀₀ = I, A₁₀ = 2I, A₁₁ = I.
+        let i6 = Matrix6::<f64>::identity();
+        assert!(BlockCholesky::factor(&i6, &(i6 * 2.0), &i6).is_none());
+        assert!(BlockCholesky::factor(&(i6 * f64::NAN), &i6, &i6).is_none());
     }
 
     /// Indefinite, singular and non-finite matrices are refused, never factored into NaN.

@@ -38,9 +38,7 @@
 pub mod scenario;
 pub mod sci;
 
-use nalgebra::{
-    Isometry3, Matrix3, Matrix6, SMatrix, SVector, Translation3, UnitQuaternion, Vector3, Vector6,
-};
+use nalgebra::{Isometry3, Matrix3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
 
 use crate::Error;
 use crate::control::{self, ControlParams, CoopInputs};
@@ -48,7 +46,7 @@ use crate::dynamics::{self, DynData, Inertials};
 use crate::grasp::{self, GraspState, ObjectParams};
 use crate::hydraulics::{self, Faults, HydraulicParams, N_ACT};
 use crate::kinematics::{self, KinData};
-use crate::linalg::Cholesky;
+use crate::linalg::{BlockCholesky, Cholesky};
 use crate::model::Model;
 
 /// Index of the left arm in every per-arm array.
@@ -56,11 +54,8 @@ pub const LEFT: usize = 0;
 /// Index of the right arm in every per-arm array.
 pub const RIGHT: usize = 1;
 
-type M12 = SMatrix<f64, 12, 12>;
-
 /// Overtravel beyond a joint limit at which q is clamped (rad): 0.1.
 const HARD_STOP_RAD: f64 = 0.1;
-type V12 = SVector<f64, 12>;
 
 /// Integration parameters (each default in its doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -318,6 +313,32 @@ pub struct Simulation {
     work: [ArmWork; 2],
     /// Steps on which a non-finite value appeared and the state was rolled back (should stay 0).
     numerical_faults: u64,
+}
+
+/// Factor of the grasp constraint system of one step (see `step_inner`): one 6×6 block per
+/// arm holding the object.
+enum ConstraintFactor {
+    /// Only this arm holds.
+    One(usize, Cholesky<6>),
+    /// Both arms hold: the 12×12 system in 6×6 blocks.
+    Both(BlockCholesky<6>),
+}
+
+impl ConstraintFactor {
+    /// Contact wrenches f with (constraint matrix)·f = b; zero for an arm not holding.
+    fn solve(&self, b: &[Vector6<f64>; 2]) -> [Vector6<f64>; 2] {
+        match self {
+            ConstraintFactor::One(i, ch) => {
+                let mut f = [Vector6::zeros(); 2];
+                f[*i] = ch.solve(&b[*i]);
+                f
+            }
+            ConstraintFactor::Both(ch) => {
+                let (f0, f1) = ch.solve(&b[0], &b[1]);
+                [f0, f1]
+            }
+        }
+    }
 }
 
 impl Simulation {
@@ -847,31 +868,27 @@ impl Simulation {
                 });
         // Constraint system.
         let r = self.grasp_radii();
-        let mut big = M12::identity();
         let active = [
             holding[0] && chol[0].is_some(),
             holding[1] && chol[1].is_some(),
         ];
-        for i in 0..2 {
-            if !active[i] {
-                continue;
-            }
-            // The factorization reads the lower triangle only: blocks (0,0), (1,0), (1,1).
-            for k in 0..=i {
-                if !active[k] {
-                    continue;
-                }
-                let mut blk = grasp::mobility_block(&r[i], &r[k], 1.0 / op.mass_kg, &iw_inv);
-                if i == k {
-                    blk += z[i].tr_mul(&z[i]) + Matrix6::identity() * sp.constraint_compliance;
-                }
-                big.fixed_view_mut::<6, 6>(6 * i, 6 * k).copy_from(&blk);
-            }
-        }
-        let big_ch = if active[0] || active[1] {
-            Cholesky::factor(&big)
-        } else {
-            None
+        // Diagonal blocks W_iᵀM_o⁻¹W_i + Z_iᵀZ_i + εI, and the coupling W₁ᵀM_o⁻¹W₀ (the
+        // factorizations read lower triangles only).
+        let diag = |i: usize| {
+            grasp::mobility_block(&r[i], &r[i], 1.0 / op.mass_kg, &iw_inv)
+                + z[i].tr_mul(&z[i])
+                + Matrix6::identity() * sp.constraint_compliance
+        };
+        let constraint = match active {
+            [true, true] => BlockCholesky::factor(
+                &diag(0),
+                &grasp::mobility_block(&r[1], &r[0], 1.0 / op.mass_kg, &iw_inv),
+                &diag(1),
+            )
+            .map(ConstraintFactor::Both),
+            [true, false] => Cholesky::factor(&diag(0)).map(|c| ConstraintFactor::One(0, c)),
+            [false, true] => Cholesky::factor(&diag(1)).map(|c| ConstraintFactor::One(1, c)),
+            [false, false] => None,
         };
         // Baumgarte position error and velocity-product terms per holding arm.
         let kp = sp.constraint_omega * sp.constraint_omega;
@@ -972,8 +989,8 @@ impl Simulation {
                 o.angular_velocity.y,
                 o.angular_velocity.z,
             );
-            if let Some(ch) = &big_ch {
-                let mut b = V12::zeros();
+            if let Some(ch) = &constraint {
+                let mut b = [Vector6::zeros(); 2];
                 for i in 0..2 {
                     if !active[i] {
                         continue;
@@ -981,22 +998,20 @@ impl Simulation {
                     let qd = Vector6::from(self.state.arms[i].qd);
                     let ev = self.work[i].jw * qd - grasp::grasp_point_twist(&r[i], &vo);
                     let ci = c_const[i] - ev * kd;
-                    let bi = self.work[i].jw * qdd_free[i]
+                    b[i] = self.work[i].jw * qdd_free[i]
                         - grasp::grasp_point_twist(&r[i], &acc_o)
                         - ci;
-                    b.fixed_rows_mut::<6>(6 * i).copy_from(&bi);
                 }
                 let f = ch.solve(&b);
                 for i in 0..2 {
                     if !active[i] {
                         continue;
                     }
-                    let fi: Vector6<f64> = f.fixed_rows::<6>(6 * i).into();
-                    fc[i] = fi;
+                    fc[i] = f[i];
                     if let Some(ch) = &chol[i] {
-                        qdd_free[i] -= ch.backward(&(z[i] * fi));
+                        qdd_free[i] -= ch.backward(&(z[i] * f[i]));
                     }
-                    acc_o += mo_inv * grasp::wrench_at_com(&r[i], &fi);
+                    acc_o += mo_inv * grasp::wrench_at_com(&r[i], &f[i]);
                 }
             }
             // Semi-implicit Euler.

@@ -316,7 +316,9 @@ pub struct Simulation {
 }
 
 /// Factor of the grasp constraint system of one step (see `step_inner`): one 6×6 block per
-/// arm holding the object.
+/// arm holding the object. Lives on the stack for one step, so the variants' different
+/// sizes cost nothing.
+#[allow(clippy::large_enum_variant)]
 enum ConstraintFactor {
     /// Only this arm holds.
     One(usize, Cholesky<6>),

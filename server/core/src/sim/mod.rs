@@ -856,11 +856,12 @@ impl Simulation {
         let iw_inv = rot.matrix()
             * ib.try_inverse().unwrap_or_else(Matrix3::identity)
             * rot.matrix().transpose();
-        let mut mo_inv = Matrix6::zeros();
-        mo_inv
-            .fixed_view_mut::<3, 3>(0, 0)
-            .copy_from(&(Matrix3::identity() / op.mass_kg));
-        mo_inv.fixed_view_mut::<3, 3>(3, 3).copy_from(&iw_inv);
+        // M_o⁻¹ = blockdiag(I/m, I_w⁻¹) applied to a wrench (force, moment about the COM).
+        let inv_mass = 1.0 / op.mass_kg;
+        let mo_inv = |w: &Vector6<f64>| {
+            let a = iw_inv * Vector3::new(w[3], w[4], w[5]);
+            Vector6::new(w[0] * inv_mass, w[1] * inv_mass, w[2] * inv_mass, a.x, a.y, a.z)
+        };
         let obj_weight = sp.gravity
             * (op.mass_kg
                 - if sp.buoyancy {
@@ -877,14 +878,14 @@ impl Simulation {
         // Diagonal blocks W_iᵀM_o⁻¹W_i + Z_iᵀZ_i + εI, and the coupling W₁ᵀM_o⁻¹W₀ (the
         // factorizations read lower triangles only).
         let diag = |i: usize| {
-            grasp::mobility_block(&r[i], &r[i], 1.0 / op.mass_kg, &iw_inv)
+            grasp::mobility_block(&r[i], &r[i], inv_mass, &iw_inv)
                 + z[i].tr_mul(&z[i])
                 + Matrix6::identity() * sp.constraint_compliance
         };
         let constraint = match active {
             [true, true] => BlockCholesky::factor(
                 &diag(0),
-                &grasp::mobility_block(&r[1], &r[0], 1.0 / op.mass_kg, &iw_inv),
+                &grasp::mobility_block(&r[1], &r[0], inv_mass, &iw_inv),
                 &diag(1),
             )
             .map(ConstraintFactor::Both),
@@ -982,7 +983,7 @@ impl Simulation {
                 sea[4] - gyro.y,
                 sea[5] - gyro.z,
             );
-            let mut acc_o = mo_inv * wrench;
+            let mut acc_o = mo_inv(&wrench);
             let vo = Vector6::new(
                 o.velocity.x,
                 o.velocity.y,
@@ -1013,7 +1014,7 @@ impl Simulation {
                     if let Some(ch) = &chol[i] {
                         qdd_free[i] -= ch.backward(&(z[i] * f[i]));
                     }
-                    acc_o += mo_inv * grasp::wrench_at_com(&r[i], &f[i]);
+                    acc_o += mo_inv(&grasp::wrench_at_com(&r[i], &f[i]));
                 }
             }
             // Semi-implicit Euler.

@@ -48,7 +48,7 @@ pub fn analyze(model: &Model, q: &[f64], rows: Option<&[usize]>) -> Result<Analy
     let mut data = KinData::new(model);
     jacobian(model, &mut data, q);
     let j = &data.jacobian;
-    let (full, subspaces) = full_svd(j)?.into_measures_and_subspaces();
+    let (full, subspaces) = full_svd(j)?.into_measures_and_subspaces()?;
     let [translational, rotational] =
         row_measures_pair(j, [&TRANSLATIONAL_ROWS, &ROTATIONAL_ROWS])?;
     let task = match rows {

@@ -67,11 +67,13 @@ pub struct EllipsoidOut {
     pub volume: Option<f64>,
 }
 
-impl From<&Ellipsoid> for EllipsoidOut {
-    fn from(e: &Ellipsoid) -> EllipsoidOut {
+impl From<&Ellipsoid<'_>> for EllipsoidOut {
+    fn from(e: &Ellipsoid<'_>) -> EllipsoidOut {
         EllipsoidOut {
-            radii: e.radii.clone(),
-            axes: columns(&e.axes),
+            radii: e.radii.to_vec(),
+            axes: (0..e.axes.ncols())
+                .map(|i| e.axes.column(i).to_vec())
+                .collect(),
             volume: e.volume,
         }
     }
@@ -103,15 +105,15 @@ pub struct MeasuresOut {
 impl From<&Measures> for MeasuresOut {
     fn from(m: &Measures) -> MeasuresOut {
         MeasuresOut {
-            singular_values: m.singular_values.clone(),
+            singular_values: m.singular_values.to_vec(),
             rank: m.rank,
             yoshikawa: m.yoshikawa,
             condition_number: m.condition_number,
             isotropy: m.isotropy,
             hong: m.hong,
             force_manipulability: m.force_manipulability,
-            ellipsoid: (&m.ellipsoid).into(),
-            force_ellipsoid: (&m.force_ellipsoid).into(),
+            ellipsoid: (&m.ellipsoid()).into(),
+            force_ellipsoid: (&m.force_ellipsoid()).into(),
         }
     }
 }

@@ -27,8 +27,8 @@ fn ellipsoid(m: &Measures) -> EllipsoidFrame {
     let mut axes = [[0.0; 3]; 3];
     for i in 0..3 {
         radii[i] = m.singular_values.get(i).copied().unwrap_or(0.0);
-        if i < m.ellipsoid.axes.ncols() && m.ellipsoid.axes.nrows() >= 3 {
-            let a = m.ellipsoid.axes.column(i);
+        if i < m.axes.ncols() && m.axes.nrows() >= 3 {
+            let a = m.axes.column(i);
             axes[i] = [a[0], a[1], a[2]];
         }
     }

@@ -7,7 +7,7 @@
 
 use nalgebra::{DMatrix, SymmetricEigen};
 
-use super::measures::{Measures, default_tolerance};
+use super::measures::{Measures, check_task_dim, default_tolerance};
 use crate::Error;
 
 /// Shape matrix M (m×m) of the dual-arm ellipsoid ẋᵀM⁻¹ẋ ≤ 1. Both Jacobians must be
@@ -43,6 +43,7 @@ pub fn dual_shape_matrix(j1: &DMatrix<f64>, j2: &DMatrix<f64>) -> Result<DMatrix
 
 /// Measures of the dual-arm ellipsoid: σᵢ = √λᵢ(M), axes = eigenvectors of M.
 pub fn dual_measures(j1: &DMatrix<f64>, j2: &DMatrix<f64>) -> Result<Measures, Error> {
+    check_task_dim(j1.nrows())?;
     let m = dual_shape_matrix(j1, j2)?;
     let k = m.nrows();
     let eig = SymmetricEigen::new(m);

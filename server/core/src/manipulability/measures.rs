@@ -1,6 +1,6 @@
 //! Singular-value measures of a Jacobian (Lim §2.4, §3.5; Jun §2.1; RX90 report part VI).
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixView, DVector, Matrix6, U1, U6};
 
 use super::jacobi;
 use crate::Error;
@@ -149,22 +149,131 @@ pub fn ellipsoid_volume_coefficient(m: usize) -> f64 {
     }
 }
 
-/// An ellipsoid given by its semi-axes: radius i along unit vector `axes[i]`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Ellipsoid {
+/// Largest task-space dimension: the rows of a spatial Jacobian (vx vy vz wx wy wz). The
+/// measures of up to this many rows are stored inline, without heap allocation.
+pub const MAX_TASK_DIM: usize = 6;
+
+/// Up to [`MAX_TASK_DIM`] values stored inline, one per task-space dimension; it derefs to
+/// the slice of its values.
+#[derive(Clone, Copy)]
+pub struct TaskVector<T> {
+    len: usize,
+    values: [T; MAX_TASK_DIM],
+}
+
+impl<T: Copy + Default> TaskVector<T> {
+    /// The values of `s`.
+    ///
+    /// # Panics
+    /// When `s` has more than [`MAX_TASK_DIM`] values.
+    pub fn from_slice(s: &[T]) -> TaskVector<T> {
+        assert!(
+            s.len() <= MAX_TASK_DIM,
+            "at most {MAX_TASK_DIM} task dimensions"
+        );
+        let mut values = [T::default(); MAX_TASK_DIM];
+        values[..s.len()].copy_from_slice(s);
+        TaskVector {
+            len: s.len(),
+            values,
+        }
+    }
+}
+
+impl<T> std::ops::Deref for TaskVector<T> {
+    type Target = [T];
+    fn deref(&self) -> &[T] {
+        &self.values[..self.len]
+    }
+}
+
+impl<T: PartialEq> PartialEq for TaskVector<T> {
+    fn eq(&self, other: &Self) -> bool {
+        **self == **other
+    }
+}
+
+impl<T: std::fmt::Debug> std::fmt::Debug for TaskVector<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        (**self).fmt(f)
+    }
+}
+
+/// An m×m matrix, m ≤ [`MAX_TASK_DIM`], stored inline as the leading block of a 6×6.
+#[derive(Clone, Copy)]
+pub struct TaskMatrix {
+    dim: usize,
+    data: Matrix6<f64>,
+}
+
+impl TaskMatrix {
+    /// The m×m matrix stored column-major in `s` (m² entries).
+    ///
+    /// # Panics
+    /// When m exceeds [`MAX_TASK_DIM`].
+    pub fn from_column_slice(m: usize, s: &[f64]) -> TaskMatrix {
+        assert!(m <= MAX_TASK_DIM, "at most {MAX_TASK_DIM} task dimensions");
+        assert_eq!(s.len(), m * m, "an m×m matrix");
+        let mut data = Matrix6::zeros();
+        for (c, col) in s.chunks_exact(m).enumerate() {
+            data.as_mut_slice()[c * MAX_TASK_DIM..c * MAX_TASK_DIM + m].copy_from_slice(col);
+        }
+        TaskMatrix { dim: m, data }
+    }
+
+    /// m.
+    pub fn nrows(&self) -> usize {
+        self.dim
+    }
+
+    /// m.
+    pub fn ncols(&self) -> usize {
+        self.dim
+    }
+
+    /// Column `i` (m entries).
+    pub fn column(&self, i: usize) -> &[f64] {
+        assert!(i < self.dim, "column {i} of {}", self.dim);
+        &self.data.as_slice()[i * MAX_TASK_DIM..i * MAX_TASK_DIM + self.dim]
+    }
+
+    /// The matrix as a nalgebra view (for arithmetic).
+    pub fn view(&self) -> DMatrixView<'_, f64, U1, U6> {
+        self.data.view((0, 0), (self.dim, self.dim))
+    }
+}
+
+impl PartialEq for TaskMatrix {
+    fn eq(&self, other: &Self) -> bool {
+        self.view() == other.view()
+    }
+}
+
+impl std::fmt::Debug for TaskMatrix {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        self.view().fmt(f)
+    }
+}
+
+/// An ellipsoid given by its semi-axes: radius i along unit vector `axes` column i (a view
+/// of the [`Measures`] it comes from).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ellipsoid<'a> {
     /// Semi-axis lengths, descending for velocity ellipsoids; `None` = infinite.
-    pub radii: Vec<Option<f64>>,
+    pub radii: TaskVector<Option<f64>>,
     /// Unit principal directions, m×m: column i is the axis of `radii[i]`.
-    pub axes: DMatrix<f64>,
+    pub axes: &'a TaskMatrix,
     /// Volume c_m·Πradii (Lim eq. 2.18); `None` = infinite.
     pub volume: Option<f64>,
 }
 
-/// Every single-Jacobian measure of the source documents for one row selection.
-#[derive(Debug, Clone, PartialEq)]
+/// Every single-Jacobian measure of the source documents for one row selection of at most
+/// [`MAX_TASK_DIM`] rows, stored inline (no heap). The velocity and force ellipsoids share
+/// their axes and follow from σ: [`Measures::ellipsoid`], [`Measures::force_ellipsoid`].
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Measures {
     /// σ₁ ≥ … ≥ σ_m ≥ 0 (m = number of rows); σ at or below the rank tolerance are 0.
-    pub singular_values: Vec<f64>,
+    pub singular_values: TaskVector<f64>,
     /// Number of σ above the tolerance.
     pub rank: usize,
     /// Yoshikawa w = Πσᵢ = √det(JJᵀ) (Lim eqs 2.17, 2.19; Jun eq. 4 for a row selection).
@@ -177,30 +286,35 @@ pub struct Measures {
     pub hong: f64,
     /// Force manipulability √det((JJᵀ)⁻¹) = 1/w (Jun eq. 7); `None` when singular.
     pub force_manipulability: Option<f64>,
-    /// Velocity ellipsoid ẋᵀ(JJᵀ)⁻¹ẋ ≤ 1: radii σᵢ along uᵢ (Lim §2.4.1.1).
-    pub ellipsoid: Ellipsoid,
-    /// Force ellipsoid Fᵀ(JJᵀ)F ≤ 1 (Jun eq. 8, corrected): radii 1/σᵢ along uᵢ.
-    pub force_ellipsoid: Ellipsoid,
+    /// Principal directions uᵢ (m×m, column i belongs to σᵢ): the axes of both ellipsoids.
+    pub axes: TaskMatrix,
 }
 
 impl Measures {
-    /// Measures from a spectrum: `sigma` descending (m entries), `u` m×m with matching columns.
-    /// σ at or below `tolerance` count as zero and are reported as 0.
+    /// Measures from a spectrum: `sigma` descending (m ≤ [`MAX_TASK_DIM`] entries), `u`
+    /// with m rows whose first m columns match σ. σ at or below `tolerance` (≥ 0) count as
+    /// zero and are reported as 0.
+    ///
+    /// # Panics
+    /// When m exceeds [`MAX_TASK_DIM`] or `u` has not m rows.
     pub fn from_spectrum(sigma: &[f64], u: &DMatrix<f64>, tolerance: f64) -> Measures {
-        Measures::from_owned_spectrum(
-            sigma.to_vec(),
-            u.columns(0, sigma.len()).into_owned(),
+        let m = sigma.len();
+        assert_eq!(u.nrows(), m, "u has one row per σ");
+        Measures::from_parts(
+            sigma,
+            TaskMatrix::from_column_slice(m, &u.as_slice()[..m * m]),
             tolerance,
         )
     }
 
-    /// [`Measures::from_spectrum`] taking ownership (`u` is exactly m×m).
-    fn from_owned_spectrum(mut sigma: Vec<f64>, u: DMatrix<f64>, tolerance: f64) -> Measures {
+    /// [`Measures::from_spectrum`] with the axes already in place.
+    fn from_parts(sigma: &[f64], axes: TaskMatrix, tolerance: f64) -> Measures {
         let m = sigma.len();
+        let mut sigma = TaskVector::from_slice(sigma);
         // σ at or below the tolerance are numerically zero: they are reported as 0, so that
         // a rank-deficient Jacobian has w = isotropy = Hong = 0 exactly rather than
         // round-off of order ε·σ₁ (the rank decision and these measures agree).
-        for s in &mut sigma {
+        for s in &mut sigma.values[..m] {
             if *s <= tolerance {
                 *s = 0.0;
             }
@@ -211,12 +325,6 @@ impl Measures {
         let s_min = sigma.last().copied().unwrap_or(0.0);
         let w: f64 = sigma.iter().product();
         let isotropy = if s_max > 0.0 { s_min / s_max } else { 0.0 };
-        let c_m = ellipsoid_volume_coefficient(m);
-        let force_radii: Vec<Option<f64>> = sigma
-            .iter()
-            .map(|&s| if s > tolerance { Some(1.0 / s) } else { None })
-            .collect();
-        let radii = sigma.iter().map(|&s| Some(s)).collect();
         Measures {
             singular_values: sigma,
             rank,
@@ -225,21 +333,52 @@ impl Measures {
             isotropy,
             hong: w * isotropy,
             force_manipulability: full.then(|| 1.0 / w),
-            ellipsoid: Ellipsoid {
-                radii,
-                axes: u.clone(),
-                volume: Some(c_m * w),
-            },
-            force_ellipsoid: Ellipsoid {
-                radii: force_radii,
-                axes: u,
-                volume: full.then(|| c_m / w),
-            },
+            axes,
+        }
+    }
+
+    /// Velocity ellipsoid ẋᵀ(JJᵀ)⁻¹ẋ ≤ 1: radii σᵢ along uᵢ, volume c_m·w (Lim §2.4.1.1,
+    /// eq. 2.18).
+    pub fn ellipsoid(&self) -> Ellipsoid<'_> {
+        let mut radii = TaskVector::from_slice(&[None; MAX_TASK_DIM][..self.singular_values.len]);
+        for (r, &s) in radii.values.iter_mut().zip(&*self.singular_values) {
+            *r = Some(s);
+        }
+        let c_m = ellipsoid_volume_coefficient(self.singular_values.len);
+        Ellipsoid {
+            radii,
+            axes: &self.axes,
+            volume: Some(c_m * self.yoshikawa),
+        }
+    }
+
+    /// Force ellipsoid Fᵀ(JJᵀ)F ≤ 1 (Jun eq. 8, corrected): radii 1/σᵢ along uᵢ (`None`,
+    /// infinite, where σᵢ is zero), volume c_m/w (`None` when singular).
+    pub fn force_ellipsoid(&self) -> Ellipsoid<'_> {
+        let mut radii = TaskVector::from_slice(&[None; MAX_TASK_DIM][..self.singular_values.len]);
+        for (r, &s) in radii.values.iter_mut().zip(&*self.singular_values) {
+            *r = (s > 0.0).then(|| 1.0 / s);
+        }
+        let c_m = ellipsoid_volume_coefficient(self.singular_values.len);
+        Ellipsoid {
+            radii,
+            axes: &self.axes,
+            volume: self.force_manipulability.map(|_| c_m / self.yoshikawa),
         }
     }
 }
 
-/// Measures of a Jacobian (any m×n, e.g. a row selection).
+/// A measured task space has at most [`MAX_TASK_DIM`] rows.
+pub(crate) fn check_task_dim(m: usize) -> Result<(), Error> {
+    if m > MAX_TASK_DIM {
+        return Err(Error::InvalidRows {
+            reason: format!("{m} rows; the measures take at most {MAX_TASK_DIM}"),
+        });
+    }
+    Ok(())
+}
+
+/// Measures of a Jacobian (m×n with m ≤ [`MAX_TASK_DIM`], e.g. a row selection).
 ///
 /// For m ≤ n (every task selection of a 6-row Jacobian) the m rows of J are rotated by
 /// one-sided Jacobi until orthogonal (`jacobi`): the accumulated rotations are U (the
@@ -247,8 +386,9 @@ impl Measures {
 /// Rank tolerance: [`RANK_TOLERANCE`]·σ₁, as [`full_svd`].
 pub fn measures(j: &DMatrix<f64>) -> Result<Measures, Error> {
     check_jacobian(j)?;
+    check_task_dim(j.nrows())?;
     if j.nrows() > j.ncols() {
-        return Ok(measures_from_svd(&full_svd(j)?));
+        return measures_from_svd(&full_svd(j)?);
     }
     Ok(wide_measures(j, j.nrows(), |p| p))
 }
@@ -258,8 +398,9 @@ pub fn measures(j: &DMatrix<f64>) -> Result<Measures, Error> {
 pub fn row_measures(j: &DMatrix<f64>, rows: &[usize]) -> Result<Measures, Error> {
     check_rows(j, rows)?;
     check_jacobian(j)?;
+    check_task_dim(rows.len())?;
     if rows.len() > j.ncols() {
-        return Ok(measures_from_svd(&full_svd(&j.select_rows(rows))?));
+        return measures_from_svd(&full_svd(&j.select_rows(rows))?);
     }
     Ok(wide_measures(j, rows.len(), |p| rows[p]))
 }
@@ -273,7 +414,7 @@ pub fn row_measures_pair(j: &DMatrix<f64>, rows: [&[usize]; 2]) -> Result<[Measu
     check_rows(j, rows[1])?;
     check_jacobian(j)?;
     let (g, n) = (rows[0].len(), j.ncols());
-    if rows[1].len() != g || g > n {
+    if rows[1].len() != g || g > n || g > MAX_TASK_DIM {
         return Ok([row_measures(j, rows[0])?, row_measures(j, rows[1])?]);
     }
     let k = 2 * g;
@@ -293,9 +434,9 @@ pub fn row_measures_pair(j: &DMatrix<f64>, rows: [&[usize]; 2]) -> Result<[Measu
         });
         let measures = |grp: usize| {
             let tol = RANK_TOLERANCE * sigma[grp * g];
-            Measures::from_owned_spectrum(
-                sigma[grp * g..(grp + 1) * g].to_vec(),
-                DMatrix::from_column_slice(g, g, &w[grp * g * g..(grp + 1) * g * g]),
+            Measures::from_parts(
+                &sigma[grp * g..(grp + 1) * g],
+                TaskMatrix::from_column_slice(g, &w[grp * g * g..(grp + 1) * g * g]),
                 tol,
             )
         };
@@ -304,11 +445,12 @@ pub fn row_measures_pair(j: &DMatrix<f64>, rows: [&[usize]; 2]) -> Result<[Measu
 }
 
 /// Measures of the m×n matrix whose row p is row `row(p)` of `j`, for m ≤ n (the callers
-/// check), by one-sided Jacobi on its rows.
+/// check; m ≤ [`MAX_TASK_DIM`]), by one-sided Jacobi on its rows.
 fn wide_measures(j: &DMatrix<f64>, m: usize, row: impl Fn(usize) -> usize) -> Measures {
     let n = j.ncols();
-    let mut u = DMatrix::<f64>::zeros(m, m);
-    let mut sigma = vec![0.0; m];
+    let mut u = [0.0; MAX_TASK_DIM * MAX_TASK_DIM];
+    let mut sigma = [0.0; MAX_TASK_DIM];
+    let (u, sigma) = (&mut u[..m * m], &mut sigma[..m]);
     jacobi::with_scratch(m * n, |a: &mut [f64]| {
         for (p, v) in a.chunks_exact_mut(n).enumerate() {
             let r = row(p);
@@ -317,16 +459,24 @@ fn wide_measures(j: &DMatrix<f64>, m: usize, row: impl Fn(usize) -> usize) -> Me
             }
         }
         jacobi::with_scratch(m, |order: &mut [usize]| {
-            jacobi::decompose(a, n, 1, u.as_mut_slice(), &mut sigma, order);
+            jacobi::decompose(a, n, 1, u, sigma, order);
         });
     });
-    let tol = RANK_TOLERANCE * sigma[0];
-    Measures::from_owned_spectrum(sigma, u, tol)
+    Measures::from_parts(
+        sigma,
+        TaskMatrix::from_column_slice(m, u),
+        RANK_TOLERANCE * sigma[0],
+    )
 }
 
-/// Measures from an SVD already computed of an m×`n` Jacobian.
-pub fn measures_from_svd(svd: &FullSvd) -> Measures {
-    Measures::from_owned_spectrum(svd.sigma.as_slice().to_vec(), svd.u.clone(), svd.tolerance)
+/// Measures from an SVD already computed of an m×`n` Jacobian (m ≤ [`MAX_TASK_DIM`]).
+pub fn measures_from_svd(svd: &FullSvd) -> Result<Measures, Error> {
+    check_task_dim(svd.u.nrows())?;
+    Ok(Measures::from_spectrum(
+        svd.sigma.as_slice(),
+        &svd.u,
+        svd.tolerance,
+    ))
 }
 
 /// The rows of `j` listed in `rows` (Jun eq. 9: the task-oriented Jacobian).
@@ -414,24 +564,71 @@ impl FullSvd {
 
     /// [`measures_from_svd`] and [`subspaces_from_svd`] at once, reusing the storage of U
     /// and V instead of copying it where possible.
-    pub fn into_measures_and_subspaces(self) -> (Measures, Subspaces) {
+    pub fn into_measures_and_subspaces(self) -> Result<(Measures, Subspaces), Error> {
+        let measures = measures_from_svd(&self)?;
         let (m, n) = (self.u.nrows(), self.v.nrows());
         let rank = self.rank();
-        let null_space = columns(&self.v, rank..n);
-        let generating = if rank == n {
-            self.v
-        } else {
-            columns(&self.v, 0..rank)
+        let whole_or = |mat: DMatrix<f64>, range: std::ops::Range<usize>| {
+            if range.len() == mat.ncols() {
+                mat
+            } else {
+                columns(&mat, range)
+            }
         };
         let subspaces = Subspaces {
             rank,
-            null_space,
-            generating,
-            range: columns(&self.u, 0..rank),
+            null_space: columns(&self.v, rank..n),
             unreachable: columns(&self.u, rank..m),
+            generating: whole_or(self.v, 0..rank),
+            range: whole_or(self.u, 0..rank),
         };
-        let measures =
-            Measures::from_owned_spectrum(Vec::from(self.sigma.data), self.u, self.tolerance);
-        (measures, subspaces)
+        Ok((measures, subspaces))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    /// The inline storage holds exactly what the heap matrices did: the m×m axes (against
+    /// nalgebra's DMatrix of the same column-major data) and σ, and the two ellipsoids follow
+    /// Lim eq. 2.18 (velocity: radii σᵢ, volume c_m·w) and Jun eq. 8 corrected (force:
+    /// radii 1/σᵢ, volume c_m/w; infinite where σ = 0).
+    #[test]
+    fn inline_measures_match_heap_matrices_and_closed_forms() {
+        for m in 1..=MAX_TASK_DIM {
+            let data: Vec<f64> = (0..m * m).map(|i| (i as f64 * 0.37).sin()).collect();
+            let heap = DMatrix::from_column_slice(m, m, &data);
+            let sigma: Vec<f64> = (0..m).map(|i| 3.0 - 0.4 * i as f64).collect();
+            let full = Measures::from_spectrum(&sigma, &heap, 0.0);
+            assert_eq!(full.axes.view(), heap);
+            for i in 0..m {
+                assert_eq!(full.axes.column(i), heap.column(i).as_slice());
+            }
+            assert_eq!(&*full.singular_values, &sigma[..]);
+            let c_m = ellipsoid_volume_coefficient(m);
+            let w: f64 = sigma.iter().product();
+            let e = full.ellipsoid();
+            assert_eq!(e.volume, Some(c_m * w));
+            assert!(e.radii.iter().zip(&sigma).all(|(r, s)| *r == Some(*s)));
+            let f = full.force_ellipsoid();
+            assert_eq!(f.volume, Some(c_m / w));
+            assert!(f.radii.iter().zip(&sigma).all(|(r, s)| *r == Some(1.0 / s)));
+            // The last σ below the tolerance: rank m − 1, force radius and volume infinite.
+            let singular = Measures::from_spectrum(&sigma, &heap, sigma[m - 1]);
+            assert_eq!(singular.rank, m - 1);
+            assert_eq!(singular.force_ellipsoid().radii[m - 1], None);
+            assert_eq!(singular.force_ellipsoid().volume, None);
+            assert_eq!(singular.ellipsoid().volume, Some(0.0));
+        }
+    }
+
+    /// More task rows than a spatial Jacobian has are refused, not truncated.
+    #[test]
+    fn more_than_six_rows_is_an_error() {
+        let j = DMatrix::from_fn(7, 8, |r, c| (r + 2 * c) as f64);
+        assert!(measures(&j).is_err());
+        assert!(measures_from_svd(&full_svd(&j).unwrap()).is_err());
     }
 }

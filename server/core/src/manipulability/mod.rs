@@ -15,7 +15,8 @@ pub mod polytope;
 pub use dual::{dual_measures, dual_shape_matrix};
 pub use jlm::{jlm, jlm_gradient};
 pub use measures::{
-    Ellipsoid, FullSvd, Measures, Subspaces, full_svd, measures, measures_from_svd, row_measures,
-    row_measures_pair, select_rows, subspaces, subspaces_from_svd,
+    Ellipsoid, FullSvd, MAX_TASK_DIM, Measures, Subspaces, TaskMatrix, TaskVector, full_svd,
+    measures, measures_from_svd, row_measures, row_measures_pair, select_rows, subspaces,
+    subspaces_from_svd,
 };
 pub use polytope::{Polytope, convex_hull, dual_velocity_polytope, velocity_polytope};

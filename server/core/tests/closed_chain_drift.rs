@@ -29,6 +29,10 @@ fn hold_for_60_s(method: ControlMethod, lifted: bool) {
     for _ in 0..60_000 {
         sim.step(&input);
         worst = worst.max(sim.grasp_error(0).0).max(sim.grasp_error(1).0);
+        // The runner's per-step monitor is the same position error.
+        for a in 0..2 {
+            assert!((sim.grasp_position_error(a) - sim.grasp_error(a).0).abs() < 1e-15);
+        }
     }
     let moved = (sim.object().pose.translation.vector - p0).norm();
     let cw = [sim.arm(0).contact_wrench, sim.arm(1).contact_wrench];

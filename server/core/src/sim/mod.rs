@@ -607,6 +607,19 @@ impl Simulation {
     pub fn numerical_faults(&self) -> u64 {
         self.numerical_faults
     }
+    /// Grasp position error of arm `arm` while holding (m): the distance of the tool point
+    /// from where the grasp fixes it on the object; 0 when not holding. The cheap half of
+    /// [`Simulation::grasp_error`], for per-step monitoring.
+    pub fn grasp_position_error(&self, arm: usize) -> f64 {
+        let i = arm.min(1);
+        let a = &self.state.arms[i];
+        if !a.holding {
+            return 0.0;
+        }
+        let des = self.state.object.pose * nalgebra::Point3::from(a.grasp_rel.translation.vector);
+        (self.work[i].tool.translation.vector - des.coords).norm()
+    }
+
     /// Grasp constraint error of arm `arm` while holding: (position m, orientation rad).
     pub fn grasp_error(&self, arm: usize) -> (f64, f64) {
         let i = arm.min(1);
@@ -860,7 +873,14 @@ impl Simulation {
         let inv_mass = 1.0 / op.mass_kg;
         let mo_inv = |w: &Vector6<f64>| {
             let a = iw_inv * Vector3::new(w[3], w[4], w[5]);
-            Vector6::new(w[0] * inv_mass, w[1] * inv_mass, w[2] * inv_mass, a.x, a.y, a.z)
+            Vector6::new(
+                w[0] * inv_mass,
+                w[1] * inv_mass,
+                w[2] * inv_mass,
+                a.x,
+                a.y,
+                a.z,
+            )
         };
         let obj_weight = sp.gravity
             * (op.mass_kg

@@ -626,7 +626,7 @@ pub fn run(
                     s.peak_line_pressure_pa =
                         s.peak_line_pressure_pa.max(arm.p_in[j]).max(arm.p_out[j]);
                 }
-                s.peak_grasp_error_m = s.peak_grasp_error_m.max(sim.grasp_error(a).0);
+                s.peak_grasp_error_m = s.peak_grasp_error_m.max(sim.grasp_position_error(a));
                 if sim.time_s() > total - 1.0 {
                     for j in 0..N_ACT {
                         s.final_max_joint_speed_rad_s =

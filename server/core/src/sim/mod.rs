@@ -823,20 +823,35 @@ impl Simulation {
         let mut x0 = [[0.0; N_ACT]; 2];
         let mut jhat = [[0.0; N_ACT]; 2];
         let q0 = [self.state.arms[0].q, self.state.arms[1].q];
-        for i in 0..2 {
+        // H, C q̇ + G and J̇q̇ (q̈ = 0) in one pass over the links (eq. 3.38), world frame, both
+        // arms in lockstep (one arm at a time if their joint kinds differ).
+        let (arms, work, models) = (&self.params.arms, &self.work, &self.models);
+        let qd = [&self.state.arms[0].qd, &self.state.arms[1].qd];
+        let all_terms = dynamics::step_terms_pair::<N_ACT>(
+            [&models[0], &models[1]],
+            [&arms[0].inertials, &arms[1].inertials],
+            [&work[0].kin, &work[1].kin],
+            qd,
+            &sp.gravity,
+            rho,
+        )
+        .unwrap_or_else(|| {
+            core::array::from_fn(|i| {
+                dynamics::step_terms::<N_ACT>(
+                    &models[i],
+                    &arms[i].inertials,
+                    &work[i].kin,
+                    qd[i],
+                    &sp.gravity,
+                    rho,
+                )
+            })
+        });
+        for (i, terms) in all_terms.iter().enumerate() {
             let ap = &self.params.arms[i];
             let model = &self.models[i];
             let a = &self.state.arms[i];
             let w = &self.work[i];
-            // H, C q̇ + G and J̇q̇ (q̈ = 0) in one pass (eq. 3.38), world frame.
-            let terms = dynamics::step_terms::<N_ACT>(
-                model,
-                &ap.inertials,
-                &w.kin,
-                &a.qd,
-                &sp.gravity,
-                rho,
-            );
             jdqd[i] = Vector6::from(terms.tool_bias);
             let mut m = terms.mass_matrix;
             for r in 0..N_ACT {

@@ -288,7 +288,7 @@ impl FixedRotation {
     }
 
     /// R·M.
-    #[inline]
+    #[inline(always)]
     pub fn after(&self, r: &Matrix3<f64>) -> Matrix3<f64> {
         match self {
             FixedRotation::Identity => *r,

@@ -48,6 +48,17 @@ pub(crate) fn decompose(
     let k = sigma.len();
     let g = k / groups;
     assert!(g * groups == k && a.len() == k * l && w.len() == groups * g * g);
+    // Fixed-size copies for the analysis's shapes (6×6 Jacobian columns, 3×6 row
+    // selections alone or as the translational/rotational pair, and the same for 7 joints).
+    match (g, l, groups) {
+        (6, 6, 1) => return decompose_fixed::<6, 3, 6, 3, 1>(a, w, sigma, order, &ROUND_ROBIN_6),
+        (6, 7, 1) => return decompose_fixed::<7, 4, 6, 3, 1>(a, w, sigma, order, &ROUND_ROBIN_6),
+        (3, 6, 1) => return decompose_fixed::<6, 3, 3, 2, 1>(a, w, sigma, order, &CYCLIC_3),
+        (3, 6, 2) => return decompose_fixed::<6, 3, 3, 2, 2>(a, w, sigma, order, &CYCLIC_3),
+        (3, 7, 1) => return decompose_fixed::<7, 4, 3, 2, 1>(a, w, sigma, order, &CYCLIC_3),
+        (3, 7, 2) => return decompose_fixed::<7, 4, 3, 2, 2>(a, w, sigma, order, &CYCLIC_3),
+        _ => {}
+    }
     let mut unscale = [1.0; 2];
     let mut unscale_heap;
     let unscale: &mut [f64] = if groups <= 2 {
@@ -120,24 +131,11 @@ pub(crate) fn orthogonalize(
         g * groups == k && a.len() == k * l && w.len() == groups * g * g,
         "orthogonalize: sizes"
     );
-    // Monomorphised copies for the analysis's shapes (6×6 Jacobian, 3×6 row selections,
-    // alone or as the translational/rotational pair): with the lengths known the loops
-    // unroll and vectorise.
-    match (g, l, groups) {
-        (6, 6, 1) => sweeps_impl(&mut a[..36], 6, 1, &mut w[..36], 6),
-        (3, 6, 1) => sweeps_impl(&mut a[..18], 6, 1, &mut w[..9], 3),
-        (3, 6, 2) => sweeps_impl(&mut a[..36], 6, 2, &mut w[..18], 3),
-        (6, 7, 1) => sweeps_impl(&mut a[..42], 7, 1, &mut w[..36], 6),
-        _ => sweeps_dyn(a, l, groups, w, g),
-    }
-}
-
-fn sweeps_dyn(a: &mut [f64], l: usize, groups: usize, w: &mut [f64], g: usize) -> usize {
+    // (The analysis's shapes take the fixed-size route of `decompose_fixed` instead.)
     sweeps_impl(a, l, groups, w, g)
 }
 
 /// [`orthogonalize`] for `groups` groups of `g` vectors.
-#[inline(always)]
 fn sweeps_impl(a: &mut [f64], l: usize, groups: usize, w: &mut [f64], g: usize) -> usize {
     let k = groups * g;
     // (√l·ε)², compared with γ²/(αβ) to avoid a square root per pair.
@@ -270,6 +268,189 @@ fn rotate_pair(
     };
     true
 }
+
+/// A vector of up to 2·H entries stored as H lanes of two (zero-padded): the layout of an
+/// SSE2 register, so that dot products and rotations map onto packed instructions.
+type Lanes<const H: usize> = [[f64; 2]; H];
+
+/// [`decompose`] for `N` groups of `G` vectors of length `L` ≤ 2·`H`, with rotation
+/// accumulators of `G` ≤ 2·`HG` entries, all known at compile time, and the pair order
+/// `pairs` (every p < q < G once). The vectors are copied into fixed-size zero-padded lane
+/// arrays ([`Lanes`]) so that each Jacobi step ([`pair_fixed`]) is straight-line code: one
+/// pass for γ, the two rotations as whole-array updates in packed pairs, no bounds checks
+/// inside a vector. Same algorithm, stopping rule and norm updates as [`sweeps_impl`]; only
+/// the summation order of the dot products differs (two interleaved partial sums). The zero
+/// padding stays zero under every rotation.
+fn decompose_fixed<
+    const L: usize,
+    const H: usize,
+    const G: usize,
+    const HG: usize,
+    const N: usize,
+>(
+    a: &mut [f64],
+    w: &mut [f64],
+    sigma: &mut [f64],
+    order: &mut [usize],
+    pairs: &[(usize, usize)],
+) {
+    debug_assert!(L <= 2 * H && G <= 2 * HG);
+    let mut v = [[[[0.0; 2]; H]; G]; N];
+    let mut rot = [[[[0.0; 2]; HG]; G]; N];
+    let mut unscale = [1.0; N];
+    for (((grp, block), u), r) in v
+        .iter_mut()
+        .zip(a.chunks_exact_mut(G * L))
+        .zip(unscale.iter_mut())
+        .zip(rot.iter_mut())
+    {
+        *u = scale_pow2(block);
+        for (col, src) in grp.iter_mut().zip(block.chunks_exact(L)) {
+            for (i, &x) in src.iter().enumerate() {
+                col[i / 2][i % 2] = x;
+            }
+        }
+        for (i, c) in r.iter_mut().enumerate() {
+            c[i / 2][i % 2] = 1.0;
+        }
+    }
+    sweeps_fixed::<L, H, G, HG, N>(&mut v, &mut rot, pairs);
+    for grp in 0..N {
+        let mut len = [0.0; G];
+        for (n, x) in len.iter_mut().zip(&v[grp]) {
+            *n = dot_lanes(x, x).sqrt();
+        }
+        let ord = &mut order[grp * G..(grp + 1) * G];
+        // Insertion sort of the indices, descending (as `decompose`).
+        for i in 0..G {
+            let mut j = i;
+            while j > 0 && len[ord[j - 1]] < len[i] {
+                ord[j] = ord[j - 1];
+                j -= 1;
+            }
+            ord[j] = i;
+        }
+        let dst = &mut w[grp * G * G..(grp + 1) * G * G];
+        for ((i, &o), d) in ord.iter().enumerate().zip(dst.chunks_exact_mut(G)) {
+            sigma[grp * G + i] = len[o] * unscale[grp];
+            for (k, x) in d.iter_mut().enumerate() {
+                *x = rot[grp][o][k / 2][k % 2];
+            }
+        }
+        for (dst, src) in a[grp * G * L..(grp + 1) * G * L]
+            .chunks_exact_mut(L)
+            .zip(&v[grp])
+        {
+            for (i, x) in dst.iter_mut().enumerate() {
+                *x = src[i / 2][i % 2];
+            }
+        }
+    }
+}
+
+/// [`sweeps_impl`] on fixed-size storage: `a[grp][p]` is vector p of group grp, `w[grp][p]`
+/// the matching column of its accumulated rotations. Returns the number of sweeps run.
+fn sweeps_fixed<const L: usize, const H: usize, const G: usize, const HG: usize, const N: usize>(
+    a: &mut [[Lanes<H>; G]; N],
+    w: &mut [[Lanes<HG>; G]; N],
+    pairs: &[(usize, usize)],
+) -> usize {
+    // (√l·ε)², compared with γ²/(αβ) (dgesvj's stopping rule, as `sweeps_impl`).
+    let tol2 = (L as f64) * f64::EPSILON * f64::EPSILON;
+    let mut d = [[0.0; G]; N];
+    for sweep in 1..=MAX_SWEEPS {
+        for (dg, ag) in d.iter_mut().zip(a.iter()) {
+            for (dp, x) in dg.iter_mut().zip(ag) {
+                *dp = dot_lanes(x, x);
+            }
+        }
+        let mut rotated = false;
+        for &(p, q) in pairs {
+            // Lockstep over the groups (see `orthogonalize`).
+            for ((ag, wg), dg) in a.iter_mut().zip(w.iter_mut()).zip(d.iter_mut()) {
+                rotated |= pair_fixed(ag, wg, dg, p, q, tol2);
+            }
+        }
+        if !rotated {
+            return sweep;
+        }
+    }
+    MAX_SWEEPS
+}
+
+/// [`rotate_pair`] on vectors p < q of fixed-size storage: the vectors and their
+/// accumulator columns are copied out, rotated in registers and stored back.
+#[inline(always)]
+fn pair_fixed<const H: usize, const G: usize, const HG: usize>(
+    a: &mut [Lanes<H>; G],
+    w: &mut [Lanes<HG>; G],
+    d: &mut [f64; G],
+    p: usize,
+    q: usize,
+    tol2: f64,
+) -> bool {
+    let (mut x, mut y) = (a[p], a[q]);
+    let (alpha, beta) = (d[p], d[q]);
+    let gamma = dot_lanes(&x, &y);
+    // Also skips zero vectors (γ = 0).
+    if gamma * gamma <= tol2 * (alpha * beta) {
+        return false;
+    }
+    // The rotation diagonalising [[α, γ], [γ, β]] (GVL Algorithm 8.5.1), as `rotate_pair`.
+    let delta = beta - alpha;
+    let r = (delta * delta + 4.0 * gamma * gamma).sqrt();
+    if r == 0.0 {
+        return false;
+    }
+    let h = delta.abs() + r;
+    let t = 2.0 * gamma * 1f64.copysign(delta) / h;
+    let c = (h / (2.0 * r)).sqrt();
+    let s = t * c;
+    rotate_lanes(&mut x, &mut y, c, s);
+    a[p] = x;
+    a[q] = y;
+    let (mut wx, mut wy) = (w[p], w[q]);
+    rotate_lanes(&mut wx, &mut wy, c, s);
+    w[p] = wx;
+    w[q] = wy;
+    // Norm updates α − tγ, β + tγ, recomputed where they cancel (dgesvj; see `sweeps_impl`).
+    let (new_x, new_y) = (alpha - t * gamma, beta + t * gamma);
+    d[p] = if new_x < 1e-4 * alpha {
+        dot_lanes(&x, &x)
+    } else {
+        new_x
+    };
+    d[q] = if new_y < 1e-4 * beta {
+        dot_lanes(&y, &y)
+    } else {
+        new_y
+    };
+    true
+}
+
+/// x·y summed lane by lane (even and odd entries), then the two lanes.
+#[inline(always)]
+fn dot_lanes<const H: usize>(x: &Lanes<H>, y: &Lanes<H>) -> f64 {
+    let mut s = [0.0; 2];
+    for (a, b) in x.iter().zip(y) {
+        s[0] += a[0] * b[0];
+        s[1] += a[1] * b[1];
+    }
+    s[0] + s[1]
+}
+
+/// x ← c·x − s·y, y ← s·x + c·y, lane by lane.
+#[inline(always)]
+fn rotate_lanes<const H: usize>(x: &mut Lanes<H>, y: &mut Lanes<H>, c: f64, s: f64) {
+    for (a, b) in x.iter_mut().zip(y.iter_mut()) {
+        let (a0, a1, b0, b1) = (a[0], a[1], b[0], b[1]);
+        *a = [c * a0 - s * b0, c * a1 - s * b1];
+        *b = [s * a0 + c * b0, s * a1 + c * b1];
+    }
+}
+
+/// The cyclic order for 3 vectors (every pair shares a vector with the previous one).
+const CYCLIC_3: [(usize, usize); 3] = [(0, 1), (0, 2), (1, 2)];
 
 /// The 15 pairs (p < q) of the round-robin order for 6 vectors, round by round.
 const ROUND_ROBIN_6: [(usize, usize); 15] = {

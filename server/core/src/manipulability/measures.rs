@@ -308,7 +308,7 @@ impl Measures {
     }
 
     /// [`Measures::from_spectrum`] with the axes already in place.
-    fn from_parts(sigma: &[f64], axes: TaskMatrix, tolerance: f64) -> Measures {
+    pub(crate) fn from_parts(sigma: &[f64], axes: TaskMatrix, tolerance: f64) -> Measures {
         let m = sigma.len();
         let mut sigma = TaskVector::from_slice(sigma);
         // σ at or below the tolerance are numerically zero: they are reported as 0, so that

@@ -5,7 +5,9 @@
 //! `analysis_loop N [MODE]` with MODE one of `analysis` (default), `svd` (only `full_svd`
 //! of the 6×6 Jacobian), `pair` (only the translational/rotational `row_measures_pair`) and
 //! `dual` (only `dual_measures` of two 3×6 translational Jacobians, as the scenario runner
-//! calls it). The cost of one call is the difference of two runs divided by the difference
+//! calls it), `rx90` (the full analysis of the RX90 at the benchmark's posture
+//! q = [0.6, 1.25, −0.3, 0.6, 0.3, 2.0], q₁ nudged per call) and `svd-rx90` (only `full_svd`
+//! of that RX90 Jacobian). The cost of one call is the difference of two runs divided by the difference
 //! of their N.
 
 use nalgebra::DMatrix;
@@ -23,6 +25,14 @@ fn main() {
     let spec: ModelSpec =
         serde_json::from_str(robots::builtin_text("magnum").expect("built-in")).expect("parses");
     let model = Model::from_spec(&spec).expect("builds");
+    let spec_rx: ModelSpec =
+        serde_json::from_str(robots::builtin_text("rx90").expect("built-in")).expect("parses");
+    let rx90 = Model::from_spec(&spec_rx).expect("builds");
+    let j_rx = {
+        let mut data = KinData::new(&rx90);
+        jacobian(&rx90, &mut data, &[0.6, 1.25, -0.3, 0.6, 0.3, 2.0]);
+        data.jacobian
+    };
     let mut q = [0.1, 0.6, -1.1, 0.4, 0.2, 0.3];
     let jac = |q: &[f64]| -> DMatrix<f64> {
         let mut data = KinData::new(&model);
@@ -56,6 +66,16 @@ fn main() {
                 let mut ji = j1.clone();
                 ji[(0, 0)] += e;
                 acc += dual_measures(&ji, &j2).expect("dual").yoshikawa;
+            }
+            "rx90" => {
+                let q = [0.6 + e, 1.25, -0.3, 0.6, 0.3, 2.0];
+                let a = analyze(&rx90, &q, None).expect("analysis");
+                acc += a.full.yoshikawa + a.translational.isotropy;
+            }
+            "svd-rx90" => {
+                let mut ji = j_rx.clone();
+                ji[(0, 0)] += e;
+                acc += full_svd(&ji).expect("svd").sigma[5];
             }
             _ => {
                 q[0] = 0.1 + e;

@@ -358,21 +358,28 @@ fn sweeps_fixed<const L: usize, const H: usize, const G: usize, const HG: usize,
     // (√l·ε)², compared with γ²/(αβ) (dgesvj's stopping rule, as `sweeps_impl`).
     let tol2 = (L as f64) * f64::EPSILON * f64::EPSILON;
     let mut d = [[0.0; G]; N];
+    // Pair visits since the last rotation: once every pair has been visited without a
+    // rotation, no vector has changed since its pairs were found orthogonal, so the stop
+    // need not wait for a sweep boundary (LAPACK dgesvj's `notrot` count, Drmač & Veselić
+    // 2008, "New fast and accurate Jacobi SVD algorithm II", SIAM J. Matrix Anal. Appl.
+    // 29(4), Algorithm 1): the closing sweep is cut short at the pair that last rotated.
+    let mut quiet = 0;
     for sweep in 1..=MAX_SWEEPS {
         for (dg, ag) in d.iter_mut().zip(a.iter()) {
             for (dp, x) in dg.iter_mut().zip(ag) {
                 *dp = dot_lanes(x, x);
             }
         }
-        let mut rotated = false;
         for &(p, q) in pairs {
             // Lockstep over the groups (see `orthogonalize`).
+            let mut rotated = false;
             for ((ag, wg), dg) in a.iter_mut().zip(w.iter_mut()).zip(d.iter_mut()) {
                 rotated |= pair_fixed(ag, wg, dg, p, q, tol2);
             }
-        }
-        if !rotated {
-            return sweep;
+            quiet = if rotated { 0 } else { quiet + 1 };
+            if quiet == pairs.len() {
+                return sweep;
+            }
         }
     }
     MAX_SWEEPS

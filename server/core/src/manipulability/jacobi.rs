@@ -278,9 +278,10 @@ type Lanes<const H: usize> = [[f64; 2]; H];
 /// `pairs` (every p < q < G once). The vectors are copied into fixed-size zero-padded lane
 /// arrays ([`Lanes`]) so that each Jacobi step ([`pair_fixed`]) is straight-line code: one
 /// pass for γ, the two rotations as whole-array updates in packed pairs, no bounds checks
-/// inside a vector. Same algorithm, stopping rule and norm updates as [`sweeps_impl`]; only
-/// the summation order of the dot products differs (two interleaved partial sums). The zero
-/// padding stays zero under every rotation.
+/// inside a vector. Same rotations, pair test and norm updates as [`sweeps_impl`], except
+/// that [`sweeps_fixed`] stops mid-sweep once every pair has passed the test in a row and
+/// refreshes the squared norms only every other sweep; the dot products are summed in two
+/// interleaved partial sums. The zero padding stays zero under every rotation.
 fn decompose_fixed<
     const L: usize,
     const H: usize,

@@ -84,15 +84,7 @@ pub(crate) fn decompose(
         for grp in 0..groups {
             let len = &lengths[grp * g..(grp + 1) * g];
             let ord = &mut order[grp * g..(grp + 1) * g];
-            // Insertion sort of the indices, descending (g is a handful).
-            for i in 0..g {
-                let mut j = i;
-                while j > 0 && len[ord[j - 1]] < len[i] {
-                    ord[j] = ord[j - 1];
-                    j -= 1;
-                }
-                ord[j] = i;
-            }
+            order_descending(len, ord);
             let (src, dst) = (&rot[grp * g * g..], &mut w[grp * g * g..]);
             for (i, &o) in ord.iter().enumerate() {
                 sigma[grp * g + i] = len[o] * unscale[grp];
@@ -322,15 +314,7 @@ fn decompose_fixed<
             *n = dot_lanes(x, x).sqrt();
         }
         let ord = &mut order[grp * G..(grp + 1) * G];
-        // Insertion sort of the indices, descending (as `decompose`).
-        for i in 0..G {
-            let mut j = i;
-            while j > 0 && len[ord[j - 1]] < len[i] {
-                ord[j] = ord[j - 1];
-                j -= 1;
-            }
-            ord[j] = i;
-        }
+        order_descending(&len, ord);
         let dst = &mut w[grp * G * G..(grp + 1) * G * G];
         for ((i, &o), d) in ord.iter().enumerate().zip(dst.chunks_exact_mut(G)) {
             sigma[grp * G + i] = len[o] * unscale[grp];
@@ -567,6 +551,19 @@ pub(crate) fn complete_columns(q: &mut [f64], l: usize, r: usize) {
         for v in x.iter_mut() {
             *v /= norm;
         }
+    }
+}
+
+/// `ord` = the indices 0..len.len() ordered by decreasing `len` (stable insertion sort;
+/// a group holds a handful of columns).
+fn order_descending(len: &[f64], ord: &mut [usize]) {
+    for i in 0..len.len() {
+        let mut j = i;
+        while j > 0 && len[ord[j - 1]] < len[i] {
+            ord[j] = ord[j - 1];
+            j -= 1;
+        }
+        ord[j] = i;
     }
 }
 

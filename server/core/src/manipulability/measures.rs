@@ -340,30 +340,34 @@ impl Measures {
     /// Velocity ellipsoid ẋᵀ(JJᵀ)⁻¹ẋ ≤ 1: radii σᵢ along uᵢ, volume c_m·w (Lim §2.4.1.1,
     /// eq. 2.18).
     pub fn ellipsoid(&self) -> Ellipsoid<'_> {
-        let mut radii = TaskVector::from_slice(&[None; MAX_TASK_DIM][..self.singular_values.len]);
-        for (r, &s) in radii.values.iter_mut().zip(&*self.singular_values) {
-            *r = Some(s);
-        }
         let c_m = ellipsoid_volume_coefficient(self.singular_values.len);
-        Ellipsoid {
-            radii,
-            axes: &self.axes,
-            volume: Some(c_m * self.yoshikawa),
-        }
+        self.ellipsoid_with(Some, Some(c_m * self.yoshikawa))
     }
 
     /// Force ellipsoid Fᵀ(JJᵀ)F ≤ 1 (Jun eq. 8, corrected): radii 1/σᵢ along uᵢ (`None`,
     /// infinite, where σᵢ is zero), volume c_m/w (`None` when singular).
     pub fn force_ellipsoid(&self) -> Ellipsoid<'_> {
+        let c_m = ellipsoid_volume_coefficient(self.singular_values.len);
+        self.ellipsoid_with(
+            |s| (s > 0.0).then(|| 1.0 / s),
+            self.force_manipulability.map(|_| c_m / self.yoshikawa),
+        )
+    }
+
+    /// An ellipsoid on the singular directions uᵢ with radii `radius(σᵢ)`.
+    fn ellipsoid_with(
+        &self,
+        radius: impl Fn(f64) -> Option<f64>,
+        volume: Option<f64>,
+    ) -> Ellipsoid<'_> {
         let mut radii = TaskVector::from_slice(&[None; MAX_TASK_DIM][..self.singular_values.len]);
         for (r, &s) in radii.values.iter_mut().zip(&*self.singular_values) {
-            *r = (s > 0.0).then(|| 1.0 / s);
+            *r = radius(s);
         }
-        let c_m = ellipsoid_volume_coefficient(self.singular_values.len);
         Ellipsoid {
             radii,
             axes: &self.axes,
-            volume: self.force_manipulability.map(|_| c_m / self.yoshikawa),
+            volume,
         }
     }
 }

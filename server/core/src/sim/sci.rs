@@ -6,8 +6,8 @@
 //! Method: x = m·10^(e−6) with m = round(|x|/10^(e−6)) ∈ [10⁶, 10⁷). For |e − 6| ≤ 22 the
 //! power of ten is exact in f64, so the scaled value carries one rounding (relative error
 //! ≤ 2⁻⁵³, i.e. < 10⁻⁹ absolute at 10⁷); when it lies within 10⁻⁶ of a rounding tie the
-//! decision is left to the standard formatter, as are zero, non-finite values and
-//! magnitudes outside 10⁻¹⁶ … 10²⁸.
+//! decision is left to the standard formatter, as are non-finite values and magnitudes
+//! outside 10⁻¹⁶ … 10²⁸. Zeros (±0) are written directly as the standard text.
 
 /// 10⁰ … 10²², all exact in f64.
 const POW10: [f64; 23] = [

@@ -379,7 +379,8 @@ struct Chamber {
 
 /// Backward-Euler pressure of one chamber: solves P − P0 − c·g(P) = 0 with
 /// g = valve flow − leak·(P − P_other) − relief − piston flow; g decreases with P, so the
-/// residual increases strictly and the root in [0, ∞) is unique. Safeguarded Newton.
+/// residual increases strictly and the root in [0, ∞) is unique. Closed forms for a shut
+/// valve and for an open turbulent one ([`open_valve_root`]); safeguarded Newton otherwise.
 fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool) {
     let g = |p: f64| -> (f64, f64) {
         let (qv, dqv) = valve_flow(ch.gain, ch.s, p, supply, hp.return_pa, hp.laminar_pa);
@@ -406,24 +407,59 @@ fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool)
         let p = p.max(0.0);
         return (p, p > hp.relief_pa);
     }
-    // Newton from P0: the first iterate is the linearly implicit Euler step, usually within
-    // a fraction of a pascal of the root. Fast path: that iterate, accepted when its residual
-    // is below tolerance and it lies where the safeguarded loop below would have taken it
-    // (same result, without the loop's bookkeeping).
-    let p0 = ch.p0.max(0.0);
-    let (g0, dg0) = g(p0);
-    let r0 = p0 - ch.p0 - ch.c * g0;
-    if r0.abs() < 0.1 {
-        return (p0, p0 > hp.relief_pa);
+    if let Some(p) = open_valve_root(ch, hp, supply) {
+        return (p, false);
     }
-    let p1 = p0 - r0 / (1.0 - ch.c * dg0);
-    if p1 > 0.0 && (if r0 > 0.0 { p1 < p0 } else { p1 > p0 }) {
-        let (g1, _) = g(p1);
-        if (p1 - ch.p0 - ch.c * g1).abs() < 0.1 {
-            return (p1, p1 > hp.relief_pa);
-        }
+    solve_chamber_bracketed(ch, hp, g)
+}
+
+/// The root of the backward-Euler residual of a chamber with an open valve, in closed form,
+/// where the orifice is turbulent and the relief valve shut — nearly always. `None` when the
+/// root lies in the orifice's laminar band or above the relief setting: the caller then
+/// solves numerically.
+///
+/// With a = 1 + c·leak and E = P0 + c·(leak·P_other − piston), the residual is
+/// R(P) = a·P − E − c·K·s·√±(P_s − P) for s > 0 (eq. 3.48, `signed_root`), and
+/// R(P) = a·P − E + c·K·|s|·√±(P − P_e) for s < 0. Writing P = P_r ∓ m² about the
+/// valve's reference pressure P_r (supply or return) turns R = 0 into
+/// a·m² + k·m − |D| = 0 with k = c·K·|s| and D = ±(a·P_r − E), whose positive root is
+/// m = 2|D| / (k + √(k² + 4a|D|)) (the cancellation-free form). The sign of D says which
+/// way the oil flows. A root below 0 Pa means the chamber cavitates: the floor holds it at 0,
+/// as in the bracketed solver (R increases, so R(0) > 0 there).
+#[inline]
+fn open_valve_root(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> Option<f64> {
+    let a = 1.0 + ch.c * ch.leak;
+    let e = ch.p0 + ch.c * (ch.leak * ch.other - ch.piston);
+    let k = ch.c * ch.gain * ch.s.abs();
+    // σ = +1 for a valve opened to supply (reference P_s), −1 to return (reference P_e).
+    let (p_ref, sigma) = if ch.s > 0.0 {
+        (supply, 1.0)
+    } else {
+        (hp.return_pa, -1.0)
+    };
+    let d = sigma * (a * p_ref - e);
+    let m = 2.0 * d.abs() / (k + (k * k + 4.0 * a * d.abs()).sqrt());
+    let m2 = m * m;
+    // P = P_r − σ·sign(D)·m²: below P_s when supply flows in, above P_e when oil flows out.
+    let p = if (d > 0.0) == (sigma > 0.0) {
+        p_ref - m2
+    } else {
+        p_ref + m2
+    };
+    if m2 >= hp.laminar_pa && p <= hp.relief_pa && m2.is_finite() {
+        Some(p.max(0.0))
+    } else {
+        None
     }
-    // Bracketing keeps it safe where the orifice law bends.
+}
+
+/// [`solve_chamber`] where the closed form does not apply: safeguarded Newton on the
+/// residual P − P0 − c·g(P), bracketing the root so it stays safe where the orifice law bends.
+fn solve_chamber_bracketed(
+    ch: &Chamber,
+    hp: &HydraulicParams,
+    g: impl Fn(f64) -> (f64, f64),
+) -> (f64, bool) {
     let mut lo = 0.0;
     let mut hi = f64::INFINITY;
     let mut p = ch.p0.max(0.0);
@@ -520,4 +556,116 @@ pub fn update_chambers(
 #[inline]
 pub fn actuator_force(act: &ActuatorParams, p_in: f64, p_out: f64, xdot: f64) -> f64 {
     act.area_in * p_in - act.area_out * p_out - act.damping * xdot
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn params() -> HydraulicParams {
+        HydraulicParams {
+            supply_pa: 6.89e6,
+            return_pa: 0.0,
+            relief_pa: 1.1 * 6.89e6,
+            relief_gain: 1.0e-8,
+            bulk_modulus_pa: 1.0e9,
+            laminar_pa: 2.0e4,
+            actuators: [ActuatorParams {
+                linkage: Linkage::Rotary,
+                area_in: 1e-3,
+                area_out: 1e-3,
+                x_min: 0.0,
+                stroke: 1.0,
+                dead_volume_in_m3: 1.5e-4,
+                dead_volume_out_m3: 1.5e-4,
+                flow_gain: 1e-7,
+                damping: 0.0,
+                continuous: false,
+                nominal_speed_rad_s: 1.0,
+                design_torque_nm: 0.0,
+            }; N_ACT],
+            jaw: JawParams::default(),
+        }
+    }
+
+    /// A reproducible uniform number in [0, 1).
+    fn uniform(s: &mut u64) -> f64 {
+        *s = s
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (*s >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// The closed-form open-valve root ([`open_valve_root`]) against the bracketed Newton
+    /// solver on the same residual (an independent numerical method), over random chambers
+    /// spanning both valve directions, both flow directions, leakage, cavitation and
+    /// pressures near relief; where the closed form declines, the solver must find the root
+    /// in the laminar band or above relief.
+    #[test]
+    fn closed_form_root_agrees_with_bracketed_newton() {
+        let hp = params();
+        let mut seed = 7;
+        let (mut closed, mut declined) = (0, 0);
+        for _ in 0..20_000 {
+            let ch = Chamber {
+                p0: uniform(&mut seed) * 1.2 * hp.relief_pa,
+                // h·β/V for V from 0.05 to 2 L at h = 1 ms.
+                c: 1e-3 * hp.bulk_modulus_pa / (5e-5 + uniform(&mut seed) * 2e-3),
+                gain: 1e-7 * (0.5 + uniform(&mut seed)),
+                s: if uniform(&mut seed) < 0.02 {
+                    1e-4
+                } else {
+                    2.0 * uniform(&mut seed) - 1.0
+                },
+                other: uniform(&mut seed) * hp.relief_pa,
+                leak: if uniform(&mut seed) < 0.5 {
+                    0.0
+                } else {
+                    uniform(&mut seed) * 1e-11
+                },
+                // Piston flow up to ±2 L/s·(A v).
+                piston: (2.0 * uniform(&mut seed) - 1.0) * 2e-3,
+            };
+            if ch.s == 0.0 {
+                continue;
+            }
+            let g = |p: f64| -> (f64, f64) {
+                let (qv, dqv) = valve_flow(ch.gain, ch.s, p, hp.supply_pa, 0.0, hp.laminar_pa);
+                let over = p - hp.relief_pa;
+                let (qr, dqr) = if over > 0.0 {
+                    (hp.relief_gain * over, hp.relief_gain)
+                } else {
+                    (0.0, 0.0)
+                };
+                (
+                    qv - ch.leak * (p - ch.other) - qr - ch.piston,
+                    dqv - ch.leak - dqr,
+                )
+            };
+            let (reference, _) = solve_chamber_bracketed(&ch, &hp, g);
+            match open_valve_root(&ch, &hp, hp.supply_pa) {
+                Some(p) => {
+                    closed += 1;
+                    // The bracketed solver stops within 0.1 Pa of the residual's root.
+                    let slope = 1.0 - ch.c * g(p.max(1.0)).1;
+                    assert!(
+                        (p - reference).abs() <= 0.1 / slope.min(1.0) + 1e-9 * reference,
+                        "{ch:?}: closed {p}, bracketed {reference}"
+                    );
+                    if p > 0.0 {
+                        let r = p - ch.p0 - ch.c * g(p).0;
+                        assert!(r.abs() < 1e-6 * (ch.p0 + 1.0) * slope, "residual {r}");
+                    }
+                }
+                None => {
+                    declined += 1;
+                    let laminar = (reference - hp.supply_pa).abs() < hp.laminar_pa
+                        || (reference - hp.return_pa).abs() < hp.laminar_pa;
+                    assert!(laminar || reference > hp.relief_pa, "{ch:?}: {reference}");
+                }
+            }
+        }
+        // Both branches were exercised.
+        assert!(closed > 15_000 && declined > 10, "{closed} {declined}");
+    }
 }

@@ -19,7 +19,7 @@
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
 
 mod pair;
-pub use pair::step_terms_pair;
+pub use pair::{PairLinks, step_terms_pair};
 
 use crate::Error;
 use crate::kinematics::KinData;

@@ -42,7 +42,7 @@ use nalgebra::{Isometry3, Matrix3, Matrix6, Translation3, UnitQuaternion, Vector
 
 use crate::Error;
 use crate::control::{self, ControlParams, CoopInputs};
-use crate::dynamics::{self, DynData, Inertials};
+use crate::dynamics::{self, DynData, Inertials, PairLinks};
 use crate::grasp::{self, GraspState, ObjectParams};
 use crate::hydraulics::{self, Faults, HydraulicParams, N_ACT};
 use crate::kinematics::{self, KinData};
@@ -308,6 +308,9 @@ pub struct Simulation {
     /// The arm models with their bases composed in ([`Model::based_at`]): joint frames,
     /// Jacobians, tool poses and the dynamics are all in the world frame.
     models: [Model; 2],
+    /// Both arms' link data paired for [`dynamics::step_terms_pair`]; `None` when the arms'
+    /// joints differ in kind (then each arm's terms are computed on their own).
+    pair_links: Option<PairLinks<N_ACT>>,
     params: SimParams,
     state: State,
     work: [ArmWork; 2],
@@ -446,8 +449,13 @@ impl Simulation {
             left.based_at(&params.arms[LEFT].base),
             right.based_at(&params.arms[RIGHT].base),
         ];
+        let pair_links = PairLinks::new(
+            [&models[0], &models[1]],
+            [&params.arms[0].inertials, &params.arms[1].inertials],
+        );
         let mut sim = Simulation {
             models,
+            pair_links,
             params,
             state,
             work,
@@ -827,16 +835,11 @@ impl Simulation {
         // arms in lockstep (one arm at a time if their joint kinds differ).
         let (arms, work, models) = (&self.params.arms, &self.work, &self.models);
         let qd = [&self.state.arms[0].qd, &self.state.arms[1].qd];
-        let all_terms = dynamics::step_terms_pair::<N_ACT>(
-            [&models[0], &models[1]],
-            [&arms[0].inertials, &arms[1].inertials],
-            [&work[0].kin, &work[1].kin],
-            qd,
-            &sp.gravity,
-            rho,
-        )
-        .unwrap_or_else(|| {
-            core::array::from_fn(|i| {
+        let all_terms = match &self.pair_links {
+            Some(links) => {
+                dynamics::step_terms_pair(links, [&work[0].kin, &work[1].kin], qd, &sp.gravity, rho)
+            }
+            None => core::array::from_fn(|i| {
                 dynamics::step_terms::<N_ACT>(
                     &models[i],
                     &arms[i].inertials,
@@ -845,8 +848,8 @@ impl Simulation {
                     &sp.gravity,
                     rho,
                 )
-            })
-        });
+            }),
+        };
         for (i, terms) in all_terms.iter().enumerate() {
             let ap = &self.params.arms[i];
             let model = &self.models[i];

@@ -157,7 +157,8 @@ pub fn wrench_at_com(r: &Vector3<f64>, f: &Vector6<f64>) -> Vector6<f64> {
     Vector6::new(fl.x, fl.y, fl.z, m.x, m.y, m.z)
 }
 
-/// Wⁱᵀ·M⁻¹·Wᵏ (6×6) for the object mobility M⁻¹ = diag(1/m·I, Q) (Q = world inverse inertia),
+/// Wⁱᵀ·M⁻¹·Wᵏ (6×6) for the object mobility M⁻¹ = diag(1/m·I, Q) (Q = world inverse inertia,
+/// symmetric),
 /// in 3×3 blocks with Sⁱ = [rⁱ]×: [[1/m·I − SⁱQSᵏ, −SⁱQ], [QSᵏ, Q]].
 pub fn mobility_block(
     ri: &Vector3<f64>,
@@ -165,12 +166,26 @@ pub fn mobility_block(
     inv_mass: f64,
     q: &Matrix3<f64>,
 ) -> Matrix6<f64> {
-    let si = skew(ri);
-    let qsk = q * skew(rk);
-    let siq = si * q;
+    // Products with a skew matrix as cross products, column by column: Sᵏ·Q has columns
+    // rᵏ × Q_j, and Q·Sᵏ = −(Sᵏ·Q)ᵀ because Q is symmetric; Sⁱ·(Q·Sᵏ) has columns
+    // rⁱ × (Q·Sᵏ)_j.
+    let cross_cols = |r: &Vector3<f64>, m: &Matrix3<f64>| {
+        Matrix3::from_columns(&[
+            r.cross(&m.column(0).into_owned()),
+            r.cross(&m.column(1).into_owned()),
+            r.cross(&m.column(2).into_owned()),
+        ])
+    };
+    let siq = cross_cols(ri, q);
+    let qsk = if ri == rk {
+        -siq.transpose()
+    } else {
+        -cross_cols(rk, q).transpose()
+    };
+    let si_qsk = cross_cols(ri, &qsk);
     let mut b = Matrix6::zeros();
     b.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(Matrix3::identity() * inv_mass - si * qsk));
+        .copy_from(&(Matrix3::identity() * inv_mass - si_qsk));
     b.fixed_view_mut::<3, 3>(0, 3).copy_from(&(-siq));
     b.fixed_view_mut::<3, 3>(3, 0).copy_from(&qsk);
     b.fixed_view_mut::<3, 3>(3, 3).copy_from(q);

@@ -70,13 +70,19 @@ impl ObjectParams {
 
     /// Inertia about the centre of mass, object axes (kg·m²): solid box.
     pub fn inertia_body(&self) -> Matrix3<f64> {
+        Matrix3::from_diagonal(&self.principal_inertia())
+    }
+
+    /// The principal moments of inertia about the centre of mass (kg·m²), along the object
+    /// axes: the diagonal of [`Self::inertia_body`] (a box's axes are its principal axes).
+    pub fn principal_inertia(&self) -> Vector3<f64> {
         let (x, y, z) = (self.size_m.x, self.size_m.y, self.size_m.z);
         let k = self.mass_kg / 12.0;
-        Matrix3::from_diagonal(&Vector3::new(
+        Vector3::new(
             k * (y * y + z * z),
             k * (x * x + z * z),
             k * (x * x + y * y),
-        ))
+        )
     }
 
     /// The eight box corners in the object frame.

@@ -879,14 +879,27 @@ impl Simulation {
                 z[i] = ch.forward_columns(&w.jw.transpose());
             }
         }
-        // Object inertia (world) and its inverse.
+        // Object inertia (world) and its inverse. The body axes are principal, so with R's
+        // columns r_k: R·diag(d)·Rᵀ = Σ d_k·r_k·r_kᵀ, and the inverse takes 1/d_k.
         let op = &self.params.object;
         let rot = self.state.object.pose.rotation.to_rotation_matrix();
-        let ib = op.inertia_body();
-        let iw: Matrix3<f64> = rot.matrix() * ib * rot.matrix().transpose();
-        let iw_inv = rot.matrix()
-            * ib.try_inverse().unwrap_or_else(Matrix3::identity)
-            * rot.matrix().transpose();
+        let d = op.principal_inertia();
+        let d_inv = if d.iter().all(|&x| x > 0.0 && x.is_finite()) {
+            d.map(|x| 1.0 / x)
+        } else {
+            Vector3::repeat(1.0)
+        };
+        let world = |e: &Vector3<f64>| -> Matrix3<f64> {
+            let r = rot.matrix();
+            let mut m = Matrix3::zeros();
+            for k in 0..3 {
+                let c = r.column(k);
+                m += (c * e[k]) * c.transpose();
+            }
+            m
+        };
+        let iw = world(&d);
+        let iw_inv = world(&d_inv);
         // M_o⁻¹ = blockdiag(I/m, I_w⁻¹) applied to a wrench (force, moment about the COM).
         let inv_mass = 1.0 / op.mass_kg;
         let mo_inv = |w: &Vector6<f64>| {

@@ -19,6 +19,7 @@
 //! * [`optimize`]: TOMM/JLM objective and gradients; optimal posture by multi-start SLSQP (Jun §3).
 //! * [`redundancy`]: task-oriented redundancy resolution, task priority, damping, velocity
 //!   limits, feedback form (Jun eqs 19–24, Kilic eqs 0.2–0.10); allocation-free steps.
+//! * [`trig`]: inline sin/cos for the step's joint angles (fdlibm kernels), within 1 ulp.
 //! * [`studies`]: Lim §4.3 manipulability case studies (single and dual arm) as rows, and a
 //!   workspace map of translational measures.
 
@@ -40,6 +41,7 @@ pub mod optimize;
 pub mod redundancy;
 pub mod robots;
 pub mod studies;
+pub mod trig;
 
 pub use error::Error;
 pub use model::{Joint, JointKind, Model, ModelSpec};

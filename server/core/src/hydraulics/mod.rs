@@ -55,7 +55,7 @@ impl Linkage {
                 phi0_rad,
             } => {
                 let phi = phi0_rad + q;
-                let (s, c) = phi.sin_cos();
+                let (s, c) = crate::trig::sin_cos(phi);
                 let l = (r_a_m * r_a_m + r_b_m * r_b_m - 2.0 * r_a_m * r_b_m * c)
                     .max(1e-12)
                     .sqrt();

@@ -1091,8 +1091,8 @@ impl Simulation {
             ob.velocity += h * Vector3::new(acc_o[0], acc_o[1], acc_o[2]);
             ob.angular_velocity += h * Vector3::new(acc_o[3], acc_o[4], acc_o[5]);
             ob.pose.translation.vector += h * ob.velocity;
-            ob.pose.rotation =
-                UnitQuaternion::from_scaled_axis(ob.angular_velocity * h) * ob.pose.rotation;
+            ob.pose.rotation = crate::trig::quaternion_from_scaled_axis(&(ob.angular_velocity * h))
+                * ob.pose.rotation;
             ob.pose.rotation.renormalize();
             ob.seabed_force_n = normal;
         }

@@ -9,6 +9,10 @@
 //! arithmetic only (no fused multiply–add), so the result is the same on every x86-64 and
 //! the simulation stays deterministic.
 
+// The constants are written with the digits fdlibm publishes (more than an f64 holds), so
+// they can be checked against the source.
+#![allow(clippy::excessive_precision)]
+
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
 /// π/2 split as `PIO2_HI + PIO2_LO` with `PIO2_HI` holding the first 33 bits, so that

@@ -125,7 +125,11 @@ fn jacobian_general(model: &Model, data: &mut KinData, q: &[f64]) {
 /// `data.jacobian` (left untouched): what the 1 kHz simulation step needs, without the
 /// dynamic matrix and the copy out of it. Joint frames, sine/cosines, flange and tool point
 /// are filled as by [`forward_kinematics`]. Six revolute joints about +z (every DH model)
-/// take a fixed-size path; anything else gives the same result through the general one.
+/// take a fixed-size path; anything else gives the same result through the general one
+/// (which then also fills `data.jacobian`).
+///
+/// # Panics
+/// When `model` does not have six joints or `data` was not allocated for it.
 pub fn jacobian6(model: &Model, data: &mut KinData, q: &[f64; 6], j: &mut Matrix6<f64>) {
     match Chain6::of(model, data, q) {
         Some((mut chain, _)) => {

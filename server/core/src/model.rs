@@ -54,17 +54,31 @@ impl Joint {
     /// −s·r₀ + c·r₁), which is what forward kinematics spends its time on.
     #[inline]
     pub fn rotate_frame(&self, r: &Matrix3<f64>, q: f64) -> Matrix3<f64> {
+        self.rotate_frame_sin_cos(r, q).0
+    }
+
+    /// [`Self::rotate_frame`], also returning (sin v, cos v) of the angle v = q + offset the
+    /// joint turns by about `axis`: forward kinematics needs them anyway, and keeping them
+    /// saves a second `sin_cos` for whoever wants the joint's trigonometry.
+    #[inline]
+    pub fn rotate_frame_sin_cos(&self, r: &Matrix3<f64>, q: f64) -> (Matrix3<f64>, (f64, f64)) {
         let v = q + self.offset;
         let a = self.axis.into_inner();
         if a.x == 0.0 && a.y == 0.0 {
-            let (s, c) = (v * a.z.signum()).sin_cos();
+            let sign = a.z.signum();
+            let (s, c) = (v * sign).sin_cos();
             let (c0, c1) = (r.column(0).into_owned(), r.column(1).into_owned());
             let mut out = *r;
             out.set_column(0, &(c0 * c + c1 * s));
             out.set_column(1, &(c1 * c - c0 * s));
-            out
+            // sin is odd, so s·sign is sin v exactly (−z axis: the frame turned by −v).
+            (out, (s * sign, c))
         } else {
-            r * Rotation3::from_axis_angle(&self.axis, v).matrix()
+            // Not produced by any DH convention: the extra sin_cos is of no concern here.
+            (
+                r * Rotation3::from_axis_angle(&self.axis, v).matrix(),
+                v.sin_cos(),
+            )
         }
     }
 

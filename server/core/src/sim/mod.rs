@@ -544,11 +544,16 @@ impl Simulation {
 
     fn update_kinematics(&mut self) {
         for i in 0..2 {
-            // The models carry their bases: these are world-frame results.
+            // The models carry their bases: these are world-frame results. The Jacobian goes
+            // straight into `jw` (`kin.jacobian` is not kept: nothing here reads it).
             let w = &mut self.work[i];
-            kinematics::jacobian(&self.models[i], &mut w.kin, &self.state.arms[i].q);
+            kinematics::jacobian6(
+                &self.models[i],
+                &mut w.kin,
+                &self.state.arms[i].q,
+                &mut w.jw,
+            );
             w.tool = w.kin.end_effector();
-            w.jw.copy_from(&w.kin.jacobian);
         }
     }
 

@@ -44,7 +44,9 @@ const C6: f64 = -1.135_964_755_778_819_482_65e-11;
 /// larger, infinite and NaN arguments go to the standard library.
 #[inline]
 pub fn sin_cos(x: f64) -> (f64, f64) {
-    if !(x.abs() < INLINE_LIMIT) {
+    // NaN fails `<` and goes to the library too.
+    let inline = x.abs() < INLINE_LIMIT;
+    if !inline {
         return x.sin_cos();
     }
     if x == 0.0 {

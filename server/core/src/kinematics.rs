@@ -197,7 +197,7 @@ impl<'a> Chain6<'a> {
             p += r * joint.origin.translation.vector;
             r = joint.origin_rotation.after(&r);
             // Joint::rotate_frame_sin_cos for the +z axis.
-            let (s, c) = (self.q[k] + joint.offset).sin_cos();
+            let (s, c) = crate::trig::sin_cos(self.q[k] + joint.offset);
             let (c0, c1) = (r.column(0).into_owned(), r.column(1).into_owned());
             r.set_column(0, &(c0 * c + c1 * s));
             r.set_column(1, &(c1 * c - c0 * s));
@@ -354,7 +354,11 @@ mod tests {
                 for (k, (&(s, c), joint)) in
                     general.joint_sin_cos.iter().zip(&model.joints).enumerate()
                 {
-                    assert_eq!((s, c), (q[k] + joint.offset).sin_cos(), "{what} joint {k}");
+                    assert_eq!(
+                        (s, c),
+                        crate::trig::sin_cos(q[k] + joint.offset),
+                        "{what} joint {k}"
+                    );
                 }
             }
         }
@@ -396,7 +400,7 @@ mod tests {
                     general.joint_sin_cos.iter().zip(&model.joints).enumerate()
                 {
                     let expect = match joint.kind {
-                        JointKind::Revolute => (q[k] + joint.offset).sin_cos(),
+                        JointKind::Revolute => crate::trig::sin_cos(q[k] + joint.offset),
                         JointKind::Prismatic => (0.0, 1.0),
                     };
                     assert_eq!((s, c), expect, "{} joint {k}", model.name);

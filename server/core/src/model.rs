@@ -66,7 +66,7 @@ impl Joint {
         let a = self.axis.into_inner();
         if a.x == 0.0 && a.y == 0.0 {
             let sign = a.z.signum();
-            let (s, c) = (v * sign).sin_cos();
+            let (s, c) = crate::trig::sin_cos(v * sign);
             let (c0, c1) = (r.column(0).into_owned(), r.column(1).into_owned());
             let mut out = *r;
             out.set_column(0, &(c0 * c + c1 * s));
@@ -77,7 +77,7 @@ impl Joint {
             // Not produced by any DH convention: the extra sin_cos is of no concern here.
             (
                 r * Rotation3::from_axis_angle(&self.axis, v).matrix(),
-                v.sin_cos(),
+                crate::trig::sin_cos(v),
             )
         }
     }

@@ -48,14 +48,19 @@ impl Linkage {
     /// Actuator coordinate x (m or rad) and Ĵ = dx/dq (m/rad or 1) at joint angle `q`.
     #[inline]
     pub fn coordinate(&self, q: f64) -> (f64, f64) {
+        let sc = match *self {
+            Linkage::Linear { phi0_rad, .. } => crate::trig::sin_cos(phi0_rad + q),
+            Linkage::Rotary => (0.0, 1.0),
+        };
+        self.coordinate_sin_cos(q, sc)
+    }
+
+    /// [`Self::coordinate`] given (sin φ, cos φ) of the pin angle φ = φ₀ + q (ignored by a
+    /// rotary actuator), for a caller that has them from the joint's trigonometry.
+    #[inline]
+    pub fn coordinate_sin_cos(&self, q: f64, (s, c): (f64, f64)) -> (f64, f64) {
         match *self {
-            Linkage::Linear {
-                r_a_m,
-                r_b_m,
-                phi0_rad,
-            } => {
-                let phi = phi0_rad + q;
-                let (s, c) = crate::trig::sin_cos(phi);
+            Linkage::Linear { r_a_m, r_b_m, .. } => {
                 let l = (r_a_m * r_a_m + r_b_m * r_b_m - 2.0 * r_a_m * r_b_m * c)
                     .max(1e-12)
                     .sqrt();
@@ -63,6 +68,15 @@ impl Linkage {
             }
             Linkage::Rotary => (q, 1.0),
         }
+    }
+
+    /// (sin, cos) of the pin angle at the joint angle whose (sin v, cos v) are `v_sin_cos`,
+    /// where v = q + `offset` (the angle forward kinematics turns; [`KinData::joint_sin_cos`]),
+    /// and `phase` = (sin, cos) of φ₀ − offset: φ = (φ₀ − offset) + v by angle addition.
+    #[inline]
+    pub fn pin_sin_cos(phase: (f64, f64), v_sin_cos: (f64, f64)) -> (f64, f64) {
+        let ((sp, cp), (sv, cv)) = (phase, v_sin_cos);
+        (sp * cv + cp * sv, cp * cv - sp * sv)
     }
 }
 
@@ -586,6 +600,35 @@ mod tests {
             }; N_ACT],
             jaw: JawParams::default(),
         }
+    }
+
+    /// The linkage coordinate from the joint's sin/cos by angle addition
+    /// ([`Linkage::pin_sin_cos`]) equals the direct one (closed form L(q), Ĵ(q)) to round-off,
+    /// with and without a DH offset.
+    #[test]
+    fn linkage_from_joint_trigonometry() {
+        let link = Linkage::Linear {
+            r_a_m: 0.35,
+            r_b_m: 0.10,
+            phi0_rad: 1.9,
+        };
+        for k in 0..400 {
+            let q = -2.0 + 0.01 * k as f64;
+            for offset in [0.0, 0.3, -1.2] {
+                let phase = crate::trig::sin_cos(1.9 - offset);
+                let sc = Linkage::pin_sin_cos(phase, (q + offset).sin_cos());
+                let (x, jh) = link.coordinate_sin_cos(q, sc);
+                let (x_ref, jh_ref) = link.coordinate(q);
+                assert!(
+                    (x - x_ref).abs() < 1e-15 && (jh - jh_ref).abs() < 1e-15,
+                    "{q} {offset}"
+                );
+            }
+        }
+        assert_eq!(
+            Linkage::Rotary.coordinate_sin_cos(0.7, (0.3, 0.1)),
+            (0.7, 1.0)
+        );
     }
 
     /// A reproducible uniform number in [0, 1).

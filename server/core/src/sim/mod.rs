@@ -44,7 +44,7 @@ use crate::Error;
 use crate::control::{self, ControlParams, CoopInputs};
 use crate::dynamics::{self, DynData, Inertials, PairLinks};
 use crate::grasp::{self, GraspState, ObjectParams};
-use crate::hydraulics::{self, Faults, HydraulicParams, N_ACT};
+use crate::hydraulics::{self, Faults, HydraulicParams, Linkage, N_ACT};
 use crate::kinematics::{self, KinData};
 use crate::linalg::{BlockCholesky, Cholesky};
 use crate::model::Model;
@@ -311,6 +311,9 @@ pub struct Simulation {
     /// Both arms' link data paired for [`dynamics::step_terms_pair`]; `None` when the arms'
     /// joints differ in kind (then each arm's terms are computed on their own).
     pair_links: Option<PairLinks<N_ACT>>,
+    /// Per arm and actuator, (sin, cos) of φ₀ − θ_offset of a cylinder linkage
+    /// ([`Linkage::pin_sin_cos`]): the step gets the pin angle from the joint's trigonometry.
+    linkage_phase: [[(f64, f64); N_ACT]; 2],
     params: SimParams,
     state: State,
     work: [ArmWork; 2],
@@ -453,9 +456,18 @@ impl Simulation {
             [&models[0], &models[1]],
             [&params.arms[0].inertials, &params.arms[1].inertials],
         );
+        let linkage_phase = core::array::from_fn(|i| {
+            core::array::from_fn(|j| match params.arms[i].hydraulics.actuators[j].linkage {
+                Linkage::Linear { phi0_rad, .. } => {
+                    crate::trig::sin_cos(phi0_rad - models[i].joints[j].offset)
+                }
+                Linkage::Rotary => (0.0, 1.0),
+            })
+        });
         let mut sim = Simulation {
             models,
             pair_links,
+            linkage_phase,
             params,
             state,
             work,
@@ -864,7 +876,11 @@ impl Simulation {
             let mut m = terms.mass_matrix;
             for r in 0..N_ACT {
                 let act = &ap.hydraulics.actuators[r];
-                let (x, jh) = act.linkage.coordinate(a.q[r]);
+                let pin = Linkage::pin_sin_cos(
+                    self.linkage_phase[i][r],
+                    self.work[i].kin.joint_sin_cos[r],
+                );
+                let (x, jh) = act.linkage.coordinate_sin_cos(a.q[r], pin);
                 x0[i][r] = x;
                 jhat[i][r] = jh;
                 damp[i][r] = act.damping * jh * jh + 2.0 * sp.joint_drag * a.qd[r].abs();

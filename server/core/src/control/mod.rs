@@ -10,11 +10,12 @@
 //!   object motion (Wⁱᵀ, equal sharing) and an admittance term that backs each arm off its
 //!   share of the internal wrench ((I − W⁺W)F_c), so internal force stays low.
 
+use std::ops::{Add, Div, Mul, Sub};
+
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
 use crate::grasp::grasp_block;
 use crate::hydraulics::N_ACT;
-use crate::linalg::Cholesky;
 
 /// Controller gains (documented defaults in [`Default`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,18 +84,187 @@ pub fn joint_servo(
     u
 }
 
-/// Damped-least-squares solve q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ for a 6×6 Jacobian.
+/// Damped-least-squares solve q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ for a 6×6 Jacobian (zero if JJᵀ + λ²I is
+/// not numerically positive definite, e.g. for a non-finite J).
 pub fn dls(j: &Matrix6<f64>, xd: &Vector6<f64>, lambda: f64) -> Vector6<f64> {
-    // Lower triangle of JJᵀ + λ²I only: the factorization reads no more.
-    let mut a = Matrix6::identity() * (lambda * lambda);
-    for c in 0..6 {
-        for r in c..6 {
-            a[(r, c)] += j.row(r).dot(&j.row(c));
-        }
+    let jl: [[f64; 6]; 6] = core::array::from_fn(|r| core::array::from_fn(|c| j[(r, c)]));
+    let (q, d) = dls_lanes(&jl, &(*xd).into(), lambda * lambda);
+    if pivots_ok(d) {
+        Vector6::from(q)
+    } else {
+        Vector6::zeros()
     }
-    match Cholesky::factor(&a) {
-        Some(ch) => j.transpose() * ch.solve(xd),
-        None => Vector6::zeros(),
+}
+
+/// [`dls`] for both arms at once: the same operations on each arm, packed in pairs (arm 0 in
+/// lane 0, arm 1 in lane 1) so that the compiler issues one SSE2 instruction for both arms.
+/// Each lane equals [`dls`] of its arm bit for bit (the operations and their order are the
+/// same, and a packed IEEE operation rounds each lane as the scalar one).
+pub fn dls_pair(j: [&Matrix6<f64>; 2], xd: [&Vector6<f64>; 2], lambda: f64) -> [Vector6<f64>; 2] {
+    let jl: [[Pair; 6]; 6] =
+        core::array::from_fn(|r| core::array::from_fn(|c| Pair([j[0][(r, c)], j[1][(r, c)]])));
+    let xl: [Pair; 6] = core::array::from_fn(|k| Pair([xd[0][k], xd[1][k]]));
+    let (q, d) = dls_lanes(&jl, &xl, Pair::splat(lambda * lambda));
+    core::array::from_fn(|lane| {
+        if pivots_ok(d.map(|d| d.0[lane])) {
+            Vector6::from_fn(|k, _| q[k].0[lane])
+        } else {
+            Vector6::zeros()
+        }
+    })
+}
+
+/// The verdict of [`Cholesky::factor`](crate::linalg::Cholesky::factor) on the pivots: all
+/// positive and finite (NaN fails). Branch-free, one verdict.
+#[inline(always)]
+fn pivots_ok(d: [f64; 6]) -> bool {
+    let mut ok = true;
+    for d in d {
+        ok &= d > 0.0 && d < f64::INFINITY;
+    }
+    ok
+}
+
+/// Arithmetic of one lane of [`dls_lanes`]: `f64` for one arm, [`Pair`] for two.
+trait Lane:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    fn splat(x: f64) -> Self;
+}
+
+impl Lane for f64 {
+    #[inline(always)]
+    fn splat(x: f64) -> f64 {
+        x
+    }
+}
+
+/// One number per arm (as `dynamics::pair`): element-wise operations that LLVM packs into
+/// SSE2 instructions. Aligned to 16 bytes so that an operand in memory (a spilled or stored
+/// pair) can be folded into the arithmetic instruction, which SSE2 allows only when aligned.
+#[derive(Debug, Clone, Copy)]
+#[repr(align(16))]
+struct Pair([f64; 2]);
+
+impl Lane for Pair {
+    #[inline(always)]
+    fn splat(x: f64) -> Pair {
+        Pair([x, x])
+    }
+}
+
+macro_rules! pair_op {
+    ($tr:ident, $f:ident, $op:tt) => {
+        impl $tr for Pair {
+            type Output = Pair;
+            #[inline(always)]
+            fn $f(self, o: Pair) -> Pair {
+                Pair([self.0[0] $op o.0[0], self.0[1] $op o.0[1]])
+            }
+        }
+    };
+}
+pair_op!(Add, add, +);
+pair_op!(Sub, sub, -);
+pair_op!(Mul, mul, *);
+pair_op!(Div, div, /);
+
+/// The DLS solve on lanes: q̇ = Jᵀ·x with (JJᵀ + λ²I)·x = ẋ, `j` row-major. Returns q̇ and the
+/// LDLᵀ pivots D (the caller rejects a lane whose pivots are not all positive and finite).
+///
+/// A = JJᵀ + λ²I (lower triangle) by row dot products, each accumulated in one register;
+/// then A = L·D·Lᵀ in Crout order and the solve L⁻ᵀ·D⁻¹·L⁻¹·ẋ, the recurrences of
+/// [`Cholesky`](crate::linalg::Cholesky) (Golub & Van Loan, Alg. 4.2.2) without its 1/√D,
+/// which the DLS does not need. The rows are separate const-generic calls so that every loop
+/// has a fixed trip count and unrolls into straight-line code (a triangular loop nest over a
+/// run-time row index is left rolled by LLVM).
+#[inline(always)]
+fn dls_lanes<T: Lane>(j: &[[T; 6]; 6], xd: &[T; 6], lambda_sq: T) -> ([T; 6], [T; 6]) {
+    let zero = T::splat(0.0);
+    let mut a = [[zero; 6]; 6];
+    gram_row::<T, 0>(j, &mut a, lambda_sq);
+    gram_row::<T, 1>(j, &mut a, lambda_sq);
+    gram_row::<T, 2>(j, &mut a, lambda_sq);
+    gram_row::<T, 3>(j, &mut a, lambda_sq);
+    gram_row::<T, 4>(j, &mut a, lambda_sq);
+    gram_row::<T, 5>(j, &mut a, lambda_sq);
+    let mut l = [[zero; 6]; 6];
+    let mut inv_d = [zero; 6];
+    let mut x = *xd;
+    let d = [
+        ldl_row::<T, 0>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 1>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 2>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 3>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 4>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 5>(&a, &mut l, &mut inv_d, &mut x),
+    ];
+    for i in 0..6 {
+        x[i] = x[i] * inv_d[i];
+    }
+    back_row::<T, 5>(&l, &mut x);
+    back_row::<T, 4>(&l, &mut x);
+    back_row::<T, 3>(&l, &mut x);
+    back_row::<T, 2>(&l, &mut x);
+    back_row::<T, 1>(&l, &mut x);
+    back_row::<T, 0>(&l, &mut x);
+    let q = core::array::from_fn(|c| {
+        let mut s = j[0][c] * x[0];
+        for r in 1..6 {
+            s = s + j[r][c] * x[r];
+        }
+        s
+    });
+    (q, d)
+}
+
+/// Row R of the lower triangle of A = JJᵀ + λ²I: A_rc = Σ_k J_rk·J_ck (+ λ² on the diagonal).
+#[inline(always)]
+fn gram_row<T: Lane, const R: usize>(j: &[[T; 6]; 6], a: &mut [[T; 6]; 6], lambda_sq: T) {
+    for c in 0..R + 1 {
+        let mut s = j[R][0] * j[c][0];
+        for k in 1..6 {
+            s = s + j[R][k] * j[c][k];
+        }
+        a[R][c] = s;
+    }
+    a[R][R] = a[R][R] + lambda_sq;
+}
+
+/// Row I of A = L·D·Lᵀ (Crout: u_k = L_ik·D_k = a_ik − Σ_m<k u_m·L_km, D_i = a_ii −
+/// Σ_k<i u_k·L_ik), then row I of the forward substitution x ← L⁻¹·x. Returns D_I.
+#[inline(always)]
+fn ldl_row<T: Lane, const I: usize>(
+    a: &[[T; 6]; 6],
+    l: &mut [[T; 6]; 6],
+    inv_d: &mut [T; 6],
+    x: &mut [T; 6],
+) -> T {
+    let mut u = [T::splat(0.0); I];
+    for k in 0..I {
+        let mut s = a[I][k];
+        for m in 0..k {
+            s = s - u[m] * l[k][m];
+        }
+        u[k] = s;
+        l[I][k] = s * inv_d[k];
+    }
+    let mut d = a[I][I];
+    for k in 0..I {
+        d = d - u[k] * l[I][k];
+    }
+    inv_d[I] = T::splat(1.0) / d;
+    for k in 0..I {
+        x[I] = x[I] - l[I][k] * x[k];
+    }
+    d
+}
+
+/// Row I of the back substitution x ← L⁻ᵀ·x (rows below I already done).
+#[inline(always)]
+fn back_row<T: Lane, const I: usize>(l: &[[T; 6]; 6], x: &mut [T; 6]) {
+    for k in I + 1..6 {
+        x[I] = x[I] - l[k][I] * x[k];
     }
 }
 
@@ -150,9 +320,7 @@ pub fn cooperative(
     let w0 = grasp_block(&inp.r[0]);
     let w1 = grasp_block(&inp.r[1]);
     let fext = w0 * inp.contact[0] + w1 * inp.contact[1];
-    let mut u = [[0.0; N_ACT]; 2];
-    let mut peak: f64 = 1.0;
-    for i in 0..2 {
+    let xd: [Vector6<f64>; 2] = core::array::from_fn(|i| {
         let wi = if i == 0 { &w0 } else { &w1 };
         // W⁺ⁱ·F_ext = ½[I 0; −Rⁱ I]F_ext.
         let f = Vector3::new(fext[0], fext[1], fext[2]) * 0.5;
@@ -171,9 +339,18 @@ pub fn cooperative(
             xd[k] -= p.internal_admittance_lin * excess[k];
             xd[k + 3] -= p.internal_admittance_rot * excess[k + 3];
         }
-        let qd = dls(&inp.jacobians[i], &xd, p.dls_damping);
+        xd
+    });
+    let qd = dls_pair(
+        [&inp.jacobians[0], &inp.jacobians[1]],
+        [&xd[0], &xd[1]],
+        p.dls_damping,
+    );
+    let mut u = [[0.0; N_ACT]; 2];
+    let mut peak: f64 = 1.0;
+    for i in 0..2 {
         for j in 0..N_ACT {
-            u[i][j] = qd[j] / inp.nominal_speed[i][j];
+            u[i][j] = qd[i][j] / inp.nominal_speed[i][j];
             if u[i][j].is_finite() {
                 peak = peak.max(u[i][j].abs());
             } else {

@@ -14,7 +14,7 @@ use std::ops::{Add, Div, Mul, Sub};
 
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
-use crate::grasp::grasp_block;
+use crate::grasp::{grasp_point_twist, wrench_at_com};
 use crate::hydraulics::N_ACT;
 
 /// Controller gains (documented defaults in [`Default`]).
@@ -304,8 +304,12 @@ pub fn cooperative(
 ) -> [[f64; N_ACT]; 2] {
     let tw = inp.twist;
     desired.translation.vector += Vector3::new(tw[0], tw[1], tw[2]) * dt_s;
-    desired.rotation = UnitQuaternion::from_scaled_axis(Vector3::new(tw[3], tw[4], tw[5]) * dt_s)
-        * desired.rotation;
+    let turn = Vector3::new(tw[3], tw[4], tw[5]) * dt_s;
+    // exp(0) is the identity quaternion exactly and the product with it returns `desired`
+    // unchanged, so the common pure-translation command skips it.
+    if turn != Vector3::zeros() {
+        desired.rotation = UnitQuaternion::from_scaled_axis(turn) * desired.rotation;
+    }
     let ep = desired.translation.vector - inp.object.translation.vector;
     let er = rotation_error(&desired.rotation, &inp.object.rotation);
     let v = Vector6::new(
@@ -316,12 +320,11 @@ pub fn cooperative(
         tw[4] + p.object_kp * er.y,
         tw[5] + p.object_kp * er.z,
     );
-    // Equal-share decomposition of the measured contact wrenches.
-    let w0 = grasp_block(&inp.r[0]);
-    let w1 = grasp_block(&inp.r[1]);
-    let fext = w0 * inp.contact[0] + w1 * inp.contact[1];
+    // Equal-share decomposition of the measured contact wrenches: F_ext = W¹F¹ + W²F²
+    // (eq. 3.40), each Wⁱ applied in closed form ([f; m + rⁱ×f]) instead of as a 6×6 product.
+    let fext =
+        wrench_at_com(&inp.r[0], &inp.contact[0]) + wrench_at_com(&inp.r[1], &inp.contact[1]);
     let xd: [Vector6<f64>; 2] = core::array::from_fn(|i| {
-        let wi = if i == 0 { &w0 } else { &w1 };
         // W⁺ⁱ·F_ext = ½[I 0; −Rⁱ I]F_ext.
         let f = Vector3::new(fext[0], fext[1], fext[2]) * 0.5;
         let m = Vector3::new(fext[3], fext[4], fext[5]) * 0.5 - inp.r[i].cross(&f);
@@ -334,7 +337,8 @@ pub fn cooperative(
             c[4] - m.y,
             c[5] - m.z,
         );
-        let mut xd = wi.transpose() * v;
+        // Wⁱᵀ·v = [v + ω×rⁱ; ω], the grasp point's twist.
+        let mut xd = grasp_point_twist(&inp.r[i], &v);
         for k in 0..3 {
             xd[k] -= p.internal_admittance_lin * excess[k];
             xd[k + 3] -= p.internal_admittance_rot * excess[k + 3];

@@ -268,10 +268,24 @@ fn back_row<T: Lane, const I: usize>(l: &[[T; 6]; 6], x: &mut [T; 6]) {
     }
 }
 
-/// Orientation error vector (rad, base frame) taking `actual` to `desired`.
+/// Orientation error vector (rad, base frame) taking `actual` to `desired`: the rotation vector
+/// θ·n of q = desired·actual⁻¹, i.e. nalgebra's `UnitQuaternion::scaled_axis` of q, spelled out
+/// (one norm instead of two, one division instead of three, no `Unit` wrapper):
+/// θ = 2·atan2(|q_v|, |q_w|), n = ±q_v/|q_v| with the sign of q_w (the shorter of the two
+/// equivalent rotations), and zero for |q_v| = 0.
 #[inline]
 pub fn rotation_error(desired: &UnitQuaternion<f64>, actual: &UnitQuaternion<f64>) -> Vector3<f64> {
-    (desired * actual.inverse()).scaled_axis()
+    // q = a·b* with b* = (b_w, −b_v): q_w = a_w·b_w + a_v·b_v, q_v = b_w·a_v − a_w·b_v − a_v×b_v.
+    let (a, b) = (desired.quaternion(), actual.quaternion());
+    let (av, bv) = (a.imag(), b.imag());
+    let w = a.w * b.w + av.dot(&bv);
+    let v = av * b.w - bv * a.w - av.cross(&bv);
+    let n = v.norm();
+    if n <= 0.0 {
+        return Vector3::zeros();
+    }
+    let s = 2.0 * n.atan2(w.abs()) / n;
+    v * if w >= 0.0 { s } else { -s }
 }
 
 /// Inputs of the cooperative controller for one step.

@@ -391,3 +391,245 @@ pub fn cooperative(
     }
     u
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grasp::grasp_block;
+
+    /// Reproducible uniform numbers in [−0.5, 0.5) (the LCG of the `linalg` tests).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((self.0 >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        }
+        fn matrix(&mut self, scale: f64) -> Matrix6<f64> {
+            Matrix6::from_fn(|_, _| self.next() * scale)
+        }
+        fn vector(&mut self, scale: f64) -> Vector6<f64> {
+            Vector6::from_fn(|_, _| self.next() * scale)
+        }
+        fn vector3(&mut self, scale: f64) -> Vector3<f64> {
+            Vector3::new(self.next(), self.next(), self.next()) * scale
+        }
+        fn rotation(&mut self) -> UnitQuaternion<f64> {
+            UnitQuaternion::from_scaled_axis(self.vector3(6.0))
+        }
+    }
+
+    /// Reference DLS: Jᵀ(JJᵀ + λ²I)⁻¹ẋ formed with nalgebra's own matrix products and Cholesky
+    /// (an implementation independent of [`dls_lanes`]).
+    fn dls_nalgebra(j: &Matrix6<f64>, xd: &Vector6<f64>, lambda: f64) -> Vector6<f64> {
+        let a = j * j.transpose() + Matrix6::identity() * (lambda * lambda);
+        match a.cholesky() {
+            Some(ch) => j.transpose() * ch.solve(xd),
+            None => Vector6::zeros(),
+        }
+    }
+
+    fn rel_err(a: &Vector6<f64>, b: &Vector6<f64>) -> f64 {
+        (a - b).norm() / b.norm().max(1e-300)
+    }
+
+    #[test]
+    fn dls_matches_the_nalgebra_reference() {
+        let mut g = Lcg(7);
+        for case in 0..300 {
+            // Well and badly conditioned Jacobians (a scaled-down row makes JJᵀ nearly
+            // singular, so the damping matters), several dampings.
+            let mut j = g.matrix(2.0);
+            if case % 3 == 0 {
+                let row = j.row(2) * 1e-6;
+                j.set_row(4, &row);
+            }
+            let xd = g.vector(1.0);
+            let lambda = [0.02, 0.5, 1e-4][case % 3];
+            let ours = dls(&j, &xd, lambda);
+            let reference = dls_nalgebra(&j, &xd, lambda);
+            // JJᵀ + λ²I has condition number up to ~10⁸ here.
+            assert!(
+                rel_err(&ours, &reference) < 1e-7,
+                "case {case}: {ours} vs {reference}"
+            );
+            // The damped normal equations hold: (JᵀJ + λ²I)q̇ = Jᵀẋ.
+            let lhs = (j.transpose() * j + Matrix6::identity() * (lambda * lambda)) * ours;
+            let rhs = j.transpose() * xd;
+            assert!(rel_err(&lhs, &rhs) < 1e-7, "case {case}");
+        }
+    }
+
+    #[test]
+    fn dls_refuses_non_finite_jacobians() {
+        let mut g = Lcg(11);
+        let xd = g.vector(1.0);
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut j = g.matrix(1.0);
+            j[(3, 1)] = bad;
+            assert_eq!(dls(&j, &xd, 0.02), Vector6::zeros());
+        }
+        // Zero damping and a singular J: a zero pivot, refused as by `Cholesky::factor`.
+        assert_eq!(dls(&Matrix6::zeros(), &xd, 0.0), Vector6::zeros());
+    }
+
+    /// Each lane of the lockstep solve is the one-arm solve, bit for bit, and a failing lane
+    /// does not affect the other.
+    #[test]
+    fn dls_pair_equals_dls_per_arm_bitwise() {
+        let mut g = Lcg(3);
+        for case in 0..200 {
+            let j = [g.matrix(2.0), g.matrix(1.0)];
+            let xd = [g.vector(1.0), g.vector(0.1)];
+            let lambda = if case % 2 == 0 { 0.02 } else { 0.3 };
+            let pair = dls_pair([&j[0], &j[1]], [&xd[0], &xd[1]], lambda);
+            for arm in 0..2 {
+                let one = dls(&j[arm], &xd[arm], lambda);
+                for k in 0..6 {
+                    assert_eq!(pair[arm][k].to_bits(), one[k].to_bits(), "case {case}");
+                }
+            }
+        }
+        let mut j = [g.matrix(1.0), g.matrix(1.0)];
+        let xd = [g.vector(1.0), g.vector(1.0)];
+        j[1][(0, 5)] = f64::NAN;
+        let pair = dls_pair([&j[0], &j[1]], [&xd[0], &xd[1]], 0.02);
+        assert_eq!(pair[0], dls(&j[0], &xd[0], 0.02));
+        assert_eq!(pair[1], Vector6::zeros());
+    }
+
+    /// Against nalgebra's `scaled_axis` of desired·actual⁻¹ (the previous definition), over
+    /// random rotations (both signs of q_w), tiny errors and none.
+    #[test]
+    fn rotation_error_matches_nalgebra_scaled_axis() {
+        let mut g = Lcg(5);
+        let mut check = |d: &UnitQuaternion<f64>, a: &UnitQuaternion<f64>| {
+            let ours = rotation_error(d, a);
+            let reference = (d * a.inverse()).scaled_axis();
+            assert!(
+                (ours - reference).norm() <= 1e-14 + 1e-13 * reference.norm(),
+                "{ours} vs {reference}"
+            );
+        };
+        for _ in 0..500 {
+            let (d, a) = (g.rotation(), g.rotation());
+            check(&d, &a);
+            // The same rotation from the other hemisphere (q and −q).
+            let neg = UnitQuaternion::new_unchecked(-d.into_inner());
+            check(&neg, &a);
+            let small = UnitQuaternion::from_scaled_axis(g.vector3(1e-9)) * a;
+            check(&small, &a);
+        }
+        let a = g.rotation();
+        assert_eq!(rotation_error(&a, &a), Vector3::zeros());
+        assert_eq!(
+            rotation_error(&UnitQuaternion::identity(), &UnitQuaternion::identity()),
+            Vector3::zeros()
+        );
+    }
+
+    /// The controller as first written, with the 6×6 grasp blocks Wⁱ (eq. 3.40) formed and
+    /// multiplied, nalgebra's `scaled_axis` and the nalgebra DLS reference: the closed forms
+    /// and the lockstep solve must reproduce it to round-off.
+    fn cooperative_reference(
+        inp: &CoopInputs<'_>,
+        desired: &mut Isometry3<f64>,
+        dt_s: f64,
+        p: &ControlParams,
+    ) -> [[f64; N_ACT]; 2] {
+        let tw = inp.twist;
+        desired.translation.vector += Vector3::new(tw[0], tw[1], tw[2]) * dt_s;
+        desired.rotation =
+            UnitQuaternion::from_scaled_axis(Vector3::new(tw[3], tw[4], tw[5]) * dt_s)
+                * desired.rotation;
+        let ep = desired.translation.vector - inp.object.translation.vector;
+        let er = (desired.rotation * inp.object.rotation.inverse()).scaled_axis();
+        let v = Vector6::new(
+            tw[0] + p.object_kp * ep.x,
+            tw[1] + p.object_kp * ep.y,
+            tw[2] + p.object_kp * ep.z,
+            tw[3] + p.object_kp * er.x,
+            tw[4] + p.object_kp * er.y,
+            tw[5] + p.object_kp * er.z,
+        );
+        let w = [grasp_block(&inp.r[0]), grasp_block(&inp.r[1])];
+        let fext = w[0] * inp.contact[0] + w[1] * inp.contact[1];
+        let mut u = [[0.0; N_ACT]; 2];
+        let mut peak: f64 = 1.0;
+        for i in 0..2 {
+            let f = Vector3::new(fext[0], fext[1], fext[2]) * 0.5;
+            let m = Vector3::new(fext[3], fext[4], fext[5]) * 0.5 - inp.r[i].cross(&f);
+            let c = inp.contact[i];
+            let excess = c - Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z);
+            let mut xd = w[i].transpose() * v;
+            for k in 0..3 {
+                xd[k] -= p.internal_admittance_lin * excess[k];
+                xd[k + 3] -= p.internal_admittance_rot * excess[k + 3];
+            }
+            let qd = dls_nalgebra(&inp.jacobians[i], &xd, p.dls_damping);
+            for j in 0..N_ACT {
+                u[i][j] = qd[j] / inp.nominal_speed[i][j];
+                if u[i][j].is_finite() {
+                    peak = peak.max(u[i][j].abs());
+                } else {
+                    u[i][j] = 0.0;
+                }
+            }
+        }
+        u.map(|ui| ui.map(|x| x / peak))
+    }
+
+    #[test]
+    fn cooperative_matches_the_matrix_form_reference() {
+        let mut g = Lcg(13);
+        let p = ControlParams::default();
+        for case in 0..300 {
+            let object = Isometry3::from_parts(g.vector3(2.0).into(), g.rotation());
+            // Desired pose near the object (the controller's regime) or far from it.
+            let near = case % 2 == 0;
+            let mut desired = Isometry3::from_parts(
+                (object.translation.vector + g.vector3(if near { 0.01 } else { 1.0 })).into(),
+                UnitQuaternion::from_scaled_axis(g.vector3(if near { 0.01 } else { 3.0 }))
+                    * object.rotation,
+            );
+            let r = [g.vector3(0.6), g.vector3(0.6)];
+            let jacobians = [g.matrix(2.0), g.matrix(2.0)];
+            let contact = [g.vector(400.0), g.vector(400.0)];
+            let mut twist = g.vector(0.2);
+            if case % 3 == 0 {
+                // Pure translation: the skipped identity rotation increment.
+                twist.fixed_rows_mut::<3>(3).fill(0.0);
+            }
+            let nominal_speed = [
+                [0.5, 0.6, 0.7, 1.0, 1.5, 2.0],
+                [0.4, 0.5, 0.6, 0.9, 1.2, 2.5],
+            ];
+            let inp = CoopInputs {
+                object: &object,
+                r: &r,
+                jacobians: &jacobians,
+                contact: &contact,
+                twist: &twist,
+                nominal_speed: &nominal_speed,
+            };
+            let mut desired_ref = desired;
+            let ours = cooperative(&inp, &mut desired, 1e-3, &p);
+            let reference = cooperative_reference(&inp, &mut desired_ref, 1e-3, &p);
+            for i in 0..2 {
+                for j in 0..N_ACT {
+                    assert!(
+                        (ours[i][j] - reference[i][j]).abs() < 1e-9,
+                        "case {case} arm {i} joint {j}: {} vs {}",
+                        ours[i][j],
+                        reference[i][j]
+                    );
+                }
+            }
+            assert!((desired.translation.vector - desired_ref.translation.vector).norm() < 1e-15);
+            assert!(desired.rotation.angle_to(&desired_ref.rotation) < 1e-12);
+        }
+    }
+}

@@ -227,6 +227,7 @@ fn dls_lanes<T: Lane>(j: &[[T; 6]; 6], xd: &[T; 6], lambda_sq: T) -> ([T; 6], [T
 }
 
 /// Row R of the lower triangle of A = JJᵀ + λ²I: A_rc = Σ_k J_rk·J_ck (+ λ² on the diagonal).
+#[allow(clippy::needless_range_loop)] // two rows of `j` indexed by the same k
 #[inline(always)]
 fn gram_row<T: Lane, const R: usize>(j: &[[T; 6]; 6], a: &mut [[T; 6]; 6], lambda_sq: T) {
     for c in 0..R + 1 {
@@ -508,7 +509,7 @@ mod tests {
     #[test]
     fn rotation_error_matches_nalgebra_scaled_axis() {
         let mut g = Lcg(5);
-        let mut check = |d: &UnitQuaternion<f64>, a: &UnitQuaternion<f64>| {
+        let check = |d: &UnitQuaternion<f64>, a: &UnitQuaternion<f64>| {
             let ours = rotation_error(d, a);
             let reference = (d * a.inverse()).scaled_axis();
             for k in 0..3 {

@@ -116,13 +116,15 @@ pub fn dls_pair(j: [&Matrix6<f64>; 2], xd: [&Vector6<f64>; 2], lambda: f64) -> [
 /// more per call than the call costs).
 #[inline(never)]
 fn unpack_checked(q: &[Pair; 6], d: &[Pair; 6]) -> [Vector6<f64>; 2] {
-    core::array::from_fn(|lane| {
-        if pivots_ok(d.map(|p| p.0[lane])) {
-            Vector6::from_fn(|k, _| q[k].0[lane])
-        } else {
-            Vector6::zeros()
+    let mut out = [Vector6::zeros(); 2];
+    for (lane, o) in out.iter_mut().enumerate() {
+        if pivots_ok(core::array::from_fn(|k| d[k].0[lane])) {
+            for k in 0..6 {
+                o[k] = q[k].0[lane];
+            }
         }
-    })
+    }
+    out
 }
 
 /// The verdict of [`Cholesky::factor`](crate::linalg::Cholesky::factor) on the pivots: every

@@ -10,11 +10,12 @@
 //!   object motion (Wⁱᵀ, equal sharing) and an admittance term that backs each arm off its
 //!   share of the internal wrench ((I − W⁺W)F_c), so internal force stays low.
 
+use std::ops::{Add, Div, Mul, Sub};
+
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
-use crate::grasp::grasp_block;
+use crate::grasp::{grasp_point_twist, wrench_at_com};
 use crate::hydraulics::N_ACT;
-use crate::linalg::Cholesky;
 
 /// Controller gains (documented defaults in [`Default`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -83,25 +84,221 @@ pub fn joint_servo(
     u
 }
 
-/// Damped-least-squares solve q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ for a 6×6 Jacobian.
+/// Damped-least-squares solve q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ for a 6×6 Jacobian (zero if JJᵀ + λ²I is
+/// not numerically positive definite, e.g. for a non-finite J).
 pub fn dls(j: &Matrix6<f64>, xd: &Vector6<f64>, lambda: f64) -> Vector6<f64> {
-    // Lower triangle of JJᵀ + λ²I only: the factorization reads no more.
-    let mut a = Matrix6::identity() * (lambda * lambda);
-    for c in 0..6 {
-        for r in c..6 {
-            a[(r, c)] += j.row(r).dot(&j.row(c));
-        }
-    }
-    match Cholesky::factor(&a) {
-        Some(ch) => j.transpose() * ch.solve(xd),
-        None => Vector6::zeros(),
+    let jl: [[f64; 6]; 6] = core::array::from_fn(|r| core::array::from_fn(|c| j[(r, c)]));
+    let (q, d) = dls_lanes(&jl, &(*xd).into(), lambda * lambda);
+    if pivots_ok(d) {
+        Vector6::from(q)
+    } else {
+        Vector6::zeros()
     }
 }
 
-/// Orientation error vector (rad, base frame) taking `actual` to `desired`.
+/// [`dls`] for both arms at once: the same operations on each arm, packed in pairs (arm 0 in
+/// lane 0, arm 1 in lane 1) so that the compiler issues one SSE2 instruction for both arms.
+/// Each lane equals [`dls`] of its arm bit for bit (the operations and their order are the
+/// same, and a packed IEEE operation rounds each lane as the scalar one).
+pub fn dls_pair(j: [&Matrix6<f64>; 2], xd: [&Vector6<f64>; 2], lambda: f64) -> [Vector6<f64>; 2] {
+    let jl: [[Pair; 6]; 6] =
+        core::array::from_fn(|r| core::array::from_fn(|c| Pair([j[0][(r, c)], j[1][(r, c)]])));
+    let xl: [Pair; 6] = core::array::from_fn(|k| Pair([xd[0][k], xd[1][k]]));
+    let (q, d) = dls_lanes(&jl, &xl, Pair::splat(lambda * lambda));
+    unpack_checked(&q, &d)
+}
+
+/// Each lane of `q` as a vector, or zero if that lane's pivots fail [`pivots_ok`].
+///
+/// Not inlined on purpose: the call makes q̇ and D complete pairs first. Inlined, the per-lane
+/// choice let LLVM move each lane's remaining work into its own branch and split the pairs,
+/// computing much of the solve in scalar code (measured with callgrind: ~250 instructions
+/// more per call than the call costs).
+#[inline(never)]
+fn unpack_checked(q: &[Pair; 6], d: &[Pair; 6]) -> [Vector6<f64>; 2] {
+    let mut out = [Vector6::zeros(); 2];
+    for (lane, o) in out.iter_mut().enumerate() {
+        if pivots_ok(core::array::from_fn(|k| d[k].0[lane])) {
+            for k in 0..6 {
+                o[k] = q[k].0[lane];
+            }
+        }
+    }
+    out
+}
+
+/// The verdict of [`Cholesky::factor`](crate::linalg::Cholesky::factor) on the pivots: every
+/// one positive and finite (NaN fails). `&` rather than `&&`: no branches.
+#[inline(always)]
+fn pivots_ok(d: [f64; 6]) -> bool {
+    d.iter()
+        .fold(true, |ok, &d| ok & (d > 0.0) & (d < f64::INFINITY))
+}
+
+/// Arithmetic of one lane of [`dls_lanes`]: `f64` for one arm, [`Pair`] for two.
+trait Lane:
+    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
+{
+    fn splat(x: f64) -> Self;
+}
+
+impl Lane for f64 {
+    #[inline(always)]
+    fn splat(x: f64) -> f64 {
+        x
+    }
+}
+
+/// One number per arm (as `dynamics::pair`): element-wise operations that LLVM packs into
+/// SSE2 instructions. Aligned to 16 bytes so that an operand in memory (a spilled or stored
+/// pair) can be folded into the arithmetic instruction, which SSE2 allows only when aligned.
+#[derive(Debug, Clone, Copy)]
+#[repr(align(16))]
+struct Pair([f64; 2]);
+
+impl Lane for Pair {
+    #[inline(always)]
+    fn splat(x: f64) -> Pair {
+        Pair([x, x])
+    }
+}
+
+macro_rules! pair_op {
+    ($tr:ident, $f:ident, $op:tt) => {
+        impl $tr for Pair {
+            type Output = Pair;
+            #[inline(always)]
+            fn $f(self, o: Pair) -> Pair {
+                Pair([self.0[0] $op o.0[0], self.0[1] $op o.0[1]])
+            }
+        }
+    };
+}
+pair_op!(Add, add, +);
+pair_op!(Sub, sub, -);
+pair_op!(Mul, mul, *);
+pair_op!(Div, div, /);
+
+/// The DLS solve on lanes: q̇ = Jᵀ·x with (JJᵀ + λ²I)·x = ẋ, `j` row-major. Returns q̇ and the
+/// LDLᵀ pivots D (the caller rejects a lane whose pivots are not all positive and finite).
+///
+/// A = JJᵀ + λ²I (lower triangle) by row dot products, each accumulated in one register;
+/// then A = L·D·Lᵀ in Crout order and the solve L⁻ᵀ·D⁻¹·L⁻¹·ẋ, the recurrences of
+/// [`Cholesky`](crate::linalg::Cholesky) (Golub & Van Loan, Alg. 4.2.2) without its 1/√D,
+/// which the DLS does not need. The rows are separate const-generic calls so that every loop
+/// has a fixed trip count and unrolls into straight-line code (a triangular loop nest over a
+/// run-time row index is left rolled by LLVM).
+#[inline(always)]
+fn dls_lanes<T: Lane>(j: &[[T; 6]; 6], xd: &[T; 6], lambda_sq: T) -> ([T; 6], [T; 6]) {
+    let zero = T::splat(0.0);
+    let mut a = [[zero; 6]; 6];
+    gram_row::<T, 0>(j, &mut a, lambda_sq);
+    gram_row::<T, 1>(j, &mut a, lambda_sq);
+    gram_row::<T, 2>(j, &mut a, lambda_sq);
+    gram_row::<T, 3>(j, &mut a, lambda_sq);
+    gram_row::<T, 4>(j, &mut a, lambda_sq);
+    gram_row::<T, 5>(j, &mut a, lambda_sq);
+    let mut l = [[zero; 6]; 6];
+    let mut inv_d = [zero; 6];
+    let mut x = *xd;
+    let d = [
+        ldl_row::<T, 0>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 1>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 2>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 3>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 4>(&a, &mut l, &mut inv_d, &mut x),
+        ldl_row::<T, 5>(&a, &mut l, &mut inv_d, &mut x),
+    ];
+    for i in 0..6 {
+        x[i] = x[i] * inv_d[i];
+    }
+    back_row::<T, 5>(&l, &mut x);
+    back_row::<T, 4>(&l, &mut x);
+    back_row::<T, 3>(&l, &mut x);
+    back_row::<T, 2>(&l, &mut x);
+    back_row::<T, 1>(&l, &mut x);
+    back_row::<T, 0>(&l, &mut x);
+    let q = core::array::from_fn(|c| {
+        let mut s = j[0][c] * x[0];
+        for r in 1..6 {
+            s = s + j[r][c] * x[r];
+        }
+        s
+    });
+    (q, d)
+}
+
+/// Row R of the lower triangle of A = JJᵀ + λ²I: A_rc = Σ_k J_rk·J_ck (+ λ² on the diagonal).
+#[allow(clippy::needless_range_loop)] // two rows of `j` indexed by the same k
+#[inline(always)]
+fn gram_row<T: Lane, const R: usize>(j: &[[T; 6]; 6], a: &mut [[T; 6]; 6], lambda_sq: T) {
+    for c in 0..R + 1 {
+        let mut s = j[R][0] * j[c][0];
+        for k in 1..6 {
+            s = s + j[R][k] * j[c][k];
+        }
+        a[R][c] = s;
+    }
+    a[R][R] = a[R][R] + lambda_sq;
+}
+
+/// Row I of A = L·D·Lᵀ (Crout: u_k = L_ik·D_k = a_ik − Σ_m<k u_m·L_km, D_i = a_ii −
+/// Σ_k<i u_k·L_ik), then row I of the forward substitution x ← L⁻¹·x. Returns D_I.
+#[inline(always)]
+fn ldl_row<T: Lane, const I: usize>(
+    a: &[[T; 6]; 6],
+    l: &mut [[T; 6]; 6],
+    inv_d: &mut [T; 6],
+    x: &mut [T; 6],
+) -> T {
+    let mut u = [T::splat(0.0); I];
+    for k in 0..I {
+        let mut s = a[I][k];
+        for m in 0..k {
+            s = s - u[m] * l[k][m];
+        }
+        u[k] = s;
+        l[I][k] = s * inv_d[k];
+    }
+    let mut d = a[I][I];
+    for k in 0..I {
+        d = d - u[k] * l[I][k];
+    }
+    inv_d[I] = T::splat(1.0) / d;
+    for k in 0..I {
+        x[I] = x[I] - l[I][k] * x[k];
+    }
+    d
+}
+
+/// Row I of the back substitution x ← L⁻ᵀ·x (rows below I already done).
+#[inline(always)]
+fn back_row<T: Lane, const I: usize>(l: &[[T; 6]; 6], x: &mut [T; 6]) {
+    for k in I + 1..6 {
+        x[I] = x[I] - l[k][I] * x[k];
+    }
+}
+
+/// Orientation error vector (rad, base frame) taking `actual` to `desired`: the rotation vector
+/// θ·n of q = desired·actual⁻¹, i.e. nalgebra's `UnitQuaternion::scaled_axis` of q, spelled out
+/// (one norm instead of two, no `Unit` wrapper):
+/// θ = 2·atan2(|q_v|, |q_w|), n = ±q_v/|q_v| with the sign of q_w (the shorter of the two
+/// equivalent rotations), and zero for |q_v| = 0.
 #[inline]
 pub fn rotation_error(desired: &UnitQuaternion<f64>, actual: &UnitQuaternion<f64>) -> Vector3<f64> {
-    (desired * actual.inverse()).scaled_axis()
+    // q = desired·actual* (a unit quaternion's inverse is its conjugate), nalgebra's product.
+    let q = desired.quaternion() * actual.quaternion().conjugate();
+    let (w, v) = (q.w, q.imag());
+    let n = v.norm();
+    if n <= 0.0 {
+        return Vector3::zeros();
+    }
+    // nalgebra's order of operations, (±q_v/|q_v|)·θ: the result is bit for bit its
+    // `scaled_axis` (the test checks it), not just equal to round-off. That matters: the
+    // closed-chain soak test (tests/stability_soak.rs) follows a chaotic trajectory, and the
+    // one-ulp differences of q_v·(θ/|q_v|) sent it to a different end.
+    let angle = n.atan2(w.abs()) * 2.0;
+    (if w >= 0.0 { v } else { -v }) / n * angle
 }
 
 /// Inputs of the cooperative controller for one step.
@@ -134,8 +331,12 @@ pub fn cooperative(
 ) -> [[f64; N_ACT]; 2] {
     let tw = inp.twist;
     desired.translation.vector += Vector3::new(tw[0], tw[1], tw[2]) * dt_s;
-    desired.rotation = UnitQuaternion::from_scaled_axis(Vector3::new(tw[3], tw[4], tw[5]) * dt_s)
-        * desired.rotation;
+    let turn = Vector3::new(tw[3], tw[4], tw[5]) * dt_s;
+    // exp(0) is the identity quaternion exactly and the product with it returns `desired`
+    // unchanged, so the common pure-translation command skips it.
+    if turn != Vector3::zeros() {
+        desired.rotation = UnitQuaternion::from_scaled_axis(turn) * desired.rotation;
+    }
     let ep = desired.translation.vector - inp.object.translation.vector;
     let er = rotation_error(&desired.rotation, &inp.object.rotation);
     let v = Vector6::new(
@@ -146,14 +347,11 @@ pub fn cooperative(
         tw[4] + p.object_kp * er.y,
         tw[5] + p.object_kp * er.z,
     );
-    // Equal-share decomposition of the measured contact wrenches.
-    let w0 = grasp_block(&inp.r[0]);
-    let w1 = grasp_block(&inp.r[1]);
-    let fext = w0 * inp.contact[0] + w1 * inp.contact[1];
-    let mut u = [[0.0; N_ACT]; 2];
-    let mut peak: f64 = 1.0;
-    for i in 0..2 {
-        let wi = if i == 0 { &w0 } else { &w1 };
+    // Equal-share decomposition of the measured contact wrenches: F_ext = W¹F¹ + W²F²
+    // (eq. 3.40), each Wⁱ applied in closed form ([f; m + rⁱ×f]) instead of as a 6×6 product.
+    let fext =
+        wrench_at_com(&inp.r[0], &inp.contact[0]) + wrench_at_com(&inp.r[1], &inp.contact[1]);
+    let xd: [Vector6<f64>; 2] = core::array::from_fn(|i| {
         // W⁺ⁱ·F_ext = ½[I 0; −Rⁱ I]F_ext.
         let f = Vector3::new(fext[0], fext[1], fext[2]) * 0.5;
         let m = Vector3::new(fext[3], fext[4], fext[5]) * 0.5 - inp.r[i].cross(&f);
@@ -166,14 +364,24 @@ pub fn cooperative(
             c[4] - m.y,
             c[5] - m.z,
         );
-        let mut xd = wi.transpose() * v;
+        // Wⁱᵀ·v = [v + ω×rⁱ; ω], the grasp point's twist.
+        let mut xd = grasp_point_twist(&inp.r[i], &v);
         for k in 0..3 {
             xd[k] -= p.internal_admittance_lin * excess[k];
             xd[k + 3] -= p.internal_admittance_rot * excess[k + 3];
         }
-        let qd = dls(&inp.jacobians[i], &xd, p.dls_damping);
+        xd
+    });
+    let qd = dls_pair(
+        [&inp.jacobians[0], &inp.jacobians[1]],
+        [&xd[0], &xd[1]],
+        p.dls_damping,
+    );
+    let mut u = [[0.0; N_ACT]; 2];
+    let mut peak: f64 = 1.0;
+    for i in 0..2 {
         for j in 0..N_ACT {
-            u[i][j] = qd[j] / inp.nominal_speed[i][j];
+            u[i][j] = qd[i][j] / inp.nominal_speed[i][j];
             if u[i][j].is_finite() {
                 peak = peak.max(u[i][j].abs());
             } else {
@@ -187,4 +395,249 @@ pub fn cooperative(
         }
     }
     u
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grasp::grasp_block;
+
+    /// Reproducible uniform numbers in [−0.5, 0.5) (the LCG of the `linalg` tests).
+    struct Lcg(u64);
+
+    impl Lcg {
+        fn next(&mut self) -> f64 {
+            self.0 = self
+                .0
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((self.0 >> 11) as f64 / (1u64 << 53) as f64) - 0.5
+        }
+        fn matrix(&mut self, scale: f64) -> Matrix6<f64> {
+            Matrix6::from_fn(|_, _| self.next() * scale)
+        }
+        fn vector(&mut self, scale: f64) -> Vector6<f64> {
+            Vector6::from_fn(|_, _| self.next() * scale)
+        }
+        fn vector3(&mut self, scale: f64) -> Vector3<f64> {
+            Vector3::new(self.next(), self.next(), self.next()) * scale
+        }
+        fn rotation(&mut self) -> UnitQuaternion<f64> {
+            UnitQuaternion::from_scaled_axis(self.vector3(6.0))
+        }
+    }
+
+    /// Reference DLS: Jᵀ(JJᵀ + λ²I)⁻¹ẋ formed with nalgebra's own matrix products and Cholesky
+    /// (an implementation independent of [`dls_lanes`]).
+    fn dls_nalgebra(j: &Matrix6<f64>, xd: &Vector6<f64>, lambda: f64) -> Vector6<f64> {
+        let a = j * j.transpose() + Matrix6::identity() * (lambda * lambda);
+        match a.cholesky() {
+            Some(ch) => j.transpose() * ch.solve(xd),
+            None => Vector6::zeros(),
+        }
+    }
+
+    fn rel_err(a: &Vector6<f64>, b: &Vector6<f64>) -> f64 {
+        (a - b).norm() / b.norm().max(1e-300)
+    }
+
+    #[test]
+    fn dls_matches_the_nalgebra_reference() {
+        let mut g = Lcg(7);
+        for case in 0..300 {
+            // Well and badly conditioned Jacobians (a scaled-down row makes JJᵀ nearly
+            // singular, so the damping matters), several dampings.
+            let mut j = g.matrix(2.0);
+            if case % 3 == 0 {
+                let row = j.row(2) * 1e-6;
+                j.set_row(4, &row);
+            }
+            let xd = g.vector(1.0);
+            let lambda = [0.02, 0.5, 1e-4][case % 3];
+            let ours = dls(&j, &xd, lambda);
+            let reference = dls_nalgebra(&j, &xd, lambda);
+            // JJᵀ + λ²I has condition number up to ~10⁸ here.
+            assert!(
+                rel_err(&ours, &reference) < 1e-7,
+                "case {case}: {ours} vs {reference}"
+            );
+            // The damped normal equations hold: (JᵀJ + λ²I)q̇ = Jᵀẋ.
+            let lhs = (j.transpose() * j + Matrix6::identity() * (lambda * lambda)) * ours;
+            let rhs = j.transpose() * xd;
+            assert!(rel_err(&lhs, &rhs) < 1e-7, "case {case}");
+        }
+    }
+
+    #[test]
+    fn dls_refuses_non_finite_jacobians() {
+        let mut g = Lcg(11);
+        let xd = g.vector(1.0);
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let mut j = g.matrix(1.0);
+            j[(3, 1)] = bad;
+            assert_eq!(dls(&j, &xd, 0.02), Vector6::zeros());
+        }
+        // Zero damping and a singular J: a zero pivot, refused as by `Cholesky::factor`.
+        assert_eq!(dls(&Matrix6::zeros(), &xd, 0.0), Vector6::zeros());
+    }
+
+    /// Each lane of the lockstep solve is the one-arm solve, bit for bit, and a failing lane
+    /// does not affect the other.
+    #[test]
+    fn dls_pair_equals_dls_per_arm_bitwise() {
+        let mut g = Lcg(3);
+        for case in 0..200 {
+            let j = [g.matrix(2.0), g.matrix(1.0)];
+            let xd = [g.vector(1.0), g.vector(0.1)];
+            let lambda = if case % 2 == 0 { 0.02 } else { 0.3 };
+            let pair = dls_pair([&j[0], &j[1]], [&xd[0], &xd[1]], lambda);
+            for arm in 0..2 {
+                let one = dls(&j[arm], &xd[arm], lambda);
+                for k in 0..6 {
+                    assert_eq!(pair[arm][k].to_bits(), one[k].to_bits(), "case {case}");
+                }
+            }
+        }
+        let mut j = [g.matrix(1.0), g.matrix(1.0)];
+        let xd = [g.vector(1.0), g.vector(1.0)];
+        j[1][(0, 5)] = f64::NAN;
+        let pair = dls_pair([&j[0], &j[1]], [&xd[0], &xd[1]], 0.02);
+        assert_eq!(pair[0], dls(&j[0], &xd[0], 0.02));
+        assert_eq!(pair[1], Vector6::zeros());
+    }
+
+    /// Bit for bit nalgebra's `scaled_axis` of desired·actual⁻¹ (the previous definition), over
+    /// random rotations (both signs of q_w), tiny errors and none.
+    #[test]
+    fn rotation_error_matches_nalgebra_scaled_axis() {
+        let mut g = Lcg(5);
+        let check = |d: &UnitQuaternion<f64>, a: &UnitQuaternion<f64>| {
+            let ours = rotation_error(d, a);
+            let reference = (d * a.inverse()).scaled_axis();
+            for k in 0..3 {
+                assert_eq!(
+                    ours[k].to_bits(),
+                    reference[k].to_bits(),
+                    "{ours} vs {reference}"
+                );
+            }
+        };
+        for _ in 0..500 {
+            let (d, a) = (g.rotation(), g.rotation());
+            check(&d, &a);
+            // The same rotation from the other hemisphere (q and −q).
+            let neg = UnitQuaternion::new_unchecked(-d.into_inner());
+            check(&neg, &a);
+            let small = UnitQuaternion::from_scaled_axis(g.vector3(1e-9)) * a;
+            check(&small, &a);
+        }
+        let a = g.rotation();
+        check(&a, &a);
+        assert_eq!(
+            rotation_error(&UnitQuaternion::identity(), &UnitQuaternion::identity()),
+            Vector3::zeros()
+        );
+    }
+
+    /// The controller as first written, with the 6×6 grasp blocks Wⁱ (eq. 3.40) formed and
+    /// multiplied, nalgebra's `scaled_axis` and the nalgebra DLS reference: the closed forms
+    /// and the lockstep solve must reproduce it to round-off.
+    fn cooperative_reference(
+        inp: &CoopInputs<'_>,
+        desired: &mut Isometry3<f64>,
+        dt_s: f64,
+        p: &ControlParams,
+    ) -> [[f64; N_ACT]; 2] {
+        let tw = inp.twist;
+        desired.translation.vector += Vector3::new(tw[0], tw[1], tw[2]) * dt_s;
+        desired.rotation =
+            UnitQuaternion::from_scaled_axis(Vector3::new(tw[3], tw[4], tw[5]) * dt_s)
+                * desired.rotation;
+        let ep = desired.translation.vector - inp.object.translation.vector;
+        let er = (desired.rotation * inp.object.rotation.inverse()).scaled_axis();
+        let v = Vector6::new(
+            tw[0] + p.object_kp * ep.x,
+            tw[1] + p.object_kp * ep.y,
+            tw[2] + p.object_kp * ep.z,
+            tw[3] + p.object_kp * er.x,
+            tw[4] + p.object_kp * er.y,
+            tw[5] + p.object_kp * er.z,
+        );
+        let w = [grasp_block(&inp.r[0]), grasp_block(&inp.r[1])];
+        let fext = w[0] * inp.contact[0] + w[1] * inp.contact[1];
+        let mut u = [[0.0; N_ACT]; 2];
+        let mut peak: f64 = 1.0;
+        for i in 0..2 {
+            let f = Vector3::new(fext[0], fext[1], fext[2]) * 0.5;
+            let m = Vector3::new(fext[3], fext[4], fext[5]) * 0.5 - inp.r[i].cross(&f);
+            let c = inp.contact[i];
+            let excess = c - Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z);
+            let mut xd = w[i].transpose() * v;
+            for k in 0..3 {
+                xd[k] -= p.internal_admittance_lin * excess[k];
+                xd[k + 3] -= p.internal_admittance_rot * excess[k + 3];
+            }
+            let qd = dls_nalgebra(&inp.jacobians[i], &xd, p.dls_damping);
+            for j in 0..N_ACT {
+                u[i][j] = qd[j] / inp.nominal_speed[i][j];
+                if u[i][j].is_finite() {
+                    peak = peak.max(u[i][j].abs());
+                } else {
+                    u[i][j] = 0.0;
+                }
+            }
+        }
+        u.map(|ui| ui.map(|x| x / peak))
+    }
+
+    #[test]
+    fn cooperative_matches_the_matrix_form_reference() {
+        let mut g = Lcg(13);
+        let p = ControlParams::default();
+        for case in 0..300 {
+            let object = Isometry3::from_parts(g.vector3(2.0).into(), g.rotation());
+            // Desired pose near the object (the controller's regime) or far from it.
+            let near = case % 2 == 0;
+            let mut desired = Isometry3::from_parts(
+                (object.translation.vector + g.vector3(if near { 0.01 } else { 1.0 })).into(),
+                UnitQuaternion::from_scaled_axis(g.vector3(if near { 0.01 } else { 3.0 }))
+                    * object.rotation,
+            );
+            let r = [g.vector3(0.6), g.vector3(0.6)];
+            let jacobians = [g.matrix(2.0), g.matrix(2.0)];
+            let contact = [g.vector(400.0), g.vector(400.0)];
+            let mut twist = g.vector(0.2);
+            if case % 3 == 0 {
+                // Pure translation: the skipped identity rotation increment.
+                twist.fixed_rows_mut::<3>(3).fill(0.0);
+            }
+            let nominal_speed = [
+                [0.5, 0.6, 0.7, 1.0, 1.5, 2.0],
+                [0.4, 0.5, 0.6, 0.9, 1.2, 2.5],
+            ];
+            let inp = CoopInputs {
+                object: &object,
+                r: &r,
+                jacobians: &jacobians,
+                contact: &contact,
+                twist: &twist,
+                nominal_speed: &nominal_speed,
+            };
+            let mut desired_ref = desired;
+            let ours = cooperative(&inp, &mut desired, 1e-3, &p);
+            let reference = cooperative_reference(&inp, &mut desired_ref, 1e-3, &p);
+            for i in 0..2 {
+                for j in 0..N_ACT {
+                    assert!(
+                        (ours[i][j] - reference[i][j]).abs() < 1e-9,
+                        "case {case} arm {i} joint {j}: {} vs {}",
+                        ours[i][j],
+                        reference[i][j]
+                    );
+                }
+            }
+            assert!((desired.translation.vector - desired_ref.translation.vector).norm() < 1e-15);
+            assert!(desired.rotation.angle_to(&desired_ref.rotation) < 1e-12);
+        }
+    }
 }

@@ -5,7 +5,7 @@
 use nalgebra::{SVector, Vector3, Vector6};
 use seaarms_core::grasp::{
     GraspState, decompose, grasp_block, grasp_matrix, grasp_pinv_equal_share, grasp_point_twist,
-    internal_basis, internal_wrench, mobility_block, wrench_at_com,
+    internal_basis, internal_wrench, mobility_block, mobility_block_general, wrench_at_com,
 };
 
 fn radii() -> [Vector3<f64>; 2] {
@@ -127,5 +127,36 @@ fn closed_form_internal_wrench_equals_least_squares() {
             (ours - fint).norm() < 1e-10 * (1.0 + fint.norm()),
             "{ours} vs {fint}"
         );
+    }
+}
+
+/// The general mobility block equals the explicit product Wⁱᵀ·X·Wᵏ for a full symmetric X
+/// (an object mass matrix with seabed dashpots, inverted), and reduces to `mobility_block`
+/// for X = blockdiag(I/m, Q).
+#[test]
+fn general_mobility_block_is_the_product() {
+    let r = radii();
+    let b = nalgebra::Matrix6::from_fn(|i, j| ((i * 7 + j * 3) as f64 * 0.37).sin());
+    let x = (b * b.transpose() + nalgebra::Matrix6::identity() * 0.5)
+        .try_inverse()
+        .expect("SPD");
+    let q = nalgebra::Matrix3::new(2.0, 0.1, -0.2, 0.1, 3.0, 0.3, -0.2, 0.3, 4.0);
+    let mut block_diag = nalgebra::Matrix6::zeros();
+    block_diag
+        .fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(nalgebra::Matrix3::identity() / 50.0));
+    block_diag.fixed_view_mut::<3, 3>(3, 3).copy_from(&q);
+    for ri in &r {
+        for rk in &r {
+            let explicit = grasp_block(ri).transpose() * x * grasp_block(rk);
+            let ours = mobility_block_general(ri, rk, &x);
+            assert!(
+                (ours - explicit).abs().max() < 1e-13 * x.norm(),
+                "{ours} vs {explicit}"
+            );
+            let special = mobility_block(ri, rk, 1.0 / 50.0, &q);
+            let general = mobility_block_general(ri, rk, &block_diag);
+            assert!((special - general).abs().max() < 1e-14);
+        }
     }
 }

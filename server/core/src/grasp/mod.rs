@@ -100,6 +100,19 @@ impl ObjectParams {
     }
 }
 
+/// The seabed's push on the object at one instant (see [`seabed_contact`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SeabedContact {
+    /// Wrench on the object (force; moment about the COM), world frame.
+    pub wrench: Vector6<f64>,
+    /// Total normal force (N).
+    pub normal_n: f64,
+    /// The wrench's damping matrix C (6×6, symmetric positive semidefinite): the wrench
+    /// falls by C·δt for a change δt = [δv; δω] of the object twist — the dashpots of the
+    /// touching corners, normal and (regularized) friction. `None` when nothing touches.
+    pub damping: Option<Matrix6<f64>>,
+}
+
 /// Seabed contact wrench on the object (6: force, moment about the COM; base frame) from
 /// penalty springs at the box corners that are below the seabed, with regularized Coulomb
 /// friction. Returns the wrench and the total normal force (N).
@@ -109,12 +122,44 @@ pub fn seabed_wrench(
     v: &Vector3<f64>,
     w: &Vector3<f64>,
 ) -> (Vector6<f64>, f64) {
+    let c = seabed_contact_impl(p, pose, v, w, false);
+    (c.wrench, c.normal_n)
+}
+
+/// [`seabed_wrench`] with its damping matrix, for an integrator that treats the dashpots
+/// implicitly. A corner's velocity along a direction d is a_dᵀ·[v; ω] with a_d = [d; r × d]
+/// (r from the COM), and a force f·d there is the wrench a_d·f, so a dashpot of coefficient
+/// c adds c·a_d·a_dᵀ. The normal dashpot is the contact damping while the corner pushes
+/// (f_n > 0); friction −μ·f_n·v_t/√(|v_t|²+ε²) is a dashpot of coefficient μ·f_n/√(|v_t|²+ε²)
+/// along both seabed axes (its secant, exact at v_t = 0).
+pub fn seabed_contact(
+    p: &ObjectParams,
+    pose: &Isometry3<f64>,
+    v: &Vector3<f64>,
+    w: &Vector3<f64>,
+) -> SeabedContact {
+    seabed_contact_impl(p, pose, v, w, true)
+}
+
+#[inline]
+fn seabed_contact_impl(
+    p: &ObjectParams,
+    pose: &Isometry3<f64>,
+    v: &Vector3<f64>,
+    w: &Vector3<f64>,
+    with_damping: bool,
+) -> SeabedContact {
     let mut f = Vector3::zeros();
     let mut m = Vector3::zeros();
     let mut normal = 0.0;
+    let mut damping: Option<Matrix6<f64>> = None;
     // Quick reject: the whole box (bounding sphere) is above the seabed.
     if pose.translation.vector.z - 0.5 * p.size_m.norm() > p.seabed_z_m {
-        return (Vector6::zeros(), 0.0);
+        return SeabedContact {
+            wrench: Vector6::zeros(),
+            normal_n: 0.0,
+            damping,
+        };
     }
     for c in p.corners() {
         let r = pose.rotation * c;
@@ -127,13 +172,30 @@ pub fn seabed_wrench(
         let fn_ = (p.contact_stiffness_n_m * pen - p.contact_damping_n_s_m * vc.z).max(0.0);
         let vt = Vector3::new(vc.x, vc.y, 0.0);
         let s = (vt.norm_squared() + p.friction_speed_m_s * p.friction_speed_m_s).sqrt();
-        let ft = -vt * (p.friction * fn_ / s);
+        let c_t = p.friction * fn_ / s;
+        let ft = -vt * c_t;
         let fc = Vector3::new(ft.x, ft.y, fn_);
         f += fc;
         m += r.cross(&fc);
         normal += fn_;
+        if with_damping && fn_ > 0.0 {
+            let d = damping.get_or_insert_with(Matrix6::zeros);
+            for (axis, coef) in [
+                (Vector3::x(), c_t),
+                (Vector3::y(), c_t),
+                (Vector3::z(), p.contact_damping_n_s_m),
+            ] {
+                let rd = r.cross(&axis);
+                let a = Vector6::new(axis.x, axis.y, axis.z, rd.x, rd.y, rd.z);
+                d.ger(coef, &a, &a, 1.0);
+            }
+        }
     }
-    (Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z), normal)
+    SeabedContact {
+        wrench: Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z),
+        normal_n: normal,
+        damping,
+    }
 }
 
 /// Wⁱ (6×6, eq. 3.40 block): maps the wrench at grasp point i (at r from the object COM, base
@@ -196,6 +258,31 @@ pub fn mobility_block(
     b.fixed_view_mut::<3, 3>(3, 0).copy_from(&qsk);
     b.fixed_view_mut::<3, 3>(3, 3).copy_from(q);
     b
+}
+
+/// Wⁱᵀ·X·Wᵏ (6×6) for a general symmetric object mobility X = [[A, B], [Bᵀ, D]] (3×3
+/// blocks; e.g. the inverse of the mass matrix with the seabed dashpots added), with
+/// Sⁱ = [rⁱ]×: X·Wᵏ = [[A + B·Sᵏ, B], [Bᵀ + D·Sᵏ, D]], then Wⁱᵀ = [[I, −Sⁱ], [0, I]] on the
+/// left. [`mobility_block`] is the case B = 0, A = I/m.
+pub fn mobility_block_general(
+    ri: &Vector3<f64>,
+    rk: &Vector3<f64>,
+    x: &Matrix6<f64>,
+) -> Matrix6<f64> {
+    let a: Matrix3<f64> = x.fixed_view::<3, 3>(0, 0).into_owned();
+    let b: Matrix3<f64> = x.fixed_view::<3, 3>(0, 3).into_owned();
+    let d: Matrix3<f64> = x.fixed_view::<3, 3>(3, 3).into_owned();
+    let sk = skew(rk);
+    let si = skew(ri);
+    let top_left = a + b * sk;
+    let bottom_left = b.transpose() + d * sk;
+    let mut out = Matrix6::zeros();
+    out.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(top_left - si * bottom_left));
+    out.fixed_view_mut::<3, 3>(0, 3).copy_from(&(b - si * d));
+    out.fixed_view_mut::<3, 3>(3, 0).copy_from(&bottom_left);
+    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&d);
+    out
 }
 
 /// W = [W¹ W²] (6×12, eq. 3.40) for grasp points at r¹, r² from the COM.

@@ -921,18 +921,57 @@ impl Simulation {
         };
         let iw = world(&d);
         let iw_inv = world(&d_inv);
-        // M_o⁻¹ = blockdiag(I/m, I_w⁻¹) applied to a wrench (force, moment about the COM).
+        // Seabed contact at the start of the step. Its dashpots (normal damping and the
+        // regularized friction) are stiff for a box touching on one corner or edge — there
+        // the effective mass is a few kg, and explicit damping of 2·10⁴ N·s/m at h = 1 ms
+        // injects energy. They are treated implicitly (linearly implicit Euler): the object's
+        // mass matrix becomes M̃ = M_o + h·C with C the contact's damping matrix, held over
+        // the step like H; the spring forces stay explicit (k·h²/m_eff ≈ 0.3).
+        let o0 = self.state.object;
+        let contact0 = grasp::seabed_contact(op, &o0.pose, &o0.velocity, &o0.angular_velocity);
+        let object_factor = contact0.damping.and_then(|c| {
+            let mut m = c * h;
+            for k in 0..3 {
+                m[(k, k)] += op.mass_kg;
+            }
+            let mut rot_block = m.fixed_view_mut::<3, 3>(3, 3);
+            rot_block += iw;
+            Cholesky::factor(&m)
+        });
+        // M̃⁻¹ itself (6×6, symmetric) when an arm also holds the object: the grasp blocks
+        // take it in 3×3 pieces, and applied to a wrench it costs one product.
+        let object_mobility = match &object_factor {
+            Some(ch) if holding[0] || holding[1] => Some(Matrix6::from_columns(
+                &core::array::from_fn::<_, 6, _>(|k| ch.solve(&Vector6::ith(k, 1.0))),
+            )),
+            _ => None,
+        };
+        // M̃⁻¹ applied to a wrench (force, moment about the COM): blockwise M_o⁻¹ =
+        // blockdiag(I/m, I_w⁻¹) when nothing touches.
         let inv_mass = 1.0 / op.mass_kg;
-        let mo_inv = |w: &Vector6<f64>| {
-            let a = iw_inv * Vector3::new(w[3], w[4], w[5]);
-            Vector6::new(
-                w[0] * inv_mass,
-                w[1] * inv_mass,
-                w[2] * inv_mass,
-                a.x,
-                a.y,
-                a.z,
-            )
+        let mo_inv = |w: &Vector6<f64>| match (&object_mobility, &object_factor) {
+            (Some(x), _) => x * w,
+            (None, Some(ch)) => ch.solve(w),
+            (None, None) => {
+                let a = iw_inv * Vector3::new(w[3], w[4], w[5]);
+                Vector6::new(
+                    w[0] * inv_mass,
+                    w[1] * inv_mass,
+                    w[2] * inv_mass,
+                    a.x,
+                    a.y,
+                    a.z,
+                )
+            }
+        };
+        // Wⁱᵀ·M̃⁻¹·Wᵏ.
+        let mobility = |ri: &Vector3<f64>, rk: &Vector3<f64>| -> Matrix6<f64> {
+            // Formed only while an arm holds, when `object_mobility` exists if anything touches.
+            debug_assert!(object_mobility.is_some() || object_factor.is_none());
+            match &object_mobility {
+                Some(x) => grasp::mobility_block_general(ri, rk, x),
+                None => grasp::mobility_block(ri, rk, inv_mass, &iw_inv),
+            }
         };
         let obj_weight = sp.gravity
             * (op.mass_kg
@@ -950,17 +989,13 @@ impl Simulation {
         // Diagonal blocks W_iᵀM_o⁻¹W_i + Z_iᵀZ_i + εI, and the coupling W₁ᵀM_o⁻¹W₀ (the
         // factorizations read lower triangles only).
         let diag = |i: usize| {
-            grasp::mobility_block(&r[i], &r[i], inv_mass, &iw_inv)
+            mobility(&r[i], &r[i])
                 + z[i].tr_mul(&z[i])
                 + Matrix6::identity() * sp.constraint_compliance
         };
         let constraint = match active {
-            [true, true] => BlockCholesky::factor(
-                &diag(0),
-                &grasp::mobility_block(&r[1], &r[0], inv_mass, &iw_inv),
-                &diag(1),
-            )
-            .map(ConstraintFactor::Both),
+            [true, true] => BlockCholesky::factor(&diag(0), &mobility(&r[1], &r[0]), &diag(1))
+                .map(ConstraintFactor::Both),
             [true, false] => Cholesky::factor(&diag(0)).map(|c| ConstraintFactor::One(0, c)),
             [false, true] => Cholesky::factor(&diag(1)).map(|c| ConstraintFactor::One(1, c)),
             [false, false] => None,
@@ -992,7 +1027,7 @@ impl Simulation {
         // ---- sub-steps ----
         let mut relief_now = [[false; N_ACT]; 2];
         let mut fc = [Vector6::zeros(); 2];
-        for _ in 0..sp.substeps {
+        for substep in 0..sp.substeps {
             let mut qdd_free = [Vector6::zeros(); 2];
             for i in 0..2 {
                 let ap = &self.params.arms[i];
@@ -1045,7 +1080,11 @@ impl Simulation {
             }
             // Object free acceleration: gravity, seabed, gyroscopic.
             let o = self.state.object;
-            let (sea, normal) = grasp::seabed_wrench(op, &o.pose, &o.velocity, &o.angular_velocity);
+            let (sea, normal) = if substep == 0 {
+                (contact0.wrench, contact0.normal_n)
+            } else {
+                grasp::seabed_wrench(op, &o.pose, &o.velocity, &o.angular_velocity)
+            };
             let gyro = o.angular_velocity.cross(&(iw * o.angular_velocity));
             let wrench = Vector6::new(
                 obj_weight.x + sea[0],

@@ -395,6 +395,7 @@ struct Chamber {
 /// g = valve flow − leak·(P − P_other) − relief − piston flow; g decreases with P, so the
 /// residual increases strictly and the root in [0, ∞) is unique. Closed forms for a shut
 /// valve and for an open turbulent one ([`open_valve_root`]); safeguarded Newton otherwise.
+#[inline]
 fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool) {
     let g = |p: f64| -> (f64, f64) {
         let (qv, dqv) = valve_flow(ch.gain, ch.s, p, supply, hp.return_pa, hp.laminar_pa);
@@ -469,6 +470,7 @@ fn open_valve_root(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> Option<f6
 
 /// [`solve_chamber`] where the closed form does not apply: safeguarded Newton on the
 /// residual P − P0 − c·g(P), bracketing the root so it stays safe where the orifice law bends.
+#[inline(never)]
 fn solve_chamber_bracketed(
     ch: &Chamber,
     hp: &HydraulicParams,

@@ -19,9 +19,15 @@
 //!    acceleration-level constraint solve (12×12 SPD system) with Baumgarte position/velocity
 //!    stabilization, so the grasp does not drift;
 //! 4. joint end stops (cylinder bottoming out): stiff spring-dampers treated implicitly in the
-//!    same (H + hD + h²K) matrix, so the closed chain stays consistent at a limit.
+//!    same (H + hD + h²K) matrix, so the closed chain stays consistent at a limit;
+//! 5. seabed contact: the corner dashpots (normal damping and the regularized friction) are
+//!    treated implicitly through the object's mass matrix, M̃ = M_o + h·C
+//!    ([`grasp::seabed_contact`]), because a box touching on one corner has an effective mass
+//!    of a few kg there and an explicit 2·10⁴ N·s/m dashpot would inject energy; the corner
+//!    springs stay explicit (k·h²/m_eff ≈ 0.3).
 //!
-//! Configuration-dependent quantities (H, C q̇ + G, J, J̇q̇, the constraint matrix) are computed
+//! Configuration-dependent quantities (H, C q̇ + G, J, J̇q̇, the constraint matrix, the seabed
+//! damping) are computed
 //! once per 1 ms step and held over its sub-steps (they change by < 0.3 % in 1 ms at the
 //! arms' speeds); pressures, forces, velocities and positions are updated every sub-step.
 //! Everything is fixed-size and allocation-free; the result depends only on the inputs.

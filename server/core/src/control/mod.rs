@@ -309,7 +309,7 @@ pub struct CoopInputs<'a> {
     /// Grasp points relative to the object COM, base frame (m), per arm.
     pub r: &'a [Vector3<f64>; 2],
     /// World-frame Jacobians of the two tool points (6×6).
-    pub jacobians: &'a [Matrix6<f64>; 2],
+    pub jacobians: [&'a Matrix6<f64>; 2],
     /// Last contact wrenches of the two arms on the object.
     pub contact: &'a [Vector6<f64>; 2],
     /// Commanded object twist (m/s, rad/s), already scaled and clamped.
@@ -372,11 +372,7 @@ pub fn cooperative(
         }
         xd
     });
-    let qd = dls_pair(
-        [&inp.jacobians[0], &inp.jacobians[1]],
-        [&xd[0], &xd[1]],
-        p.dls_damping,
-    );
+    let qd = dls_pair(inp.jacobians, [&xd[0], &xd[1]], p.dls_damping);
     let mut u = [[0.0; N_ACT]; 2];
     let mut peak: f64 = 1.0;
     for i in 0..2 {
@@ -577,7 +573,7 @@ mod tests {
                 xd[k] -= p.internal_admittance_lin * excess[k];
                 xd[k + 3] -= p.internal_admittance_rot * excess[k + 3];
             }
-            let qd = dls_nalgebra(&inp.jacobians[i], &xd, p.dls_damping);
+            let qd = dls_nalgebra(inp.jacobians[i], &xd, p.dls_damping);
             for j in 0..N_ACT {
                 u[i][j] = qd[j] / inp.nominal_speed[i][j];
                 if u[i][j].is_finite() {
@@ -618,7 +614,7 @@ mod tests {
             let inp = CoopInputs {
                 object: &object,
                 r: &r,
-                jacobians: &jacobians,
+                jacobians: [&jacobians[0], &jacobians[1]],
                 contact: &contact,
                 twist: &twist,
                 nominal_speed: &nominal_speed,

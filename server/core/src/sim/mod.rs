@@ -779,7 +779,6 @@ impl Simulation {
             let twist = Vector6::new(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z);
             let obj = self.state.object.pose;
             let r = self.grasp_radii();
-            let jac = [self.work[0].jw, self.work[1].jw];
             let contact = [
                 Vector6::from(self.state.arms[0].contact_wrench),
                 Vector6::from(self.state.arms[1].contact_wrench),
@@ -787,7 +786,7 @@ impl Simulation {
             let ci = CoopInputs {
                 object: &obj,
                 r: &r,
-                jacobians: &jac,
+                jacobians: [&self.work[0].jw, &self.work[1].jw],
                 contact: &contact,
                 twist: &twist,
                 nominal_speed: &nominal,

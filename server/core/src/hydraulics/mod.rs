@@ -391,25 +391,30 @@ struct Chamber {
     piston: f64,
 }
 
+/// Net flow into a chamber at pressure `p` and its derivative with respect to `p`: valve
+/// flow − leakage to the other chamber − relief flow − piston flow (eqs 3.48–3.50).
+#[inline]
+fn chamber_inflow(ch: &Chamber, hp: &HydraulicParams, supply: f64, p: f64) -> (f64, f64) {
+    let (qv, dqv) = valve_flow(ch.gain, ch.s, p, supply, hp.return_pa, hp.laminar_pa);
+    let over = p - hp.relief_pa;
+    let (qr, dqr) = if over > 0.0 {
+        (hp.relief_gain * over, hp.relief_gain)
+    } else {
+        (0.0, 0.0)
+    };
+    (
+        qv - ch.leak * (p - ch.other) - qr - ch.piston,
+        dqv - ch.leak - dqr,
+    )
+}
+
 /// Backward-Euler pressure of one chamber: solves P − P0 − c·g(P) = 0 with
 /// g = valve flow − leak·(P − P_other) − relief − piston flow; g decreases with P, so the
 /// residual increases strictly and the root in [0, ∞) is unique. Closed forms for a shut
 /// valve and for an open turbulent one ([`open_valve_root`]); safeguarded Newton otherwise.
 #[inline]
 fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool) {
-    let g = |p: f64| -> (f64, f64) {
-        let (qv, dqv) = valve_flow(ch.gain, ch.s, p, supply, hp.return_pa, hp.laminar_pa);
-        let over = p - hp.relief_pa;
-        let (qr, dqr) = if over > 0.0 {
-            (hp.relief_gain * over, hp.relief_gain)
-        } else {
-            (0.0, 0.0)
-        };
-        (
-            qv - ch.leak * (p - ch.other) - qr - ch.piston,
-            dqv - ch.leak - dqr,
-        )
-    };
+    let g = |p: f64| chamber_inflow(ch, hp, supply, p);
     // Closed valve: g is linear (piston, leakage and relief only): closed form.
     if ch.s == 0.0 {
         let k = ch.c * ch.leak;
@@ -674,19 +679,7 @@ mod tests {
             if ch.s == 0.0 {
                 continue;
             }
-            let g = |p: f64| -> (f64, f64) {
-                let (qv, dqv) = valve_flow(ch.gain, ch.s, p, hp.supply_pa, 0.0, hp.laminar_pa);
-                let over = p - hp.relief_pa;
-                let (qr, dqr) = if over > 0.0 {
-                    (hp.relief_gain * over, hp.relief_gain)
-                } else {
-                    (0.0, 0.0)
-                };
-                (
-                    qv - ch.leak * (p - ch.other) - qr - ch.piston,
-                    dqv - ch.leak - dqr,
-                )
-            };
+            let g = |p: f64| chamber_inflow(&ch, &hp, hp.supply_pa, p);
             let (reference, _) = solve_chamber_bracketed(&ch, &hp, g);
             match open_valve_root(&ch, &hp, hp.supply_pa) {
                 Some(p) => {

@@ -8,7 +8,7 @@ use nalgebra::{
     DMatrix, Isometry3, IsometryMatrix3, Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3,
 };
 
-use crate::model::{Joint, JointKind, Model};
+use crate::model::{Joint, JointKind, Model, turn_about_z};
 
 /// Preallocated kinematic results for one model.
 #[derive(Debug, Clone)]
@@ -198,9 +198,7 @@ impl<'a> Chain6<'a> {
             r = joint.origin_rotation.after(&r);
             // Joint::rotate_frame_sin_cos for the +z axis.
             let (s, c) = crate::trig::sin_cos(self.q[k] + joint.offset);
-            let (c0, c1) = (r.column(0).into_owned(), r.column(1).into_owned());
-            r.set_column(0, &(c0 * c + c1 * s));
-            r.set_column(1, &(c1 * c - c0 * s));
+            r = turn_about_z(&r, s, c);
             self.sin_cos[k] = (s, c);
             self.frames[k] =
                 IsometryMatrix3::from_parts(p.into(), Rotation3::from_matrix_unchecked(r));

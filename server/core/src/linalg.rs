@@ -133,6 +133,20 @@ impl<const N: usize> Cholesky<N> {
     }
 }
 
+/// The lower triangle of ZᵀZ (the part above the diagonal left zero: the factorizations read
+/// no more), from dot products of Z's contiguous columns.
+#[inline]
+pub fn gram_lower<const N: usize>(z: &SMatrix<f64, N, N>) -> SMatrix<f64, N, N> {
+    let mut g = SMatrix::<f64, N, N>::zeros();
+    for c in 0..N {
+        let zc = z.column(c);
+        for r in c..N {
+            g[(r, c)] = z.column(r).dot(&zc);
+        }
+    }
+    g
+}
+
 /// The Cholesky factor of a symmetric positive definite 2B×2B matrix given by its lower
 /// blocks, [[A₀₀, A₁₀ᵀ], [A₁₀, A₁₁]] = L̃·L̃ᵀ with L̃ = [[L̃₀₀, 0], [L̃₁₀, L̃₁₁]] (block
 /// Cholesky, Golub & Van Loan §4.2.9): L̃₀₀ = chol(A₀₀), W = L̃₁₀ᵀ = L̃₀₀⁻¹·A₁₀ᵀ,
@@ -157,12 +171,7 @@ impl<const B: usize> BlockCholesky<B> {
         let l00 = Cholesky::factor(a00)?;
         let w = l00.forward_columns(&a10.transpose());
         // Schur complement A₁₁ − WᵀW, lower triangle only.
-        let mut s = *a11;
-        for c in 0..B {
-            for r in c..B {
-                s[(r, c)] -= w.column(r).dot(&w.column(c));
-            }
-        }
+        let s = a11 - gram_lower(&w);
         let l11 = Cholesky::factor(&s)?;
         Some(BlockCholesky { l00, w, l11 })
     }
@@ -197,6 +206,23 @@ mod tests {
             ((s >> 11) as f64 / (1u64 << 53) as f64) - 0.5
         });
         b * b.transpose() + SMatrix::<f64, N, N>::identity() * delta
+    }
+
+    /// `gram_lower` is the lower triangle of nalgebra's ZᵀZ (to round-off) and zero above.
+    #[test]
+    fn gram_lower_is_the_lower_triangle_of_ztz() {
+        let z = Matrix6::from_fn(|i, j| ((i * 6 + j) as f64 * 0.61).sin() * (1.0 + i as f64));
+        let full = z.tr_mul(&z);
+        let g = gram_lower(&z);
+        for c in 0..6 {
+            for r in 0..6 {
+                if r >= c {
+                    assert!((g[(r, c)] - full[(r, c)]).abs() < 1e-13 * full.norm());
+                } else {
+                    assert_eq!(g[(r, c)], 0.0);
+                }
+            }
+        }
     }
 
     /// Against nalgebra's own Cholesky (an independent implementation): the same factor,

@@ -48,6 +48,17 @@ pub struct Joint {
     pub max_velocity: f64,
 }
 
+/// `r`·R_z(v) given s = sin v, c = cos v: only the first two columns change, to
+/// c·r₀ + s·r₁ and c·r₁ − s·r₀.
+#[inline(always)]
+pub(crate) fn turn_about_z(r: &Matrix3<f64>, s: f64, c: f64) -> Matrix3<f64> {
+    let (c0, c1) = (r.column(0).into_owned(), r.column(1).into_owned());
+    let mut out = *r;
+    out.set_column(0, &(c0 * c + c1 * s));
+    out.set_column(1, &(c1 * c - c0 * s));
+    out
+}
+
 impl Joint {
     /// `r`·R(axis, q + offset): a frame's rotation followed by this revolute joint's motion.
     /// For the z axis of every DH convention only two columns change (c·r₀ + s·r₁,
@@ -67,12 +78,8 @@ impl Joint {
         if a.x == 0.0 && a.y == 0.0 {
             let sign = a.z.signum();
             let (s, c) = crate::trig::sin_cos(v * sign);
-            let (c0, c1) = (r.column(0).into_owned(), r.column(1).into_owned());
-            let mut out = *r;
-            out.set_column(0, &(c0 * c + c1 * s));
-            out.set_column(1, &(c1 * c - c0 * s));
             // sin is odd, so s·sign is sin v exactly (−z axis: the frame turned by −v).
-            (out, (s * sign, c))
+            (turn_about_z(r, s, c), (s * sign, c))
         } else {
             // Not produced by any DH convention: the extra sin_cos is of no concern here.
             (

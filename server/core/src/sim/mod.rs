@@ -52,7 +52,7 @@ use crate::dynamics::{self, DynData, Inertials, PairLinks};
 use crate::grasp::{self, GraspState, ObjectParams};
 use crate::hydraulics::{self, Faults, HydraulicParams, Linkage, N_ACT};
 use crate::kinematics::{self, KinData};
-use crate::linalg::{BlockCholesky, Cholesky};
+use crate::linalg::{self, BlockCholesky, Cholesky};
 use crate::model::Model;
 
 /// Index of the left arm in every per-arm array.
@@ -995,7 +995,7 @@ impl Simulation {
         // factorizations read lower triangles only).
         let diag = |i: usize| {
             mobility(&r[i], &r[i])
-                + gram_lower(&z[i])
+                + linalg::gram_lower(&z[i])
                 + Matrix6::identity() * sp.constraint_compliance
         };
         let constraint = match active {
@@ -1206,46 +1206,10 @@ impl Simulation {
     }
 }
 
-/// The lower triangle of ZᵀZ (the upper left zero: the factorizations read no more), from
-/// dot products of Z's contiguous columns.
-#[inline]
-fn gram_lower(z: &Matrix6<f64>) -> Matrix6<f64> {
-    let mut g = Matrix6::zeros();
-    for c in 0..6 {
-        let zc = z.column(c);
-        for r in c..6 {
-            g[(r, c)] = z.column(r).dot(&zc);
-        }
-    }
-    g
-}
-
 /// Convenience: an isometry from a translation and a rotation vector.
 pub fn pose(t: [f64; 3], r: [f64; 3]) -> Isometry3<f64> {
     Isometry3::from_parts(
         Translation3::new(t[0], t[1], t[2]),
         UnitQuaternion::from_scaled_axis(Vector3::new(r[0], r[1], r[2])),
     )
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    /// `gram_lower` is the lower triangle of nalgebra's ZᵀZ (to round-off) and zero above.
-    #[test]
-    fn gram_lower_is_the_lower_triangle_of_ztz() {
-        let z = Matrix6::from_fn(|i, j| ((i * 6 + j) as f64 * 0.61).sin() * (1.0 + i as f64));
-        let full = z.tr_mul(&z);
-        let g = gram_lower(&z);
-        for c in 0..6 {
-            for r in 0..6 {
-                if r >= c {
-                    assert!((g[(r, c)] - full[(r, c)]).abs() < 1e-13 * full.norm());
-                } else {
-                    assert_eq!(g[(r, c)], 0.0);
-                }
-            }
-        }
-    }
 }

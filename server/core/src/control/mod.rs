@@ -294,9 +294,10 @@ pub fn rotation_error(desired: &UnitQuaternion<f64>, actual: &UnitQuaternion<f64
         return Vector3::zeros();
     }
     // nalgebra's order of operations, (±q_v/|q_v|)·θ: the result is bit for bit its
-    // `scaled_axis` (the test checks it), not just equal to round-off. That matters: the
-    // closed-chain soak test (tests/stability_soak.rs) follows a chaotic trajectory, and the
-    // one-ulp differences of q_v·(θ/|q_v|) sent it to a different end.
+    // `scaled_axis` (the test checks it), not just equal to round-off, so replacing it
+    // changed no trajectory. (A one-ulp variant once sent the closed-loop soak to a
+    // different end; the divergence itself was the seabed dashpots injecting energy, since
+    // made implicit — see `sim`.)
     let angle = n.atan2(w.abs()) * 2.0;
     (if w >= 0.0 { v } else { -v }) / n * angle
 }
@@ -335,7 +336,7 @@ pub fn cooperative(
     // exp(0) is the identity quaternion exactly and the product with it returns `desired`
     // unchanged, so the common pure-translation command skips it.
     if turn != Vector3::zeros() {
-        desired.rotation = UnitQuaternion::from_scaled_axis(turn) * desired.rotation;
+        desired.rotation = crate::trig::quaternion_from_scaled_axis(&turn) * desired.rotation;
     }
     let ep = desired.translation.vector - inp.object.translation.vector;
     let er = rotation_error(&desired.rotation, &inp.object.rotation);

@@ -6,7 +6,55 @@
 // Triangular loops index several arrays by the same counters; iterators would hide that.
 #![allow(clippy::needless_range_loop)]
 
+use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub};
+
 use nalgebra::{SMatrix, SVector};
+
+/// One number for each of the simulation's two arms (arm 0 in lane 0, arm 1 in lane 1), for
+/// code that runs both arms in lockstep (`dynamics::step_terms_pair`, `control::dls_pair`):
+/// element-wise operations that LLVM packs into one SSE2 instruction each. Each lane rounds
+/// exactly as the scalar operation would.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct Pair(pub(crate) [f64; 2]);
+
+impl Pair {
+    /// Both lanes `x`.
+    #[inline(always)]
+    pub(crate) fn splat(x: f64) -> Pair {
+        Pair([x, x])
+    }
+}
+
+macro_rules! pair_op {
+    ($tr:ident, $f:ident, $op:tt) => {
+        impl $tr for Pair {
+            type Output = Pair;
+            #[inline(always)]
+            fn $f(self, o: Pair) -> Pair {
+                Pair([self.0[0] $op o.0[0], self.0[1] $op o.0[1]])
+            }
+        }
+    };
+}
+pair_op!(Add, add, +);
+pair_op!(Sub, sub, -);
+pair_op!(Mul, mul, *);
+pair_op!(Div, div, /);
+
+impl Neg for Pair {
+    type Output = Pair;
+    #[inline(always)]
+    fn neg(self) -> Pair {
+        Pair([-self.0[0], -self.0[1]])
+    }
+}
+
+impl AddAssign for Pair {
+    #[inline(always)]
+    fn add_assign(&mut self, o: Pair) {
+        *self = *self + o;
+    }
+}
 
 /// A = L·D·Lᵀ with L unit lower triangular and D diagonal positive, i.e. the Cholesky
 /// factorization A = L̃·L̃ᵀ with L̃ = L·D^½ (Golub & Van Loan, Matrix Computations, 4th ed.,

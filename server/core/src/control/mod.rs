@@ -16,6 +16,7 @@ use nalgebra::{Isometry3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
 use crate::grasp::{grasp_point_twist, wrench_at_com};
 use crate::hydraulics::N_ACT;
+use crate::linalg::Pair;
 
 /// Controller gains (documented defaults in [`Default`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -149,35 +150,12 @@ impl Lane for f64 {
     }
 }
 
-/// One number per arm (as `dynamics::pair`): element-wise operations that LLVM packs into
-/// SSE2 instructions. Aligned to 16 bytes so that an operand in memory (a spilled or stored
-/// pair) can be folded into the arithmetic instruction, which SSE2 allows only when aligned.
-#[derive(Debug, Clone, Copy)]
-#[repr(align(16))]
-struct Pair([f64; 2]);
-
 impl Lane for Pair {
     #[inline(always)]
     fn splat(x: f64) -> Pair {
-        Pair([x, x])
+        Pair::splat(x)
     }
 }
-
-macro_rules! pair_op {
-    ($tr:ident, $f:ident, $op:tt) => {
-        impl $tr for Pair {
-            type Output = Pair;
-            #[inline(always)]
-            fn $f(self, o: Pair) -> Pair {
-                Pair([self.0[0] $op o.0[0], self.0[1] $op o.0[1]])
-            }
-        }
-    };
-}
-pair_op!(Add, add, +);
-pair_op!(Sub, sub, -);
-pair_op!(Mul, mul, *);
-pair_op!(Div, div, /);
 
 /// The DLS solve on lanes: q̇ = Jᵀ·x with (JJᵀ + λ²I)·x = ẋ, `j` row-major. Returns q̇ and the
 /// LDLᵀ pivots D (the caller rejects a lane whose pivots are not all positive and finite).

@@ -16,59 +16,14 @@
 // function.
 #![allow(clippy::needless_range_loop)]
 
-use std::ops::{Add, AddAssign, Mul, Neg, Sub};
+use std::ops::{Add, AddAssign, Neg, Sub};
 
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
 
 use super::{Inertials, StepTerms};
 use crate::kinematics::KinData;
+use crate::linalg::Pair as P;
 use crate::model::{JointKind, Model};
-
-/// One number for each arm.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-struct P([f64; 2]);
-
-impl P {
-    #[inline(always)]
-    fn splat(x: f64) -> P {
-        P([x, x])
-    }
-}
-
-impl Add for P {
-    type Output = P;
-    #[inline(always)]
-    fn add(self, o: P) -> P {
-        P([self.0[0] + o.0[0], self.0[1] + o.0[1]])
-    }
-}
-impl Sub for P {
-    type Output = P;
-    #[inline(always)]
-    fn sub(self, o: P) -> P {
-        P([self.0[0] - o.0[0], self.0[1] - o.0[1]])
-    }
-}
-impl Mul for P {
-    type Output = P;
-    #[inline(always)]
-    fn mul(self, o: P) -> P {
-        P([self.0[0] * o.0[0], self.0[1] * o.0[1]])
-    }
-}
-impl Neg for P {
-    type Output = P;
-    #[inline(always)]
-    fn neg(self) -> P {
-        P([-self.0[0], -self.0[1]])
-    }
-}
-impl AddAssign for P {
-    #[inline(always)]
-    fn add_assign(&mut self, o: P) {
-        *self = *self + o;
-    }
-}
 
 /// A 3-vector of pairs.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

@@ -259,7 +259,7 @@ fn back_row<T: Lane, const I: usize>(l: &[[T; 6]; 6], x: &mut [T; 6]) {
 
 /// Orientation error vector (rad, base frame) taking `actual` to `desired`: the rotation vector
 /// θ·n of q = desired·actual⁻¹, i.e. nalgebra's `UnitQuaternion::scaled_axis` of q, spelled out
-/// (one norm instead of two, no `Unit` wrapper):
+/// (one norm instead of two, no `Unit` wrapper, an inline atan2):
 /// θ = 2·atan2(|q_v|, |q_w|), n = ±q_v/|q_v| with the sign of q_w (the shorter of the two
 /// equivalent rotations), and zero for |q_v| = 0.
 #[inline]
@@ -271,12 +271,10 @@ pub fn rotation_error(desired: &UnitQuaternion<f64>, actual: &UnitQuaternion<f64
     if n <= 0.0 {
         return Vector3::zeros();
     }
-    // nalgebra's order of operations, (±q_v/|q_v|)·θ: the result is bit for bit its
-    // `scaled_axis` (the test checks it), not just equal to round-off, so replacing it
-    // changed no trajectory. (A one-ulp variant once sent the closed-loop soak to a
-    // different end; the divergence itself was the seabed dashpots injecting energy, since
-    // made implicit — see `sim`.)
-    let angle = n.atan2(w.abs()) * 2.0;
+    // nalgebra's order of operations, (±q_v/|q_v|)·θ; the angle from the inline atan2
+    // (errors are small angles, |q_v| ≪ |q_w|), within 2 ulp of the library's, so the result
+    // equals nalgebra's `scaled_axis` to a few ulp (the test checks it).
+    let angle = crate::trig::atan2_first_quadrant(n, w.abs()) * 2.0;
     (if w >= 0.0 { v } else { -v }) / n * angle
 }
 
@@ -481,21 +479,18 @@ mod tests {
         assert_eq!(pair[1], Vector6::zeros());
     }
 
-    /// Bit for bit nalgebra's `scaled_axis` of desired·actual⁻¹ (the previous definition), over
-    /// random rotations (both signs of q_w), tiny errors and none.
+    /// nalgebra's `scaled_axis` of desired·actual⁻¹ (the previous definition) to 4 ulp of the
+    /// angle, over random rotations (both signs of q_w), tiny errors and none.
     #[test]
     fn rotation_error_matches_nalgebra_scaled_axis() {
         let mut g = Lcg(5);
         let check = |d: &UnitQuaternion<f64>, a: &UnitQuaternion<f64>| {
             let ours = rotation_error(d, a);
             let reference = (d * a.inverse()).scaled_axis();
-            for k in 0..3 {
-                assert_eq!(
-                    ours[k].to_bits(),
-                    reference[k].to_bits(),
-                    "{ours} vs {reference}"
-                );
-            }
+            assert!(
+                (ours - reference).norm() <= 4.0 * f64::EPSILON * reference.norm(),
+                "{ours} vs {reference}"
+            );
         };
         for _ in 0..500 {
             let (d, a) = (g.rotation(), g.rotation());

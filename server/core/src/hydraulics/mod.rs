@@ -412,7 +412,7 @@ fn chamber_inflow(ch: &Chamber, hp: &HydraulicParams, supply: f64, p: f64) -> (f
 /// g = valve flow − leak·(P − P_other) − relief − piston flow; g decreases with P, so the
 /// residual increases strictly and the root in [0, ∞) is unique. Closed forms for a shut
 /// valve and for an open turbulent one ([`open_valve_root`]); safeguarded Newton otherwise.
-#[inline]
+#[inline(always)]
 fn solve_chamber(ch: &Chamber, hp: &HydraulicParams, supply: f64) -> (f64, bool) {
     let g = |p: f64| chamber_inflow(ch, hp, supply, p);
     // Closed valve: g is linear (piston, leakage and relief only): closed form.
@@ -532,6 +532,7 @@ pub struct ChamberFlags {
 /// pressure (the stiff orifice/relief terms); the coupling through leakage uses the other
 /// chamber's latest value (Gauss–Seidel).
 #[allow(clippy::too_many_arguments)]
+#[inline]
 pub fn update_chambers(
     act: &ActuatorParams,
     hp: &HydraulicParams,

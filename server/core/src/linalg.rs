@@ -80,17 +80,21 @@ impl<const N: usize> Cholesky<N> {
     /// Factors `a` (only its lower triangle is read). `None` unless every pivot D_j is
     /// positive and finite, i.e. unless `a` is numerically positive definite.
     pub fn factor(a: &SMatrix<f64, N, N>) -> Option<Self> {
-        // Built in place (no copy of the factor on return).
-        let mut out = Cholesky {
+        // Built inside the `Option` it is returned in, so the factor is written once, in
+        // place (a `Self` moved into `Some` at the end costs a copy of its N² + 2N numbers).
+        let mut out = Some(Cholesky {
             l: [[0.0; N]; N],
             inv_d: [0.0; N],
             inv_sqrt_d: [0.0; N],
-        };
-        let Cholesky {
+        });
+        let Some(Cholesky {
             l,
             inv_d,
             inv_sqrt_d,
-        } = &mut out;
+        }) = &mut out
+        else {
+            unreachable!("constructed as Some just above")
+        };
         // Branch-free inside (the loops unroll); one verdict at the end. NaN fails `d > 0`.
         let mut positive = true;
         for i in 0..N {
@@ -115,7 +119,10 @@ impl<const N: usize> Cholesky<N> {
         for i in 0..N {
             inv_sqrt_d[i] = inv_d[i].sqrt();
         }
-        positive.then_some(out)
+        if !positive {
+            out = None;
+        }
+        out
     }
 
     /// L⁻¹·b with L unit lower triangular.

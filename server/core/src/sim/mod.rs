@@ -857,7 +857,7 @@ impl Simulation {
         // arms in lockstep (one arm at a time if their joint kinds differ).
         let (arms, work, models) = (&self.params.arms, &self.work, &self.models);
         let qd = [&self.state.arms[0].qd, &self.state.arms[1].qd];
-        let all_terms = match &self.pair_links {
+        let mut all_terms = match &self.pair_links {
             Some(links) => {
                 dynamics::step_terms_pair(links, [&work[0].kin, &work[1].kin], qd, &sp.gravity, rho)
             }
@@ -872,13 +872,14 @@ impl Simulation {
                 )
             }),
         };
-        for (i, terms) in all_terms.iter().enumerate() {
+        for (i, terms) in all_terms.iter_mut().enumerate() {
             let ap = &self.params.arms[i];
             let model = &self.models[i];
             let a = &self.state.arms[i];
             let w = &self.work[i];
             jdqd[i] = Vector6::from(terms.tool_bias);
-            let mut m = terms.mass_matrix;
+            // H̃ = H + h·(damping, end stops) on the diagonal, formed in place.
+            let m = &mut terms.mass_matrix;
             for r in 0..N_ACT {
                 let act = &ap.hydraulics.actuators[r];
                 let pin = Linkage::pin_sin_cos(
@@ -898,7 +899,7 @@ impl Simulation {
                 bias[i][r] = terms.bias[r] + sp.joint_drag * a.qd[r] * a.qd[r].abs()
                     - 2.0 * sp.joint_drag * a.qd[r].abs() * a.qd[r];
             }
-            chol[i] = Cholesky::factor(&m);
+            chol[i] = Cholesky::factor(m);
             if let (Some(ch), true) = (&chol[i], a.holding) {
                 // Z = L⁻¹Jᵀ (H̃ = LLᵀ): J·H̃⁻¹·Jᵀ = ZᵀZ, H̃⁻¹Jᵀf = L⁻ᵀ(Zf). Only a holding
                 // arm enters the constraint solve.

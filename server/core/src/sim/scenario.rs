@@ -430,14 +430,11 @@ impl Row {
     }
 
     /// Appends this row as one CSV line (UTF-8 bytes, no newline), fields in [`Row::header`] order: times
-    /// with 3 decimals, numbers as `{:.6e}` (via [`super::sci::push_sci6`]), names verbatim
+    /// with 3 decimals, numbers as `{:.6e}` (via [`super::sci::push_sci6_field`]), names verbatim
     /// (stage letters and grasp-state names contain no commas or quotes).
     pub fn write_csv(&self, out: &mut Vec<u8>) {
         use std::io::Write;
-        let f = |out: &mut Vec<u8>, x: f64| {
-            out.push(b',');
-            super::sci::push_sci6(out, x);
-        };
+        let f = super::sci::push_sci6_field;
         let _ = write!(out, "{:.3},{}", self.t_s, self.stage);
         for i in 0..2 {
             for &x in self.q[i].iter().chain(&self.qd[i]).chain(&self.u[i]) {

@@ -22,54 +22,86 @@ fn scaled(a: f64, e: i32) -> Option<f64> {
     Some(if k >= 0 { a / p } else { a * p })
 }
 
+/// "00", "01", … "99": two digits per table lookup.
+const PAIRS: &[u8; 200] = b"0001020304050607080910111213141516171819\
+2021222324252627282930313233343536373839\
+4041424344454647484950515253545556575859\
+6061626364656667686970717273747576777879\
+8081828384858687888990919293949596979899";
+
 /// Appends `x` as `format!("{x:.6e}")` would, as UTF-8 bytes.
 pub fn push_sci6(out: &mut Vec<u8>, x: f64) {
-    // Zeros are common in the CSV (forces while not holding, idle inputs).
-    if x == 0.0 {
-        let text: &[u8] = if x.is_sign_negative() {
-            b"-0.000000e0"
-        } else {
-            b"0.000000e0"
-        };
-        out.extend_from_slice(text);
-        return;
-    }
-    let Some((negative, mut m, e)) = digits(x) else {
-        use std::io::Write;
-        let _ = write!(out, "{x:.6e}");
-        return;
-    };
-    // "-d.dddddde-ddd" at most: assembled on the stack, appended once.
+    push(out, x, false);
+}
+
+/// Appends `,` and then `x` as [`push_sci6`]: one CSV field.
+pub fn push_sci6_field(out: &mut Vec<u8>, x: f64) {
+    push(out, x, true);
+}
+
+#[inline(always)]
+fn push(out: &mut Vec<u8>, x: f64, comma: bool) {
+    // ",-d.dddddde-ddd" at most (15 bytes): assembled on the stack.
     let mut buf = [0u8; 16];
     let mut n = 0;
-    if negative {
-        buf[0] = b'-';
+    if comma {
+        buf[0] = b',';
         n = 1;
     }
-    // Seven digits, least significant first, into buf[n], buf[n+2..n+8] (the point at n+1).
-    for i in (0..7).rev() {
-        let d = b'0' + (m % 10) as u8;
-        m /= 10;
-        buf[if i == 0 { n } else { n + 1 + i }] = d;
+    let Some((negative, m, e)) = digits(x) else {
+        // Zeros (common in the CSV: forces while not holding, idle inputs) are written as the
+        // standard text directly; the rest goes to the standard formatter.
+        out.extend_from_slice(&buf[..n]);
+        if x == 0.0 {
+            let text: &[u8] = if x.is_sign_negative() {
+                b"-0.000000e0"
+            } else {
+                b"0.000000e0"
+            };
+            out.extend_from_slice(text);
+        } else {
+            use std::io::Write;
+            let _ = write!(out, "{x:.6e}");
+        }
+        return;
+    };
+    if negative {
+        buf[n] = b'-';
+        n += 1;
     }
+    // d.dddddd: the leading digit, then three pairs.
+    let m = m as usize;
+    let (lead, rest) = (m / 1_000_000, m % 1_000_000);
+    buf[n] = b'0' + lead as u8;
     buf[n + 1] = b'.';
+    for (k, pair) in [rest / 10_000, rest / 100 % 100, rest % 100]
+        .into_iter()
+        .enumerate()
+    {
+        buf[n + 2 + 2 * k..n + 4 + 2 * k].copy_from_slice(&PAIRS[2 * pair..2 * pair + 2]);
+    }
     buf[n + 8] = b'e';
     n += 9;
     if e < 0 {
         buf[n] = b'-';
         n += 1;
     }
-    let a = e.unsigned_abs();
+    let a = e.unsigned_abs() as usize;
     if a >= 100 {
         buf[n] = b'0' + (a / 100) as u8;
         n += 1;
     }
     if a >= 10 {
-        buf[n] = b'0' + (a / 10 % 10) as u8;
+        buf[n..n + 2].copy_from_slice(&PAIRS[2 * (a % 100)..2 * (a % 100) + 2]);
+        n += 2;
+    } else {
+        buf[n] = b'0' + a as u8;
         n += 1;
     }
-    buf[n] = b'0' + (a % 10) as u8;
-    out.extend_from_slice(&buf[..n + 1]);
+    // All 16 bytes (a fixed-size copy, no call), then the unused tail cut off.
+    let len = out.len();
+    out.extend_from_slice(&buf);
+    out.truncate(len + n);
 }
 
 /// (sign, 7-digit mantissa, exponent), or `None` where the standard formatter decides.

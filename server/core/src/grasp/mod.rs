@@ -350,19 +350,62 @@ pub fn mobility_block_general(
     rk: &Vector3<f64>,
     x: &Matrix6<f64>,
 ) -> Matrix6<f64> {
+    mobility_general_impl(ri, rk, x, false)
+}
+
+/// Wᵀ·X·W for one grasp point (W = Wⁱ = Wᵏ, [`mobility_block_general`]), lower triangle
+/// only: the part above the diagonal is left zero, as [`crate::linalg::gram_lower`] does
+/// (the factorizations read no more). It skips the upper block B − S·D and three entries of
+/// the upper left block.
+pub fn mobility_block_general_lower(r: &Vector3<f64>, x: &Matrix6<f64>) -> Matrix6<f64> {
+    mobility_general_impl(r, r, x, true)
+}
+
+/// [`mobility_block_general`], the lower triangle only if `lower`. Products with a skew
+/// matrix as cross products: M·Sᵏ has rows mᵢ × rᵏ (mᵢᵀ·Sᵏ = (Sᵏᵀ·mᵢ)ᵀ = (mᵢ × rᵏ)ᵀ, for the
+/// rows mᵢ of M) and Sⁱ·M columns rⁱ × m_j. Inlined with `lower` a constant, the entries it
+/// does not store are never computed.
+#[inline(always)]
+fn mobility_general_impl(
+    ri: &Vector3<f64>,
+    rk: &Vector3<f64>,
+    x: &Matrix6<f64>,
+    lower: bool,
+) -> Matrix6<f64> {
     let a: Matrix3<f64> = x.fixed_view::<3, 3>(0, 0).into_owned();
     let b: Matrix3<f64> = x.fixed_view::<3, 3>(0, 3).into_owned();
     let d: Matrix3<f64> = x.fixed_view::<3, 3>(3, 3).into_owned();
-    let sk = skew(rk);
-    let si = skew(ri);
-    let top_left = a + b * sk;
-    let bottom_left = b.transpose() + d * sk;
+    let times_sk = |m: &Matrix3<f64>| {
+        Matrix3::from_rows(&[
+            m.row(0).transpose().cross(rk).transpose(),
+            m.row(1).transpose().cross(rk).transpose(),
+            m.row(2).transpose().cross(rk).transpose(),
+        ])
+    };
+    let si_times = |m: &Matrix3<f64>| {
+        Matrix3::from_columns(&[
+            ri.cross(&m.column(0)),
+            ri.cross(&m.column(1)),
+            ri.cross(&m.column(2)),
+        ])
+    };
+    let bottom_left = b.transpose() + times_sk(&d);
+    let top_left = a + times_sk(&b) - si_times(&bottom_left);
     let mut out = Matrix6::zeros();
-    out.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(top_left - si * bottom_left));
-    out.fixed_view_mut::<3, 3>(0, 3).copy_from(&(b - si * d));
+    if lower {
+        for j in 0..3 {
+            for i in j..3 {
+                out[(i, j)] = top_left[(i, j)];
+                out[(i + 3, j + 3)] = d[(i, j)];
+            }
+        }
+    } else {
+        out.fixed_view_mut::<3, 3>(0, 0).copy_from(&top_left);
+        out.fixed_view_mut::<3, 3>(0, 3)
+            .copy_from(&(b - si_times(&d)));
+        out.fixed_view_mut::<3, 3>(3, 3).copy_from(&d);
+    }
     out.fixed_view_mut::<3, 3>(3, 0).copy_from(&bottom_left);
-    out.fixed_view_mut::<3, 3>(3, 3).copy_from(&d);
     out
 }
 

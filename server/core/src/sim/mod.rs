@@ -977,6 +977,13 @@ impl Simulation {
                 None => grasp::mobility_block(ri, rk, inv_mass, &iw_inv),
             }
         };
+        // Wⁱᵀ·M̃⁻¹·Wⁱ for a diagonal block: with the general M̃⁻¹ only its lower triangle.
+        let mobility_diag = |ri: &Vector3<f64>| -> Matrix6<f64> {
+            match &object_mobility {
+                Some(x) => grasp::mobility_block_general_lower(ri, x),
+                None => mobility(ri, ri),
+            }
+        };
         let obj_weight = sp.gravity
             * (op.mass_kg
                 - if sp.buoyancy {
@@ -993,7 +1000,7 @@ impl Simulation {
         // Diagonal blocks W_iᵀM_o⁻¹W_i + Z_iᵀZ_i + εI, and the coupling W₁ᵀM_o⁻¹W₀ (the
         // factorizations read lower triangles only).
         let diag = |i: usize| {
-            mobility(&r[i], &r[i])
+            mobility_diag(&r[i])
                 + linalg::gram_lower(&z[i])
                 + Matrix6::identity() * sp.constraint_compliance
         };

@@ -5,7 +5,8 @@
 use nalgebra::{SVector, Vector3, Vector6};
 use seaarms_core::grasp::{
     GraspState, decompose, grasp_block, grasp_matrix, grasp_pinv_equal_share, grasp_point_twist,
-    internal_basis, internal_wrench, mobility_block, mobility_block_general, wrench_at_com,
+    internal_basis, internal_wrench, mobility_block, mobility_block_general,
+    mobility_block_general_lower, wrench_at_com,
 };
 
 fn radii() -> [Vector3<f64>; 2] {
@@ -157,6 +158,21 @@ fn general_mobility_block_is_the_product() {
             let special = mobility_block(ri, rk, 1.0 / 50.0, &q);
             let general = mobility_block_general(ri, rk, &block_diag);
             assert!((special - general).abs().max() < 1e-14);
+        }
+        // The diagonal block's lower triangle, zero above the diagonal.
+        let explicit = grasp_block(ri).transpose() * x * grasp_block(ri);
+        let lower = mobility_block_general_lower(ri, &x);
+        for j in 0..6 {
+            for i in 0..6 {
+                if i >= j {
+                    assert!(
+                        (lower[(i, j)] - explicit[(i, j)]).abs() < 1e-13 * x.norm(),
+                        "({i}, {j}): {lower} vs {explicit}"
+                    );
+                } else {
+                    assert_eq!(lower[(i, j)], 0.0);
+                }
+            }
         }
     }
 }

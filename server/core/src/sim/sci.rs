@@ -129,11 +129,13 @@ fn digits(x: f64) -> Option<(bool, u64, i32)> {
     }
     // s ∈ [10⁶, 10⁷): truncation is ⌊s⌋ and s + 0.5 is exact (ulp(s) ≤ 2⁻²⁹), so these are
     // floor and round-half-up without library calls.
-    let whole = s as u64;
+    // In i64 (s < 10⁷ fits): one conversion instruction each way, where u64 conversions
+    // take branchy sequences for values ≥ 2⁶³.
+    let whole = s as i64;
     if (s - whole as f64 - 0.5).abs() < 1e-6 {
         return None;
     }
-    let mut m = (s + 0.5) as u64;
+    let mut m = (s + 0.5) as i64 as u64;
     if m == 10_000_000 {
         m = 1_000_000;
         e += 1;

@@ -630,12 +630,14 @@ fn map(x: Pair, f: impl Fn(f64) -> f64) -> Pair {
 ///   valve direction (reference pressure P_r and σ) selected per lane.
 ///
 /// A lane that needs more — relief open, the orifice's laminar band, a non-finite value —
-/// is solved by the scalar [`solve_chamber`] (rare).
+/// is solved by the scalar [`solve_chamber`] (rare). `both_shut`: s = 0 in both lanes (the
+/// caller knows it from the spools, once for both chambers).
 #[inline(always)]
 fn solve_chamber_pair(
     ch: &ChamberPair,
     hps: [&HydraulicParams; 2],
     supply: Pair,
+    both_shut: bool,
 ) -> (Pair, [bool; 2]) {
     let ret = Pair([hps[0].return_pa, hps[1].return_pa]);
     let relief = Pair([hps[0].relief_pa, hps[1].relief_pa]);
@@ -645,7 +647,7 @@ fn solve_chamber_pair(
     let p_shut = e / a;
     let shut = [ch.s.0[0] == 0.0, ch.s.0[1] == 0.0];
     // Both valves shut (an arm holding still): the linear root alone.
-    if shut[0] & shut[1] & (p_shut.0[0] <= relief.0[0]) & (p_shut.0[1] <= relief.0[1]) {
+    if both_shut && (p_shut.0[0] <= relief.0[0]) & (p_shut.0[1] <= relief.0[1]) {
         return (map(p_shut, |v| v.max(0.0)), [false, false]);
     }
     // Open valve (open_valve_root): σ = +1 towards supply, −1 towards return; σ·t = ±t.
@@ -704,6 +706,8 @@ pub(crate) fn update_chambers_pair(
     let (vi1, vo1) = acts[1].volumes(x.0[1]);
     let field = |f: fn(&ActuatorParams) -> f64| Pair([f(acts[0]), f(acts[1])]);
     let hb = Pair::splat(h_s) * beta_pa;
+    // Both spools shut: both chambers of both lanes have s = 0 (tested once here).
+    let both_shut = (spool.0[0] == 0.0) & (spool.0[1] == 0.0);
     let gain = field(|a| a.flow_gain);
     let a = ChamberPair {
         p0: *p_in,
@@ -714,7 +718,7 @@ pub(crate) fn update_chambers_pair(
         leak,
         piston: field(|a| a.area_in) * xdot,
     };
-    let (pi, ri) = solve_chamber_pair(&a, hps, supply_pa);
+    let (pi, ri) = solve_chamber_pair(&a, hps, supply_pa, both_shut);
     let b = ChamberPair {
         p0: *p_out,
         c: hb / Pair([vo0, vo1]),
@@ -724,7 +728,7 @@ pub(crate) fn update_chambers_pair(
         leak,
         piston: -field(|a| a.area_out) * xdot,
     };
-    let (po, ro) = solve_chamber_pair(&b, hps, supply_pa);
+    let (po, ro) = solve_chamber_pair(&b, hps, supply_pa, both_shut);
     *p_in = pi;
     *p_out = po;
     [

@@ -605,6 +605,42 @@ impl ChamberPair {
     }
 }
 
+/// Both arms' hydraulic constants for [`update_chambers_pair`] (arm i in lane i), the same
+/// for every actuator and sub-step, so gathered once per step.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PairSystem {
+    /// Fault-adjusted supply pressure P_s (Pa).
+    supply: Pair,
+    /// Return pressure P_e (Pa).
+    ret: Pair,
+    /// Relief cracking pressure (Pa).
+    relief: Pair,
+    /// Laminar band of the orifice law (Pa).
+    laminar: Pair,
+    /// h·β, the numerator of c = h·β/V (eq. 3.56 in backward Euler).
+    h_beta: Pair,
+}
+
+impl PairSystem {
+    /// From the arms' parameters, fault-adjusted supply pressure and bulk modulus, and the
+    /// step length `h_s` (s).
+    #[inline]
+    pub(crate) fn new(
+        hps: [&HydraulicParams; 2],
+        supply_pa: Pair,
+        beta_pa: Pair,
+        h_s: f64,
+    ) -> PairSystem {
+        PairSystem {
+            supply: supply_pa,
+            ret: Pair([hps[0].return_pa, hps[1].return_pa]),
+            relief: Pair([hps[0].relief_pa, hps[1].relief_pa]),
+            laminar: Pair([hps[0].laminar_pa, hps[1].laminar_pa]),
+            h_beta: Pair::splat(h_s) * beta_pa,
+        }
+    }
+}
+
 /// Per lane: `a` where `take_a`, else `b` (a select, no branch).
 #[inline(always)]
 fn select(take_a: [bool; 2], a: Pair, b: Pair) -> Pair {
@@ -636,11 +672,10 @@ fn map(x: Pair, f: impl Fn(f64) -> f64) -> Pair {
 fn solve_chamber_pair(
     ch: &ChamberPair,
     hps: [&HydraulicParams; 2],
-    supply: Pair,
+    sys: &PairSystem,
     both_shut: bool,
 ) -> (Pair, [bool; 2]) {
-    let ret = Pair([hps[0].return_pa, hps[1].return_pa]);
-    let relief = Pair([hps[0].relief_pa, hps[1].relief_pa]);
+    let (supply, ret, relief) = (sys.supply, sys.ret, sys.relief);
     let a = Pair::splat(1.0) + ch.c * ch.leak;
     let e = ch.p0 + ch.c * (ch.leak * ch.other - ch.piston);
     // Shut valve.
@@ -664,7 +699,7 @@ fn solve_chamber_pair(
     let p = select(shut, p_shut, p_open);
     // Non-short-circuit `&`/`|` so the lane tests compile to compares, not branches;
     // m² ≥ 0 or NaN, so m² < ∞ is its finiteness test.
-    let lam = Pair([hps[0].laminar_pa, hps[1].laminar_pa]);
+    let lam = sys.laminar;
     let ok = |l: usize| {
         (p.0[l] <= relief.0[l]) & (shut[l] | ((m2.0[l] >= lam.0[l]) & (m2.0[l] < f64::INFINITY)))
     };
@@ -692,20 +727,18 @@ fn solve_chamber_pair(
 pub(crate) fn update_chambers_pair(
     acts: [&ActuatorParams; 2],
     hps: [&HydraulicParams; 2],
-    supply_pa: Pair,
-    beta_pa: Pair,
+    sys: &PairSystem,
     leak: Pair,
     spool: Pair,
     x: Pair,
     xdot: Pair,
-    h_s: f64,
     p_in: &mut Pair,
     p_out: &mut Pair,
 ) -> [ChamberFlags; 2] {
     let (vi0, vo0) = acts[0].volumes(x.0[0]);
     let (vi1, vo1) = acts[1].volumes(x.0[1]);
     let field = |f: fn(&ActuatorParams) -> f64| Pair([f(acts[0]), f(acts[1])]);
-    let hb = Pair::splat(h_s) * beta_pa;
+    let hb = sys.h_beta;
     // Both spools shut: both chambers of both lanes have s = 0 (tested once here).
     let both_shut = (spool.0[0] == 0.0) & (spool.0[1] == 0.0);
     let gain = field(|a| a.flow_gain);
@@ -718,7 +751,7 @@ pub(crate) fn update_chambers_pair(
         leak,
         piston: field(|a| a.area_in) * xdot,
     };
-    let (pi, ri) = solve_chamber_pair(&a, hps, supply_pa, both_shut);
+    let (pi, ri) = solve_chamber_pair(&a, hps, sys, both_shut);
     let b = ChamberPair {
         p0: *p_out,
         c: hb / Pair([vo0, vo1]),
@@ -728,7 +761,7 @@ pub(crate) fn update_chambers_pair(
         leak,
         piston: -field(|a| a.area_out) * xdot,
     };
-    let (po, ro) = solve_chamber_pair(&b, hps, supply_pa, both_shut);
+    let (po, ro) = solve_chamber_pair(&b, hps, sys, both_shut);
     *p_in = pi;
     *p_out = po;
     [
@@ -927,16 +960,15 @@ mod tests {
             let pick = |k: usize| Pair([lane_args[0][k], lane_args[1][k]]);
             let mut p_in = pick(6);
             let mut p_out = pick(7);
+            let sys = PairSystem::new([&hps[0], &hps[1]], pick(0), pick(1), h);
             let flags = update_chambers_pair(
                 acts,
                 [&hps[0], &hps[1]],
-                pick(0),
-                pick(1),
+                &sys,
                 pick(2),
                 pick(3),
                 pick(4),
                 pick(5),
-                h,
                 &mut p_in,
                 &mut p_out,
             );

@@ -1059,6 +1059,7 @@ impl Simulation {
                 finite_or(faults[i].leak_m3_s_pa[j], 0.0).clamp(0.0, 1e-8)
             }))
         });
+        let sys = hydraulics::PairSystem::new(hps, supply, beta, h);
         for substep in 0..sp.substeps {
             let mut qdd_free = [Vector6::zeros(); 2];
             // Chamber pressures (eqs 3.48–3.50, 3.56): actuator j of both arms in lockstep.
@@ -1075,13 +1076,11 @@ impl Simulation {
                     let fl = hydraulics::update_chambers_pair(
                         [&hps[0].actuators[j], &hps[1].actuators[j]],
                         hps,
-                        supply,
-                        beta,
+                        &sys,
                         leak[j],
                         Pair([a0.spool[j], a1.spool[j]]),
                         Pair([x_0, x_1]),
                         Pair([xd_0, xd_1]),
-                        h,
                         &mut p_in,
                         &mut p_out,
                     );

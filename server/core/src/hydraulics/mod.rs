@@ -6,7 +6,8 @@
 //!   sizes them from Lim Table 1-1 with documented rules.
 //! * [`valve_flow`]: turbulent orifice flow with the sign logic of eq. 3.48.
 //! * [`update_chambers`]: one backward-Euler step of the chamber continuity equations
-//!   (3.49–3.50, 3.56) including relief flow, piston leakage and the cavitation floor.
+//!   (3.49–3.50, 3.56) including relief flow, piston leakage and the cavitation floor;
+//!   `update_chambers_pair` does the same for both arms' actuator j in lockstep, bit for bit.
 //! * [`JawParams`]: the jaw function (Table 1-1: 7.5 cm, 10.2 cm/s, 150 kgf), modelled as a
 //!   flow-limited actuator (opening rate ∝ command) with a clamp force, not a chamber model.
 //!
@@ -18,6 +19,7 @@
 use crate::Error;
 use crate::dynamics::Inertials;
 use crate::kinematics::{KinData, jacobian};
+use crate::linalg::Pair;
 use crate::model::Model;
 
 /// Number of joint actuators per arm.
@@ -574,6 +576,204 @@ pub fn update_chambers(
     }
 }
 
+/// Fixed inputs of one chamber update for both arms in lockstep (arm i in lane i): the
+/// fields of [`Chamber`], one [`Pair`] each.
+#[derive(Debug, Clone, Copy)]
+struct ChamberPair {
+    p0: Pair,
+    c: Pair,
+    gain: Pair,
+    s: Pair,
+    other: Pair,
+    leak: Pair,
+    piston: Pair,
+}
+
+impl ChamberPair {
+    /// The scalar chamber of lane `l`.
+    #[inline(always)]
+    fn lane(&self, l: usize) -> Chamber {
+        Chamber {
+            p0: self.p0.0[l],
+            c: self.c.0[l],
+            gain: self.gain.0[l],
+            s: self.s.0[l],
+            other: self.other.0[l],
+            leak: self.leak.0[l],
+            piston: self.piston.0[l],
+        }
+    }
+}
+
+/// Both arms' hydraulic constants for [`update_chambers_pair`] (arm i in lane i), the same
+/// for every actuator and sub-step, so gathered once per step.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct PairSystem {
+    /// Fault-adjusted supply pressure P_s (Pa).
+    supply: Pair,
+    /// Return pressure P_e (Pa).
+    ret: Pair,
+    /// Relief cracking pressure (Pa).
+    relief: Pair,
+    /// Laminar band of the orifice law (Pa).
+    laminar: Pair,
+    /// h·β, the numerator of c = h·β/V (eq. 3.56 in backward Euler).
+    h_beta: Pair,
+}
+
+impl PairSystem {
+    /// From the arms' parameters, fault-adjusted supply pressure and bulk modulus, and the
+    /// step length `h_s` (s).
+    #[inline]
+    pub(crate) fn new(
+        hps: [&HydraulicParams; 2],
+        supply_pa: Pair,
+        beta_pa: Pair,
+        h_s: f64,
+    ) -> PairSystem {
+        PairSystem {
+            supply: supply_pa,
+            ret: Pair([hps[0].return_pa, hps[1].return_pa]),
+            relief: Pair([hps[0].relief_pa, hps[1].relief_pa]),
+            laminar: Pair([hps[0].laminar_pa, hps[1].laminar_pa]),
+            h_beta: Pair::splat(h_s) * beta_pa,
+        }
+    }
+}
+
+/// Per lane: `a` where `take_a`, else `b` (a select, no branch).
+#[inline(always)]
+fn select(take_a: [bool; 2], a: Pair, b: Pair) -> Pair {
+    Pair([
+        if take_a[0] { a.0[0] } else { b.0[0] },
+        if take_a[1] { a.0[1] } else { b.0[1] },
+    ])
+}
+
+/// Per-lane function of a pair.
+#[inline(always)]
+fn map(x: Pair, f: impl Fn(f64) -> f64) -> Pair {
+    Pair([f(x.0[0]), f(x.0[1])])
+}
+
+/// [`solve_chamber`] for both arms' chamber in lockstep, giving bit for bit the scalar
+/// results: each lane evaluates the scalar closed forms with the same operations in the same
+/// order, and selects instead of branching —
+///
+/// * shut valve (s = 0): P = E/a, the root of the linear residual R(P) = a·P − E with
+///   a = 1 + c·leak, E = P0 + c·(leak·P_other − piston) (eqs 3.49–3.50, 3.56);
+/// * open valve: the turbulent-orifice root of [`open_valve_root`] (eq. 3.48), with the
+///   valve direction (reference pressure P_r and σ) selected per lane.
+///
+/// A lane that needs more — relief open, the orifice's laminar band, a non-finite value —
+/// is solved by the scalar [`solve_chamber`] (rare). `both_shut`: s = 0 in both lanes (the
+/// caller knows it from the spools, once for both chambers).
+#[inline(always)]
+fn solve_chamber_pair(
+    ch: &ChamberPair,
+    hps: [&HydraulicParams; 2],
+    sys: &PairSystem,
+    both_shut: bool,
+) -> (Pair, [bool; 2]) {
+    let (supply, ret, relief) = (sys.supply, sys.ret, sys.relief);
+    let a = Pair::splat(1.0) + ch.c * ch.leak;
+    let e = ch.p0 + ch.c * (ch.leak * ch.other - ch.piston);
+    // Shut valve.
+    let p_shut = e / a;
+    let shut = [ch.s.0[0] == 0.0, ch.s.0[1] == 0.0];
+    // Both valves shut (an arm holding still): the linear root alone.
+    if both_shut && (p_shut.0[0] <= relief.0[0]) & (p_shut.0[1] <= relief.0[1]) {
+        return (map(p_shut, |v| v.max(0.0)), [false, false]);
+    }
+    // Open valve (open_valve_root): σ = +1 towards supply, −1 towards return; σ·t = ±t.
+    let k = ch.c * ch.gain * map(ch.s, f64::abs);
+    let up = [ch.s.0[0] > 0.0, ch.s.0[1] > 0.0];
+    let p_ref = select(up, supply, ret);
+    let t = a * p_ref - e;
+    let d = select(up, t, -t);
+    let d_abs = map(d, f64::abs);
+    let m = Pair::splat(2.0) * d_abs / (k + map(k * k + Pair::splat(4.0) * a * d_abs, f64::sqrt));
+    let m2 = m * m;
+    let below = [(d.0[0] > 0.0) == up[0], (d.0[1] > 0.0) == up[1]];
+    let p_open = select(below, p_ref - m2, p_ref + m2);
+    let p = select(shut, p_shut, p_open);
+    // Non-short-circuit `&`/`|` so the lane tests compile to compares, not branches;
+    // m² ≥ 0 or NaN, so m² < ∞ is its finiteness test.
+    let lam = sys.laminar;
+    let ok = |l: usize| {
+        (p.0[l] <= relief.0[l]) & (shut[l] | ((m2.0[l] >= lam.0[l]) & (m2.0[l] < f64::INFINITY)))
+    };
+    let (ok0, ok1) = (ok(0), ok(1));
+    // Relief flags are false on this path, as in the scalar closed forms: P ≤ P_relief and
+    // P_relief ≥ 0 (the initial pressures are clamped to [0, P_relief]), so max(P, 0) is too.
+    if ok0 & ok1 {
+        return (map(p, |v| v.max(0.0)), [false, false]);
+    }
+    let mut out = map(p, |v| v.max(0.0));
+    let mut relief_open = [false, false];
+    for (l, good) in [ok0, ok1].into_iter().enumerate() {
+        if !good {
+            (out.0[l], relief_open[l]) = solve_chamber(&ch.lane(l), hps[l], supply.0[l]);
+        }
+    }
+    (out, relief_open)
+}
+
+/// [`update_chambers`] for actuator j of both arms in lockstep (arm i in lane i, each lane
+/// with its own arm's actuator and hydraulic parameters), bit for bit the same results
+/// (see [`solve_chamber_pair`]). The pressures are read and written as pairs.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) fn update_chambers_pair(
+    acts: [&ActuatorParams; 2],
+    hps: [&HydraulicParams; 2],
+    sys: &PairSystem,
+    leak: Pair,
+    spool: Pair,
+    x: Pair,
+    xdot: Pair,
+    p_in: &mut Pair,
+    p_out: &mut Pair,
+) -> [ChamberFlags; 2] {
+    let (vi0, vo0) = acts[0].volumes(x.0[0]);
+    let (vi1, vo1) = acts[1].volumes(x.0[1]);
+    let field = |f: fn(&ActuatorParams) -> f64| Pair([f(acts[0]), f(acts[1])]);
+    let hb = sys.h_beta;
+    // Both spools shut: both chambers of both lanes have s = 0 (tested once here).
+    let both_shut = (spool.0[0] == 0.0) & (spool.0[1] == 0.0);
+    let gain = field(|a| a.flow_gain);
+    let a = ChamberPair {
+        p0: *p_in,
+        c: hb / Pair([vi0, vi1]),
+        gain,
+        s: spool,
+        other: *p_out,
+        leak,
+        piston: field(|a| a.area_in) * xdot,
+    };
+    let (pi, ri) = solve_chamber_pair(&a, hps, sys, both_shut);
+    let b = ChamberPair {
+        p0: *p_out,
+        c: hb / Pair([vo0, vo1]),
+        gain,
+        s: -spool,
+        other: pi,
+        leak,
+        piston: -field(|a| a.area_out) * xdot,
+    };
+    let (po, ro) = solve_chamber_pair(&b, hps, sys, both_shut);
+    *p_in = pi;
+    *p_out = po;
+    [
+        ChamberFlags {
+            relief_open: ri[0] || ro[0],
+        },
+        ChamberFlags {
+            relief_open: ri[1] || ro[1],
+        },
+    ]
+}
+
 /// Actuator force (eq. 3.52), N (N·m for rotary): A_I P_I − A_O P_O − K_damp ẋ.
 #[inline]
 pub fn actuator_force(act: &ActuatorParams, p_in: f64, p_out: f64, xdot: f64) -> f64 {
@@ -706,5 +906,88 @@ mod tests {
         }
         // Both branches were exercised.
         assert!(closed > 15_000 && declined > 10, "{closed} {declined}");
+    }
+    /// [`update_chambers_pair`] against two calls of the scalar [`update_chambers`] (the
+    /// reference it must reproduce bit for bit), with different parameters per lane, over
+    /// random states mixing shut valves (in one lane or both), both valve and flow
+    /// directions, leakage, cavitation, the laminar band and relief.
+    #[test]
+    fn pair_update_is_bitwise_the_scalar_update() {
+        let mut hp1 = params();
+        hp1.supply_pa = 5.0e6;
+        hp1.relief_pa = 6.0e6;
+        hp1.return_pa = 1.0e5;
+        hp1.laminar_pa = 3.0e4;
+        hp1.actuators[0].flow_gain = 2e-7;
+        hp1.actuators[0].area_out = 0.8e-3;
+        hp1.actuators[0].continuous = true;
+        let hps = [params(), hp1];
+        let mut seed = 5;
+        let (mut fallbacks, mut shut_both, mut shut_one) = (0, 0, 0);
+        for n in 0..20_000 {
+            let mut lane_in = [0.0; 2];
+            // Per lane: supply, β, leak, spool, x, ẋ, P_I, P_O.
+            let mut lane_args = [[0.0; 8]; 2];
+            for l in 0..2 {
+                let spool = match uniform(&mut seed) {
+                    u if u < 0.3 => 0.0,
+                    u if u < 0.35 => 1e-4 * (2.0 * uniform(&mut seed) - 1.0),
+                    _ => 2.0 * uniform(&mut seed) - 1.0,
+                };
+                lane_args[l] = [
+                    hps[l].supply_pa * (1.0 - 0.3 * uniform(&mut seed)),
+                    hps[l].bulk_modulus_pa * (0.2 + 0.8 * uniform(&mut seed)),
+                    if uniform(&mut seed) < 0.5 {
+                        0.0
+                    } else {
+                        uniform(&mut seed) * 1e-11
+                    },
+                    spool,
+                    1.2 * uniform(&mut seed) - 0.1,
+                    (2.0 * uniform(&mut seed) - 1.0) * 2.0,
+                    uniform(&mut seed) * 1.2 * hps[l].relief_pa,
+                    uniform(&mut seed) * 1.2 * hps[l].relief_pa,
+                ];
+                lane_in[l] = spool;
+            }
+            if lane_in[0] == 0.0 && lane_in[1] == 0.0 {
+                shut_both += 1;
+            } else if lane_in[0] == 0.0 || lane_in[1] == 0.0 {
+                shut_one += 1;
+            }
+            let h = if n % 2 == 0 { 1e-3 } else { 2.5e-4 };
+            let acts = [&hps[0].actuators[0], &hps[1].actuators[0]];
+            let pick = |k: usize| Pair([lane_args[0][k], lane_args[1][k]]);
+            let mut p_in = pick(6);
+            let mut p_out = pick(7);
+            let sys = PairSystem::new([&hps[0], &hps[1]], pick(0), pick(1), h);
+            let flags = update_chambers_pair(
+                acts,
+                [&hps[0], &hps[1]],
+                &sys,
+                pick(2),
+                pick(3),
+                pick(4),
+                pick(5),
+                &mut p_in,
+                &mut p_out,
+            );
+            for l in 0..2 {
+                let [supply, beta, leak, spool, x, xd, mut pi, mut po] = lane_args[l];
+                let reference = update_chambers(
+                    acts[l], &hps[l], supply, beta, leak, spool, x, xd, h, &mut pi, &mut po,
+                );
+                assert_eq!(
+                    (p_in.0[l].to_bits(), p_out.0[l].to_bits(), flags[l]),
+                    (pi.to_bits(), po.to_bits(), reference),
+                    "lane {l}: {:?}",
+                    lane_args[l]
+                );
+                if reference.relief_open {
+                    fallbacks += 1;
+                }
+            }
+        }
+        assert!(fallbacks > 100 && shut_both > 1000 && shut_one > 1000);
     }
 }

@@ -52,7 +52,7 @@ use crate::dynamics::{self, DynData, Inertials, PairLinks};
 use crate::grasp::{self, GraspState, ObjectParams};
 use crate::hydraulics::{self, Faults, HydraulicParams, Linkage, N_ACT};
 use crate::kinematics::{self, KinData};
-use crate::linalg::{self, BlockCholesky, Cholesky};
+use crate::linalg::{self, BlockCholesky, Cholesky, Pair};
 use crate::model::Model;
 
 /// Index of the left arm in every per-arm array.
@@ -1039,38 +1039,64 @@ impl Simulation {
         // ---- sub-steps ----
         let mut relief_now = [[false; N_ACT]; 2];
         let mut fc = [Vector6::zeros(); 2];
+        // Fault-adjusted supply pressure, bulk modulus and leakage of each arm (arm i in
+        // lane i), constant over the step's sub-steps.
+        let hps = [
+            &self.params.arms[0].hydraulics,
+            &self.params.arms[1].hydraulics,
+        ];
+        let faults = [&self.params.arms[0].faults, &self.params.arms[1].faults];
+        let supply = Pair(core::array::from_fn(|i| {
+            let (hp, f) = (hps[i], faults[i]);
+            hp.supply_pa - finite_or(f.supply_drop_pa, 0.0).clamp(0.0, hp.supply_pa)
+        }));
+        let beta = Pair(core::array::from_fn(|i| {
+            let (hp, f) = (hps[i], faults[i]);
+            hp.bulk_modulus_pa * finite_or(f.bulk_modulus_scale, 1.0).clamp(0.01, 1.0)
+        }));
+        let leak: [Pair; N_ACT] = core::array::from_fn(|j| {
+            Pair(core::array::from_fn(|i| {
+                finite_or(faults[i].leak_m3_s_pa[j], 0.0).clamp(0.0, 1e-8)
+            }))
+        });
+        let sys = hydraulics::PairSystem::new(hps, supply, beta, h);
         for substep in 0..sp.substeps {
             let mut qdd_free = [Vector6::zeros(); 2];
+            // Chamber pressures (eqs 3.48–3.50, 3.56): actuator j of both arms in lockstep.
+            {
+                let [a0, a1] = &mut self.state.arms;
+                for j in 0..N_ACT {
+                    let lane = |i: usize, a: &ArmState| {
+                        let jh = jhat[i][j];
+                        (x0[i][j] + jh * (a.q[j] - q0[i][j]), jh * a.qd[j])
+                    };
+                    let ((x_0, xd_0), (x_1, xd_1)) = (lane(0, a0), lane(1, a1));
+                    let mut p_in = Pair([a0.p_in[j], a1.p_in[j]]);
+                    let mut p_out = Pair([a0.p_out[j], a1.p_out[j]]);
+                    let fl = hydraulics::update_chambers_pair(
+                        [&hps[0].actuators[j], &hps[1].actuators[j]],
+                        hps,
+                        &sys,
+                        leak[j],
+                        Pair([a0.spool[j], a1.spool[j]]),
+                        Pair([x_0, x_1]),
+                        Pair([xd_0, xd_1]),
+                        &mut p_in,
+                        &mut p_out,
+                    );
+                    [a0.p_in[j], a1.p_in[j]] = p_in.0;
+                    [a0.p_out[j], a1.p_out[j]] = p_out.0;
+                    relief_now[0][j] = fl[0].relief_open;
+                    relief_now[1][j] = fl[1].relief_open;
+                }
+            }
             for i in 0..2 {
-                let ap = &self.params.arms[i];
-                let hp = &ap.hydraulics;
-                let f = &ap.faults;
-                let supply =
-                    hp.supply_pa - finite_or(f.supply_drop_pa, 0.0).clamp(0.0, hp.supply_pa);
-                let beta =
-                    hp.bulk_modulus_pa * finite_or(f.bulk_modulus_scale, 1.0).clamp(0.01, 1.0);
+                let hp = hps[i];
                 let a = &mut self.state.arms[i];
                 let mut rhs = Vector6::zeros();
                 for j in 0..N_ACT {
                     let act = &hp.actuators[j];
                     let jh = jhat[i][j];
-                    let x = x0[i][j] + jh * (a.q[j] - q0[i][j]);
-                    let xd = jh * a.qd[j];
-                    let leak = finite_or(f.leak_m3_s_pa[j], 0.0).clamp(0.0, 1e-8);
-                    let fl = hydraulics::update_chambers(
-                        act,
-                        hp,
-                        supply,
-                        beta,
-                        leak,
-                        a.spool[j],
-                        x,
-                        xd,
-                        h,
-                        &mut a.p_in[j],
-                        &mut a.p_out[j],
-                    );
-                    relief_now[i][j] = fl.relief_open;
                     let t = jh * (act.area_in * a.p_in[j] - act.area_out * a.p_out[j]);
                     a.torque[j] = t - damp[i][j] * a.qd[j];
                     rhs[j] = t - bias[i][j] - damp[i][j] * a.qd[j];

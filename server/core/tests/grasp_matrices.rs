@@ -86,6 +86,18 @@ fn grasp_state_colour_code() {
     assert_eq!(BothHolding.colour(), "yellow");
 }
 
+/// A free 50 kg object's mobility M⁻¹ = diag(I/m, Q) with a symmetric positive definite Q:
+/// (Q, M⁻¹).
+fn free_object_mobility() -> (nalgebra::Matrix3<f64>, nalgebra::Matrix6<f64>) {
+    let q = nalgebra::Matrix3::new(2.0, 0.1, -0.2, 0.1, 3.0, 0.3, -0.2, 0.3, 4.0);
+    let mut m_inv = nalgebra::Matrix6::zeros();
+    m_inv
+        .fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(nalgebra::Matrix3::identity() / 50.0));
+    m_inv.fixed_view_mut::<3, 3>(3, 3).copy_from(&q);
+    (q, m_inv)
+}
+
 /// The step's structured products (eq. 3.40 blocks applied without forming them) equal the
 /// explicit matrix products: Wⁱᵀt, WⁱF and Wⁱᵀ·M⁻¹·Wᵏ with M⁻¹ = diag(I/m, Q).
 #[test]
@@ -93,12 +105,7 @@ fn structured_grasp_products_equal_explicit_matrices() {
     let r = radii();
     let t = Vector6::new(0.1, -0.2, 0.3, 0.4, -0.5, 0.6);
     let f = Vector6::new(10.0, -20.0, 30.0, 4.0, -5.0, 6.0);
-    let q = nalgebra::Matrix3::new(2.0, 0.1, -0.2, 0.1, 3.0, 0.3, -0.2, 0.3, 4.0);
-    let mut m_inv = nalgebra::Matrix6::zeros();
-    m_inv
-        .fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(nalgebra::Matrix3::identity() / 50.0));
-    m_inv.fixed_view_mut::<3, 3>(3, 3).copy_from(&q);
+    let (q, m_inv) = free_object_mobility();
     for ri in &r {
         let w = grasp_block(ri);
         assert!((grasp_point_twist(ri, &t) - w.transpose() * t).norm() < 1e-14);
@@ -141,12 +148,7 @@ fn general_mobility_block_is_the_product() {
     let x = (b * b.transpose() + nalgebra::Matrix6::identity() * 0.5)
         .try_inverse()
         .expect("SPD");
-    let q = nalgebra::Matrix3::new(2.0, 0.1, -0.2, 0.1, 3.0, 0.3, -0.2, 0.3, 4.0);
-    let mut block_diag = nalgebra::Matrix6::zeros();
-    block_diag
-        .fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(nalgebra::Matrix3::identity() / 50.0));
-    block_diag.fixed_view_mut::<3, 3>(3, 3).copy_from(&q);
+    let (q, block_diag) = free_object_mobility();
     for ri in &r {
         for rk in &r {
             let explicit = grasp_block(ri).transpose() * x * grasp_block(rk);

@@ -45,21 +45,18 @@ fn damping_matrix_is_the_wrench_velocity_derivative() {
         for k in 0..6 {
             let mut t = Vector6::new(v.x, v.y, v.z, w.x, w.y, w.z);
             t[k] += h;
-            let plus = seabed_wrench(
-                &p,
-                &pose,
-                &t.fixed_rows::<3>(0).into(),
-                &t.fixed_rows::<3>(3).into(),
-            )
-            .0;
+            let wrench_at = |t: &Vector6<f64>| {
+                seabed_wrench(
+                    &p,
+                    &pose,
+                    &t.fixed_rows::<3>(0).into(),
+                    &t.fixed_rows::<3>(3).into(),
+                )
+                .0
+            };
+            let plus = wrench_at(&t);
             t[k] -= 2.0 * h;
-            let minus = seabed_wrench(
-                &p,
-                &pose,
-                &t.fixed_rows::<3>(0).into(),
-                &t.fixed_rows::<3>(3).into(),
-            )
-            .0;
+            let minus = wrench_at(&t);
             let fd = -(plus - minus) / (2.0 * h);
             let col = damping.column(k);
             assert!(

@@ -9,8 +9,9 @@
 //! [`StepParams::substeps`] sub-steps; default 1, h = 1 ms, the thesis's own step) is:
 //!
 //! 1. chamber pressures: **backward Euler**, each chamber solved exactly in its own pressure
-//!    (safeguarded Newton; orifice, relief and cavitation floor included) — unconditionally
-//!    stable for the stiff pressure–flow terms ([`crate::hydraulics::update_chambers`]);
+//!    (closed forms; safeguarded Newton in the laminar band and above relief) — unconditionally
+//!    stable for the stiff pressure–flow terms ([`crate::hydraulics::update_chambers`], both
+//!    arms' actuators in lockstep);
 //! 2. joints: **semi-implicit (symplectic) Euler** with the viscous actuator damping treated
 //!    implicitly ((H + hD)q̈ = T − Cq̇ − G − Dq̇ − JᵀF_c); the remaining hydraulic spring
 //!    (ω_h ≈ 900 rad/s at most — the wrist rotate motor on its 0.15 L hoses — so

@@ -5,11 +5,8 @@ ARG BUILDER_IMAGE=rust:1.95-bookworm
 ARG RUNTIME_IMAGE=debian:bookworm-slim
 
 FROM ${BUILDER_IMAGE} AS builder
-# The image may run on another machine than the one that builds it, so it is compiled for
-# a named x86-64 level instead of the builder's own CPU (.cargo/config.toml): x86-64-v3
-# (AVX2, FMA; Intel since 2013, AMD since 2015). Older CPUs: --build-arg TARGET_CPU=x86-64.
-ARG TARGET_CPU=x86-64-v3
-ENV CARGO_TARGET_X86_64_UNKNOWN_LINUX_GNU_RUSTFLAGS="-C target-cpu=${TARGET_CPU}"
+# The default build targets baseline x86-64 (no target-cpu), so the binary runs on any
+# x86-64 machine; speed does not need more (docs/speed.md).
 WORKDIR /src
 COPY . .
 RUN cargo build --release --locked --bin seaarms

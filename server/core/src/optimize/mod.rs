@@ -7,6 +7,7 @@
 
 pub mod objective;
 pub mod posture;
+pub(crate) mod spd;
 
 pub use objective::{
     PerformanceIndex, check_rows, performance_index, tomm, tomm_gradient, tomm_gradient_analytic,

@@ -109,3 +109,58 @@ pub(crate) fn solve_columns(
         out[c * k..(c + 1) * k].copy_from_slice(&x[..k]);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    //! Against nalgebra's dense determinant, inverse and eigenvalues (an independent
+    //! implementation) on a fixed 3×5 matrix A.
+    use super::*;
+    use nalgebra::{DMatrix, SMatrix};
+
+    const A: [[f64; 5]; 3] = [
+        [0.3, -1.2, 0.5, 2.0, 0.1],
+        [1.1, 0.4, -0.7, 0.2, 0.9],
+        [-0.5, 0.8, 1.3, -0.6, 0.4],
+    ];
+
+    fn a_gram() -> (Square, SMatrix<f64, 3, 3>) {
+        let a = SMatrix::<f64, 3, 5>::from_fn(|r, c| A[r][c]);
+        (gram(3, 5, |r, c| A[r][c]), a * a.transpose())
+    }
+
+    #[test]
+    fn gram_and_determinant_match_nalgebra() {
+        let (mut m, reference) = a_gram();
+        for r in 0..3 {
+            for c in 0..3 {
+                assert!((m[r * 3 + c] - reference[(r, c)]).abs() <= 1e-14);
+            }
+        }
+        let det = psd_determinant(&mut m, 3);
+        assert!((det - reference.determinant()).abs() <= 1e-12 * det);
+    }
+
+    #[test]
+    fn cholesky_solve_matches_the_inverse() {
+        let (m, reference) = a_gram();
+        let l = cholesky(&m, 3, 0.0, 0.0).expect("A has full row rank");
+        let mut out = [0.0; 15];
+        solve_columns(&l, 3, 5, |r, c| A[r][c], &mut out);
+        let inv = reference.try_inverse().expect("invertible");
+        let expected = inv * SMatrix::<f64, 3, 5>::from_fn(|r, c| A[r][c]);
+        for c in 0..5 {
+            for r in 0..3 {
+                assert!((out[c * 3 + r] - expected[(r, c)]).abs() <= 1e-12);
+            }
+        }
+    }
+
+    #[test]
+    fn shifted_cholesky_fails_exactly_past_the_smallest_eigenvalue() {
+        let (m, reference) = a_gram();
+        let eig = DMatrix::from_fn(3, 3, |r, c| reference[(r, c)]).symmetric_eigenvalues();
+        let min = eig.min();
+        assert!(cholesky(&m, 3, 0.99 * min, 0.0).is_some());
+        assert!(cholesky(&m, 3, 1.01 * min, 0.0).is_none());
+    }
+}

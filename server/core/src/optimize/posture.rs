@@ -269,9 +269,9 @@ fn violation(model: &Model, data: &mut KinData, q: &[f64], target: &Vector3<f64>
 /// round-off or the evaluation cap, and the point it returns (its best *feasible* point) may
 /// be an early iterate far from the optimum. So a value 0 < c ≤ τ, τ = 10⁻³·s, is reported
 /// as 0, which is the per-constraint tolerance τ of NLopt's own interface: far below s, far
-/// above the round-off of the tool point (≈ 10⁻¹⁶ m). On the 50 runs of
-/// `tests/optimal_posture.rs` this took the runs stopped by ftol from 9 to 48 and the
-/// evaluations from 6103 to 1159, and every start now ends at a KKT point.
+/// above the round-off of the tool point (≈ 10⁻¹⁶ m). Measured on the 50 runs of
+/// `tests/optimal_posture.rs` when this was written: runs stopped by ftol 9 → 48, evaluations
+/// 6103 → 1159, and every start ends at a KKT point (that test checks it).
 fn slsqp(model: &Model, target: &Vector3<f64>, opts: &PostureOptions, q: &mut [f64]) -> usize {
     let n = model.dof();
     let slack_m = opts.constraint_tolerance_m * 1e-3;

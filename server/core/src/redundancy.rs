@@ -28,6 +28,7 @@ use crate::kinematics::{KinData, jacobian};
 use crate::manipulability::jlm;
 use crate::model::Model;
 use crate::optimize::objective::{MAX_ROWS, PerformanceIndex, check_rows, tomm_of_jacobian};
+use crate::optimize::spd::{Square, cholesky, gram, solve_columns};
 
 /// Settings of [`Redundancy`]; `Default` gives the values in each field's doc.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -103,7 +104,19 @@ pub struct Redundancy {
     reference: Option<(Vector3<f64>, UnitQuaternion<f64>)>,
 }
 
-/// Task velocity of a second task: rows of the 6×n Jacobian and the desired velocity.
+/// How a step forms and resolves its command (see [`Redundancy::step`],
+/// [`Redundancy::step_priority`], [`Redundancy::step_tracking`]).
+#[derive(Debug, Clone, Copy)]
+enum Mode<'a> {
+    /// Eq. 21 with the desired task velocity.
+    Plain,
+    /// Kilic eq. 0.6 with this second task.
+    Priority(Task<'a>),
+    /// Eqs 22–24: the desired velocity plus feedback to the reference.
+    Tracking,
+}
+
+/// A task velocity: rows of the 6×n Jacobian and the desired velocity along each.
 #[derive(Debug, Clone, Copy)]
 pub struct Task<'a> {
     /// Rows (0..6: vx vy vz wx wy wz).
@@ -155,10 +168,7 @@ impl Redundancy {
         rows: &[usize],
         dt: f64,
     ) -> Result<&[f64], Error> {
-        self.check(model, q, r_dot_desired, rows, dt)?;
-        jacobian(model, &mut self.data, q);
-        self.resolve(model, q, r_dot_desired, rows, None)?;
-        Ok(self.finish(model, q, dt))
+        self.run(model, q, r_dot_desired, rows, Mode::Plain, dt)
     }
 
     /// Kilic eq. 0.6: task 1 (`rows`, `r_dot_desired`) has priority; `second` is met as well
@@ -172,11 +182,7 @@ impl Redundancy {
         second: Task<'_>,
         dt: f64,
     ) -> Result<&[f64], Error> {
-        self.check(model, q, r_dot_desired, rows, dt)?;
-        check_task(second.rows, second.velocity)?;
-        jacobian(model, &mut self.data, q);
-        self.resolve(model, q, r_dot_desired, rows, Some(second))?;
-        Ok(self.finish(model, q, dt))
+        self.run(model, q, r_dot_desired, rows, Mode::Priority(second), dt)
     }
 
     /// Sets the feedback reference r₁ᵈ of [`Redundancy::step_tracking`] to the current tool
@@ -205,29 +211,57 @@ impl Redundancy {
         rows: &[usize],
         dt: f64,
     ) -> Result<&[f64], Error> {
+        self.run(model, q, r_dot_desired, rows, Mode::Tracking, dt)
+    }
+
+    /// The common path of the three steps: validate, Jacobian at q, task-1 command, eq. 21 (with
+    /// the second task for [`Mode::Priority`]), velocity limits and q + q̇·dt.
+    fn run(
+        &mut self,
+        model: &Model,
+        q: &[f64],
+        r_dot_desired: &[f64],
+        rows: &[usize],
+        mode: Mode<'_>,
+        dt: f64,
+    ) -> Result<&[f64], Error> {
         self.check(model, q, r_dot_desired, rows, dt)?;
+        let second = match mode {
+            Mode::Priority(second) => {
+                check_task(second.rows, second.velocity)?;
+                Some(second)
+            }
+            Mode::Plain | Mode::Tracking => None,
+        };
         jacobian(model, &mut self.data, q);
+        let k = rows.len();
+        let mut cmd = [0.0; MAX_ROWS];
+        cmd[..k].copy_from_slice(r_dot_desired);
+        if let Mode::Tracking = mode {
+            self.add_feedback(rows, r_dot_desired, dt, &mut cmd[..k]);
+        }
+        self.resolve(model, q, &cmd[..k], rows, second)?;
+        Ok(self.finish(model, q, dt))
+    }
+
+    /// Jun eq. 22: adds G(r₁ᵈ − r₁) to `cmd` (one entry per task row) with the pose in
+    /// `self.data`, then advances the reference r₁ᵈ by ṙ₁ᵈ·dt for the next step.
+    fn add_feedback(&mut self, rows: &[usize], r_dot_desired: &[f64], dt: f64, cmd: &mut [f64]) {
         let (p_d, r_d) = self
             .reference
             .unwrap_or((self.data.tool_point, self.data.flange.rotation));
         let dp = p_d - self.data.tool_point;
         let dr = (r_d * self.data.flange.rotation.inverse()).scaled_axis();
-        // Advance the reference by the desired velocity for the next step (eq. 22's r₁ᵈ).
+        let err = [dp.x, dp.y, dp.z, dr.x, dr.y, dr.z];
         let mut v = [0.0; 6];
-        for (&r, &x) in rows.iter().zip(r_dot_desired) {
+        for ((c, &r), &x) in cmd.iter_mut().zip(rows).zip(r_dot_desired) {
+            *c += self.params.feedback_gain * err[r];
             v[r] = x;
         }
         self.reference = Some((
             p_d + Vector3::new(v[0], v[1], v[2]) * dt,
             UnitQuaternion::from_scaled_axis(Vector3::new(v[3], v[4], v[5]) * dt) * r_d,
         ));
-        let err = [dp.x, dp.y, dp.z, dr.x, dr.y, dr.z];
-        let mut cmd = [0.0; MAX_ROWS];
-        for (i, &r) in rows.iter().enumerate() {
-            cmd[i] = r_dot_desired[i] + self.params.feedback_gain * err[r];
-        }
-        self.resolve(model, q, &cmd[..rows.len()], rows, None)?;
-        Ok(self.finish(model, q, dt))
     }
 
     fn check(
@@ -428,17 +462,11 @@ pub fn damped_pinv(
     lambda_max: f64,
     out: &mut [f64],
 ) -> Result<(Option<f64>, f64), Error> {
-    let mut m = [0.0; MAX_ROWS * MAX_ROWS];
-    for i in 0..k {
-        for j in i..k {
-            let s = dot(&a[i * n..(i + 1) * n], &a[j * n..(j + 1) * n]);
-            m[i * k + j] = s;
-            m[j * k + i] = s;
-        }
-    }
-    // σ_min ≥ σ_0 ⟺ AAᵀ − σ_0²I ⪰ 0: one Cholesky attempt instead of an eigenvalue solve.
+    let row = |i: usize, c: usize| a[i * n + c];
+    let mut m = gram(k, n, row);
+    // σ_min ≥ σ_0 ⟺ AAᵀ − σ_0²I ≻ 0: one Cholesky attempt instead of an eigenvalue solve.
     let (sigma_min, lambda2) =
-        if sigma_0 <= 0.0 || positive_definite_shifted(&m, k, sigma_0 * sigma_0) {
+        if sigma_0 <= 0.0 || cholesky(&m, k, sigma_0 * sigma_0, 0.0).is_some() {
             (None, 0.0)
         } else {
             let s = symmetric_min_eigenvalue(&m, k).max(0.0).sqrt();
@@ -451,74 +479,18 @@ pub fn damped_pinv(
     for i in 0..k {
         m[i * k + i] += lambda2;
     }
-    // Cholesky M = LLᵀ (lower, in place), then out = Aᵀ M⁻¹ row by row: solve M x = a_col.
-    let mut l = [0.0; MAX_ROWS * MAX_ROWS];
-    for i in 0..k {
-        for j in 0..=i {
-            let mut s = m[i * k + j];
-            for p in 0..j {
-                s -= l[i * k + p] * l[j * k + p];
-            }
-            if i == j {
-                if s <= 64.0 * f64::EPSILON * scale || !s.is_finite() {
-                    return Err(Error::NotConverged {
-                        what: "pseudo-inverse (singular task Jacobian; enable damping)",
-                        iterations: 0,
-                        residual: sigma_min.unwrap_or(0.0),
-                    });
-                }
-                l[i * k + i] = s.sqrt();
-            } else {
-                l[i * k + j] = s / l[j * k + j];
-            }
-        }
-    }
-    for c in 0..n {
-        // Row c of Aᵀ M⁻¹ = (M⁻¹ A[:, c])ᵀ.
-        let mut x = [0.0; MAX_ROWS];
-        for i in 0..k {
-            let mut s = a[i * n + c];
-            for p in 0..i {
-                s -= l[i * k + p] * x[p];
-            }
-            x[i] = s / l[i * k + i];
-        }
-        for i in (0..k).rev() {
-            let mut s = x[i];
-            for p in i + 1..k {
-                s -= l[p * k + i] * x[p];
-            }
-            x[i] = s / l[i * k + i];
-        }
-        out[c * k..(c + 1) * k].copy_from_slice(&x[..k]);
-    }
+    // M = AAᵀ + λ²I = LLᵀ; row c of Aᵀ M⁻¹ is (M⁻¹ A[:, c])ᵀ.
+    let l = cholesky(&m, k, 0.0, 64.0 * f64::EPSILON * scale).ok_or(Error::NotConverged {
+        what: "pseudo-inverse (singular task Jacobian; enable damping)",
+        iterations: 0,
+        residual: sigma_min.unwrap_or(0.0),
+    })?;
+    solve_columns(&l, k, n, row, out);
     Ok((sigma_min, lambda2.sqrt()))
 }
 
-/// Whether the symmetric k×k matrix `m` − `shift`·I is positive definite (Cholesky succeeds).
-fn positive_definite_shifted(m: &[f64; MAX_ROWS * MAX_ROWS], k: usize, shift: f64) -> bool {
-    let mut l = [0.0; MAX_ROWS * MAX_ROWS];
-    for i in 0..k {
-        for j in 0..=i {
-            let mut s = m[i * k + j] - if i == j { shift } else { 0.0 };
-            for p in 0..j {
-                s -= l[i * k + p] * l[j * k + p];
-            }
-            if i == j {
-                if s.is_nan() || s <= 0.0 {
-                    return false;
-                }
-                l[i * k + i] = s.sqrt();
-            } else {
-                l[i * k + j] = s / l[j * k + j];
-            }
-        }
-    }
-    true
-}
-
 /// Smallest eigenvalue of a symmetric k×k matrix (row-major, k ≤ 6) by cyclic Jacobi.
-fn symmetric_min_eigenvalue(m: &[f64; MAX_ROWS * MAX_ROWS], k: usize) -> f64 {
+fn symmetric_min_eigenvalue(m: &Square, k: usize) -> f64 {
     let mut a = *m;
     for _sweep in 0..30 {
         let mut off = 0.0;

@@ -11,6 +11,7 @@
 //! ([`tomm_gradient`], step [`TOMM_FD_STEP`]) where J_rJ_rᵀ is singular; the JLM gradient is
 //! analytic ([`crate::manipulability::jlm_gradient`]).
 
+use super::spd::{Square, cholesky, gram, psd_determinant, solve_columns};
 use crate::Error;
 use crate::kinematics::{KinData, jacobian};
 use crate::manipulability::{jlm, jlm_gradient};
@@ -47,58 +48,16 @@ pub fn check_rows(rows: &[usize]) -> Result<(), Error> {
     Ok(())
 }
 
-/// Determinant of a symmetric positive semi-definite k×k matrix stored row-major in the first
-/// k² entries of `a` (destroyed), by Gaussian elimination with partial pivoting; clamped ≥ 0.
-pub(crate) fn psd_determinant(a: &mut [f64; MAX_ROWS * MAX_ROWS], k: usize) -> f64 {
-    let mut det = 1.0;
-    for c in 0..k {
-        let mut p = c;
-        for r in c + 1..k {
-            if a[r * k + c].abs() > a[p * k + c].abs() {
-                p = r;
-            }
-        }
-        let pivot = a[p * k + c];
-        if pivot == 0.0 {
-            return 0.0;
-        }
-        if p != c {
-            for j in 0..k {
-                a.swap(c * k + j, p * k + j);
-            }
-            det = -det;
-        }
-        det *= pivot;
-        for r in c + 1..k {
-            let f = a[r * k + c] / pivot;
-            if f != 0.0 {
-                for j in c..k {
-                    a[r * k + j] -= f * a[c * k + j];
-                }
-            }
-        }
-    }
-    det.max(0.0)
-}
-
 /// TOMM √det(J_r J_rᵀ) of the rows `rows` of the Jacobian held in `data` (call
 /// [`jacobian`] first). `rows` must be valid ([`check_rows`]).
 pub fn tomm_of_jacobian(data: &KinData, rows: &[usize]) -> f64 {
+    psd_determinant(&mut task_gram(data, rows), rows.len()).sqrt()
+}
+
+/// M = J_r·J_rᵀ of the rows `rows` of the Jacobian in `data`.
+fn task_gram(data: &KinData, rows: &[usize]) -> Square {
     let j = &data.jacobian;
-    let n = j.ncols();
-    let k = rows.len();
-    let mut g = [0.0; MAX_ROWS * MAX_ROWS];
-    for (a, &ra) in rows.iter().enumerate() {
-        for (b, &rb) in rows.iter().enumerate().skip(a) {
-            let mut s = 0.0;
-            for c in 0..n {
-                s += j[(ra, c)] * j[(rb, c)];
-            }
-            g[a * k + b] = s;
-            g[b * k + a] = s;
-        }
-    }
-    psd_determinant(&mut g, k).sqrt()
+    gram(rows.len(), j.ncols(), |a, c| j[(rows[a], c)])
 }
 
 /// TOMM at `q` (Jun eq. 4): fills `data` with the Jacobian at `q`.
@@ -147,59 +106,17 @@ pub fn tomm_gradient_analytic(
     let j = &data.jacobian;
     let n = j.ncols();
     let k = rows.len();
-    // M = J_r J_rᵀ and its Cholesky factor L; det M = Π L_aa².
-    let mut m = [0.0; MAX_ROWS * MAX_ROWS];
-    for (a, &ra) in rows.iter().enumerate() {
-        for (b, &rb) in rows.iter().enumerate().skip(a) {
-            let mut s = 0.0;
-            for c in 0..n {
-                s += j[(ra, c)] * j[(rb, c)];
-            }
-            m[a * k + b] = s;
-            m[b * k + a] = s;
-        }
-    }
+    // M = J_r J_rᵀ = L·Lᵀ; det M = Π L_aa². Singular (relative to its largest diagonal entry):
+    // TOMM is not differentiable there.
+    let m = task_gram(data, rows);
     let scale = (0..k).map(|i| m[i * k + i]).fold(0.0, f64::max);
-    let mut l = [0.0; MAX_ROWS * MAX_ROWS];
-    let mut det = 1.0;
-    for a in 0..k {
-        for b in 0..=a {
-            let mut s = m[a * k + b];
-            for p in 0..b {
-                s -= l[a * k + p] * l[b * k + p];
-            }
-            if a == b {
-                if s.is_nan() || s <= 1e-10 * scale {
-                    return false;
-                }
-                l[a * k + a] = s.sqrt();
-                det *= s;
-            } else {
-                l[a * k + b] = s / l[b * k + b];
-            }
-        }
-    }
-    let w = det.sqrt();
+    let Some(l) = cholesky(&m, k, 0.0, 1e-10 * scale) else {
+        return false;
+    };
+    let w: f64 = (0..k).map(|a| l[a * k + a]).product();
     // B = M⁻¹ J_r (k×n), column c stored at bm[c·k..].
     let mut bm = [0.0; MAX_ROWS * crate::model::MAX_JOINTS];
-    for c in 0..n {
-        let mut x = [0.0; MAX_ROWS];
-        for a in 0..k {
-            let mut s = j[(rows[a], c)];
-            for p in 0..a {
-                s -= l[a * k + p] * x[p];
-            }
-            x[a] = s / l[a * k + a];
-        }
-        for a in (0..k).rev() {
-            let mut s = x[a];
-            for p in a + 1..k {
-                s -= l[p * k + a] * x[p];
-            }
-            x[a] = s / l[a * k + a];
-        }
-        bm[c * k..(c + 1) * k].copy_from_slice(&x[..k]);
-    }
+    solve_columns(&l, k, n, |a, c| j[(rows[a], c)], &mut bm);
     let axis = |i: usize| -> Vector3<f64> {
         data.joint_frames[i].rotation * model.joints[i].axis.into_inner()
     };

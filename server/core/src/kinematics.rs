@@ -78,7 +78,6 @@ pub fn forward_kinematics(model: &Model, data: &mut KinData, q: &[f64]) {
 }
 
 /// The tool point and the flange pose from the last joint's frame (rotation `r`, origin `p`).
-#[inline(always)]
 fn finish_chain(
     model: &Model,
     mut r: Matrix3<f64>,
@@ -160,7 +159,6 @@ struct Chain6<'a> {
 impl<'a> Chain6<'a> {
     /// `Some` when `model` (with `data` and `q` sized for it) takes the fixed-size path;
     /// `data.jacobian` comes back alongside for [`jacobian`] to fill.
-    #[inline(always)]
     fn of(
         model: &'a Model,
         data: &'a mut KinData,
@@ -188,7 +186,6 @@ impl<'a> Chain6<'a> {
 
     /// Forward kinematics and the Jacobian (column-major 6×6 into `out`): the same operations
     /// in the same order as [`forward_kinematics`] and [`jacobian`], so the same results.
-    #[inline(always)]
     fn fill(&mut self, model: &Model, out: &mut [f64; 36]) {
         let mut r = Matrix3::identity();
         let mut p = Vector3::zeros();
@@ -197,7 +194,7 @@ impl<'a> Chain6<'a> {
             p += r * joint.origin.translation.vector;
             r = joint.origin_rotation.after(&r);
             // Joint::rotate_frame_sin_cos for the +z axis.
-            let (s, c) = crate::trig::sin_cos(self.q[k] + joint.offset);
+            let (s, c) = (self.q[k] + joint.offset).sin_cos();
             r = turn_about_z(&r, s, c);
             self.sin_cos[k] = (s, c);
             self.frames[k] =
@@ -352,11 +349,7 @@ mod tests {
                 for (k, (&(s, c), joint)) in
                     general.joint_sin_cos.iter().zip(&model.joints).enumerate()
                 {
-                    assert_eq!(
-                        (s, c),
-                        crate::trig::sin_cos(q[k] + joint.offset),
-                        "{what} joint {k}"
-                    );
+                    assert_eq!((s, c), (q[k] + joint.offset).sin_cos(), "{what} joint {k}");
                 }
             }
         }
@@ -398,7 +391,7 @@ mod tests {
                     general.joint_sin_cos.iter().zip(&model.joints).enumerate()
                 {
                     let expect = match joint.kind {
-                        JointKind::Revolute => crate::trig::sin_cos(q[k] + joint.offset),
+                        JointKind::Revolute => (q[k] + joint.offset).sin_cos(),
                         JointKind::Prismatic => (0.0, 1.0),
                     };
                     assert_eq!((s, c), expect, "{} joint {k}", model.name);

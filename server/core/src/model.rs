@@ -50,7 +50,6 @@ pub struct Joint {
 
 /// `r`·R_z(v) given s = sin v, c = cos v: only the first two columns change, to
 /// c·r₀ + s·r₁ and c·r₁ − s·r₀.
-#[inline(always)]
 pub(crate) fn turn_about_z(r: &Matrix3<f64>, s: f64, c: f64) -> Matrix3<f64> {
     let (c0, c1) = (r.column(0).into_owned(), r.column(1).into_owned());
     let mut out = *r;
@@ -77,14 +76,14 @@ impl Joint {
         let a = self.axis.into_inner();
         if a.x == 0.0 && a.y == 0.0 {
             let sign = a.z.signum();
-            let (s, c) = crate::trig::sin_cos(v * sign);
+            let (s, c) = (v * sign).sin_cos();
             // sin is odd, so s·sign is sin v exactly (−z axis: the frame turned by −v).
             (turn_about_z(r, s, c), (s * sign, c))
         } else {
             // Not produced by any DH convention: the extra sin_cos is of no concern here.
             (
                 r * Rotation3::from_axis_angle(&self.axis, v).matrix(),
-                crate::trig::sin_cos(v),
+                v.sin_cos(),
             )
         }
     }
@@ -309,7 +308,6 @@ impl FixedRotation {
     }
 
     /// R·M.
-    #[inline(always)]
     pub fn after(&self, r: &Matrix3<f64>) -> Matrix3<f64> {
         match self {
             FixedRotation::Identity => *r,

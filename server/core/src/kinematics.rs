@@ -19,8 +19,8 @@ pub struct KinData {
     pub joint_frames: Vec<IsometryMatrix3<f64>>,
     /// (sin v, cos v) per joint of the angle v = q + offset (DH θ included) a revolute joint
     /// turns by about its axis; (0, 1) for a prismatic joint, which turns by nothing.
-    /// Forward kinematics computes them anyway; the built-in models have θ = 0, so there they
-    /// are sin q and cos q (what cylinder linkages need) without a second `sin_cos`.
+    /// Forward kinematics computes them anyway and keeps them for callers that want the
+    /// joint's trigonometry without a second `sin_cos`.
     pub joint_sin_cos: Vec<(f64, f64)>,
     /// Pose of the last link frame (flange), base frame.
     pub flange: Isometry3<f64>,

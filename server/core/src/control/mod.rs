@@ -9,6 +9,10 @@
 //!   controller regulates the object pose, sends each arm the grasp-point twist of the desired
 //!   object motion (Wⁱᵀ, equal sharing) and an admittance term that backs each arm off its
 //!   share of the internal wrench ((I − W⁺W)F_c), so internal force stays low.
+//! * Cartesian teleoperation ([`teleop`]): an end-effector speed command to the joint-velocity
+//!   reference the servo follows.
+
+pub mod teleop;
 
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion, Vector3, Vector6};
 

@@ -295,54 +295,7 @@ impl Simulation {
     /// Builds a simulation of `left` and `right` (6-joint revolute models) with `params`, at its
     /// reset state.
     pub fn new(left: Model, right: Model, params: SimParams) -> Result<Simulation, Error> {
-        for m in [&left, &right] {
-            if m.dof() != N_ACT {
-                return Err(Error::InvalidModel {
-                    reason: format!(
-                        "the simulation needs 6-joint arms, {} has {}",
-                        m.name,
-                        m.dof()
-                    ),
-                });
-            }
-        }
-        for (i, a) in params.arms.iter().enumerate() {
-            if a.inertials.links.len() != N_ACT {
-                return Err(Error::InvalidParameter {
-                    what: "inertials",
-                    reason: format!("arm {i} needs 6 links"),
-                });
-            }
-            if a.inertials
-                .links
-                .iter()
-                .any(|l| l.mass_kg.is_nan() || l.mass_kg <= 0.0 || !l.mass_kg.is_finite())
-            {
-                return Err(Error::InvalidParameter {
-                    what: "inertials",
-                    reason: "masses must be finite and > 0".into(),
-                });
-            }
-            if a.initial_q.iter().any(|v| !v.is_finite()) {
-                return Err(Error::NonFinite {
-                    what: "initial_q",
-                    index: i,
-                });
-            }
-        }
-        let s = &params.step;
-        if !(s.dt_s > 0.0 && s.dt_s <= 0.01) || s.substeps == 0 || s.substeps > 1000 {
-            return Err(Error::InvalidParameter {
-                what: "step",
-                reason: "dt_s in (0, 0.01] and 1..=1000 substeps".into(),
-            });
-        }
-        if params.object.mass_kg.is_nan() || params.object.mass_kg <= 0.0 {
-            return Err(Error::InvalidParameter {
-                what: "object",
-                reason: "mass must be > 0".into(),
-            });
-        }
+        params.check(&left, &right)?;
         let work = [
             ArmWork {
                 kin: KinData::new(&left),

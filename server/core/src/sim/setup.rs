@@ -1,5 +1,6 @@
-//! The case-study setup of Lim §4.2–4.3: where the two Magnum arms, the seabed and the 50 kg
-//! box are ([`SimParams::case_study`]), and the arms' reset posture.
+//! Setting a simulation up: the checks on its parameters ([`SimParams::check`]) and the
+//! case-study setup of Lim §4.2–4.3 — where the two Magnum arms, the seabed and the 50 kg box
+//! are ([`SimParams::case_study`]), and the arms' reset posture.
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
@@ -25,6 +26,61 @@ pub const INITIAL_Q: [f64; N_ACT] = [0.0, 30.0 * DEG, -70.0 * DEG, -20.0 * DEG, 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 
 impl SimParams {
+    /// What [`super::Simulation::new`] requires of `left`, `right` and these parameters:
+    /// 6-joint arms with 6 links of finite positive mass, finite initial angles, a step in
+    /// (0, 10 ms] with 1..=1000 sub-steps, a positive object mass.
+    pub fn check(&self, left: &Model, right: &Model) -> Result<(), Error> {
+        for m in [&left, &right] {
+            if m.dof() != N_ACT {
+                return Err(Error::InvalidModel {
+                    reason: format!(
+                        "the simulation needs 6-joint arms, {} has {}",
+                        m.name,
+                        m.dof()
+                    ),
+                });
+            }
+        }
+        for (i, a) in self.arms.iter().enumerate() {
+            if a.inertials.links.len() != N_ACT {
+                return Err(Error::InvalidParameter {
+                    what: "inertials",
+                    reason: format!("arm {i} needs 6 links"),
+                });
+            }
+            if a.inertials
+                .links
+                .iter()
+                .any(|l| l.mass_kg.is_nan() || l.mass_kg <= 0.0 || !l.mass_kg.is_finite())
+            {
+                return Err(Error::InvalidParameter {
+                    what: "inertials",
+                    reason: "masses must be finite and > 0".into(),
+                });
+            }
+            if a.initial_q.iter().any(|v| !v.is_finite()) {
+                return Err(Error::NonFinite {
+                    what: "initial_q",
+                    index: i,
+                });
+            }
+        }
+        let s = &self.step;
+        if !(s.dt_s > 0.0 && s.dt_s <= 0.01) || s.substeps == 0 || s.substeps > 1000 {
+            return Err(Error::InvalidParameter {
+                what: "step",
+                reason: "dt_s in (0, 0.01] and 1..=1000 substeps".into(),
+            });
+        }
+        if self.object.mass_kg.is_nan() || self.object.mass_kg <= 0.0 {
+            return Err(Error::InvalidParameter {
+                what: "object",
+                reason: "mass must be > 0".into(),
+            });
+        }
+        Ok(())
+    }
+
     /// The case-study setup: two Magnum arms ([`HydraulicParams::magnum`], [`Inertials::magnum`]),
     /// bases per [`LEFT_BASE_Y_M`], the 50 kg box at [`OBJECT_XY_M`] on the seabed at
     /// [`SEABED_Z_M`], default step and control parameters.

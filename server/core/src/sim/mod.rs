@@ -41,14 +41,14 @@
 //! * Valves are ideal critically lapped spools with instantaneous response (Lim eq. 3.51);
 //!   no valve leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
 //! * Buoyancy (optional) uses the mean link density; drag is an optional quadratic joint term.
-
 //!
 //! # Layout
 //! * here: parameters, inputs, state and the [`Simulation`] with its public API;
 //! * `pipeline.rs`: the step as a list of named stages ([`Simulation::step`]);
 //! * `arm.rs`, `object.rs`, `constraint.rs`: the stages' per-arm, object and grasp-constraint
 //!   parts;
-//! * `setup.rs`: the case-study setup ([`SimParams::case_study`] and its constants);
+//! * `setup.rs`: parameter checks ([`SimParams::check`]) and the case-study setup
+//!   ([`SimParams::case_study`] and its constants);
 //! * `scenario.rs`, `sci.rs`: scripted scenarios and their CSV output.
 
 mod arm;

@@ -189,7 +189,7 @@ impl DynData {
     }
 }
 
-/// Skew-symmetric cross-product matrix [v]×.
+/// Skew-symmetric cross-product matrix \[v\]×.
 pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }

@@ -23,7 +23,7 @@
 //!    same (H + hD + h²K) matrix, so the closed chain stays consistent at a limit;
 //! 5. seabed contact: the corner dashpots (normal damping and the regularized friction) are
 //!    treated implicitly through the object's mass matrix, M̃ = M_o + h·C
-//!    ([`grasp::seabed_contact`]), because a box touching on one corner has an effective mass
+//!    ([`crate::grasp::seabed_contact`]), because a box touching on one corner has an effective mass
 //!    of a few kg there and an explicit 2·10⁴ N·s/m dashpot would inject energy; the corner
 //!    springs stay explicit (k·h²/m_eff ≈ 0.3).
 //!

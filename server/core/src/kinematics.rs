@@ -17,11 +17,6 @@ pub struct KinData {
     /// for every DH convention; its origin lies on the axis). Rotations are matrices: the
     /// dynamics and the Jacobian read axes and rotate inertias with them directly.
     pub joint_frames: Vec<IsometryMatrix3<f64>>,
-    /// (sin v, cos v) per joint of the angle v = q + offset (DH θ included) a revolute joint
-    /// turns by about its axis; (0, 1) for a prismatic joint, which turns by nothing.
-    /// Forward kinematics computes them anyway; the built-in models have θ = 0, so there they
-    /// are sin q and cos q (what cylinder linkages need) without a second `sin_cos`.
-    pub joint_sin_cos: Vec<(f64, f64)>,
     /// Pose of the last link frame (flange), base frame.
     pub flange: Isometry3<f64>,
     /// Tool point (the Jacobian's reference point), base frame (m).
@@ -37,7 +32,6 @@ impl KinData {
         let n = model.dof();
         KinData {
             joint_frames: vec![IsometryMatrix3::identity(); n],
-            joint_sin_cos: vec![(0.0, 1.0); n],
             flange: Isometry3::identity(),
             tool_point: Vector3::zeros(),
             jacobian: DMatrix::zeros(6, n),
@@ -56,20 +50,13 @@ pub fn forward_kinematics(model: &Model, data: &mut KinData, q: &[f64]) {
     // Rotation matrix and origin of the current frame, composed joint by joint.
     let mut r = Matrix3::identity();
     let mut p = Vector3::zeros();
-    for (((joint, frame), sc), &qi) in model
-        .joints
-        .iter()
-        .zip(data.joint_frames.iter_mut())
-        .zip(data.joint_sin_cos.iter_mut())
-        .zip(q)
-    {
+    for ((joint, frame), &qi) in model.joints.iter().zip(data.joint_frames.iter_mut()).zip(q) {
         p += r * joint.origin.translation.vector;
         r = joint.origin_rotation.after(&r);
         match joint.kind {
-            JointKind::Revolute => (r, *sc) = joint.rotate_frame_sin_cos(&r, qi),
+            JointKind::Revolute => r = joint.rotate_frame(&r, qi),
             JointKind::Prismatic => {
                 p += r * (joint.axis.into_inner() * (qi + joint.offset));
-                *sc = (0.0, 1.0);
             }
         }
         *frame = IsometryMatrix3::from_parts(p.into(), Rotation3::from_matrix_unchecked(r));
@@ -78,7 +65,6 @@ pub fn forward_kinematics(model: &Model, data: &mut KinData, q: &[f64]) {
 }
 
 /// The tool point and the flange pose from the last joint's frame (rotation `r`, origin `p`).
-#[inline(always)]
 fn finish_chain(
     model: &Model,
     mut r: Matrix3<f64>,
@@ -123,8 +109,8 @@ fn jacobian_general(model: &Model, data: &mut KinData, q: &[f64]) {
 
 /// [`jacobian`] for a six-joint model with the Jacobian written to `j` instead of
 /// `data.jacobian` (left untouched): what the 1 kHz simulation step needs, without the
-/// dynamic matrix and the copy out of it. Joint frames, sine/cosines, flange and tool point
-/// are filled as by [`forward_kinematics`]. Six revolute joints about +z (every DH model)
+/// dynamic matrix and the copy out of it. Joint frames, flange and tool point are filled as
+/// by [`forward_kinematics`]. Six revolute joints about +z (every DH model)
 /// take a fixed-size path; anything else gives the same result through the general one
 /// (which then also fills `data.jacobian`).
 ///
@@ -152,7 +138,6 @@ struct Chain6<'a> {
     joints: &'a [Joint; 6],
     q: &'a [f64; 6],
     frames: &'a mut [IsometryMatrix3<f64>; 6],
-    sin_cos: &'a mut [(f64, f64); 6],
     flange: &'a mut Isometry3<f64>,
     tool_point: &'a mut Vector3<f64>,
 }
@@ -160,7 +145,6 @@ struct Chain6<'a> {
 impl<'a> Chain6<'a> {
     /// `Some` when `model` (with `data` and `q` sized for it) takes the fixed-size path;
     /// `data.jacobian` comes back alongside for [`jacobian`] to fill.
-    #[inline(always)]
     fn of(
         model: &'a Model,
         data: &'a mut KinData,
@@ -179,7 +163,6 @@ impl<'a> Chain6<'a> {
             joints,
             q: q.try_into().ok()?,
             frames: data.joint_frames.as_mut_slice().try_into().ok()?,
-            sin_cos: data.joint_sin_cos.as_mut_slice().try_into().ok()?,
             flange: &mut data.flange,
             tool_point: &mut data.tool_point,
         };
@@ -188,7 +171,6 @@ impl<'a> Chain6<'a> {
 
     /// Forward kinematics and the Jacobian (column-major 6×6 into `out`): the same operations
     /// in the same order as [`forward_kinematics`] and [`jacobian`], so the same results.
-    #[inline(always)]
     fn fill(&mut self, model: &Model, out: &mut [f64; 36]) {
         let mut r = Matrix3::identity();
         let mut p = Vector3::zeros();
@@ -196,10 +178,9 @@ impl<'a> Chain6<'a> {
             let joint = &self.joints[k];
             p += r * joint.origin.translation.vector;
             r = joint.origin_rotation.after(&r);
-            // Joint::rotate_frame_sin_cos for the +z axis.
-            let (s, c) = crate::trig::sin_cos(self.q[k] + joint.offset);
+            // Joint::rotate_frame for the +z axis.
+            let (s, c) = (self.q[k] + joint.offset).sin_cos();
             r = turn_about_z(&r, s, c);
-            self.sin_cos[k] = (s, c);
             self.frames[k] =
                 IsometryMatrix3::from_parts(p.into(), Rotation3::from_matrix_unchecked(r));
         }
@@ -286,7 +267,6 @@ mod tests {
             );
             assert_eq!(fa.translation, fb.translation, "{what} frame {k}");
         }
-        assert_eq!(a.joint_sin_cos, b.joint_sin_cos, "{what}");
         assert_eq!(a.tool_point, b.tool_point, "{what}");
         assert_eq!(a.flange.translation, b.flange.translation, "{what}");
         assert_eq!(a.flange.rotation, b.flange.rotation, "{what}");
@@ -348,24 +328,13 @@ mod tests {
                 assert_eq!(direct.jacobian, DMatrix::zeros(6, 6), "{what}");
                 direct.jacobian = general.jacobian.clone();
                 assert_same(&direct, &general, &what);
-
-                for (k, (&(s, c), joint)) in
-                    general.joint_sin_cos.iter().zip(&model.joints).enumerate()
-                {
-                    assert_eq!(
-                        (s, c),
-                        crate::trig::sin_cos(q[k] + joint.offset),
-                        "{what} joint {k}"
-                    );
-                }
             }
         }
         assert!(models >= 3, "too few six-joint models tested");
     }
 
     /// Six-joint chains the fixed-size path does not take (a prismatic joint, a −z axis)
-    /// still give [`jacobian`]'s results through [`jacobian6`], and their sine/cosines keep
-    /// their meaning.
+    /// still give [`jacobian`]'s results through [`jacobian6`].
     #[test]
     fn jacobian6_falls_back_for_other_chains() {
         let spec = r#"{"name":"p","dh":"standard","joints":[
@@ -394,15 +363,6 @@ mod tests {
                     DMatrix::from_column_slice(6, 6, j6.as_slice()),
                     general.jacobian
                 );
-                for (k, (&(s, c), joint)) in
-                    general.joint_sin_cos.iter().zip(&model.joints).enumerate()
-                {
-                    let expect = match joint.kind {
-                        JointKind::Revolute => crate::trig::sin_cos(q[k] + joint.offset),
-                        JointKind::Prismatic => (0.0, 1.0),
-                    };
-                    assert_eq!((s, c), expect, "{} joint {k}", model.name);
-                }
             }
         }
     }

@@ -1,7 +1,7 @@
 //! seaarms-core: the pure simulation core of the seaarms training simulator.
 //!
-//! No I/O, no clock, no async: kinematics, manipulability, (later) dynamics, hydraulics,
-//! grasp and control, as free functions over a fixed [`model::Model`] and preallocated data.
+//! No I/O, no clock, no async: kinematics, manipulability, dynamics, hydraulics, grasp and
+//! control, as free functions over a fixed [`model::Model`] and preallocated data.
 //!
 //! # Layout
 //! * [`analysis`]: one-call analysis of a posture (what the HTTP API returns).
@@ -11,7 +11,7 @@
 //! * [`ik`]: Magnum closed-form IK (Lim eqs 3.10–3.19) and damped-least-squares IK.
 //! * [`manipulability`]: ellipsoid measures, JLM, dual-arm ellipsoid, velocity polytopes.
 //! * [`dynamics`]: link inertials, RNEA, CRBA, tool bias acceleration (Lim eq. 3.38).
-//! * [`linalg`]: fixed-size Cholesky for the step's small SPD systems.
+//! * [`linalg`]: fixed-size LDLᵀ factorization for the step's small SPD systems.
 //! * [`hydraulics`]: valves, cylinders, relief, linkage Ĵ(q), Magnum sizing (Lim eqs 3.48–3.56).
 //! * [`grasp`]: the object, seabed contact, grasp matrices W, W⁺, V, grasp state (Lim eqs 3.39–3.47).
 //! * [`control`]: open loop, joint-velocity servo, closed-loop cooperative control.
@@ -19,7 +19,6 @@
 //! * [`optimize`]: TOMM/JLM objective and gradients; optimal posture by multi-start SLSQP (Jun §3).
 //! * [`redundancy`]: task-oriented redundancy resolution, task priority, damping, velocity
 //!   limits, feedback form (Jun eqs 19–24, Kilic eqs 0.2–0.10); allocation-free steps.
-//! * [`trig`]: inline sin/cos for the step's joint angles (fdlibm kernels), within 1 ulp.
 //! * [`studies`]: Lim §4.3 manipulability case studies (single and dual arm) as rows, and a
 //!   workspace map of translational measures.
 
@@ -41,7 +40,12 @@ pub mod optimize;
 pub mod redundancy;
 pub mod robots;
 pub mod studies;
-pub mod trig;
 
 pub use error::Error;
 pub use model::{Joint, JointKind, Model, ModelSpec};
+
+/// `x` if it is finite, else `default`: the validation rule for numbers from outside (inputs,
+/// fault settings) that must not reach the physics as NaN or ±∞.
+pub(crate) fn finite_or(x: f64, default: f64) -> f64 {
+    if x.is_finite() { x } else { default }
+}

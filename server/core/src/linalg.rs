@@ -1,60 +1,17 @@
-//! Small dense factorizations for the 1 kHz step: a fixed-size factor of a symmetric
-//! positive definite N×N matrix (the arms' 6×6 mass matrices, the 12×12 grasp constraint
-//! matrix) kept in plain arrays, so that factor and solves compile to straight-line loops
-//! without the generic machinery of a library decomposition.
+//! Small dense factorizations for the 1 kHz step: [`Ldlt`], a fixed-size LDLᵀ factor of a
+//! symmetric positive definite N×N matrix (the arms' 6×6 mass matrices, the DLS matrix
+//! JJᵀ + λ²I of the cooperative controller, the 6×6 blocks of the grasp constraint system),
+//! and [`BlockLdlt`], the same factor of a 2B×2B matrix built from B×B blocks.
+//!
+//! Hand-written rather than nalgebra's `Cholesky` because the step needs what that type does
+//! not offer: the half solves with the Cholesky factor (Z = L̃⁻¹Jᵀ, so J·H̃⁻¹·Jᵀ = ZᵀZ), the
+//! explicit inverse from the factor, the two-block factor, and a refusal (`None`) for a
+//! non-finite pivot as well as a non-positive one. It is the only LDLᵀ in the crate.
 
 // Triangular loops index several arrays by the same counters; iterators would hide that.
 #![allow(clippy::needless_range_loop)]
 
-use std::ops::{Add, AddAssign, Div, Mul, Neg, Sub};
-
 use nalgebra::{SMatrix, SVector};
-
-/// One number for each of the simulation's two arms (arm 0 in lane 0, arm 1 in lane 1), for
-/// code that runs both arms in lockstep (`dynamics::step_terms_pair`, `control::dls_pair`):
-/// element-wise operations that LLVM packs into one SSE2 instruction each. Each lane rounds
-/// exactly as the scalar operation would.
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
-pub(crate) struct Pair(pub(crate) [f64; 2]);
-
-impl Pair {
-    /// Both lanes `x`.
-    #[inline(always)]
-    pub(crate) fn splat(x: f64) -> Pair {
-        Pair([x, x])
-    }
-}
-
-macro_rules! pair_op {
-    ($tr:ident, $f:ident, $op:tt) => {
-        impl $tr for Pair {
-            type Output = Pair;
-            #[inline(always)]
-            fn $f(self, o: Pair) -> Pair {
-                Pair([self.0[0] $op o.0[0], self.0[1] $op o.0[1]])
-            }
-        }
-    };
-}
-pair_op!(Add, add, +);
-pair_op!(Sub, sub, -);
-pair_op!(Mul, mul, *);
-pair_op!(Div, div, /);
-
-impl Neg for Pair {
-    type Output = Pair;
-    #[inline(always)]
-    fn neg(self) -> Pair {
-        Pair([-self.0[0], -self.0[1]])
-    }
-}
-
-impl AddAssign for Pair {
-    #[inline(always)]
-    fn add_assign(&mut self, o: Pair) {
-        *self = *self + o;
-    }
-}
 
 /// A = L·D·Lᵀ with L unit lower triangular and D diagonal positive, i.e. the Cholesky
 /// factorization A = L̃·L̃ᵀ with L̃ = L·D^½ (Golub & Van Loan, Matrix Computations, 4th ed.,
@@ -62,11 +19,11 @@ impl AddAssign for Pair {
 ///
 /// The LDLᵀ recurrence is used instead of the square-root form because it keeps the square
 /// root off the critical path: each row waits only for one division (1/D of the row
-/// before), and the √D_j needed by the half solves ([`Cholesky::forward`], [`Cholesky::backward`])
+/// before), and the √D_j needed by the half solves ([`Ldlt::forward`], [`Ldlt::backward`])
 /// are computed independently of the recurrence. Rows are built left to right (Crout
 /// order), so a row depends on the rows above it only.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Cholesky<const N: usize> {
+pub struct Ldlt<const N: usize> {
     /// Row-major strictly lower part of the unit lower triangular L (the diagonal is 1 and
     /// is not stored; entries on and above it are zero and never read).
     l: [[f64; N]; N],
@@ -76,18 +33,18 @@ pub struct Cholesky<const N: usize> {
     inv_sqrt_d: [f64; N],
 }
 
-impl<const N: usize> Cholesky<N> {
+impl<const N: usize> Ldlt<N> {
     /// Factors `a` (only its lower triangle is read). `None` unless every pivot D_j is
     /// positive and finite, i.e. unless `a` is numerically positive definite.
     pub fn factor(a: &SMatrix<f64, N, N>) -> Option<Self> {
         // Built inside the `Option` it is returned in, so the factor is written once, in
         // place (a `Self` moved into `Some` at the end costs a copy of its N² + 2N numbers).
-        let mut out = Some(Cholesky {
+        let mut out = Some(Ldlt {
             l: [[0.0; N]; N],
             inv_d: [0.0; N],
             inv_sqrt_d: [0.0; N],
         });
-        let Some(Cholesky {
+        let Some(Ldlt {
             l,
             inv_d,
             inv_sqrt_d,
@@ -247,17 +204,17 @@ pub fn gram_lower<const N: usize>(z: &SMatrix<f64, N, N>) -> SMatrix<f64, N, N> 
 /// The Cholesky factor of a symmetric positive definite 2B×2B matrix given by its lower
 /// blocks, [[A₀₀, A₁₀ᵀ], [A₁₀, A₁₁]] = L̃·L̃ᵀ with L̃ = [[L̃₀₀, 0], [L̃₁₀, L̃₁₁]] (block
 /// Cholesky, Golub & Van Loan §4.2.9): L̃₀₀ = chol(A₀₀), W = L̃₁₀ᵀ = L̃₀₀⁻¹·A₁₀ᵀ,
-/// L̃₁₁ = chol(A₁₁ − WᵀW). The same factor as [`Cholesky`] of the whole matrix, computed
+/// L̃₁₁ = chol(A₁₁ − WᵀW). The same factor as [`Ldlt`] of the whole matrix, computed
 /// from fixed B×B pieces whose loops unroll (the grasp constraint system of two arms).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BlockCholesky<const B: usize> {
-    l00: Cholesky<B>,
+pub struct BlockLdlt<const B: usize> {
+    l00: Ldlt<B>,
     /// W = L̃₁₀ᵀ.
     w: SMatrix<f64, B, B>,
-    l11: Cholesky<B>,
+    l11: Ldlt<B>,
 }
 
-impl<const B: usize> BlockCholesky<B> {
+impl<const B: usize> BlockLdlt<B> {
     /// Factors the matrix with lower blocks `a00`, `a10`, `a11` (only the lower triangles of
     /// the diagonal blocks are read). `None` unless it is numerically positive definite.
     pub fn factor(
@@ -265,12 +222,12 @@ impl<const B: usize> BlockCholesky<B> {
         a10: &SMatrix<f64, B, B>,
         a11: &SMatrix<f64, B, B>,
     ) -> Option<Self> {
-        let l00 = Cholesky::factor(a00)?;
+        let l00 = Ldlt::factor(a00)?;
         let w = l00.forward_columns(&a10.transpose());
         // Schur complement A₁₁ − WᵀW, lower triangle only.
         let s = a11 - gram_lower(&w);
-        let l11 = Cholesky::factor(&s)?;
-        Some(BlockCholesky { l00, w, l11 })
+        let l11 = Ldlt::factor(&s)?;
+        Some(BlockLdlt { l00, w, l11 })
     }
 
     /// (x₀, x₁) with A·[x₀; x₁] = [b₀; b₁]: y₀ = L̃₀₀⁻¹b₀, y₁ = L̃₁₁⁻¹(b₁ − Wᵀy₀),
@@ -328,7 +285,7 @@ mod tests {
     fn agrees_with_nalgebra_and_solves() {
         for seed in 1..50 {
             let a: Matrix6<f64> = spd(seed, 1e-3);
-            let ours = Cholesky::factor(&a).expect("SPD");
+            let ours = Ldlt::factor(&a).expect("SPD");
             let theirs = a.cholesky().expect("SPD");
             let l = theirs.l();
             for i in 0..6 {
@@ -358,7 +315,7 @@ mod tests {
             assert!((ours.backward(&ours.forward(&b)) - x).norm() < 1e-12 * x.norm());
             let a12: SMatrix<f64, 12, 12> = spd(seed + 100, 1e-6);
             let b12 = SVector::<f64, 12>::from_fn(|i, _| (i as f64).cos());
-            let x12 = Cholesky::factor(&a12).expect("SPD").solve(&b12);
+            let x12 = Ldlt::factor(&a12).expect("SPD").solve(&b12);
             let x12_ref = a12.cholesky().expect("SPD").solve(&b12);
             assert!((x12 - x12_ref).norm() < 1e-8 * x12_ref.norm());
         }
@@ -371,7 +328,7 @@ mod tests {
         for seed in 1..60 {
             for delta in [1.0, 1e-3, 1e-6] {
                 let a: Matrix6<f64> = spd(seed + 500, delta);
-                let ours = Cholesky::factor(&a).expect("SPD").inverse();
+                let ours = Ldlt::factor(&a).expect("SPD").inverse();
                 let theirs = a.try_inverse().expect("invertible");
                 assert!(
                     (ours - theirs).norm() <= 1e-10 * theirs.norm() * (1.0 + 1.0 / delta),
@@ -381,13 +338,13 @@ mod tests {
                 assert!((a * ours - Matrix6::identity()).norm() < 1e-12 / delta);
             }
             let a12: SMatrix<f64, 12, 12> = spd(seed + 700, 1e-2);
-            let inv12 = Cholesky::factor(&a12).expect("SPD").inverse();
+            let inv12 = Ldlt::factor(&a12).expect("SPD").inverse();
             let ref12 = a12.try_inverse().expect("invertible");
             assert!((inv12 - ref12).norm() < 1e-10 * ref12.norm());
         }
         // N = 1: 1/a.
         let one = SMatrix::<f64, 1, 1>::new(4.0);
-        assert_eq!(Cholesky::factor(&one).expect("SPD").inverse()[(0, 0)], 0.25);
+        assert_eq!(Ldlt::factor(&one).expect("SPD").inverse()[(0, 0)], 0.25);
     }
 
     /// The block factor solves the same systems as the whole-matrix factor (and nalgebra's
@@ -399,13 +356,13 @@ mod tests {
             let a00: Matrix6<f64> = a.fixed_view::<6, 6>(0, 0).into_owned();
             let a10: Matrix6<f64> = a.fixed_view::<6, 6>(6, 0).into_owned();
             let a11: Matrix6<f64> = a.fixed_view::<6, 6>(6, 6).into_owned();
-            let blk = BlockCholesky::factor(&a00, &a10, &a11).expect("SPD");
+            let blk = BlockLdlt::factor(&a00, &a10, &a11).expect("SPD");
             let b = SVector::<f64, 12>::from_fn(|i, _| (i as f64 * 0.7).sin() + 0.1);
             let b0: Vector6<f64> = b.fixed_rows::<6>(0).into_owned();
             let b1: Vector6<f64> = b.fixed_rows::<6>(6).into_owned();
             let (x0, x1) = blk.solve(&b0, &b1);
             let x_ref = a.cholesky().expect("SPD").solve(&b);
-            let x_whole = Cholesky::factor(&a).expect("SPD").solve(&b);
+            let x_whole = Ldlt::factor(&a).expect("SPD").solve(&b);
             for i in 0..6 {
                 assert!((x0[i] - x_ref[i]).abs() < 1e-9 * x_ref.norm());
                 assert!((x1[i] - x_ref[i + 6]).abs() < 1e-9 * x_ref.norm());
@@ -414,8 +371,8 @@ mod tests {
         }
         // Indefinite in the Schur complement only: A₀₀ = I, A₁₀ = 2I, A₁₁ = I.
         let i6 = Matrix6::<f64>::identity();
-        assert!(BlockCholesky::factor(&i6, &(i6 * 2.0), &i6).is_none());
-        assert!(BlockCholesky::factor(&(i6 * f64::NAN), &i6, &i6).is_none());
+        assert!(BlockLdlt::factor(&i6, &(i6 * 2.0), &i6).is_none());
+        assert!(BlockLdlt::factor(&(i6 * f64::NAN), &i6, &i6).is_none());
     }
 
     /// Indefinite, singular and non-finite matrices are refused, never factored into NaN.
@@ -423,13 +380,13 @@ mod tests {
     fn refuses_non_positive_definite() {
         let mut a = Matrix6::<f64>::identity();
         a[(3, 3)] = -1.0;
-        assert!(Cholesky::factor(&a).is_none());
+        assert!(Ldlt::factor(&a).is_none());
         a[(3, 3)] = 0.0;
-        assert!(Cholesky::factor(&a).is_none());
+        assert!(Ldlt::factor(&a).is_none());
         a[(3, 3)] = f64::NAN;
-        assert!(Cholesky::factor(&a).is_none());
+        assert!(Ldlt::factor(&a).is_none());
         // Rank one: the second pivot vanishes.
         let v = Vector6::new(1.0, 2.0, 3.0, 4.0, 5.0, 6.0);
-        assert!(Cholesky::factor(&(v * v.transpose())).is_none());
+        assert!(Ldlt::factor(&(v * v.transpose())).is_none());
     }
 }

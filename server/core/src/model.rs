@@ -50,7 +50,6 @@ pub struct Joint {
 
 /// `r`·R_z(v) given s = sin v, c = cos v: only the first two columns change, to
 /// c·r₀ + s·r₁ and c·r₁ − s·r₀.
-#[inline(always)]
 pub(crate) fn turn_about_z(r: &Matrix3<f64>, s: f64, c: f64) -> Matrix3<f64> {
     let (c0, c1) = (r.column(0).into_owned(), r.column(1).into_owned());
     let mut out = *r;
@@ -63,29 +62,16 @@ impl Joint {
     /// `r`·R(axis, q + offset): a frame's rotation followed by this revolute joint's motion.
     /// For the z axis of every DH convention only two columns change (c·r₀ + s·r₁,
     /// −s·r₀ + c·r₁), which is what forward kinematics spends its time on.
-    #[inline]
     pub fn rotate_frame(&self, r: &Matrix3<f64>, q: f64) -> Matrix3<f64> {
-        self.rotate_frame_sin_cos(r, q).0
-    }
-
-    /// [`Self::rotate_frame`], also returning (sin v, cos v) of the angle v = q + offset the
-    /// joint turns by about `axis`: forward kinematics needs them anyway, and keeping them
-    /// saves a second `sin_cos` for whoever wants the joint's trigonometry.
-    #[inline]
-    pub fn rotate_frame_sin_cos(&self, r: &Matrix3<f64>, q: f64) -> (Matrix3<f64>, (f64, f64)) {
         let v = q + self.offset;
         let a = self.axis.into_inner();
         if a.x == 0.0 && a.y == 0.0 {
-            let sign = a.z.signum();
-            let (s, c) = crate::trig::sin_cos(v * sign);
-            // sin is odd, so s·sign is sin v exactly (−z axis: the frame turned by −v).
-            (turn_about_z(r, s, c), (s * sign, c))
+            // ±z: the frame turned by ±v.
+            let (s, c) = (v * a.z.signum()).sin_cos();
+            turn_about_z(r, s, c)
         } else {
-            // Not produced by any DH convention: the extra sin_cos is of no concern here.
-            (
-                r * Rotation3::from_axis_angle(&self.axis, v).matrix(),
-                crate::trig::sin_cos(v),
-            )
+            // Not produced by any DH convention.
+            r * Rotation3::from_axis_angle(&self.axis, v).matrix()
         }
     }
 
@@ -309,7 +295,6 @@ impl FixedRotation {
     }
 
     /// R·M.
-    #[inline(always)]
     pub fn after(&self, r: &Matrix3<f64>) -> Matrix3<f64> {
         match self {
             FixedRotation::Identity => *r,

@@ -14,10 +14,11 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
+use seaarms_core::control::teleop::cartesian_to_joint_velocity;
 use seaarms_core::sim::{LEFT, RIGHT};
 
 use super::record::{RecordMsg, RecordSender};
-use super::snapshot::{build_frame, cartesian_to_joint_velocity};
+use super::snapshot::build_frame;
 use super::{Frame, Live, Session};
 use crate::metrics::Metrics;
 use crate::protocol::{ControlMethod, ControlMode, ServerMessage};
@@ -186,7 +187,14 @@ fn apply_control(live: &mut Live, models: &[Arc<seaarms_core::Model>; 2]) {
         }
         live.input.arms[arm].joint_velocity_ref = match live.settings.control_mode {
             ControlMode::Joint => None,
-            ControlMode::Cartesian => Some(cartesian_to_joint_velocity(live, models, arm)),
+            ControlMode::Cartesian => Some(cartesian_to_joint_velocity(
+                &mut live.redundancy[arm],
+                &models[arm],
+                &live.sim.params().arms[arm].base.rotation,
+                &live.sim.arm(arm).q,
+                &live.cartesian[arm],
+                1e-3,
+            )),
         };
     }
 }

@@ -18,9 +18,9 @@ pub const NEAR_SINGULAR_ISOTROPY: f64 = 0.05;
 /// A joint within this fraction of its range from a limit is reported near the limit.
 pub const NEAR_LIMIT_FRACTION: f64 = 0.05;
 /// Cartesian mode: end-effector linear speed at full stick (m/s).
-pub const CARTESIAN_MAX_LINEAR_M_S: f64 = 0.2;
+pub const CARTESIAN_MAX_LINEAR_M_S: f64 = seaarms_core::control::teleop::MAX_LINEAR_SPEED_M_S;
 /// Cartesian mode: end-effector angular speed at full stick (rad/s).
-pub const CARTESIAN_MAX_ANGULAR_RAD_S: f64 = 0.5;
+pub const CARTESIAN_MAX_ANGULAR_RAD_S: f64 = seaarms_core::control::teleop::MAX_ANGULAR_SPEED_RAD_S;
 
 fn ellipsoid(m: &Measures) -> EllipsoidFrame {
     let mut radii = [0.0; 3];
@@ -145,38 +145,4 @@ pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
         warnings,
         faults: live.faults.clone(),
     }
-}
-
-/// Cartesian mode: the stick command (fractions of the maximum end-effector speeds, world
-/// frame) to a joint-velocity reference by task-oriented redundancy resolution (Jun eq. 21):
-/// translational rows when the angular sticks are idle, so the three spare DOF keep the arm
-/// away from joint limits and singularities (P = α·TOMM + (1−α)·JLM rises in the null space);
-/// all six rows otherwise. Damped near singularities; joint-velocity limits respected.
-pub fn cartesian_to_joint_velocity(
-    live: &mut Live,
-    models: &[std::sync::Arc<seaarms_core::Model>; 2],
-    arm: usize,
-) -> [f64; 6] {
-    let cmd = live.cartesian[arm];
-    if cmd.iter().all(|v| *v == 0.0) {
-        return [0.0; 6];
-    }
-    // World → arm base frame (velocities rotate only).
-    let r = live.sim.params().arms[arm].base.rotation.inverse();
-    let lin = r * nalgebra::Vector3::new(cmd[0], cmd[1], cmd[2]) * CARTESIAN_MAX_LINEAR_M_S;
-    let ang = r * nalgebra::Vector3::new(cmd[3], cmd[4], cmd[5]) * CARTESIAN_MAX_ANGULAR_RAD_S;
-    let q = live.sim.arm(arm).q;
-    let full = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
-    let (rows, rdot): (&[usize], &[f64]) = if ang.norm() == 0.0 {
-        (&[0, 1, 2], &full[..3])
-    } else {
-        (&[0, 1, 2, 3, 4, 5], &full[..])
-    };
-    let mut out = [0.0; 6];
-    if let Ok(qd) = live.redundancy[arm].step(&models[arm], &q, rdot, rows, 1e-3) {
-        for (o, v) in out.iter_mut().zip(qd) {
-            *o = if v.is_finite() { *v } else { 0.0 };
-        }
-    }
-    out
 }

@@ -9,14 +9,16 @@
 //!   controller regulates the object pose, sends each arm the grasp-point twist of the desired
 //!   object motion (Wⁱᵀ, equal sharing) and an admittance term that backs each arm off its
 //!   share of the internal wrench ((I − W⁺W)F_c), so internal force stays low.
+//! * Cartesian teleoperation ([`teleop`]): an end-effector speed command to the joint-velocity
+//!   reference the servo follows.
 
-use std::ops::{Add, Div, Mul, Sub};
+pub mod teleop;
 
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
 use crate::grasp::{grasp_point_twist, wrench_at_com};
 use crate::hydraulics::N_ACT;
-use crate::linalg::Pair;
+use crate::linalg::{Ldlt, gram_lower};
 
 /// Controller gains (documented defaults in [`Default`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -88,193 +90,28 @@ pub fn joint_servo(
 /// Damped-least-squares solve q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ for a 6×6 Jacobian (zero if JJᵀ + λ²I is
 /// not numerically positive definite, e.g. for a non-finite J).
 pub fn dls(j: &Matrix6<f64>, xd: &Vector6<f64>, lambda: f64) -> Vector6<f64> {
-    let jl: [[f64; 6]; 6] = core::array::from_fn(|r| core::array::from_fn(|c| j[(r, c)]));
-    let (q, d) = dls_lanes(&jl, &(*xd).into(), lambda * lambda);
-    if pivots_ok(d) {
-        Vector6::from(q)
-    } else {
-        Vector6::zeros()
+    // JJᵀ = ZᵀZ with Z = Jᵀ; the factorization reads the lower triangle only.
+    let a = gram_lower(&j.transpose()) + Matrix6::identity() * (lambda * lambda);
+    match Ldlt::factor(&a) {
+        Some(f) => j.tr_mul(&f.solve(xd)),
+        None => Vector6::zeros(),
     }
 }
 
-/// [`dls`] for both arms at once: the same operations on each arm, packed in pairs (arm 0 in
-/// lane 0, arm 1 in lane 1) so that the compiler issues one SSE2 instruction for both arms.
-/// Each lane equals [`dls`] of its arm bit for bit (the operations and their order are the
-/// same, and a packed IEEE operation rounds each lane as the scalar one).
-pub fn dls_pair(j: [&Matrix6<f64>; 2], xd: [&Vector6<f64>; 2], lambda: f64) -> [Vector6<f64>; 2] {
-    let jl: [[Pair; 6]; 6] =
-        core::array::from_fn(|r| core::array::from_fn(|c| Pair([j[0][(r, c)], j[1][(r, c)]])));
-    let xl: [Pair; 6] = core::array::from_fn(|k| Pair([xd[0][k], xd[1][k]]));
-    let (q, d) = dls_lanes(&jl, &xl, Pair::splat(lambda * lambda));
-    unpack_checked(&q, &d)
-}
-
-/// Each lane of `q` as a vector, or zero if that lane's pivots fail [`pivots_ok`].
-///
-/// Not inlined on purpose: the call makes q̇ and D complete pairs first. Inlined, the per-lane
-/// choice let LLVM move each lane's remaining work into its own branch and split the pairs,
-/// computing much of the solve in scalar code (measured with callgrind: ~250 instructions
-/// more per call than the call costs).
-#[inline(never)]
-fn unpack_checked(q: &[Pair; 6], d: &[Pair; 6]) -> [Vector6<f64>; 2] {
-    let mut out = [Vector6::zeros(); 2];
-    for (lane, o) in out.iter_mut().enumerate() {
-        if pivots_ok(core::array::from_fn(|k| d[k].0[lane])) {
-            for k in 0..6 {
-                o[k] = q[k].0[lane];
-            }
-        }
-    }
-    out
-}
-
-/// The verdict of [`Cholesky::factor`](crate::linalg::Cholesky::factor) on the pivots: every
-/// one positive and finite (NaN fails). `&` rather than `&&`: no branches.
-#[inline(always)]
-fn pivots_ok(d: [f64; 6]) -> bool {
-    d.iter()
-        .fold(true, |ok, &d| ok & (d > 0.0) & (d < f64::INFINITY))
-}
-
-/// Arithmetic of one lane of [`dls_lanes`]: `f64` for one arm, [`Pair`] for two.
-trait Lane:
-    Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
-{
-    fn splat(x: f64) -> Self;
-}
-
-impl Lane for f64 {
-    #[inline(always)]
-    fn splat(x: f64) -> f64 {
-        x
-    }
-}
-
-impl Lane for Pair {
-    #[inline(always)]
-    fn splat(x: f64) -> Pair {
-        Pair::splat(x)
-    }
-}
-
-/// The DLS solve on lanes: q̇ = Jᵀ·x with (JJᵀ + λ²I)·x = ẋ, `j` row-major. Returns q̇ and the
-/// LDLᵀ pivots D (the caller rejects a lane whose pivots are not all positive and finite).
-///
-/// A = JJᵀ + λ²I (lower triangle) by row dot products, each accumulated in one register;
-/// then A = L·D·Lᵀ in Crout order and the solve L⁻ᵀ·D⁻¹·L⁻¹·ẋ, the recurrences of
-/// [`Cholesky`](crate::linalg::Cholesky) (Golub & Van Loan, Alg. 4.2.2) without its 1/√D,
-/// which the DLS does not need. The rows are separate const-generic calls so that every loop
-/// has a fixed trip count and unrolls into straight-line code (a triangular loop nest over a
-/// run-time row index is left rolled by LLVM).
-#[inline(always)]
-fn dls_lanes<T: Lane>(j: &[[T; 6]; 6], xd: &[T; 6], lambda_sq: T) -> ([T; 6], [T; 6]) {
-    let zero = T::splat(0.0);
-    let mut a = [[zero; 6]; 6];
-    gram_row::<T, 0>(j, &mut a, lambda_sq);
-    gram_row::<T, 1>(j, &mut a, lambda_sq);
-    gram_row::<T, 2>(j, &mut a, lambda_sq);
-    gram_row::<T, 3>(j, &mut a, lambda_sq);
-    gram_row::<T, 4>(j, &mut a, lambda_sq);
-    gram_row::<T, 5>(j, &mut a, lambda_sq);
-    let mut l = [[zero; 6]; 6];
-    let mut inv_d = [zero; 6];
-    let mut x = *xd;
-    let d = [
-        ldl_row::<T, 0>(&a, &mut l, &mut inv_d, &mut x),
-        ldl_row::<T, 1>(&a, &mut l, &mut inv_d, &mut x),
-        ldl_row::<T, 2>(&a, &mut l, &mut inv_d, &mut x),
-        ldl_row::<T, 3>(&a, &mut l, &mut inv_d, &mut x),
-        ldl_row::<T, 4>(&a, &mut l, &mut inv_d, &mut x),
-        ldl_row::<T, 5>(&a, &mut l, &mut inv_d, &mut x),
-    ];
-    for i in 0..6 {
-        x[i] = x[i] * inv_d[i];
-    }
-    back_row::<T, 5>(&l, &mut x);
-    back_row::<T, 4>(&l, &mut x);
-    back_row::<T, 3>(&l, &mut x);
-    back_row::<T, 2>(&l, &mut x);
-    back_row::<T, 1>(&l, &mut x);
-    back_row::<T, 0>(&l, &mut x);
-    let q = core::array::from_fn(|c| {
-        let mut s = j[0][c] * x[0];
-        for r in 1..6 {
-            s = s + j[r][c] * x[r];
-        }
-        s
-    });
-    (q, d)
-}
-
-/// Row R of the lower triangle of A = JJᵀ + λ²I: A_rc = Σ_k J_rk·J_ck (+ λ² on the diagonal).
-#[allow(clippy::needless_range_loop)] // two rows of `j` indexed by the same k
-#[inline(always)]
-fn gram_row<T: Lane, const R: usize>(j: &[[T; 6]; 6], a: &mut [[T; 6]; 6], lambda_sq: T) {
-    for c in 0..R + 1 {
-        let mut s = j[R][0] * j[c][0];
-        for k in 1..6 {
-            s = s + j[R][k] * j[c][k];
-        }
-        a[R][c] = s;
-    }
-    a[R][R] = a[R][R] + lambda_sq;
-}
-
-/// Row I of A = L·D·Lᵀ (Crout: u_k = L_ik·D_k = a_ik − Σ_m<k u_m·L_km, D_i = a_ii −
-/// Σ_k<i u_k·L_ik), then row I of the forward substitution x ← L⁻¹·x. Returns D_I.
-#[inline(always)]
-fn ldl_row<T: Lane, const I: usize>(
-    a: &[[T; 6]; 6],
-    l: &mut [[T; 6]; 6],
-    inv_d: &mut [T; 6],
-    x: &mut [T; 6],
-) -> T {
-    let mut u = [T::splat(0.0); I];
-    for k in 0..I {
-        let mut s = a[I][k];
-        for m in 0..k {
-            s = s - u[m] * l[k][m];
-        }
-        u[k] = s;
-        l[I][k] = s * inv_d[k];
-    }
-    let mut d = a[I][I];
-    for k in 0..I {
-        d = d - u[k] * l[I][k];
-    }
-    inv_d[I] = T::splat(1.0) / d;
-    for k in 0..I {
-        x[I] = x[I] - l[I][k] * x[k];
-    }
-    d
-}
-
-/// Row I of the back substitution x ← L⁻ᵀ·x (rows below I already done).
-#[inline(always)]
-fn back_row<T: Lane, const I: usize>(l: &[[T; 6]; 6], x: &mut [T; 6]) {
-    for k in I + 1..6 {
-        x[I] = x[I] - l[k][I] * x[k];
-    }
-}
-
-/// Orientation error vector (rad, base frame) taking `actual` to `desired`: the rotation vector
-/// θ·n of q = desired·actual⁻¹, i.e. nalgebra's `UnitQuaternion::scaled_axis` of q, spelled out
-/// (one norm instead of two, no `Unit` wrapper, an inline atan2):
+/// Orientation difference (rad, world frame) of `to` relative to `from`: the rotation vector
+/// θ·n of q = to·from⁻¹, the rotation taking `from` to `to` (the analogue of `to − from` for
+/// positions), i.e. nalgebra's `UnitQuaternion::scaled_axis` of q with one norm instead of two:
 /// θ = 2·atan2(|q_v|, |q_w|), n = ±q_v/|q_v| with the sign of q_w (the shorter of the two
 /// equivalent rotations), and zero for |q_v| = 0.
-#[inline]
-pub fn rotation_error(desired: &UnitQuaternion<f64>, actual: &UnitQuaternion<f64>) -> Vector3<f64> {
-    // q = desired·actual* (a unit quaternion's inverse is its conjugate), nalgebra's product.
-    let q = desired.quaternion() * actual.quaternion().conjugate();
+pub fn rotation_error(to: &UnitQuaternion<f64>, from: &UnitQuaternion<f64>) -> Vector3<f64> {
+    // q = to·from* (a unit quaternion's inverse is its conjugate).
+    let q = to.quaternion() * from.quaternion().conjugate();
     let (w, v) = (q.w, q.imag());
     let n = v.norm();
     if n <= 0.0 {
         return Vector3::zeros();
     }
-    // nalgebra's order of operations, (±q_v/|q_v|)·θ; the angle from the inline atan2
-    // (errors are small angles, |q_v| ≪ |q_w|), within 2 ulp of the library's, so the result
-    // equals nalgebra's `scaled_axis` to a few ulp (the test checks it).
-    let angle = crate::trig::atan2_first_quadrant(n, w.abs()) * 2.0;
+    let angle = n.atan2(w.abs()) * 2.0;
     (if w >= 0.0 { v } else { -v }) / n * angle
 }
 
@@ -309,10 +146,8 @@ pub fn cooperative(
     let tw = inp.twist;
     desired.translation.vector += Vector3::new(tw[0], tw[1], tw[2]) * dt_s;
     let turn = Vector3::new(tw[3], tw[4], tw[5]) * dt_s;
-    // exp(0) is the identity quaternion exactly and the product with it returns `desired`
-    // unchanged, so the common pure-translation command skips it.
     if turn != Vector3::zeros() {
-        desired.rotation = crate::trig::quaternion_from_scaled_axis(&turn) * desired.rotation;
+        desired.rotation = UnitQuaternion::from_scaled_axis(turn) * desired.rotation;
     }
     let ep = desired.translation.vector - inp.object.translation.vector;
     let er = rotation_error(&desired.rotation, &inp.object.rotation);
@@ -349,7 +184,10 @@ pub fn cooperative(
         }
         xd
     });
-    let qd = dls_pair(inp.jacobians, [&xd[0], &xd[1]], p.dls_damping);
+    let qd = [
+        dls(inp.jacobians[0], &xd[0], p.dls_damping),
+        dls(inp.jacobians[1], &xd[1], p.dls_damping),
+    ];
     let mut u = [[0.0; N_ACT]; 2];
     let mut peak: f64 = 1.0;
     for i in 0..2 {
@@ -401,7 +239,7 @@ mod tests {
     }
 
     /// Reference DLS: Jᵀ(JJᵀ + λ²I)⁻¹ẋ formed with nalgebra's own matrix products and Cholesky
-    /// (an implementation independent of [`dls_lanes`]).
+    /// (products and factorization independent of [`dls`]'s).
     fn dls_nalgebra(j: &Matrix6<f64>, xd: &Vector6<f64>, lambda: f64) -> Vector6<f64> {
         let a = j * j.transpose() + Matrix6::identity() * (lambda * lambda);
         match a.cholesky() {
@@ -450,36 +288,11 @@ mod tests {
             j[(3, 1)] = bad;
             assert_eq!(dls(&j, &xd, 0.02), Vector6::zeros());
         }
-        // Zero damping and a singular J: a zero pivot, refused as by `Cholesky::factor`.
+        // Zero damping and a singular J: a zero pivot, refused by `Ldlt::factor`.
         assert_eq!(dls(&Matrix6::zeros(), &xd, 0.0), Vector6::zeros());
     }
 
-    /// Each lane of the lockstep solve is the one-arm solve, bit for bit, and a failing lane
-    /// does not affect the other.
-    #[test]
-    fn dls_pair_equals_dls_per_arm_bitwise() {
-        let mut g = Lcg(3);
-        for case in 0..200 {
-            let j = [g.matrix(2.0), g.matrix(1.0)];
-            let xd = [g.vector(1.0), g.vector(0.1)];
-            let lambda = if case % 2 == 0 { 0.02 } else { 0.3 };
-            let pair = dls_pair([&j[0], &j[1]], [&xd[0], &xd[1]], lambda);
-            for arm in 0..2 {
-                let one = dls(&j[arm], &xd[arm], lambda);
-                for k in 0..6 {
-                    assert_eq!(pair[arm][k].to_bits(), one[k].to_bits(), "case {case}");
-                }
-            }
-        }
-        let mut j = [g.matrix(1.0), g.matrix(1.0)];
-        let xd = [g.vector(1.0), g.vector(1.0)];
-        j[1][(0, 5)] = f64::NAN;
-        let pair = dls_pair([&j[0], &j[1]], [&xd[0], &xd[1]], 0.02);
-        assert_eq!(pair[0], dls(&j[0], &xd[0], 0.02));
-        assert_eq!(pair[1], Vector6::zeros());
-    }
-
-    /// nalgebra's `scaled_axis` of desired·actual⁻¹ (the previous definition) to 4 ulp of the
+    /// nalgebra's `scaled_axis` of to·from⁻¹ (an independent implementation) to 4 ulp of the
     /// angle, over random rotations (both signs of q_w), tiny errors and none.
     #[test]
     fn rotation_error_matches_nalgebra_scaled_axis() {
@@ -511,7 +324,7 @@ mod tests {
 
     /// The controller as first written, with the 6×6 grasp blocks Wⁱ (eq. 3.40) formed and
     /// multiplied, nalgebra's `scaled_axis` and the nalgebra DLS reference: the closed forms
-    /// and the lockstep solve must reproduce it to round-off.
+    /// must reproduce it to round-off.
     fn cooperative_reference(
         inp: &CoopInputs<'_>,
         desired: &mut Isometry3<f64>,

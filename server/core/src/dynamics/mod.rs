@@ -10,16 +10,11 @@
 //! * [`step_terms`]: H, C q̇ + G and J̇q̇ together in one pass over the links, on the stack —
 //!   what the 1 kHz step needs; the same formulas as [`rnea`] and [`crba`], which stay the
 //!   readable reference implementations it is tested against.
-//! * [`step_terms_pair`]: [`step_terms`] of the simulation's two arms in lockstep (each
-//!   operation on both arms' numbers at once), tested against [`step_terms`].
 //!
 //! All functions use the joint frames of a [`KinData`] already filled by
 //! [`crate::kinematics::forward_kinematics`] (or `jacobian`) for the same q, and allocate nothing.
 
 use nalgebra::{DMatrix, Matrix3, SMatrix, SVector, Vector3};
-
-mod pair;
-pub use pair::{PairLinks, step_terms_pair};
 
 use crate::Error;
 use crate::kinematics::KinData;
@@ -194,7 +189,7 @@ impl DynData {
     }
 }
 
-/// Skew-symmetric cross-product matrix [v]×.
+/// Skew-symmetric cross-product matrix \[v\]×.
 pub fn skew(v: &Vector3<f64>) -> Matrix3<f64> {
     Matrix3::new(0.0, -v.z, v.y, v.z, 0.0, -v.x, -v.y, v.x, 0.0)
 }

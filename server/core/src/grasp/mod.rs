@@ -457,7 +457,7 @@ pub fn decompose(r: &[Vector3<f64>; 2], fc: &SVector<f64, 12>) -> (Vector6<f64>,
     let fext = w * fc;
     let rest = fc - wp * fext;
     let vtv = v.transpose() * v;
-    let fint = match crate::linalg::Cholesky::factor(&vtv) {
+    let fint = match crate::linalg::Ldlt::factor(&vtv) {
         Some(ch) => ch.solve(&(v.transpose() * rest)),
         None => Vector6::zeros(),
     };

@@ -1,0 +1,262 @@
+//! The per-arm stages of the step, each a function of one arm's parameters and state: the
+//! jaw, the operator's valve commands, the rigid-body terms held over the step, and within a
+//! sub-step the chamber pressures, the free joint acceleration and the integration.
+
+use nalgebra::{Isometry3, Matrix6, Vector6};
+
+use super::{ArmInput, ArmParams, ArmState, ArmWork, StepParams};
+use crate::control::{self, ControlParams};
+use crate::dynamics;
+use crate::finite_or;
+use crate::grasp::ObjectParams;
+use crate::hydraulics::{self, HydraulicParams, JawParams, N_ACT};
+use crate::linalg::Ldlt;
+use crate::model::Model;
+
+/// Overtravel beyond a joint limit at which q is clamped (rad): 0.1.
+const HARD_STOP_RAD: f64 = 0.1;
+
+/// One arm's terms computed once per step and held over its sub-steps.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ArmTerms {
+    /// LDLᵀ factor of H̃ = H + h·D (+ h·d_stop + h²·k_stop on a joint past its limit), the
+    /// mass matrix with the implicit damping and end stops; `None` if not positive definite
+    /// (then the arm's joints do not accelerate).
+    pub(super) factor: Option<Ldlt<N_ACT>>,
+    /// C(q, q̇)q̇ + G(q) (buoyancy included) plus the explicit part of the quadratic drag.
+    pub(super) bias: Vector6<f64>,
+    /// Viscous joint damping D, treated implicitly: K_damp·Ĵ² plus the linearized drag.
+    pub(super) damp: [f64; N_ACT],
+    /// Actuator coordinate x, lever Ĵ and joint angle q at the start of the step; within the
+    /// step x = x₀ + Ĵ·(q − q₀) (the linkage curvature changes x by < 1 µm over 1 ms).
+    pub(super) x0: [f64; N_ACT],
+    /// Ĵ = dx/dq at the start of the step.
+    pub(super) jhat: [f64; N_ACT],
+    /// q at the start of the step.
+    pub(super) q0: [f64; N_ACT],
+    /// Z = L̃⁻¹Jᵀ with H̃ = L̃L̃ᵀ, for a holding arm (zero otherwise): J·H̃⁻¹·Jᵀ = ZᵀZ and
+    /// H̃⁻¹Jᵀf = L̃⁻ᵀ(Zf).
+    pub(super) z: Matrix6<f64>,
+    /// Tool-point J̇q̇ (linear; angular), world frame.
+    pub(super) jdqd: Vector6<f64>,
+    /// Fault-adjusted supply pressure (Pa).
+    pub(super) supply_pa: f64,
+    /// Fault-adjusted bulk modulus (Pa).
+    pub(super) bulk_modulus_pa: f64,
+    /// Fault-adjusted cross-piston leakage per actuator (m³/s per Pa).
+    pub(super) leak: [f64; N_ACT],
+}
+
+/// Stage 1 (per arm): the jaw opens or closes at its rated speed (`cmd` ∈ [−1, 1], already
+/// speed-scaled), stops on the handle when it closes on it, and the grasp is taken (closing
+/// on the handle) or released (opened 2 mm past the handle). `contact`: the tool point is
+/// within the capture radius of this arm's handle; `tool`, `object`: world poses.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn update_jaw(
+    a: &mut ArmState,
+    jaw: &JawParams,
+    op: &ObjectParams,
+    contact: bool,
+    cmd: f64,
+    tool: &Isometry3<f64>,
+    object: &Isometry3<f64>,
+    dt: f64,
+) {
+    let was_open_enough = a.jaw_opening_m >= op.handle_width_m - 1e-9;
+    let stop = if contact && was_open_enough {
+        op.handle_width_m
+    } else {
+        0.0
+    };
+    a.jaw_opening_m = (a.jaw_opening_m + cmd * jaw.speed_m_s * dt).clamp(stop, jaw.max_opening_m);
+    let closed_on_handle =
+        contact && was_open_enough && a.jaw_opening_m <= op.handle_width_m + 1e-9;
+    if closed_on_handle && cmd < 0.0 {
+        a.clamp_force_n =
+            jaw.clamp_force_n * (-cmd).min(1.0).max(a.clamp_force_n / jaw.clamp_force_n);
+    } else if !closed_on_handle || cmd > 0.0 {
+        a.clamp_force_n = 0.0;
+    }
+    if !a.holding && closed_on_handle && cmd < 0.0 {
+        a.holding = true;
+        a.grasp_rel = object.inverse() * tool;
+    } else if a.holding && a.jaw_opening_m > op.handle_width_m + 0.002 {
+        a.holding = false;
+        a.contact_wrench = [0.0; 6];
+    }
+    a.contact = contact || a.holding;
+}
+
+/// Stage 2 outside cooperative control (per arm): the operator's valve commands (open loop),
+/// or the joint servo's when the input carries a joint-velocity reference (clamped to ±2×
+/// the nominal speeds). `speed` is the validated speed scale.
+pub(super) fn operator_spools(
+    a: &mut ArmState,
+    input: &ArmInput,
+    nominal: &[f64; N_ACT],
+    speed: f64,
+    dt: f64,
+    cp: &ControlParams,
+) -> [f64; N_ACT] {
+    match input.joint_velocity_ref {
+        Some(r) => {
+            if !a.servo_active {
+                a.servo_ref = a.q;
+                a.servo_active = true;
+            }
+            let qd_ref: [f64; N_ACT] = core::array::from_fn(|j| {
+                (finite_or(r[j], 0.0) * speed).clamp(-2.0 * nominal[j], 2.0 * nominal[j])
+            });
+            control::joint_servo(&qd_ref, &a.q, &mut a.servo_ref, nominal, dt, cp)
+        }
+        None => {
+            a.servo_active = false;
+            let v: [f64; N_ACT] =
+                core::array::from_fn(|j| finite_or(input.valves[j], 0.0).clamp(-1.0, 1.0));
+            control::open_loop(&v, speed)
+        }
+    }
+}
+
+/// Stage 3 (per arm): H, C q̇ + G and J̇q̇ in one pass over the links (eq. 3.38, world frame,
+/// [`dynamics::step_terms`]), the actuator linkages, and the factor of H̃ with the implicit
+/// damping and end stops. `work` holds the kinematics of the state's q; `h` is the sub-step.
+pub(super) fn arm_terms(
+    model: &Model,
+    ap: &ArmParams,
+    sp: &StepParams,
+    work: &ArmWork,
+    a: &ArmState,
+    h: f64,
+) -> ArmTerms {
+    let rho = if sp.buoyancy {
+        sp.water_density_kgm3
+    } else {
+        0.0
+    };
+    let terms =
+        dynamics::step_terms::<N_ACT>(model, &ap.inertials, &work.kin, &a.qd, &sp.gravity, rho);
+    let hp = &ap.hydraulics;
+    let mut out = ArmTerms {
+        factor: None,
+        bias: Vector6::zeros(),
+        damp: [0.0; N_ACT],
+        x0: [0.0; N_ACT],
+        jhat: [0.0; N_ACT],
+        q0: a.q,
+        z: Matrix6::zeros(),
+        jdqd: Vector6::from(terms.tool_bias),
+        supply_pa: ap.faults.supply_pa(hp),
+        bulk_modulus_pa: ap.faults.bulk_modulus_pa(hp),
+        leak: core::array::from_fn(|j| ap.faults.leak_m3_s_pa(j)),
+    };
+    // H̃ = H + h·(damping, end stops) on the diagonal.
+    let mut m = terms.mass_matrix;
+    let drag = sp.joint_drag;
+    for r in 0..N_ACT {
+        let act = &hp.actuators[r];
+        let (x, jh) = act.linkage.coordinate(a.q[r]);
+        out.x0[r] = x;
+        out.jhat[r] = jh;
+        out.damp[r] = act.damping * jh * jh + 2.0 * drag * a.qd[r].abs();
+        m[(r, r)] += h * out.damp[r];
+        if end_stop_penetration(a.q[r], model.joints[r].limits) != 0.0 {
+            // End stop engaged at the start of the step: implicit spring-damper.
+            m[(r, r)] += h * sp.stop_damping + h * h * sp.stop_stiffness;
+        }
+        // Quadratic drag −c·q̇|q̇|, linearized: its implicit part −2c|q̇|·q̇ is in D.
+        out.bias[r] =
+            terms.bias[r] + drag * a.qd[r] * a.qd[r].abs() - 2.0 * drag * a.qd[r].abs() * a.qd[r];
+    }
+    out.factor = Ldlt::factor(&m);
+    if let (Some(f), true) = (&out.factor, a.holding) {
+        // Only a holding arm enters the constraint solve.
+        out.z = f.forward_columns(&work.jw.transpose());
+    }
+    out
+}
+
+/// How far `q` is past its limits (rad; negative below the lower one), 0 within them.
+fn end_stop_penetration(q: f64, limits: [f64; 2]) -> f64 {
+    if q < limits[0] {
+        q - limits[0]
+    } else if q > limits[1] {
+        q - limits[1]
+    } else {
+        0.0
+    }
+}
+
+/// Sub-step, per arm: every actuator's chamber pressures by backward Euler
+/// ([`hydraulics::update_chambers`], eqs 3.48–3.50, 3.56) at the arm's current q, q̇.
+/// Returns which actuators have a relief valve open.
+pub(super) fn update_pressures(
+    a: &mut ArmState,
+    hp: &HydraulicParams,
+    t: &ArmTerms,
+    h: f64,
+) -> [bool; N_ACT] {
+    core::array::from_fn(|j| {
+        let jh = t.jhat[j];
+        let x = t.x0[j] + jh * (a.q[j] - t.q0[j]);
+        hydraulics::update_chambers(
+            &hp.actuators[j],
+            hp,
+            t.supply_pa,
+            t.bulk_modulus_pa,
+            t.leak[j],
+            a.spool[j],
+            x,
+            jh * a.qd[j],
+            h,
+            &mut a.p_in[j],
+            &mut a.p_out[j],
+        )
+        .relief_open
+    })
+}
+
+/// Sub-step, per arm: the joint acceleration without contact forces,
+/// q̈ = H̃⁻¹(T − Cq̇ − G − Dq̇ − end stops) with the actuator torques T = Ĵ·(A_I P_I − A_O P_O)
+/// (eqs 3.52–3.54); also records the actuator torques net of damping in `a.torque`.
+pub(super) fn free_acceleration(
+    a: &mut ArmState,
+    model: &Model,
+    hp: &HydraulicParams,
+    t: &ArmTerms,
+    sp: &StepParams,
+) -> Vector6<f64> {
+    let mut rhs = Vector6::zeros();
+    for j in 0..N_ACT {
+        let act = &hp.actuators[j];
+        let torque = t.jhat[j] * (act.area_in * a.p_in[j] - act.area_out * a.p_out[j]);
+        a.torque[j] = torque - t.damp[j] * a.qd[j];
+        rhs[j] = torque - t.bias[j] - t.damp[j] * a.qd[j];
+        let pen = end_stop_penetration(a.q[j], model.joints[j].limits);
+        if pen != 0.0 {
+            rhs[j] -= sp.stop_stiffness * pen + sp.stop_damping * a.qd[j];
+        }
+    }
+    match &t.factor {
+        Some(f) => f.solve(&rhs),
+        None => Vector6::zeros(),
+    }
+}
+
+/// Sub-step, per arm: semi-implicit (symplectic) Euler, q̇ += h·q̈ then q += h·q̇, with a hard
+/// backstop [`HARD_STOP_RAD`] beyond the elastic end stop (never reached in normal use) that
+/// keeps q bounded whatever happens.
+pub(super) fn integrate(a: &mut ArmState, model: &Model, qdd: &Vector6<f64>, h: f64) {
+    for j in 0..N_ACT {
+        a.qd[j] += h * qdd[j];
+        a.q[j] += h * a.qd[j];
+        let lim = model.joints[j].limits;
+        if a.q[j] < lim[0] - HARD_STOP_RAD {
+            a.q[j] = lim[0] - HARD_STOP_RAD;
+            a.qd[j] = a.qd[j].max(0.0);
+        } else if a.q[j] > lim[1] + HARD_STOP_RAD {
+            a.q[j] = lim[1] + HARD_STOP_RAD;
+            a.qd[j] = a.qd[j].min(0.0);
+        }
+    }
+}

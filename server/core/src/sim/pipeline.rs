@@ -1,0 +1,272 @@
+//! The 1 ms step as a pipeline of named stages (the scheme is in the [`super`] module docs).
+//! [`Simulation::step_inner`] is the list:
+//!
+//! 1. jaws and grasp transitions, per arm ([`arm::update_jaw`]);
+//! 2. spool commands: cooperative control, or each arm's open loop or joint servo, then
+//!    stuck valves ([`Simulation::spool_commands`]);
+//! 3. arm terms, per arm: H, C q̇ + G, J̇q̇, linkage levers and the factor of H̃
+//!    ([`arm::arm_terms`]);
+//! 4. object terms: inertia, weight, implicit seabed damping ([`ObjectTerms::new`]);
+//! 5. the grasp constraint system ([`Constraint::new`]);
+//! 6. the sub-steps ([`Simulation::substep`]): chamber pressures, free accelerations,
+//!    contact wrenches, integration;
+//! 7. outputs: relief events, contact and internal wrenches, time, kinematics
+//!    ([`Simulation::finish_step`]).
+//!
+//! Stages 3–5 fill a [`StepScratch`] that the sub-steps read.
+
+use nalgebra::{Point3, Vector3, Vector6};
+
+use super::arm::{self, ArmTerms};
+use super::constraint::Constraint;
+use super::object::{self, ObjectTerms};
+use super::{ControlMethod, Input, Simulation};
+use crate::control::{self, ControlParams, CoopInputs};
+use crate::finite_or;
+use crate::hydraulics::N_ACT;
+use crate::kinematics;
+
+/// Everything computed once per step and held over its sub-steps (configuration-dependent
+/// terms change by < 0.3 % in 1 ms at the arms' speeds). Fixed-size, on the stack.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct StepScratch {
+    /// Sub-step length h (s).
+    h: f64,
+    /// Per arm: stage 3.
+    arms: [ArmTerms; 2],
+    /// Stage 4.
+    object: ObjectTerms,
+    /// Stage 5.
+    constraint: Constraint,
+}
+
+/// What the last sub-step leaves for the outputs.
+#[derive(Debug, Clone, Copy, Default)]
+struct SubstepOutput {
+    /// Relief valve open, per arm and actuator.
+    relief: [[bool; N_ACT]; 2],
+    /// Contact wrench of each arm on the object (zero when not holding).
+    contact: [Vector6<f64>; 2],
+}
+
+impl Simulation {
+    /// One step: the stages in order (see the module docs). Kinematics are current for the
+    /// state's q on entry and on exit.
+    pub(super) fn step_inner(&mut self, input: &Input) {
+        let speed = finite_or(input.speed_scale, 0.0).clamp(0.0, 1.0);
+        for i in 0..2 {
+            let contact = self.in_contact(i);
+            let cmd = finite_or(input.arms[i].jaw, 0.0).clamp(-1.0, 1.0) * speed;
+            arm::update_jaw(
+                &mut self.state.arms[i],
+                &self.params.arms[i].hydraulics.jaw,
+                &self.params.object,
+                contact,
+                cmd,
+                &self.work[i].tool,
+                &self.state.object.pose,
+                self.params.step.dt_s,
+            );
+        }
+        let r = self.grasp_radii();
+        self.spool_commands(input, speed, &r);
+        let scratch = self.step_scratch(&r);
+        let mut out = SubstepOutput::default();
+        for k in 0..self.params.step.substeps {
+            out = self.substep(&scratch, k == 0);
+        }
+        self.finish_step(&scratch, &out);
+    }
+
+    /// Stage 2: the valve spool of every actuator. Cooperative control while the method is
+    /// closed loop and both jaws hold (its object pose reference starts at the object's pose);
+    /// otherwise each arm's operator input. A stuck valve overrides its command.
+    fn spool_commands(&mut self, input: &Input, speed: f64, r: &[Vector3<f64>; 2]) {
+        let holding_both = self.state.arms.iter().all(|a| a.holding);
+        let coop = input.method == ControlMethod::ClosedLoop && holding_both;
+        if coop && !self.state.coop_active {
+            self.state.coop_ref = self.state.object.pose;
+        }
+        self.state.coop_active = coop;
+        let nominal: [[f64; N_ACT]; 2] = core::array::from_fn(|i| {
+            core::array::from_fn(|j| {
+                self.params.arms[i].hydraulics.actuators[j].nominal_speed_rad_s
+            })
+        });
+        let (dt, cp) = (self.params.step.dt_s, &self.params.control);
+        let spools = if coop {
+            let contact = self.state.arms.map(|a| Vector6::from(a.contact_wrench));
+            let ci = CoopInputs {
+                object: &self.state.object.pose,
+                r,
+                jacobians: [&self.work[0].jw, &self.work[1].jw],
+                contact: &contact,
+                twist: &object_twist_command(&input.object_velocity, speed, cp),
+                nominal_speed: &nominal,
+            };
+            let u = control::cooperative(&ci, &mut self.state.coop_ref, dt, cp);
+            for a in self.state.arms.iter_mut() {
+                a.servo_active = false;
+            }
+            u
+        } else {
+            let arms = &mut self.state.arms;
+            core::array::from_fn(|i| {
+                arm::operator_spools(&mut arms[i], &input.arms[i], &nominal[i], speed, dt, cp)
+            })
+        };
+        for (i, a) in self.state.arms.iter_mut().enumerate() {
+            let faults = &self.params.arms[i].faults;
+            a.spool = core::array::from_fn(|j| faults.spool(j, spools[i][j]));
+        }
+    }
+
+    /// Stages 3–5: the terms held over the step's sub-steps.
+    fn step_scratch(&self, r: &[Vector3<f64>; 2]) -> StepScratch {
+        let sp = &self.params.step;
+        let h = sp.dt_s / sp.substeps as f64;
+        let st = &self.state;
+        let arms = core::array::from_fn(|i| {
+            arm::arm_terms(
+                &self.models[i],
+                &self.params.arms[i],
+                sp,
+                &self.work[i],
+                &st.arms[i],
+                h,
+            )
+        });
+        let held = st.arms.iter().any(|a| a.holding);
+        let object = ObjectTerms::new(&self.params.object, sp, &st.object, held, h);
+        let constraint = Constraint::new(
+            [(&st.arms[0], &arms[0]), (&st.arms[1], &arms[1])],
+            (&st.object, &object),
+            [&self.work[0].tool, &self.work[1].tool],
+            r,
+            sp,
+        );
+        StepScratch {
+            h,
+            arms,
+            object,
+            constraint,
+        }
+    }
+
+    /// Stage 6, one sub-step of length h: chamber pressures (backward Euler), the arms' and
+    /// the object's free accelerations, the contact wrenches of the closed chain, then
+    /// semi-implicit Euler for arms and object. `first`: the step's first sub-step.
+    fn substep(&mut self, s: &StepScratch, first: bool) -> SubstepOutput {
+        let h = s.h;
+        let mut out = SubstepOutput::default();
+        let mut qdd = [Vector6::zeros(); 2];
+        for (i, a) in self.state.arms.iter_mut().enumerate() {
+            let hp = &self.params.arms[i].hydraulics;
+            out.relief[i] = arm::update_pressures(a, hp, &s.arms[i], h);
+            qdd[i] = arm::free_acceleration(a, &self.models[i], hp, &s.arms[i], &self.params.step);
+        }
+        let o = &self.state.object;
+        let (mut acc_o, seabed_normal_n) =
+            s.object.free_acceleration(&self.params.object, o, first);
+        let arms = &self.state.arms;
+        out.contact = s.constraint.apply(
+            [&s.arms[0], &s.arms[1]],
+            &s.object,
+            [&self.work[0].jw, &self.work[1].jw],
+            [&arms[0].qd, &arms[1].qd],
+            &object::twist(o),
+            &mut qdd,
+            &mut acc_o,
+        );
+        for ((a, model), qdd) in self.state.arms.iter_mut().zip(&self.models).zip(&qdd) {
+            arm::integrate(a, model, qdd, h);
+        }
+        object::integrate(&mut self.state.object, &acc_o, seabed_normal_n, h);
+        out
+    }
+
+    /// Stage 7: relief events (rising edges), contact and internal wrenches, time, and the
+    /// kinematics and contact flags for the new q.
+    fn finish_step(&mut self, s: &StepScratch, out: &SubstepOutput) {
+        for (i, a) in self.state.arms.iter_mut().enumerate() {
+            for j in 0..N_ACT {
+                if out.relief[i][j] && !a.relief_open[j] {
+                    a.relief_events += 1;
+                }
+                a.relief_open[j] = out.relief[i][j];
+            }
+            a.contact_wrench = if s.constraint.active[i] {
+                out.contact[i].into()
+            } else {
+                [0.0; 6]
+            };
+        }
+        self.state.internal = s.constraint.internal_wrench(&out.contact).into();
+        self.state.time_s += self.params.step.dt_s;
+        self.state.steps += 1;
+        self.update_kinematics();
+        for i in 0..2 {
+            let c = self.in_contact(i);
+            self.state.arms[i].contact = c || self.state.arms[i].holding;
+        }
+    }
+
+    /// Forward kinematics and world Jacobians of both arms for the state's q.
+    pub(super) fn update_kinematics(&mut self) {
+        for i in 0..2 {
+            // The models carry their bases: these are world-frame results. The Jacobian goes
+            // straight into `jw` (`kin.jacobian` is not kept: nothing here reads it).
+            let w = &mut self.work[i];
+            kinematics::jacobian6(
+                &self.models[i],
+                &mut w.kin,
+                &self.state.arms[i].q,
+                &mut w.jw,
+            );
+            w.tool = w.kin.end_effector();
+        }
+    }
+
+    /// Arm `i`'s tool point is within the capture radius of its handle.
+    pub(super) fn in_contact(&self, i: usize) -> bool {
+        let op = &self.params.object;
+        let handle = self.state.object.pose * Point3::from(op.handles_m[i]);
+        (self.work[i].tool.translation.vector - handle.coords).norm() <= op.capture_radius_m
+    }
+
+    /// Grasp points relative to the object COM (world frame): the holding tool frames, or the
+    /// handles when not holding.
+    pub(super) fn grasp_radii(&self) -> [Vector3<f64>; 2] {
+        let o = &self.state.object.pose;
+        core::array::from_fn(|i| {
+            let a = &self.state.arms[i];
+            if a.holding {
+                o.rotation * a.grasp_rel.translation.vector
+            } else {
+                o.rotation * self.params.object.handles_m[i]
+            }
+        })
+    }
+}
+
+/// The operator's object twist for cooperative control (m/s, rad/s; world): non-finite
+/// components as 0, scaled by `speed`, and the linear and angular parts each limited to the
+/// controller's maximum speeds.
+fn object_twist_command(v: &[f64; 6], speed: f64, cp: &ControlParams) -> Vector6<f64> {
+    let part = |k: usize, max: f64| {
+        let mut x = Vector3::new(
+            finite_or(v[k], 0.0),
+            finite_or(v[k + 1], 0.0),
+            finite_or(v[k + 2], 0.0),
+        ) * speed;
+        if x.norm() > max {
+            x *= max / x.norm();
+        }
+        x
+    };
+    let (lin, ang) = (
+        part(0, cp.max_object_speed_m_s),
+        part(3, cp.max_object_rate_rad_s),
+    );
+    Vector6::new(lin.x, lin.y, lin.z, ang.x, ang.y, ang.z)
+}

@@ -318,25 +318,13 @@ impl<'a> Rig<'a> {
     }
 
     fn sweep_x(&self, spec: &SweepX) -> Result<Vec<StudyRow>, Error> {
-        let range = (spec.start, spec.end, spec.step);
-        self.sweep_line(
-            ("x sweep", "z_levels"),
-            &spec.z_levels,
-            range,
-            'z',
-            |z, x| [x, 0.0, z],
-        )
+        let (names, range) = (("x sweep", "z_levels"), (spec.start, spec.end, spec.step));
+        self.sweep_line(names, &spec.z_levels, range, 'z', |z, x| [x, 0.0, z])
     }
 
     fn sweep_z(&self, spec: &SweepZ) -> Result<Vec<StudyRow>, Error> {
-        let range = (spec.start, spec.end, spec.step);
-        self.sweep_line(
-            ("z sweep", "x_levels"),
-            &spec.x_levels,
-            range,
-            'x',
-            |x, z| [x, 0.0, z],
-        )
+        let (names, range) = (("z sweep", "x_levels"), (spec.start, spec.end, spec.step));
+        self.sweep_line(names, &spec.x_levels, range, 'x', |x, z| [x, 0.0, z])
     }
 
     /// Pitch then yaw at each point; for a pair only the right arm turns.

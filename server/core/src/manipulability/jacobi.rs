@@ -43,12 +43,13 @@
 //! * slices for every other shape ([`Slices`]).
 //!
 //! The fixed-size form is kept because one generic slice path misses the analysis budget
-//! (≤ 5 µs for a 6-DOF arm): measured against it, the slice path (also with vectors in
-//! zero-padded blocks of six and the block count a compile-time constant) took 1.7× the
-//! instructions of the 6×6 `full_svd` and 1.9× those of the translational/rotational pair
-//! (callgrind, `examples/analysis_loop`), 1.58× those of the whole magnum analysis and 1.57×
-//! those of the RX90's, and 1.3–1.5× the wall-clock time of the analysis in interleaved runs:
-//! the RX90 analysis (4.2 µs) would pass 5 µs.
+//! (≤ 5 µs for a 6-DOF arm). Such a path was measured and not kept (vectors in zero-padded
+//! blocks of six, the block count a compile-time constant for single blocks): against the
+//! fixed-size form it took 1.7× the instructions of the 6×6 `full_svd` and 1.9× those of the
+//! translational/rotational pair, 1.58× those of the whole magnum analysis and 1.57× those
+//! of the RX90's (callgrind, `examples/analysis_loop`), and 1.3–1.5× the wall-clock time of
+//! the analysis in interleaved runs — the RX90's 4.2 µs (README, Speed) would become about
+//! 5.5 µs.
 //!
 //! Vectors shorter than about 10⁻⁶⁰ of the longest are beyond the reach of the squared
 //! norms and products in the stopping test and count as zero (see `full_svd`).

@@ -60,30 +60,27 @@ fn pure_squeeze_is_internal_force() {
 #[test]
 fn grasp_state_colour_code() {
     use GraspState::*;
-    assert_eq!(
-        GraspState::classify([false, false], [true, true], true),
-        Free
-    );
-    assert_eq!(
-        GraspState::classify([false, true], [false, true], true),
-        OneOnSurface
-    );
-    assert_eq!(OneOnSurface.colour(), "black");
-    assert_eq!(
-        GraspState::classify([true, false], [true, false], false),
-        OneLifted
-    );
-    assert_eq!(OneLifted.colour(), "lightblue");
-    assert_eq!(
-        GraspState::classify([false, true], [true, true], false),
-        OneHoldingOtherContact
-    );
-    assert_eq!(OneHoldingOtherContact.colour(), "red");
-    assert_eq!(
-        GraspState::classify([true, true], [true, true], false),
-        BothHolding
-    );
-    assert_eq!(BothHolding.colour(), "yellow");
+    // (holding, contact, on the seabed) → state and its colour (Lim §4.1, Fig. 4-4).
+    for (holding, contact, on_surface, state, colour) in [
+        ([false, false], [true, true], true, Free, ""),
+        ([false, true], [false, true], true, OneOnSurface, "black"),
+        ([true, false], [true, false], false, OneLifted, "lightblue"),
+        (
+            [false, true],
+            [true, true],
+            false,
+            OneHoldingOtherContact,
+            "red",
+        ),
+        ([true, true], [true, true], false, BothHolding, "yellow"),
+    ] {
+        assert_eq!(
+            GraspState::classify(holding, contact, on_surface),
+            state,
+            "{holding:?} {contact:?} {on_surface}"
+        );
+        assert_eq!(state.colour(), colour);
+    }
 }
 
 /// A free 50 kg object's mobility M⁻¹ = diag(I/m, Q) with a symmetric positive definite Q:

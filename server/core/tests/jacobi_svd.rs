@@ -91,6 +91,25 @@ fn random_matrix(
     j
 }
 
+/// A random 6×n Jacobian, n in `cols`, its rows optionally scaled by 10^e
+/// ([`random_matrix`]).
+fn six_row_matrix(cols: std::ops::RangeInclusive<usize>) -> impl Strategy<Value = DMatrix<f64>> {
+    (
+        proptest::collection::vec(-2.0f64..2.0, 100),
+        proptest::collection::vec(-8i32..=8, 20),
+        cols,
+        proptest::bool::ANY,
+    )
+        .prop_map(|(vals, exps, n, scale_rows)| {
+            random_matrix(&vals, &exps, 6, n, false, scale_rows, false)
+        })
+}
+
+/// 1 to `most` distinct rows of a 6-row Jacobian, in order.
+fn row_selection(most: usize) -> impl Strategy<Value = Vec<usize>> {
+    proptest::sample::subsequence(vec![0usize, 1, 2, 3, 4, 5], 1..=most)
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(512))]
 
@@ -143,13 +162,9 @@ proptest! {
     /// identical to `measures` of the selected rows.
     #[test]
     fn measures_agree_with_nalgebra_and_row_selection(
-        vals in proptest::collection::vec(-2.0f64..2.0, 100),
-        exps in proptest::collection::vec(-8i32..=8, 20),
-        n in 1usize..=10,
-        rows in proptest::sample::subsequence(vec![0usize, 1, 2, 3, 4, 5], 1..=6),
-        scale_rows in proptest::bool::ANY,
+        j in six_row_matrix(1..=10),
+        rows in row_selection(6),
     ) {
-        let j = random_matrix(&vals, &exps, 6, n, false, scale_rows, false);
         let sel = select_rows(&j, &rows).unwrap();
         let m = measures(&sel).unwrap();
         prop_assert_eq!(&row_measures(&j, &rows).unwrap(), &m);
@@ -177,14 +192,10 @@ proptest! {
     /// the selections differ in size or exceed the columns (the separate fallback).
     #[test]
     fn row_measures_pair_equals_two_row_measures(
-        vals in proptest::collection::vec(-2.0f64..2.0, 100),
-        exps in proptest::collection::vec(-8i32..=8, 20),
-        n in 1usize..=8,
-        a in proptest::sample::subsequence(vec![0usize, 1, 2, 3, 4, 5], 1..=4),
-        b in proptest::sample::subsequence(vec![0usize, 1, 2, 3, 4, 5], 1..=4),
-        scale_rows in proptest::bool::ANY,
+        j in six_row_matrix(1..=8),
+        a in row_selection(4),
+        b in row_selection(4),
     ) {
-        let j = random_matrix(&vals, &exps, 6, n, false, scale_rows, false);
         let [ma, mb] = row_measures_pair(&j, [&a, &b]).unwrap();
         prop_assert_eq!(ma, row_measures(&j, &a).unwrap());
         prop_assert_eq!(mb, row_measures(&j, &b).unwrap());

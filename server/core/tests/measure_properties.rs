@@ -185,14 +185,19 @@ fn singular_jacobian_reports_infinite_values_as_none() {
     assert_eq!(m.isotropy, 0.0);
 }
 
+/// Every joint at the fraction `t` of its range: (1 − t)·lower + t·upper.
+fn posture_at_fraction(model: &seaarms_core::Model, t: f64) -> Vec<f64> {
+    model
+        .joints
+        .iter()
+        .map(|j| (1.0 - t) * j.limits[0] + t * j.limits[1])
+        .collect()
+}
+
 #[test]
 fn jlm_is_one_at_mid_range_and_zero_at_a_limit() {
     let model = common::builtin("orion");
-    let mid: Vec<f64> = model
-        .joints
-        .iter()
-        .map(|j| (j.limits[0] + j.limits[1]) / 2.0)
-        .collect();
+    let mid = posture_at_fraction(&model, 0.5);
     assert!((jlm(&model, &mid) - 1.0).abs() < 1e-12);
     let mut at = mid.clone();
     at[2] = model.joints[2].limits[1];
@@ -206,12 +211,7 @@ fn jlm_is_one_at_mid_range_and_zero_at_a_limit() {
 #[test]
 fn jlm_gradient_at_a_limit_is_zero() {
     let model = common::builtin("orion");
-    let mid: Vec<f64> = model
-        .joints
-        .iter()
-        .map(|j| 0.3 * j.limits[0] + 0.7 * j.limits[1])
-        .collect();
-    let mut at = mid.clone();
+    let mut at = posture_at_fraction(&model, 0.7);
     at[2] = model.joints[2].limits[1];
     let mut g = vec![1.0; 6];
     jlm_gradient(&model, &at, &mut g);

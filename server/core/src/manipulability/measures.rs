@@ -1,136 +1,21 @@
-//! Singular-value measures of a Jacobian (Lim §2.4, §3.5; Jun §2.1; RX90 report part VI).
+//! Singular-value measures of a Jacobian (Lim §2.4, §3.5; Jun §2.1; RX90 report part VI):
+//! Yoshikawa, condition number, isotropy, Hong, force manipulability and the velocity and
+//! force ellipsoids, of the whole Jacobian or of a selection of its rows.
+//!
+//! The full SVD and the subspaces live in `svd`, the inline storage in `task`; both are
+//! re-exported here.
 
-use nalgebra::{DMatrix, DMatrixView, DVector, Matrix6, U1, U6};
+use nalgebra::DMatrix;
 
 use super::jacobi;
+use super::svd::check_jacobian;
+pub use super::svd::{
+    FullSvd, RANK_TOLERANCE, Subspaces, complete_basis, default_tolerance, full_svd, subspaces,
+    subspaces_from_svd,
+};
+pub(crate) use super::task::check_task_dim;
+pub use super::task::{MAX_TASK_DIM, TaskMatrix, TaskVector};
 use crate::Error;
-
-/// Full singular value decomposition J = U Σ Vᵀ with U m×m, V n×n, σ sorted descending and
-/// padded with zeros to m entries when m > n.
-#[derive(Debug, Clone)]
-pub struct FullSvd {
-    /// m×m orthogonal; column i is the i-th principal direction in task space.
-    pub u: DMatrix<f64>,
-    /// m singular values, descending, ≥ 0.
-    pub sigma: DVector<f64>,
-    /// n×n orthogonal; column i is the i-th joint-space direction.
-    pub v: DMatrix<f64>,
-    /// Singular values at or below this count as zero (rank, subspaces, measures).
-    pub tolerance: f64,
-}
-
-/// A Jacobian must be non-empty and finite.
-fn check_jacobian(j: &DMatrix<f64>) -> Result<(), Error> {
-    if j.is_empty() {
-        return Err(Error::SizeMismatch {
-            what: "jacobian",
-            input: 0,
-            required: 1,
-        });
-    }
-    if let Some(index) = j.as_slice().iter().position(|v| !v.is_finite()) {
-        return Err(Error::NonFinite {
-            what: "jacobian",
-            index,
-        });
-    }
-    Ok(())
-}
-
-/// Relative rank tolerance of every route ([`full_svd`], [`measures`], [`row_measures`]):
-/// σ ≤ this·σ₁ counts as zero.
-///
-/// The one-sided Jacobi SVD itself is accurate to a few ε·σ₁ (relatively accurate, even),
-/// so this is a modelling choice rather than a round-off floor: a Jacobian computed from
-/// joint angles is only as good as those angles, and a posture whose smallest σ is below
-/// 1.5·10⁻⁷σ₁ (about 0.01 millidegree of joint motion from the singular posture at unit
-/// lever arms) is reported as singular — rank, null space, infinite condition number and
-/// force measures — rather than as conditioned 10⁷. It is the value the earlier eigenvalue
-/// route through JᵀJ needed for its own round-off, kept so that the reported rank of the
-/// full Jacobian does not change (that route's `measures` used √(mε)σ₁ ≈ 3·10⁻⁸σ₁).
-pub const RANK_TOLERANCE: f64 = 1.5e-7;
-
-/// Full SVD of `j` (m×n) by one-sided Jacobi rotations (module `jacobi`; Hestenes 1958,
-/// Demmel & Veselić 1992): the shorter family of vectors of J — its columns when m ≥ n, its
-/// rows when m < n — is rotated until mutually orthogonal. The accumulated rotations are V
-/// (resp. U), the vector lengths are σ and the normalised vectors the leading columns of U
-/// (resp. V), completed to an orthogonal matrix by Gram–Schmidt on unit vectors where a
-/// vector is zero (or shorter than 10⁻⁶⁰σ₁). No squaring of J, so σ keeps full relative
-/// accuracy, and no heap beyond the outputs up to 7×7.
-/// Rank tolerance: [`RANK_TOLERANCE`]·σ₁.
-pub fn full_svd(j: &DMatrix<f64>) -> Result<FullSvd, Error> {
-    let (m, n) = j.shape();
-    check_jacobian(j)?;
-    let wide = m < n;
-    let (k, l) = if wide { (m, n) } else { (n, m) };
-    let mut w = DMatrix::<f64>::zeros(k, k);
-    let mut sigma = DVector::<f64>::zeros(m);
-    let mut q = DMatrix::<f64>::zeros(l, l);
-    let kept = jacobi::with_scratch(k * l, |a: &mut [f64]| {
-        if wide {
-            // a holds the rows of J: vector p is row p.
-            for (p, row) in a.chunks_exact_mut(l).enumerate() {
-                for (x, &v) in row.iter_mut().zip(j.row(p).iter()) {
-                    *x = v;
-                }
-            }
-        } else {
-            // Column-major storage: vector p is column p.
-            a.copy_from_slice(j.as_slice());
-        }
-        jacobi::with_scratch(k, |order: &mut [usize]| {
-            let s = &mut sigma.as_mut_slice()[..k];
-            jacobi::decompose(a, l, 1, w.as_mut_slice(), s, order);
-            // Every vector that is not negligible is normalised, including those below the
-            // rank tolerance: Jacobi leaves them orthogonal to the others to working
-            // precision relative to their own length, so UΣVᵀ = J holds to round-off. Only
-            // vectors shorter than 10⁻⁶⁰σ₁ — where the products of squares in the stopping
-            // test could underflow, so that orthogonality is no longer checked — and zero
-            // ones are replaced by the completion.
-            let negligible = 1e-60 * s[0];
-            let kept = s.iter().filter(|&&x| x > negligible).count();
-            for (dst, &o) in q
-                .as_mut_slice()
-                .chunks_exact_mut(l)
-                .zip(order.iter())
-                .take(kept)
-            {
-                let src = &a[o * l..(o + 1) * l];
-                let norm = src.iter().map(|x| x * x).sum::<f64>().sqrt();
-                for (d, x) in dst.iter_mut().zip(src) {
-                    *d = x / norm;
-                }
-            }
-            kept
-        })
-    });
-    jacobi::complete_columns(q.as_mut_slice(), l, kept);
-    let (u, v) = if wide { (w, q) } else { (q, w) };
-    Ok(FullSvd {
-        u,
-        tolerance: RANK_TOLERANCE * sigma[0],
-        sigma,
-        v,
-    })
-}
-
-/// Extends the orthonormal columns of `b` (k×r, r ≤ k) to a k×k orthogonal matrix by
-/// Gram–Schmidt on unit vectors (`jacobi::complete_columns`).
-pub fn complete_basis(b: &DMatrix<f64>) -> DMatrix<f64> {
-    let (k, r) = b.shape();
-    if r >= k {
-        return b.columns(0, k).into_owned();
-    }
-    let mut out = DMatrix::zeros(k, k);
-    out.columns_mut(0, r).copy_from(b);
-    jacobi::complete_columns(out.as_mut_slice(), k, r);
-    out
-}
-
-/// Default rank tolerance: max(m, n)·ε·σ₁ (as numpy's `matrix_rank`).
-pub fn default_tolerance(m: usize, n: usize, sigma_max: f64) -> f64 {
-    (m.max(n) as f64) * f64::EPSILON * sigma_max
-}
 
 /// Volume coefficient c_m of an m-dimensional ellipsoid (Lim eq. 2.18): volume = c_m·Πσᵢ.
 pub fn ellipsoid_volume_coefficient(m: usize) -> f64 {
@@ -146,112 +31,6 @@ pub fn ellipsoid_volume_coefficient(m: usize) -> f64 {
         // 2(2π)^{(m−1)/2} / (1·3·…·m)
         let denom: f64 = (0..=(m - 1) / 2).map(|k| (2 * k + 1) as f64).product();
         2.0 * (2.0 * PI).powi(((m - 1) / 2) as i32) / denom
-    }
-}
-
-/// Largest task-space dimension: the rows of a spatial Jacobian (vx vy vz wx wy wz). The
-/// measures of up to this many rows are stored inline, without heap allocation.
-pub const MAX_TASK_DIM: usize = 6;
-
-/// Up to [`MAX_TASK_DIM`] values stored inline, one per task-space dimension; it derefs to
-/// the slice of its values.
-#[derive(Clone, Copy)]
-pub struct TaskVector<T> {
-    len: usize,
-    values: [T; MAX_TASK_DIM],
-}
-
-impl<T: Copy + Default> TaskVector<T> {
-    /// The values of `s`.
-    ///
-    /// # Panics
-    /// When `s` has more than [`MAX_TASK_DIM`] values.
-    pub fn from_slice(s: &[T]) -> TaskVector<T> {
-        assert!(
-            s.len() <= MAX_TASK_DIM,
-            "at most {MAX_TASK_DIM} task dimensions"
-        );
-        let mut values = [T::default(); MAX_TASK_DIM];
-        values[..s.len()].copy_from_slice(s);
-        TaskVector {
-            len: s.len(),
-            values,
-        }
-    }
-}
-
-impl<T> std::ops::Deref for TaskVector<T> {
-    type Target = [T];
-    fn deref(&self) -> &[T] {
-        &self.values[..self.len]
-    }
-}
-
-impl<T: PartialEq> PartialEq for TaskVector<T> {
-    fn eq(&self, other: &Self) -> bool {
-        **self == **other
-    }
-}
-
-impl<T: std::fmt::Debug> std::fmt::Debug for TaskVector<T> {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        (**self).fmt(f)
-    }
-}
-
-/// An m×m matrix, m ≤ [`MAX_TASK_DIM`], stored inline as the leading block of a 6×6.
-#[derive(Clone, Copy)]
-pub struct TaskMatrix {
-    dim: usize,
-    data: Matrix6<f64>,
-}
-
-impl TaskMatrix {
-    /// The m×m matrix stored column-major in `s` (m² entries).
-    ///
-    /// # Panics
-    /// When m exceeds [`MAX_TASK_DIM`].
-    pub fn from_column_slice(m: usize, s: &[f64]) -> TaskMatrix {
-        assert!(m <= MAX_TASK_DIM, "at most {MAX_TASK_DIM} task dimensions");
-        assert_eq!(s.len(), m * m, "an m×m matrix");
-        let mut data = Matrix6::zeros();
-        for (c, col) in s.chunks_exact(m).enumerate() {
-            data.as_mut_slice()[c * MAX_TASK_DIM..c * MAX_TASK_DIM + m].copy_from_slice(col);
-        }
-        TaskMatrix { dim: m, data }
-    }
-
-    /// m.
-    pub fn nrows(&self) -> usize {
-        self.dim
-    }
-
-    /// m.
-    pub fn ncols(&self) -> usize {
-        self.dim
-    }
-
-    /// Column `i` (m entries).
-    pub fn column(&self, i: usize) -> &[f64] {
-        assert!(i < self.dim, "column {i} of {}", self.dim);
-        &self.data.as_slice()[i * MAX_TASK_DIM..i * MAX_TASK_DIM + self.dim]
-    }
-
-    /// The matrix as a nalgebra view (for arithmetic).
-    pub fn view(&self) -> DMatrixView<'_, f64, U1, U6> {
-        self.data.view((0, 0), (self.dim, self.dim))
-    }
-}
-
-impl PartialEq for TaskMatrix {
-    fn eq(&self, other: &Self) -> bool {
-        self.view() == other.view()
-    }
-}
-
-impl std::fmt::Debug for TaskMatrix {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        self.view().fmt(f)
     }
 }
 
@@ -372,16 +151,6 @@ impl Measures {
     }
 }
 
-/// A measured task space has at most [`MAX_TASK_DIM`] rows.
-pub(crate) fn check_task_dim(m: usize) -> Result<(), Error> {
-    if m > MAX_TASK_DIM {
-        return Err(Error::InvalidRows {
-            reason: format!("{m} rows; the measures take at most {MAX_TASK_DIM}"),
-        });
-    }
-    Ok(())
-}
-
 /// Measures of a Jacobian (m×n with m ≤ [`MAX_TASK_DIM`], e.g. a row selection).
 ///
 /// For m ≤ n (every task selection of a 6-row Jacobian) the m rows of J are rotated by
@@ -394,7 +163,8 @@ pub fn measures(j: &DMatrix<f64>) -> Result<Measures, Error> {
     if j.nrows() > j.ncols() {
         return measures_from_svd(&full_svd(j)?);
     }
-    Ok(wide_measures(j, j.nrows(), |p| p))
+    let [m] = wide_measures(j, j.nrows(), |p| p);
+    Ok(m)
 }
 
 /// Measures of the rows `rows` of `j` (Jun eq. 9), as [`measures`] of [`select_rows`] but
@@ -406,7 +176,8 @@ pub fn row_measures(j: &DMatrix<f64>, rows: &[usize]) -> Result<Measures, Error>
     if rows.len() > j.ncols() {
         return measures_from_svd(&full_svd(&j.select_rows(rows))?);
     }
-    Ok(wide_measures(j, rows.len(), |p| rows[p]))
+    let [m] = wide_measures(j, rows.len(), |p| rows[p]);
+    Ok(m)
 }
 
 /// [`row_measures`] of two row selections of the same size at once (the analysis's
@@ -421,56 +192,41 @@ pub fn row_measures_pair(j: &DMatrix<f64>, rows: [&[usize]; 2]) -> Result<[Measu
     if rows[1].len() != g || g > n || g > MAX_TASK_DIM {
         return Ok([row_measures(j, rows[0])?, row_measures(j, rows[1])?]);
     }
-    let k = 2 * g;
-    jacobi::with_scratch(k * n + 2 * g * g + k, |scratch: &mut [f64]| {
-        let (a, rest) = scratch.split_at_mut(k * n);
-        let (w, sigma) = rest.split_at_mut(2 * g * g);
-        for (v, &r) in a
-            .chunks_exact_mut(n)
-            .zip(rows[0].iter().chain(rows[1].iter()))
-        {
-            for (c, x) in v.iter_mut().enumerate() {
-                *x = j[(r, c)];
-            }
-        }
-        jacobi::with_scratch(k, |order: &mut [usize]| {
-            jacobi::decompose(a, n, 2, w, sigma, order);
-        });
-        let measures = |grp: usize| {
-            let tol = RANK_TOLERANCE * sigma[grp * g];
-            Measures::from_parts(
-                &sigma[grp * g..(grp + 1) * g],
-                TaskMatrix::from_column_slice(g, &w[grp * g * g..(grp + 1) * g * g]),
-                tol,
-            )
-        };
-        Ok([measures(0), measures(1)])
-    })
+    Ok(wide_measures(j, g, |p| {
+        if p < g { rows[0][p] } else { rows[1][p - g] }
+    }))
 }
 
-/// Measures of the m×n matrix whose row p is row `row(p)` of `j`, for m ≤ n (the callers
-/// check; m ≤ [`MAX_TASK_DIM`]), by one-sided Jacobi on its rows.
-fn wide_measures(j: &DMatrix<f64>, m: usize, row: impl Fn(usize) -> usize) -> Measures {
-    let n = j.ncols();
-    let mut u = [0.0; MAX_TASK_DIM * MAX_TASK_DIM];
-    let mut sigma = [0.0; MAX_TASK_DIM];
-    let (u, sigma) = (&mut u[..m * m], &mut sigma[..m]);
-    jacobi::with_scratch(m * n, |a: &mut [f64]| {
+/// Measures of `N` m×n matrices, m ≤ n (the callers check; m ≤ [`MAX_TASK_DIM`]), whose
+/// rows are rows of `j`: row p of problem G is row `row(G·m + p)` of `j`. One-sided Jacobi
+/// on the rows, the `N` problems swept in lockstep.
+fn wide_measures<const N: usize>(
+    j: &DMatrix<f64>,
+    m: usize,
+    row: impl Fn(usize) -> usize,
+) -> [Measures; N] {
+    let (n, k) = (j.ncols(), N * m);
+    jacobi::with_scratch(k * n, |a: &mut [f64]| {
         for (p, v) in a.chunks_exact_mut(n).enumerate() {
             let r = row(p);
             for (c, x) in v.iter_mut().enumerate() {
                 *x = j[(r, c)];
             }
         }
-        jacobi::with_scratch(m, |order: &mut [usize]| {
-            jacobi::decompose(a, n, 1, u, sigma, order);
-        });
-    });
-    Measures::from_parts(
-        sigma,
-        TaskMatrix::from_column_slice(m, u),
-        RANK_TOLERANCE * sigma[0],
-    )
+        jacobi::with_scratch(k * m + k, |out: &mut [f64]| {
+            let (u, sigma) = out.split_at_mut(k * m);
+            jacobi::with_scratch(k, |order: &mut [usize]| {
+                jacobi::decompose(a, n, N, u, sigma, order);
+            });
+            std::array::from_fn(|grp| {
+                Measures::from_parts(
+                    &sigma[grp * m..(grp + 1) * m],
+                    TaskMatrix::from_column_slice(m, &u[grp * m * m..(grp + 1) * m * m]),
+                    RANK_TOLERANCE * sigma[grp * m],
+                )
+            })
+        })
+    })
 }
 
 /// Measures from an SVD already computed of an m×`n` Jacobian (m ≤ [`MAX_TASK_DIM`]).
@@ -509,85 +265,6 @@ fn check_rows(j: &DMatrix<f64>, rows: &[usize]) -> Result<(), Error> {
         }
     }
     Ok(())
-}
-
-/// The four fundamental subspaces from the SVD (RX90 report part VI), each an orthonormal
-/// basis stored as the columns of a matrix.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Subspaces {
-    /// Rank used to split them.
-    pub rank: usize,
-    /// V_{r+1..n} (n×(n−r)): joint velocities giving no end-effector motion (null space of J).
-    pub null_space: DMatrix<f64>,
-    /// V_{1..r} (n×r): joint velocities that generate end-effector motion.
-    pub generating: DMatrix<f64>,
-    /// U_{1..r} (m×r): achievable end-effector velocities (range of J).
-    pub range: DMatrix<f64>,
-    /// U_{r+1..m} (m×(m−r)): end-effector velocities that cannot be generated.
-    pub unreachable: DMatrix<f64>,
-}
-
-/// Splits the SVD of `j` into its subspaces with the default rank tolerance.
-pub fn subspaces(j: &DMatrix<f64>) -> Result<Subspaces, Error> {
-    Ok(subspaces_from_svd(&full_svd(j)?))
-}
-
-/// Subspaces from a full SVD (with `v`).
-pub fn subspaces_from_svd(svd: &FullSvd) -> Subspaces {
-    let (m, n) = (svd.u.nrows(), svd.v.nrows());
-    let rank = svd.rank();
-    Subspaces {
-        rank,
-        null_space: columns(&svd.v, rank..n),
-        generating: columns(&svd.v, 0..rank),
-        range: columns(&svd.u, 0..rank),
-        unreachable: columns(&svd.u, rank..m),
-    }
-}
-
-/// Columns `range` of `mat` (a contiguous copy of its column-major storage).
-fn columns(mat: &DMatrix<f64>, range: std::ops::Range<usize>) -> DMatrix<f64> {
-    let r = mat.nrows();
-    DMatrix::from_column_slice(
-        r,
-        range.len(),
-        &mat.as_slice()[range.start * r..range.end * r],
-    )
-}
-
-impl FullSvd {
-    /// Number of σ above the tolerance.
-    pub fn rank(&self) -> usize {
-        let k = self.u.nrows().min(self.v.nrows());
-        self.sigma
-            .iter()
-            .take(k)
-            .filter(|&&s| s > self.tolerance)
-            .count()
-    }
-
-    /// [`measures_from_svd`] and [`subspaces_from_svd`] at once, reusing the storage of U
-    /// and V instead of copying it where possible.
-    pub fn into_measures_and_subspaces(self) -> Result<(Measures, Subspaces), Error> {
-        let measures = measures_from_svd(&self)?;
-        let (m, n) = (self.u.nrows(), self.v.nrows());
-        let rank = self.rank();
-        let whole_or = |mat: DMatrix<f64>, range: std::ops::Range<usize>| {
-            if range.len() == mat.ncols() {
-                mat
-            } else {
-                columns(&mat, range)
-            }
-        };
-        let subspaces = Subspaces {
-            rank,
-            null_space: columns(&self.v, rank..n),
-            unreachable: columns(&self.u, rank..m),
-            generating: whole_or(self.v, 0..rank),
-            range: whole_or(self.u, 0..rank),
-        };
-        Ok((measures, subspaces))
-    }
 }
 
 #[cfg(test)]

@@ -1,7 +1,9 @@
 //! Manipulability: ellipsoid measures, joint-limit measure, dual-arm ellipsoid, polytopes.
 //!
-//! * [`measures`]: SVD, rank, Yoshikawa, condition number, isotropy, Hong, force measures,
-//!   velocity and force ellipsoids, SVD subspaces, task rows (Lim §2.4, §3.5; Jun §2).
+//! * [`measures`]: rank, Yoshikawa, condition number, isotropy, Hong, force measures,
+//!   velocity and force ellipsoids, task rows (Lim §2.4, §3.5; Jun §2); it re-exports the
+//!   full SVD and its subspaces (`svd`) and the inline task-space storage (`task`).
+//! * `jacobi`: the one-sided Jacobi SVD behind them.
 //! * [`jlm`]: joint-limit measure and gradient (Jun eqs 11–16).
 //! * [`dual`]: dual-arm ellipsoid (Lim eq. 3.68).
 //! * [`polytope`]: velocity polytopes, single and dual (Kilic §3.2).
@@ -11,6 +13,8 @@ mod jacobi;
 pub mod jlm;
 pub mod measures;
 pub mod polytope;
+mod svd;
+mod task;
 
 pub use dual::{dual_measures, dual_shape_matrix};
 pub use jlm::{jlm, jlm_gradient};

@@ -50,7 +50,8 @@ fn check_secret(what: &str, value: &str) -> anyhow::Result<()> {
     anyhow::ensure!(
         value
             .chars()
-            .all(|c| c.is_ascii_graphic() || (!c.is_ascii() && !c.is_whitespace() && !c.is_control())),
+            .all(|c| c.is_ascii_graphic()
+                || (!c.is_ascii() && !c.is_whitespace() && !c.is_control())),
         "{what} must not contain spaces or control characters"
     );
     Ok(())
@@ -204,14 +205,19 @@ pub fn app(state: AppState) -> Router {
         .fallback(|uri: axum::http::Uri| async move {
             ApiError::not_found(format!("no route for {}", uri.path()))
         })
-        .method_not_allowed_fallback(|method: axum::http::Method, uri: axum::http::Uri| async move {
-            ApiError::new(
-                axum::http::StatusCode::METHOD_NOT_ALLOWED,
-                format!("{method} is not allowed on {}", uri.path()),
-            )
-        })
+        .method_not_allowed_fallback(
+            |method: axum::http::Method, uri: axum::http::Uri| async move {
+                ApiError::new(
+                    axum::http::StatusCode::METHOD_NOT_ALLOWED,
+                    format!("{method} is not allowed on {}", uri.path()),
+                )
+            },
+        )
         .layer(DefaultBodyLimit::max(MAX_BODY_BYTES))
-        .layer(middleware::from_fn_with_state(state.clone(), security::guard))
+        .layer(middleware::from_fn_with_state(
+            state.clone(),
+            security::guard,
+        ))
         .layer(middleware::from_fn_with_state(
             state.metrics.clone(),
             count_requests,

@@ -129,20 +129,45 @@ pub struct ServeConfig {
 
     // --- Admission and browser security (docs/operations.md) ---
     /// Sessions one client may create at once before the rate limit applies (429 beyond).
-    #[arg(long, env = "SEAARMS_SESSION_BURST", default_value_t = 10, global = true)]
+    #[arg(
+        long,
+        env = "SEAARMS_SESSION_BURST",
+        default_value_t = 10,
+        global = true
+    )]
     pub session_burst: u32,
     /// Sessions one client may create per minute after its burst (token-bucket refill).
-    #[arg(long, env = "SEAARMS_SESSIONS_PER_MINUTE", default_value_t = 6.0, global = true)]
+    #[arg(
+        long,
+        env = "SEAARMS_SESSIONS_PER_MINUTE",
+        default_value_t = 6.0,
+        global = true
+    )]
     pub sessions_per_minute: f64,
     /// Most live sessions created by one client at once (429 beyond).
-    #[arg(long, env = "SEAARMS_MAX_SESSIONS_PER_CLIENT", default_value_t = 16, global = true)]
+    #[arg(
+        long,
+        env = "SEAARMS_MAX_SESSIONS_PER_CLIENT",
+        default_value_t = 16,
+        global = true
+    )]
     pub max_sessions_per_client: usize,
     /// A session no trainee has connected to ends after this many seconds.
-    #[arg(long, env = "SEAARMS_UNJOINED_GRACE_SECS", default_value_t = 60, global = true)]
+    #[arg(
+        long,
+        env = "SEAARMS_UNJOINED_GRACE_SECS",
+        default_value_t = 60,
+        global = true
+    )]
     pub unjoined_grace_secs: u64,
     /// Reverse proxies (IP addresses, comma-separated) whose `X-Forwarded-For` and
     /// `X-Forwarded-Proto` are believed; none by default (the headers are ignored).
-    #[arg(long, env = "SEAARMS_TRUSTED_PROXIES", value_delimiter = ',', global = true)]
+    #[arg(
+        long,
+        env = "SEAARMS_TRUSTED_PROXIES",
+        value_delimiter = ',',
+        global = true
+    )]
     pub trusted_proxies: Vec<IpAddr>,
     /// Class code that `POST /api/sessions` must present (`join_code` field or `X-Join-Code`
     /// header; 403 otherwise); none by default. The instructor token needs none.
@@ -150,7 +175,12 @@ pub struct ServeConfig {
     pub join_code: Option<String>,
     /// Further origins (e.g. `https://sim.example.org`, comma-separated) allowed to open
     /// WebSockets and send POST/DELETE, besides the served host itself.
-    #[arg(long, env = "SEAARMS_ALLOWED_ORIGINS", value_delimiter = ',', global = true)]
+    #[arg(
+        long,
+        env = "SEAARMS_ALLOWED_ORIGINS",
+        value_delimiter = ',',
+        global = true
+    )]
     pub allowed_origins: Vec<String>,
     /// Public base URL (`https://sim.example.org`); `ws_url` is built from it instead of the
     /// request's Host header, and its origin is allowed.

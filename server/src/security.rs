@@ -388,6 +388,9 @@ mod tests {
             Some("ws://sim.example.org:8443")
         );
         let p = Policy::new(Some("https://sim.example.org/"), &[], &[]).unwrap();
-        assert_eq!(ws_base(&p, &h, None).as_deref(), Some("wss://sim.example.org"));
+        assert_eq!(
+            ws_base(&p, &h, None).as_deref(),
+            Some("wss://sim.example.org")
+        );
     }
 }

@@ -26,10 +26,7 @@ impl<S: Send + Sync> FromRequestParts<S> for Peer {
 
     async fn from_request_parts(parts: &mut Parts, _state: &S) -> Result<Self, Self::Rejection> {
         Ok(Peer(
-            parts
-                .extensions
-                .get::<ConnectInfo<SocketAddr>>()
-                .cloned(),
+            parts.extensions.get::<ConnectInfo<SocketAddr>>().cloned(),
         ))
     }
 }
@@ -248,13 +245,13 @@ mod tests {
             Some("10.1.1.1".parse().unwrap())
         );
         // No proxies configured: never believed.
-        assert_eq!(
-            client_ip(Some(&peer("10.0.0.1")), &h, &[]),
-            Some(proxy)
-        );
+        assert_eq!(client_ip(Some(&peer("10.0.0.1")), &h, &[]), Some(proxy));
         // Garbage in the chain: the proxy itself.
         h.insert("x-forwarded-for", "nonsense".parse().unwrap());
-        assert_eq!(client_ip(Some(&peer("10.0.0.1")), &h, &[proxy]), Some(proxy));
+        assert_eq!(
+            client_ip(Some(&peer("10.0.0.1")), &h, &[proxy]),
+            Some(proxy)
+        );
     }
 
     #[test]

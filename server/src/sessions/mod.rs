@@ -105,7 +105,10 @@ pub fn random_hex(bytes: usize) -> String {
 pub fn token_eq(a: &str, b: &str) -> bool {
     use sha2::{Digest, Sha256};
     let (da, db) = (Sha256::digest(a.as_bytes()), Sha256::digest(b.as_bytes()));
-    let diff = da.iter().zip(db.iter()).fold(0u8, |acc, (x, y)| acc | (x ^ y));
+    let diff = da
+        .iter()
+        .zip(db.iter())
+        .fold(0u8, |acc, (x, y)| acc | (x ^ y));
     std::hint::black_box(diff) == 0
 }
 
@@ -263,9 +266,7 @@ impl Live {
 
     /// Injects a fault, replacing one of the same kind on the same arm and actuator.
     pub fn inject_fault(&mut self, fault: ActiveFault) {
-        fault
-            .fault
-            .apply_to(self.sim.faults_mut(fault.arm.index()));
+        fault.fault.apply_to(self.sim.faults_mut(fault.arm.index()));
         self.faults.retain(|f| !f.same_slot(&fault));
         self.faults.push(fault);
     }

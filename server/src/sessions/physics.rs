@@ -236,8 +236,9 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
     if grasp != live.last_grasp {
         recorder.send(RecordMsg::Event {
             id: session.id.clone(),
-            json: serde_json::json!({"t": sim.time_s(), "event": "grasp", "state": grasp_name(grasp)})
-                .to_string(),
+            json:
+                serde_json::json!({"t": sim.time_s(), "event": "grasp", "state": grasp_name(grasp)})
+                    .to_string(),
         });
         live.last_grasp = grasp;
     }

@@ -146,11 +146,10 @@ pub async fn create(
         ));
     }
     if let (Some(code), false) = (&state.join_code, instructor) {
-        let presented = req.join_code.as_deref().or_else(|| {
-            headers
-                .get("x-join-code")
-                .and_then(|v| v.to_str().ok())
-        });
+        let presented = req
+            .join_code
+            .as_deref()
+            .or_else(|| headers.get("x-join-code").and_then(|v| v.to_str().ok()));
         if !presented.is_some_and(|p| token_eq(p, code)) {
             return Err(forbidden(
                 "this server needs the class join code (`join_code` field or X-Join-Code header)",
@@ -447,8 +446,7 @@ impl TryFrom<Action> for Command {
                 let kind = parse_fault_kind(&fault).ok_or_else(|| {
                     CommandError::Invalid(format!(
                         "unknown fault `{fault}` ({})",
-                        command::FaultKind::ALL.map(fault_kind_name)
-                        .join(", ")
+                        command::FaultKind::ALL.map(fault_kind_name).join(", ")
                     ))
                 })?;
                 let fault = Fault::new(kind, joint, value).map_err(CommandError::Invalid)?;

@@ -386,8 +386,9 @@ fn parse(msg: ClientMessage, notes: &mut Vec<String>) -> Result<Command, String>
             control_mode,
             control_method,
             arm_speed,
-        } => Command::settings(control_mode, control_method, arm_speed)
-            .map_err(|e| e.to_string())?,
+        } => {
+            Command::settings(control_mode, control_method, arm_speed).map_err(|e| e.to_string())?
+        }
         ClientMessage::Reset => Command::Reset,
         ClientMessage::Pause => Command::Pause,
         ClientMessage::Resume => Command::Resume,
@@ -411,8 +412,9 @@ fn handle(
         Role::Observer => Actor::Observer,
     };
     let mut notes = Vec::new();
-    let result = parse(msg, &mut notes)
-        .and_then(|c| command::apply(&state.sessions, session, actor, c).map_err(|e| e.to_string()));
+    let result = parse(msg, &mut notes).and_then(|c| {
+        command::apply(&state.sessions, session, actor, c).map_err(|e| e.to_string())
+    });
     match result {
         Ok(()) => notes
             .into_iter()

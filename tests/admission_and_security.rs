@@ -323,11 +323,8 @@ async fn state_changes_need_json_and_an_allowed_origin() {
         let v: Value = r.json().await.unwrap();
         assert_eq!(st, want, "Origin {origin}: {v}");
     }
-    let (_, c) = create(&s, json!({})).await;
-    let (id, tok) = (
-        c["id"].as_str().unwrap(),
-        c["control_token"].as_str().unwrap(),
-    );
+    let (id, tok) = new_session(&s).await;
+    let (id, tok) = (id.as_str(), tok.as_str());
     let q = format!("token={tok}");
     assert_eq!(
         connect_with(&s, id, &q, &[("origin", "http://evil.example")])
@@ -460,11 +457,8 @@ async fn every_error_is_json() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn oversize_messages_close_with_1009() {
     let s = start().await;
-    let (_, c) = create(&s, json!({})).await;
-    let (id, tok) = (
-        c["id"].as_str().unwrap(),
-        c["control_token"].as_str().unwrap(),
-    );
+    let (id, tok) = new_session(&s).await;
+    let (id, tok) = (id.as_str(), tok.as_str());
     let q = format!("token={tok}");
     for size in [20 * 1024, 200 * 1024] {
         let mut ws = connect(&s, id, &q).await.unwrap();
@@ -483,11 +477,8 @@ async fn oversize_messages_close_with_1009() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_seq_beyond_2_53_is_refused_and_the_session_streams_on() {
     let s = start().await;
-    let (_, c) = create(&s, json!({})).await;
-    let (id, tok) = (
-        c["id"].as_str().unwrap(),
-        c["control_token"].as_str().unwrap(),
-    );
+    let (id, tok) = new_session(&s).await;
+    let (id, tok) = (id.as_str(), tok.as_str());
     let mut ws = connect(&s, id, &format!("token={tok}")).await.unwrap();
     next_of(&mut ws, "hello", Duration::from_secs(5)).await;
     let too_big: u64 = (1 << 53) + 1;
@@ -552,11 +543,8 @@ async fn tokens_compare_exactly() {
             "{bad:?}"
         );
     }
-    let (_, c) = create(&s, json!({})).await;
-    let (id, tok) = (
-        c["id"].as_str().unwrap(),
-        c["control_token"].as_str().unwrap(),
-    );
+    let (id, tok) = new_session(&s).await;
+    let (id, tok) = (id.as_str(), tok.as_str());
     for query in [
         format!("token={tok}%20"),
         format!("token=%20{tok}"),

@@ -79,6 +79,16 @@ pub async fn create(s: &Server, body: Value) -> (u16, Value) {
     (st, r.json().await.unwrap())
 }
 
+/// Creates a default session; its id and control token.
+pub async fn new_session(s: &Server) -> (String, String) {
+    let (st, c) = create(s, serde_json::json!({})).await;
+    assert_eq!(st, 201, "{c}");
+    (
+        c["id"].as_str().unwrap().to_string(),
+        c["control_token"].as_str().unwrap().to_string(),
+    )
+}
+
 /// Opens a WebSocket with extra request headers (e.g. `Origin`); `Err(status)` when refused.
 pub async fn connect_with(
     s: &Server,

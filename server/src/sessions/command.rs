@@ -371,7 +371,11 @@ pub fn apply(
             _ => format!("instructor token required for `{}`", command.name()),
         }));
     }
-    if actor != Actor::Observer {
+    if session.ended.load(Ordering::Relaxed) {
+        return Err(CommandError::Invalid("the session has ended".into()));
+    }
+    // Trainee activity keeps a session from idling out; an instructor's does not.
+    if actor == Actor::Trainee {
         session.touch();
     }
     if command == Command::End {
@@ -434,9 +438,6 @@ pub fn apply(
         }
     };
     record(manager, session, actor, &command, detail);
-    if session.ended.load(Ordering::Relaxed) {
-        return Err(CommandError::Invalid("the session has ended".into()));
-    }
     Ok(())
 }
 

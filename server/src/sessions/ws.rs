@@ -142,9 +142,9 @@ enum Outgoing {
 }
 
 /// Whether a read error is the transport's size limit (tungstenite's `Capacity` error).
-fn is_capacity_error(e: axum::Error) -> bool {
-    e.into_inner()
-        .downcast_ref::<tokio_tungstenite::tungstenite::Error>()
+fn is_capacity_error(e: &axum::Error) -> bool {
+    std::error::Error::source(e)
+        .and_then(|inner| inner.downcast_ref::<tokio_tungstenite::tungstenite::Error>())
         .is_some_and(|e| matches!(e, tokio_tungstenite::tungstenite::Error::Capacity(_)))
 }
 
@@ -242,46 +242,34 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
     // nothing more may be read), `Some(false)` after a close the peer should answer.
     let mut closing: Option<bool> = None;
     while let Some(item) = stream.next().await {
-        let msg = match item {
-            Ok(m) => m,
-            Err(e) => {
-                if is_capacity_error(e) {
-                    metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
-                    let _ = reply_tx
-                        .send(Outgoing::Close(CLOSE_TOO_BIG, too_big.clone()))
-                        .await;
-                    closing = Some(true);
-                }
-                break;
-            }
+        // Over the documented limit: read whole (under the transport limit) and the close
+        // handshake completed, or refused by the transport (nothing more can be read).
+        let oversize = match &item {
+            Ok(Message::Text(t)) => t.len() > MAX_CLIENT_MESSAGE_BYTES,
+            Ok(Message::Binary(b)) => b.len() > MAX_CLIENT_MESSAGE_BYTES,
+            Ok(_) => false,
+            Err(_) => false,
         };
-        let text = match msg {
-            Message::Text(t) => t,
-            Message::Binary(b) => {
+        if oversize || item.as_ref().err().is_some_and(is_capacity_error) {
+            metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
+            let _ = reply_tx
+                .send(Outgoing::Close(CLOSE_TOO_BIG, too_big.clone()))
+                .await;
+            closing = Some(!oversize);
+            break;
+        }
+        let text = match item {
+            Ok(Message::Text(t)) => t,
+            Ok(Message::Binary(_)) => {
                 metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
-                if b.len() > MAX_CLIENT_MESSAGE_BYTES {
-                    let _ = reply_tx
-                        .send(Outgoing::Close(CLOSE_TOO_BIG, too_big.clone()))
-                        .await;
-                    closing = Some(false);
-                    break;
-                }
                 let _ = reply_tx.try_send(Outgoing::Text(error_text(
                     "binary messages are not supported; send JSON text",
                 )));
                 continue;
             }
-            Message::Close(_) => break,
-            Message::Ping(_) | Message::Pong(_) => continue,
+            Ok(Message::Ping(_) | Message::Pong(_)) => continue,
+            Ok(Message::Close(_)) | Err(_) => break,
         };
-        if text.len() > MAX_CLIENT_MESSAGE_BYTES {
-            metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
-            let _ = reply_tx
-                .send(Outgoing::Close(CLOSE_TOO_BIG, too_big.clone()))
-                .await;
-            closing = Some(false);
-            break;
-        }
         if !limiter.try_take(Instant::now()) {
             metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
             if last_rate_notice.is_none_or(|t| t.elapsed().as_secs_f64() >= 1.0) {
@@ -364,10 +352,7 @@ fn parse(msg: ClientMessage, notes: &mut Vec<String>) -> Result<Command, String>
                 seq,
                 ..StickInput::default()
             };
-            for (i, (name, a)) in [(LEFT, "left", &arms.left), (RIGHT, "right", &arms.right)]
-                .into_iter()
-                .map(|(i, n, a)| (i, (n, a)))
-            {
+            for (i, name, a) in [(LEFT, "left", &arms.left), (RIGHT, "right", &arms.right)] {
                 if let Some(a) = a {
                     input.arms[i] = arm_sticks(name, a, notes)?;
                 }

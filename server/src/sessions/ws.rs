@@ -141,6 +141,17 @@ enum Outgoing {
     Close(u16, String),
 }
 
+/// How a connection's reading ended, after the server sent a close frame or not.
+enum Ending {
+    /// The peer closed or went away; nothing more to do.
+    Plain,
+    /// We closed after reading a whole message: the peer's close frame is awaited.
+    AwaitPeerClose,
+    /// The transport refused a message and nothing more may be read: the connection is held
+    /// for [`CLOSE_LINGER`] so the close frame arrives before the socket drops.
+    Linger,
+}
+
 /// Whether a read error is the transport's size limit (tungstenite's `Capacity` error).
 fn is_capacity_error(e: &axum::Error) -> bool {
     std::error::Error::source(e)
@@ -238,9 +249,7 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
     let mut limiter = TokenBucket::new(2.0 * rate, rate, Instant::now());
     let mut last_rate_notice: Option<Instant> = None;
     let too_big = format!("message over {} KiB", MAX_CLIENT_MESSAGE_BYTES / 1024);
-    // How the reading ended: `Some(true)` when the transport refused a message (close sent,
-    // nothing more may be read), `Some(false)` after a close the peer should answer.
-    let mut closing: Option<bool> = None;
+    let mut ending = Ending::Plain;
     while let Some(item) = stream.next().await {
         // Over the documented limit: read whole (under the transport limit) and the close
         // handshake completed, or refused by the transport (nothing more can be read).
@@ -255,7 +264,11 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
             let _ = reply_tx
                 .send(Outgoing::Close(CLOSE_TOO_BIG, too_big.clone()))
                 .await;
-            closing = Some(!oversize);
+            ending = if oversize {
+                Ending::AwaitPeerClose
+            } else {
+                Ending::Linger
+            };
             break;
         }
         let text = match item {
@@ -297,10 +310,10 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
     }
     drop(reply_tx);
     let _ = writer.await;
-    match closing {
-        Some(true) => tokio::time::sleep(CLOSE_LINGER).await,
-        Some(false) => await_peer_close(&mut stream).await,
-        None => {}
+    match ending {
+        Ending::Linger => tokio::time::sleep(CLOSE_LINGER).await,
+        Ending::AwaitPeerClose => await_peer_close(&mut stream).await,
+        Ending::Plain => {}
     }
     metrics.ws_clients.fetch_sub(1, Ordering::Relaxed);
     if role == Role::Trainee {

@@ -624,7 +624,7 @@ fn run_binary(args: &[&str], probe: impl FnOnce(&str)) -> (String, String, Strin
 }
 
 /// A generated instructor token is printed once, to stderr, never to stdout; a configured
-/// one is printed nowhere.
+/// one is printed nowhere, `--help` included.
 #[test]
 fn the_instructor_token_is_printed_only_when_generated_and_only_to_stderr() {
     let mut probed = None;
@@ -659,4 +659,15 @@ fn the_instructor_token_is_printed_only_when_generated_and_only_to_stderr() {
     assert!(!stdout.contains(secret), "{stdout}");
     assert!(!stderr.contains(secret), "{stderr}");
     assert!(!stderr.contains("instructor token"), "{stderr}");
+
+    // Nor does `--help` show the environment's token or join code (clap would by default).
+    let help = std::process::Command::new(env!("CARGO_BIN_EXE_seaarms"))
+        .arg("--help")
+        .env("SEAARMS_INSTRUCTOR_TOKEN", secret)
+        .env("SEAARMS_JOIN_CODE", "class-code-91")
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&help.stdout);
+    assert!(text.contains("SEAARMS_INSTRUCTOR_TOKEN"), "{text}");
+    assert!(!text.contains(secret) && !text.contains("class-code-91"), "{text}");
 }

@@ -86,7 +86,12 @@ pub struct ServeConfig {
     pub bind: SocketAddr,
     /// Instructor token; when not set, one is generated and printed once to stderr (a
     /// configured token is never printed).
-    #[arg(long, env = "SEAARMS_INSTRUCTOR_TOKEN", global = true)]
+    #[arg(
+        long,
+        env = "SEAARMS_INSTRUCTOR_TOKEN",
+        hide_env_values = true,
+        global = true
+    )]
     pub instructor_token: Option<String>,
     /// Directory of session records and the session index.
     #[arg(
@@ -171,7 +176,7 @@ pub struct ServeConfig {
     pub trusted_proxies: Vec<IpAddr>,
     /// Class code that `POST /api/sessions` must present (`join_code` field or `X-Join-Code`
     /// header; 403 otherwise); none by default. The instructor token needs none.
-    #[arg(long, env = "SEAARMS_JOIN_CODE", global = true)]
+    #[arg(long, env = "SEAARMS_JOIN_CODE", hide_env_values = true, global = true)]
     pub join_code: Option<String>,
     /// Further origins (e.g. `https://sim.example.org`, comma-separated) allowed to open
     /// WebSockets and send POST/DELETE, besides the served host itself.

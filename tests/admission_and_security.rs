@@ -669,5 +669,8 @@ fn the_instructor_token_is_printed_only_when_generated_and_only_to_stderr() {
         .unwrap();
     let text = String::from_utf8_lossy(&help.stdout);
     assert!(text.contains("SEAARMS_INSTRUCTOR_TOKEN"), "{text}");
-    assert!(!text.contains(secret) && !text.contains("class-code-91"), "{text}");
+    assert!(
+        !text.contains(secret) && !text.contains("class-code-91"),
+        "{text}"
+    );
 }

@@ -387,3 +387,57 @@ pub enum ServerMessage {
         t: f64,
     },
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The wire strings the page and the instructor dashboard rely on (README "Protocol",
+    /// web/instructor.js) are unchanged by the typed faults and grasp states.
+    #[test]
+    fn wire_strings_of_faults_and_grasp_states() {
+        let label = |arm, kind, joint, value| {
+            fault_label(&ActiveFault {
+                arm,
+                fault: Fault::new(kind, joint, value).unwrap(),
+            })
+        };
+        assert_eq!(
+            label(Arm::Left, FaultKind::SupplyDrop, None, 3.0e6),
+            "supply_drop:left:3000000Pa"
+        );
+        assert_eq!(
+            label(Arm::Right, FaultKind::StuckValve, Some(2), 0.5),
+            "stuck_valve:right:2:0.5"
+        );
+        assert_eq!(
+            label(Arm::Left, FaultKind::Leak, Some(1), 5e-10),
+            "leak:left:1:5e-10"
+        );
+        assert_eq!(
+            label(Arm::Right, FaultKind::Air, None, 0.3),
+            "air:right:0.3"
+        );
+        let f = ActiveFault {
+            arm: Arm::Left,
+            fault: Fault::new(FaultKind::Air, None, 0.3).unwrap(),
+        };
+        assert_eq!(serde_json::to_value(f).unwrap(), "air:left:0.3");
+        for kind in FaultKind::ALL {
+            assert_eq!(parse_fault_kind(fault_kind_name(kind)), Some(kind));
+        }
+        for arm in Arm::BOTH {
+            assert_eq!(parse_arm(arm_name(arm)), Some(arm));
+        }
+        // The core's own snake-case names (CSV) agree with the wire names.
+        for g in [
+            GraspState::Free,
+            GraspState::OneOnSurface,
+            GraspState::OneLifted,
+            GraspState::OneHoldingOtherContact,
+            GraspState::BothHolding,
+        ] {
+            assert_eq!(grasp_name(g), g.as_str());
+        }
+    }
+}

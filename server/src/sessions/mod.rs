@@ -190,11 +190,6 @@ impl Live {
         &self.faults
     }
 
-    /// Last input sequence number applied.
-    pub fn input_seq(&self) -> u64 {
-        self.input_seq
-    }
-
     /// New stick input: in joint mode the axes drive the valves, in Cartesian mode they are
     /// end-effector velocity fractions (resolved every step); the grips drive the jaws.
     pub fn apply_input(&mut self, input: &StickInput) {

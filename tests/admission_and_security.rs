@@ -173,8 +173,7 @@ async fn unjoined_sessions_end_and_the_instructor_ends_any() {
         joined["id"].as_str().unwrap(),
     );
     let jtok = joined["control_token"].as_str().unwrap();
-    let mut ws = connect(&s, jid, &format!("token={jtok}")).await.unwrap();
-    next_of(&mut ws, "hello", Duration::from_secs(5)).await;
+    let mut ws = trainee(&s, jid, jtok).await;
     let deadline = Instant::now() + Duration::from_secs(15);
     loop {
         let v = status_of(&s, lid).await;
@@ -461,8 +460,7 @@ async fn oversize_messages_close_with_1009() {
     let (id, tok) = (id.as_str(), tok.as_str());
     let q = format!("token={tok}");
     for size in [20 * 1024, 200 * 1024] {
-        let mut ws = connect(&s, id, &q).await.unwrap();
-        next_of(&mut ws, "hello", Duration::from_secs(5)).await;
+        let mut ws = trainee(&s, id, tok).await;
         let big = json!({"type": "input", "seq": 1, "pad": "x".repeat(size)}).to_string();
         ws.send(Message::Text(big.into())).await.unwrap();
         assert_eq!(close_code(&mut ws).await, 1009, "{size} bytes");
@@ -479,8 +477,7 @@ async fn a_seq_beyond_2_53_is_refused_and_the_session_streams_on() {
     let s = start().await;
     let (id, tok) = new_session(&s).await;
     let (id, tok) = (id.as_str(), tok.as_str());
-    let mut ws = connect(&s, id, &format!("token={tok}")).await.unwrap();
-    next_of(&mut ws, "hello", Duration::from_secs(5)).await;
+    let mut ws = trainee(&s, id, tok).await;
     let too_big: u64 = (1 << 53) + 1;
     ws.send(Message::Text(
         json!({"type": "input", "seq": too_big}).to_string().into(),

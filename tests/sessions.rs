@@ -326,8 +326,7 @@ async fn bad_messages_get_errors_and_the_session_keeps_running() {
         c["id"].as_str().unwrap(),
         c["control_token"].as_str().unwrap(),
     );
-    let mut ws = connect(&s, id, &format!("token={tok}")).await.unwrap();
-    next_of(&mut ws, "hello", Duration::from_secs(5)).await;
+    let mut ws = trainee(&s, id, tok).await;
     let cases: Vec<(String, &str)> = vec![
         ("{not json".into(), "invalid message"),
         (

@@ -89,6 +89,13 @@ pub async fn new_session(s: &Server) -> (String, String) {
     )
 }
 
+/// Connects as the session's trainee and reads the `hello`.
+pub async fn trainee(s: &Server, id: &str, token: &str) -> Ws {
+    let mut ws = connect(s, id, &format!("token={token}")).await.unwrap();
+    next_of(&mut ws, "hello", Duration::from_secs(5)).await;
+    ws
+}
+
 /// Opens a WebSocket with extra request headers (e.g. `Origin`); `Err(status)` when refused.
 pub async fn connect_with(
     s: &Server,

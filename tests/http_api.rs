@@ -6,34 +6,8 @@
 
 use serde_json::{Value, json};
 
-struct Server {
-    base: String,
-    _shutdown: tokio::sync::oneshot::Sender<()>,
-}
-
-async fn start() -> Server {
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let (tx, rx) = tokio::sync::oneshot::channel::<()>();
-    let dir =
-        std::env::temp_dir().join(format!("seaarms-http-{}", seaarms::sessions::random_hex(6)));
-    let config = seaarms::config::ServeConfig {
-        data_dir: dir,
-        ..Default::default()
-    };
-    let state = seaarms::app::AppState::new(&config).unwrap();
-    tokio::spawn(async move {
-        seaarms::run(listener, state, async {
-            let _ = rx.await;
-        })
-        .await
-        .unwrap();
-    });
-    Server {
-        base: format!("http://{addr}"),
-        _shutdown: tx,
-    }
-}
+mod common;
+use common::{Server, start};
 
 async fn post(s: &Server, path: &str, body: String) -> (u16, Value) {
     let resp = reqwest::Client::new()

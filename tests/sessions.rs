@@ -5,126 +5,14 @@
 
 #![allow(clippy::unwrap_used)]
 
-use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
-use futures_util::{SinkExt, StreamExt};
+use futures_util::SinkExt;
 use serde_json::{Value, json};
 use tokio_tungstenite::tungstenite::Message;
 
-const TEACHER: &str = "teacher-token";
-
-struct Server {
-    base: String,
-    stop: Option<tokio::sync::oneshot::Sender<()>>,
-    done: Option<tokio::task::JoinHandle<()>>,
-}
-
-impl Server {
-    async fn stop(mut self) {
-        if let Some(s) = self.stop.take() {
-            let _ = s.send(());
-        }
-        if let Some(d) = self.done.take() {
-            let _ = d.await;
-        }
-    }
-}
-
-fn temp_dir() -> PathBuf {
-    std::env::temp_dir().join(format!(
-        "seaarms-sessions-{}",
-        seaarms::sessions::random_hex(6)
-    ))
-}
-
-async fn start_with(dir: PathBuf, tweak: impl FnOnce(&mut seaarms::config::ServeConfig)) -> Server {
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let addr = listener.local_addr().unwrap();
-    let mut config = seaarms::config::ServeConfig {
-        data_dir: dir,
-        instructor_token: Some(TEACHER.into()),
-        ..Default::default()
-    };
-    tweak(&mut config);
-    let state = seaarms::app::AppState::new(&config).unwrap();
-    let (tx, rx) = tokio::sync::oneshot::channel::<()>();
-    let done = tokio::spawn(async move {
-        seaarms::run(listener, state, async {
-            let _ = rx.await;
-        })
-        .await
-        .unwrap();
-    });
-    Server {
-        base: format!("http://{addr}"),
-        stop: Some(tx),
-        done: Some(done),
-    }
-}
-
-async fn start() -> Server {
-    start_with(temp_dir(), |_| {}).await
-}
-
-async fn create(s: &Server, body: Value) -> (u16, Value) {
-    let r = reqwest::Client::new()
-        .post(format!("{}/api/sessions", s.base))
-        .json(&body)
-        .send()
-        .await
-        .unwrap();
-    let st = r.status().as_u16();
-    (st, r.json().await.unwrap())
-}
-
-type Ws =
-    tokio_tungstenite::WebSocketStream<tokio_tungstenite::MaybeTlsStream<tokio::net::TcpStream>>;
-
-async fn connect(s: &Server, id: &str, query: &str) -> Result<Ws, u16> {
-    let url = format!(
-        "{}/ws/sessions/{id}?{query}",
-        s.base.replace("http://", "ws://")
-    );
-    match tokio_tungstenite::connect_async(&url).await {
-        Ok((ws, _)) => Ok(ws),
-        Err(tokio_tungstenite::tungstenite::Error::Http(resp)) => Err(resp.status().as_u16()),
-        Err(e) => panic!("connect: {e}"),
-    }
-}
-
-/// Next message of the given type within `timeout`.
-async fn next_of(ws: &mut Ws, kind: &str, timeout: Duration) -> Value {
-    let deadline = Instant::now() + timeout;
-    loop {
-        let left = deadline.saturating_duration_since(Instant::now());
-        let msg = tokio::time::timeout(left, ws.next())
-            .await
-            .unwrap_or_else(|_| panic!("no `{kind}` message in time"));
-        match msg {
-            Some(Ok(Message::Text(t))) => {
-                let v: Value = serde_json::from_str(&t).unwrap();
-                if v["type"] == kind {
-                    return v;
-                }
-            }
-            Some(Ok(Message::Close(f))) => panic!("closed while waiting for {kind}: {f:?}"),
-            Some(Ok(_)) => {}
-            other => panic!("socket ended while waiting for {kind}: {other:?}"),
-        }
-    }
-}
-
-/// The first state frame with simulated time ≥ `t_min` (frames buffered in the socket while
-/// the test was busy are read and dropped on the way).
-async fn state_after(ws: &mut Ws, t_min: f64) -> Value {
-    loop {
-        let s = next_of(ws, "state", Duration::from_secs(5)).await;
-        if s["t"].as_f64().unwrap() >= t_min {
-            return s;
-        }
-    }
-}
+mod common;
+use common::*;
 
 async fn send(ws: &mut Ws, v: Value) {
     ws.send(Message::Text(v.to_string().into())).await.unwrap();
@@ -136,7 +24,10 @@ fn q(state: &Value, arm: &str, j: usize) -> f64 {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn stick_input_moves_the_joint_and_observers_see_it_read_only() {
-    let s = start().await;
+    let s = start_with(temp_dir(), |c| {
+        c.trusted_proxies = vec![std::net::Ipv4Addr::LOCALHOST.into()];
+    })
+    .await;
     let (st, c) = create(&s, json!({"label": "alice"})).await;
     assert_eq!(st, 201, "{c}");
     let id = c["id"].as_str().unwrap();
@@ -149,7 +40,8 @@ async fn stick_input_moves_the_joint_and_observers_see_it_read_only() {
     );
 
     assert!(c["ws_url"].as_str().unwrap().starts_with("ws://"));
-    // Behind a TLS proxy (X-Forwarded-Proto: https) the page is told to use wss://.
+    // Behind a TLS proxy (X-Forwarded-Proto: https, believed from --trusted-proxies only)
+    // the page is told to use wss://.
     let proxied: Value = reqwest::Client::new()
         .post(format!("{}/api/sessions", s.base))
         .header("x-forwarded-proto", "https")
@@ -434,8 +326,7 @@ async fn bad_messages_get_errors_and_the_session_keeps_running() {
         c["id"].as_str().unwrap(),
         c["control_token"].as_str().unwrap(),
     );
-    let mut ws = connect(&s, id, &format!("token={tok}")).await.unwrap();
-    next_of(&mut ws, "hello", Duration::from_secs(5)).await;
+    let mut ws = trainee(&s, id, tok).await;
     let cases: Vec<(String, &str)> = vec![
         ("{not json".into(), "invalid message"),
         (
@@ -502,20 +393,10 @@ async fn bad_messages_get_errors_and_the_session_keeps_running() {
         "{e}"
     );
     next_of(&mut ws, "state", Duration::from_secs(5)).await;
-    // Over 16 KiB: closed with 1008 (policy violation).
+    // Over 16 KiB: closed with 1009 (message too big, RFC 6455 §7.4.1).
     let big = json!({"type": "input", "seq": 1, "pad": "x".repeat(17 * 1024)}).to_string();
     ws.send(Message::Text(big.into())).await.unwrap();
-    let code = loop {
-        match tokio::time::timeout(Duration::from_secs(5), ws.next())
-            .await
-            .unwrap()
-        {
-            Some(Ok(Message::Close(Some(f)))) => break u16::from(f.code),
-            Some(Ok(_)) => continue,
-            other => panic!("expected a close frame, got {other:?}"),
-        }
-    };
-    assert_eq!(code, 1008);
+    assert_eq!(close_code(&mut ws).await, 1009);
     // The session survives its client: a new connection still streams it.
     let mut again = connect(&s, id, &format!("token={tok}")).await.unwrap();
     next_of(&mut again, "state", Duration::from_secs(5)).await;

@@ -37,11 +37,13 @@ export class View {
 
   legend() {
     if (!this.legendEl) return;
-    const sw = (c) => `<span class="sw" style="background:#${c.toString(16).padStart(6, '0')}"></span>`;
+    // Swatch colours are set through the CSSOM below: the page's CSP refuses style="" attributes.
+    const sw = (c) => `<span class="sw" data-colour="#${c.toString(16).padStart(6, '0')}"></span>`;
     this.legendEl.innerHTML =
       `ellipsoids ${sw(ELLIPSOID_COLOURS.left)}left ${sw(ELLIPSOID_COLOURS.right)}right ${sw(ELLIPSOID_COLOURS.dual)}dual` +
       ` — 1 m/s drawn as ${this.ellipsoids.scale} m<br>object ${sw(GRASP_COLOURS.free)}free ${sw(GRASP_COLOURS.one_on_surface)}one holding, on surface` +
       ` ${sw(GRASP_COLOURS.one_lifted)}one lifted ${sw(GRASP_COLOURS.one_holding_other_contact)}one holds, other touches ${sw(GRASP_COLOURS.both_holding)}both holding`;
+    for (const el of this.legendEl.querySelectorAll('.sw')) el.style.background = el.dataset.colour;
   }
 
   setHello(hello) {

@@ -17,6 +17,8 @@ use crate::error::ApiError;
 use crate::json::MAX_BODY_BYTES;
 use crate::metrics::Metrics;
 use crate::robots::Robots;
+use crate::security::{self, Policy};
+use crate::sessions::admission::CreationLimiter;
 use crate::sessions::record::Recorder;
 use crate::sessions::{self, SessionConfig, SessionManager};
 
@@ -33,6 +35,26 @@ pub struct AppState {
     pub instructor_token: Arc<str>,
     /// Recent scenario runs' CSVs, for download.
     pub scenario_runs: Arc<api::scenarios::RunStore>,
+    /// Origins, public URL and trusted proxies.
+    pub policy: Arc<Policy>,
+    /// Per-client rate limit of session creation.
+    pub creation_limiter: Arc<CreationLimiter>,
+    /// Class code required to create a session, when configured.
+    pub join_code: Option<Arc<str>>,
+}
+
+/// Checks an operator-supplied secret (instructor token, join code): it must travel intact
+/// in a header, so no whitespace or control characters (a trailing space from a pasted
+/// value is a start-up error, not a token nobody can type).
+fn check_secret(what: &str, value: &str) -> anyhow::Result<()> {
+    anyhow::ensure!(
+        value
+            .chars()
+            .all(|c| c.is_ascii_graphic()
+                || (!c.is_ascii() && !c.is_whitespace() && !c.is_control())),
+        "{what} must not contain spaces or control characters"
+    );
+    Ok(())
 }
 
 impl AppState {
@@ -56,21 +78,48 @@ impl AppState {
                 frame_hz: config.frame_hz,
                 max_messages_per_second: config.max_messages_per_second,
                 physics_threads: threads,
+                unjoined_grace: Duration::from_secs(config.unjoined_grace_secs),
+                max_sessions_per_client: config.max_sessions_per_client,
             },
             recorder,
             metrics.clone(),
             magnum,
         );
         let instructor_token: Arc<str> = match &config.instructor_token {
-            Some(t) if !t.is_empty() => t.as_str().into(),
+            Some(t) if !t.is_empty() => {
+                check_secret("the instructor token", t)?;
+                t.as_str().into()
+            }
             _ => sessions::random_hex(16).into(),
         };
+        let join_code = match &config.join_code {
+            Some(c) if !c.is_empty() => {
+                check_secret("the join code", c)?;
+                Some(c.as_str().into())
+            }
+            _ => None,
+        };
+        let policy = Policy::new(
+            config.public_url.as_deref(),
+            &config.allowed_origins,
+            &config.trusted_proxies,
+        )?;
+        anyhow::ensure!(
+            config.sessions_per_minute.is_finite() && config.sessions_per_minute > 0.0,
+            "--sessions-per-minute must be a positive number"
+        );
         Ok(AppState {
             robots,
             sessions,
             metrics,
             instructor_token,
             scenario_runs: Arc::default(),
+            policy: Arc::new(policy),
+            creation_limiter: Arc::new(CreationLimiter::new(
+                config.session_burst,
+                config.sessions_per_minute,
+            )),
+            join_code,
         })
     }
 }
@@ -156,7 +205,19 @@ pub fn app(state: AppState) -> Router {
         .fallback(|uri: axum::http::Uri| async move {
             ApiError::not_found(format!("no route for {}", uri.path()))
         })
+        .method_not_allowed_fallback(
+            |method: axum::http::Method, uri: axum::http::Uri| async move {
+                ApiError::new(
+                    axum::http::StatusCode::METHOD_NOT_ALLOWED,
+                    format!("{method} is not allowed on {}", uri.path()),
+                )
+            },
+        )
         .layer(DefaultBodyLimit::max(MAX_BODY_BYTES))
+        .layer(middleware::from_fn_with_state(
+            state.clone(),
+            security::guard,
+        ))
         .layer(middleware::from_fn_with_state(
             state.metrics.clone(),
             count_requests,

@@ -1,5 +1,8 @@
 //! The browser page and its vendored libraries, embedded in the binary (rust-embed; with
-//! `debug-embed`, debug builds serve the same bytes as release builds).
+//! `debug-embed`, debug builds serve the same bytes as release builds), and the Content
+//! Security Policy that lets exactly them run.
+
+use std::sync::OnceLock;
 
 use axum::extract::Path;
 use axum::http::{HeaderValue, StatusCode, header};
@@ -52,4 +55,103 @@ pub async fn web(Path(path): Path<String>) -> Response {
 /// `GET /static/{*path}`: vendored packages, immutable for a given binary.
 pub async fn vendored(Path(path): Path<String>) -> Response {
     serve::<Static>(&path, "public, max-age=86400")
+}
+
+/// The pages' inline import maps (`<script type="importmap">…</script>`): the only inline
+/// scripts; a browser cannot load an import map from a file, so the policy allows each by
+/// its SHA-256 (CSP Level 3 hash source).
+fn inline_importmap_hashes() -> Vec<String> {
+    use base64::Engine as _;
+    use sha2::{Digest, Sha256};
+    const OPEN: &str = "<script type=\"importmap\">";
+    let mut hashes: Vec<String> = Vec::new();
+    for name in Web::iter().filter(|n| n.ends_with(".html")) {
+        let Some(file) = Web::get(&name) else {
+            continue;
+        };
+        let html = String::from_utf8_lossy(&file.data);
+        let mut rest: &str = &html;
+        while let Some(start) = rest.find(OPEN) {
+            let body = &rest[start + OPEN.len()..];
+            let Some(end) = body.find("</script>") else {
+                break;
+            };
+            let digest = Sha256::digest(&body.as_bytes()[..end]);
+            let h = format!(
+                "'sha256-{}'",
+                base64::engine::general_purpose::STANDARD.encode(digest)
+            );
+            if !hashes.contains(&h) {
+                hashes.push(h);
+            }
+            rest = &body[end..];
+        }
+    }
+    hashes
+}
+
+/// The Content-Security-Policy of every response: everything from this server only, no
+/// inline script but the hashed import maps, no inline `<style>` or `style=""` attributes,
+/// WebSockets to any host (the page's socket goes to the server it came from; `'self'` does
+/// not cover `ws:` in every browser), no framing, no plugins.
+pub fn content_security_policy() -> &'static str {
+    static CSP: OnceLock<String> = OnceLock::new();
+    CSP.get_or_init(|| {
+        let mut script_src = String::from("'self'");
+        for h in inline_importmap_hashes() {
+            script_src.push(' ');
+            script_src.push_str(&h);
+        }
+        format!(
+            "default-src 'self'; script-src {script_src}; style-src 'self'; \
+             img-src 'self' data: blob:; connect-src 'self' ws: wss:; object-src 'none'; \
+             base-uri 'none'; form-action 'self'; frame-ancestors 'none'"
+        )
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The policy hashes the import map the pages really carry: recomputed here from the
+    /// page text with an independent SHA-256 (FIPS 180-4 test vector first, so the hash
+    /// itself is right).
+    #[test]
+    fn the_policy_allows_the_pages_import_map_and_nothing_else_inline() {
+        use base64::Engine as _;
+        use sha2::{Digest, Sha256};
+        // FIPS 180-4 / NIST example: SHA-256("abc").
+        let hex: String = Sha256::digest(b"abc")
+            .iter()
+            .map(|b| format!("{b:02x}"))
+            .collect();
+        assert_eq!(
+            hex,
+            "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
+        );
+        let csp = content_security_policy();
+        let index = String::from_utf8(Web::get("index.html").unwrap().data.into_owned()).unwrap();
+        let map = index
+            .split("<script type=\"importmap\">")
+            .nth(1)
+            .unwrap()
+            .split("</script>")
+            .next()
+            .unwrap();
+        let want = base64::engine::general_purpose::STANDARD.encode(Sha256::digest(map));
+        assert!(csp.contains(&format!("'sha256-{want}'")), "{csp}");
+        assert!(!csp.contains("unsafe-inline") && !csp.contains("unsafe-eval"));
+        assert!(csp.contains("frame-ancestors 'none'"));
+        // No page has another inline script or an inline style element.
+        for name in Web::iter().filter(|n| n.ends_with(".html")) {
+            let html = String::from_utf8(Web::get(&name).unwrap().data.into_owned()).unwrap();
+            let scripts = html.matches("<script").count();
+            let external = html.matches("<script type=\"module\" src=").count();
+            let maps = html.matches("<script type=\"importmap\">").count();
+            assert_eq!(scripts, external + maps, "{name} has an inline script");
+            assert!(!html.contains("<style"), "{name} has an inline <style>");
+            assert!(!html.contains("style=\""), "{name} has a style attribute");
+        }
+    }
 }

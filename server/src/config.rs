@@ -1,7 +1,7 @@
 //! Command line and environment configuration: one `clap` struct, defaults that make a bare
 //! `seaarms` serve on http://127.0.0.1:8080.
 
-use std::net::SocketAddr;
+use std::net::{IpAddr, SocketAddr};
 use std::path::PathBuf;
 
 use clap::{Parser, Subcommand};
@@ -84,8 +84,14 @@ pub struct ServeConfig {
         global = true
     )]
     pub bind: SocketAddr,
-    /// Instructor token; generated and printed at start-up when not set.
-    #[arg(long, env = "SEAARMS_INSTRUCTOR_TOKEN", global = true)]
+    /// Instructor token; when not set, one is generated and printed once to stderr (a
+    /// configured token is never printed).
+    #[arg(
+        long,
+        env = "SEAARMS_INSTRUCTOR_TOKEN",
+        hide_env_values = true,
+        global = true
+    )]
     pub instructor_token: Option<String>,
     /// Directory of session records and the session index.
     #[arg(
@@ -125,6 +131,66 @@ pub struct ServeConfig {
     /// Physics worker threads (default: one per CPU).
     #[arg(long, env = "SEAARMS_PHYSICS_THREADS", global = true)]
     pub physics_threads: Option<usize>,
+
+    // --- Admission and browser security (docs/operations.md) ---
+    /// Sessions one client may create at once before the rate limit applies (429 beyond).
+    #[arg(
+        long,
+        env = "SEAARMS_SESSION_BURST",
+        default_value_t = 10,
+        global = true
+    )]
+    pub session_burst: u32,
+    /// Sessions one client may create per minute after its burst (token-bucket refill).
+    #[arg(
+        long,
+        env = "SEAARMS_SESSIONS_PER_MINUTE",
+        default_value_t = 6.0,
+        global = true
+    )]
+    pub sessions_per_minute: f64,
+    /// Most live sessions created by one client at once (429 beyond).
+    #[arg(
+        long,
+        env = "SEAARMS_MAX_SESSIONS_PER_CLIENT",
+        default_value_t = 16,
+        global = true
+    )]
+    pub max_sessions_per_client: usize,
+    /// A session no trainee has connected to ends after this many seconds.
+    #[arg(
+        long,
+        env = "SEAARMS_UNJOINED_GRACE_SECS",
+        default_value_t = 60,
+        global = true
+    )]
+    pub unjoined_grace_secs: u64,
+    /// Reverse proxies (IP addresses, comma-separated) whose `X-Forwarded-For` and
+    /// `X-Forwarded-Proto` are believed; none by default (the headers are ignored).
+    #[arg(
+        long,
+        env = "SEAARMS_TRUSTED_PROXIES",
+        value_delimiter = ',',
+        global = true
+    )]
+    pub trusted_proxies: Vec<IpAddr>,
+    /// Class code that `POST /api/sessions` must present (`join_code` field or `X-Join-Code`
+    /// header; 403 otherwise); none by default. The instructor token needs none.
+    #[arg(long, env = "SEAARMS_JOIN_CODE", hide_env_values = true, global = true)]
+    pub join_code: Option<String>,
+    /// Further origins (e.g. `https://sim.example.org`, comma-separated) allowed to open
+    /// WebSockets and send POST/DELETE, besides the served host itself.
+    #[arg(
+        long,
+        env = "SEAARMS_ALLOWED_ORIGINS",
+        value_delimiter = ',',
+        global = true
+    )]
+    pub allowed_origins: Vec<String>,
+    /// Public base URL (`https://sim.example.org`); `ws_url` is built from it instead of the
+    /// request's Host header, and its origin is allowed.
+    #[arg(long, env = "SEAARMS_PUBLIC_URL", global = true)]
+    pub public_url: Option<String>,
 }
 
 impl Default for ServeConfig {
@@ -138,6 +204,14 @@ impl Default for ServeConfig {
             frame_hz: 60,
             max_messages_per_second: 200,
             physics_threads: None,
+            session_burst: 10,
+            sessions_per_minute: 6.0,
+            max_sessions_per_client: 16,
+            unjoined_grace_secs: 60,
+            trusted_proxies: Vec::new(),
+            join_code: None,
+            allowed_origins: Vec::new(),
+            public_url: None,
         }
     }
 }

@@ -23,26 +23,31 @@ impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for ApiJson<T> {
             .map_err(|rejection| ApiError {
                 status: rejection.status(),
                 error: match rejection.status().as_u16() {
-                    413 => format!("request body is larger than {MAX_BODY_BYTES} bytes"),
+                    413 => crate::error::body_too_large_message(),
                     _ => rejection.body_text(),
                 },
                 detail: None,
             })?;
-        let mut de = serde_json::Deserializer::from_slice(&bytes);
-        let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
-            let path = e.path().to_string();
-            let inner = e.into_inner();
-            let msg = if inner.is_syntax() || inner.is_eof() {
-                format!("malformed JSON: {inner}")
-            } else if path == "." {
-                format!("invalid request: {inner}")
-            } else {
-                format!("invalid field `{path}`: {inner}")
-            };
-            ApiError::bad_request(msg)
-        })?;
-        de.end()
-            .map_err(|e| ApiError::bad_request(format!("malformed JSON: {e}")))?;
-        Ok(ApiJson(value))
+        parse(&bytes).map(ApiJson)
     }
+}
+
+/// Parses a JSON body into `T`; errors name the line and column (malformed JSON) or the field.
+pub fn parse<T: DeserializeOwned>(bytes: &[u8]) -> Result<T, ApiError> {
+    let mut de = serde_json::Deserializer::from_slice(bytes);
+    let value = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let path = e.path().to_string();
+        let inner = e.into_inner();
+        let msg = if inner.is_syntax() || inner.is_eof() {
+            format!("malformed JSON: {inner}")
+        } else if path == "." {
+            format!("invalid request: {inner}")
+        } else {
+            format!("invalid field `{path}`: {inner}")
+        };
+        ApiError::bad_request(msg)
+    })?;
+    de.end()
+        .map_err(|e| ApiError::bad_request(format!("malformed JSON: {e}")))?;
+    Ok(value)
 }

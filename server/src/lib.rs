@@ -9,7 +9,8 @@
 //! * [`json`]: the JSON extractor whose rejections are JSON errors.
 //! * [`protocol`]: WebSocket wire types (the page contract).
 //! * [`error`]: the one HTTP error type.
-//! * [`assets`]: the embedded web page and vendored libraries.
+//! * [`assets`]: the embedded web page and vendored libraries, and the Content-Security-Policy.
+//! * [`security`]: the middleware for origins, content types, security headers, JSON errors.
 //! * [`sessions`]: live sessions — physics threads, frames, WebSocket, REST, records.
 //! * [`metrics`]: Prometheus counters; [`load`]: the `seaarms load` client.
 //! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
@@ -26,6 +27,7 @@ pub mod metrics;
 pub mod protocol;
 pub mod robots;
 pub mod scenarios;
+pub mod security;
 pub mod sessions;
 
 use std::future::Future;
@@ -33,7 +35,7 @@ use std::future::Future;
 use tokio::net::TcpListener;
 
 /// Serves the application on a bound listener until `shutdown` completes (tests bind port
-/// 0). Idle sessions are expired every few seconds; on shutdown every session is ended and
+/// 0). Idle and never-joined sessions are expired every few seconds; on shutdown every session is ended and
 /// every record flushed before this returns.
 pub async fn run(
     listener: TcpListener,
@@ -44,7 +46,7 @@ pub async fn run(
     let expiry = tokio::spawn({
         let sessions = sessions.clone();
         async move {
-            let mut tick = tokio::time::interval(std::time::Duration::from_secs(5));
+            let mut tick = tokio::time::interval(sessions.expiry_interval());
             loop {
                 tick.tick().await;
                 let s = sessions.clone();
@@ -56,7 +58,9 @@ pub async fn run(
     let listener = axum::serve::ListenerExt::tap_io(listener, |tcp: &mut tokio::net::TcpStream| {
         let _ = tcp.set_nodelay(true);
     });
-    let result = axum::serve(listener, app::app(state))
+    // Connect info: the peer address keys the per-client admission limits.
+    let service = app::app(state).into_make_service_with_connect_info::<std::net::SocketAddr>();
+    let result = axum::serve(listener, service)
         .with_graceful_shutdown(shutdown)
         .await;
     expiry.abort();

@@ -90,16 +90,17 @@ async fn serve(config: seaarms::config::ServeConfig) -> anyhow::Result<()> {
     let state = seaarms::app::AppState::new(&config)?;
     let listener = tokio::net::TcpListener::bind(config.bind).await?;
     let addr = listener.local_addr()?;
-    println!("seaarms serving on http://{addr}");
-    println!(
-        "instructor dashboard: http://{addr}/instructor  token: {}",
-        state.instructor_token
-    );
-    if config.instructor_token.is_none() {
-        println!(
-            "(token generated for this run; set --instructor-token or SEAARMS_INSTRUCTOR_TOKEN to keep one)"
+    // A configured token is the operator's secret and is never printed; a generated one is
+    // printed once, to stderr (not to stdout, which is often collected into shared logs),
+    // before the address lines so it is out by the time anyone reads them.
+    if config.instructor_token.as_deref().is_none_or(str::is_empty) {
+        eprintln!(
+            "instructor token (generated for this run; set --instructor-token or SEAARMS_INSTRUCTOR_TOKEN to keep one): {}",
+            state.instructor_token
         );
     }
+    println!("seaarms serving on http://{addr}");
+    println!("instructor dashboard: http://{addr}/instructor");
     tracing::info!(%addr, data_dir = %config.data_dir.display(), "listening");
     seaarms::run(listener, state, shutdown_signal()).await?;
     tracing::info!("stopped; records flushed");

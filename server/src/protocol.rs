@@ -6,12 +6,91 @@
 //! [`StateFrame`] at the frame rate (latest state wins: a slow client skips frames), plus
 //! [`ServerMessage::Error`], [`ServerMessage::Message`] and [`ServerMessage::Pong`].
 
-use serde::{Deserialize, Serialize};
+use seaarms_core::grasp::GraspState;
+use serde::{Deserialize, Serialize, Serializer};
 
 use crate::api::wire::PoseOut;
+use crate::sessions::command::{ActiveFault, Arm, Fault, FaultKind};
 
-/// Largest WebSocket message accepted from a client (bytes); larger closes with 1008.
+/// Largest WebSocket message accepted from a client (bytes); a larger one closes the
+/// connection with a close frame, code 1009 (message too big, RFC 6455 §7.4.1).
 pub const MAX_CLIENT_MESSAGE_BYTES: usize = 16 * 1024;
+
+/// Largest `seq` of an input message: 2⁵³ − 1, the largest integer a JavaScript number holds
+/// exactly (`Number.MAX_SAFE_INTEGER`). A larger one is refused with an `error` message (the
+/// session goes on), so `input_seq` can never be pushed out of the page's reach.
+pub const MAX_INPUT_SEQ: u64 = (1 << 53) - 1;
+
+/// Wire name of an arm.
+pub fn arm_name(arm: Arm) -> &'static str {
+    match arm {
+        Arm::Left => "left",
+        Arm::Right => "right",
+    }
+}
+
+/// An arm from its wire name.
+pub fn parse_arm(name: &str) -> Option<Arm> {
+    match name {
+        "left" => Some(Arm::Left),
+        "right" => Some(Arm::Right),
+        _ => None,
+    }
+}
+
+/// Wire name of a fault kind (REST `fault` field, fault labels).
+pub fn fault_kind_name(kind: FaultKind) -> &'static str {
+    match kind {
+        FaultKind::SupplyDrop => "supply_drop",
+        FaultKind::StuckValve => "stuck_valve",
+        FaultKind::Leak => "leak",
+        FaultKind::Air => "air",
+    }
+}
+
+/// A fault kind from its wire name.
+pub fn parse_fault_kind(name: &str) -> Option<FaultKind> {
+    FaultKind::ALL
+        .into_iter()
+        .find(|k| fault_kind_name(*k) == name)
+}
+
+/// Wire name of a grasp state (state frames, session summaries, records).
+pub fn grasp_name(state: GraspState) -> &'static str {
+    match state {
+        GraspState::Free => "free",
+        GraspState::OneOnSurface => "one_on_surface",
+        GraspState::OneLifted => "one_lifted",
+        GraspState::OneHoldingOtherContact => "one_holding_other_contact",
+        GraspState::BothHolding => "both_holding",
+    }
+}
+
+fn serialize_grasp<S: Serializer>(state: &GraspState, s: S) -> Result<S::Ok, S::Error> {
+    s.serialize_str(grasp_name(*state))
+}
+
+/// An active fault as users see it: `supply_drop:left:3000000Pa`, `stuck_valve:right:2:0.5`,
+/// `leak:left:1:5e-10`, `air:right:0.3`.
+pub fn fault_label(f: &ActiveFault) -> String {
+    let arm = arm_name(f.arm);
+    let kind = fault_kind_name(f.fault.kind());
+    match f.fault {
+        Fault::SupplyDrop { drop_pa } => format!("{kind}:{arm}:{drop_pa:.0}Pa"),
+        Fault::StuckValve { joint, spool } => format!("{kind}:{arm}:{joint}:{spool}"),
+        Fault::Leak {
+            joint,
+            coefficient_m3_s_pa,
+        } => format!("{kind}:{arm}:{joint}:{coefficient_m3_s_pa:e}"),
+        Fault::Air { bulk_modulus_scale } => format!("{kind}:{arm}:{bulk_modulus_scale}"),
+    }
+}
+
+impl Serialize for ActiveFault {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&fault_label(self))
+    }
+}
 
 /// Per-arm stick input: six axes and a grip, each in [−1, 1].
 #[derive(Debug, Clone, Default, Deserialize, Serialize, PartialEq)]
@@ -259,7 +338,8 @@ pub struct StateFrame {
     /// The object.
     pub object: ObjectFrame,
     /// `free`, `one_on_surface`, `one_lifted`, `one_holding_other_contact`, `both_holding`.
-    pub grasp: &'static str,
+    #[serde(serialize_with = "serialize_grasp")]
+    pub grasp: GraspState,
     /// Internal force (N) on the object (Lim eq. 3.47).
     pub internal_force_n: [f64; 3],
     /// Internal torque (N·m).
@@ -268,8 +348,8 @@ pub struct StateFrame {
     pub relief_events: u64,
     /// Active warnings: `near_singularity:left`, `near_joint_limit:right:3`, `relief:left:2`, …
     pub warnings: Vec<String>,
-    /// Active faults, as instructors set them.
-    pub faults: Vec<String>,
+    /// Active faults, as instructors set them (labels, see [`fault_label`]).
+    pub faults: Vec<ActiveFault>,
 }
 
 /// Left and right arm frames.
@@ -306,4 +386,58 @@ pub enum ServerMessage {
         /// The ping's timestamp.
         t: f64,
     },
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The wire strings the page and the instructor dashboard rely on (README "Protocol",
+    /// web/instructor.js) are unchanged by the typed faults and grasp states.
+    #[test]
+    fn wire_strings_of_faults_and_grasp_states() {
+        let label = |arm, kind, joint, value| {
+            fault_label(&ActiveFault {
+                arm,
+                fault: Fault::new(kind, joint, value).unwrap(),
+            })
+        };
+        assert_eq!(
+            label(Arm::Left, FaultKind::SupplyDrop, None, 3.0e6),
+            "supply_drop:left:3000000Pa"
+        );
+        assert_eq!(
+            label(Arm::Right, FaultKind::StuckValve, Some(2), 0.5),
+            "stuck_valve:right:2:0.5"
+        );
+        assert_eq!(
+            label(Arm::Left, FaultKind::Leak, Some(1), 5e-10),
+            "leak:left:1:5e-10"
+        );
+        assert_eq!(
+            label(Arm::Right, FaultKind::Air, None, 0.3),
+            "air:right:0.3"
+        );
+        let f = ActiveFault {
+            arm: Arm::Left,
+            fault: Fault::new(FaultKind::Air, None, 0.3).unwrap(),
+        };
+        assert_eq!(serde_json::to_value(f).unwrap(), "air:left:0.3");
+        for kind in FaultKind::ALL {
+            assert_eq!(parse_fault_kind(fault_kind_name(kind)), Some(kind));
+        }
+        for arm in Arm::BOTH {
+            assert_eq!(parse_arm(arm_name(arm)), Some(arm));
+        }
+        // The core's own snake-case names (CSV) agree with the wire names.
+        for g in [
+            GraspState::Free,
+            GraspState::OneOnSurface,
+            GraspState::OneLifted,
+            GraspState::OneHoldingOtherContact,
+            GraspState::BothHolding,
+        ] {
+            assert_eq!(grasp_name(g), g.as_str());
+        }
+    }
 }

@@ -6,8 +6,12 @@
 //! * [`physics`]: the worker threads that step sessions and publish frames.
 //! * [`snapshot`]: building a [`crate::protocol::StateFrame`] (measures included) from a simulation.
 //! * [`record`]: the recorder thread (CSV time series, events, the session index on disk).
+//! * [`command`]: the one [`command::Command`] type both edges parse into, applied in one place.
+//! * [`admission`]: who may create sessions how often (per-client token buckets and caps).
 //! * [`ws`]: the WebSocket endpoint; [`rest`]: the REST endpoints.
 
+pub mod admission;
+pub mod command;
 pub mod physics;
 pub mod record;
 pub mod rest;
@@ -21,6 +25,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use axum::extract::ws::Utf8Bytes;
 use seaarms_core::Model;
+use seaarms_core::grasp::GraspState;
 use seaarms_core::kinematics::KinData;
 use seaarms_core::redundancy::{Redundancy, RedundancyParams};
 use seaarms_core::sim::{Input, SimParams, Simulation};
@@ -28,7 +33,10 @@ use tokio::sync::watch;
 
 use crate::metrics::Metrics;
 use crate::protocol::{ControlMethod, ControlMode, Settings};
+use admission::ClientKey;
+use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
+use snapshot::{CARTESIAN_MAX_ANGULAR_RAD_S, CARTESIAN_MAX_LINEAR_M_S};
 
 /// Scenarios a live session can start from (the initial position of Lim §4.1 for all of
 /// them); `training` is free play.
@@ -68,6 +76,10 @@ pub struct SessionConfig {
     pub max_messages_per_second: u32,
     /// Physics worker threads.
     pub physics_threads: usize,
+    /// A session no trainee has ever connected to ends after this long.
+    pub unjoined_grace: Duration,
+    /// Most live sessions created by one client (peer address) at once.
+    pub max_sessions_per_client: usize,
 }
 
 /// A random hex token of `bytes` bytes.
@@ -87,13 +99,17 @@ pub fn random_hex(bytes: usize) -> String {
     buf.iter().map(|b| format!("{b:02x}")).collect()
 }
 
-/// Compares two tokens in time independent of where they differ.
+/// Compares two tokens exactly (no trimming, case-sensitive) in time independent of their
+/// contents and lengths: the SHA-256 digests of both are compared with an XOR fold, so neither
+/// the position of the first difference nor a length mismatch shows in the timing.
 pub fn token_eq(a: &str, b: &str) -> bool {
-    let (a, b) = (a.as_bytes(), b.as_bytes());
-    if a.len() != b.len() {
-        return false;
-    }
-    a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+    use sha2::{Digest, Sha256};
+    let (da, db) = (Sha256::digest(a.as_bytes()), Sha256::digest(b.as_bytes()));
+    let diff = da
+        .iter()
+        .zip(db.iter())
+        .fold(0u8, |acc, (x, y)| acc | (x ^ y));
+    std::hint::black_box(diff) == 0
 }
 
 /// Seconds since the Unix epoch.
@@ -113,46 +129,150 @@ pub struct Frame {
     pub json: Utf8Bytes,
 }
 
-/// Instructor-injected faults, as shown to users.
-#[derive(Debug, Clone, PartialEq)]
-pub struct FaultLabel(pub String);
-
 /// Mutable state of a session, behind one mutex (held briefly by the physics worker each
-/// tick and by handlers applying input).
+/// tick and by handlers applying commands). Its fields are private: the edges (WebSocket,
+/// REST) change it only through [`command::apply`] and read it through the accessors; the
+/// stepping engine ([`physics`], [`snapshot`]) works on the fields directly.
 pub struct Live {
     /// The simulation.
-    pub sim: Simulation,
+    sim: Simulation,
     /// Inputs applied from the next step on.
-    pub input: Input,
+    input: Input,
     /// Current settings.
-    pub settings: Settings,
+    settings: Settings,
     /// Clock paused.
-    pub paused: bool,
+    paused: bool,
     /// Last input sequence number applied.
-    pub input_seq: u64,
+    input_seq: u64,
     /// Cartesian-mode stick commands per arm (fractions of the maximum speeds), turned into
     /// joint-velocity references every step by redundancy resolution.
-    pub cartesian: [[f64; 6]; 2],
-    /// Active fault descriptions.
-    pub faults: Vec<String>,
+    cartesian: [[f64; 6]; 2],
+    /// Active faults (one per arm, kind and actuator).
+    faults: Vec<ActiveFault>,
     /// Steps taken since the clock origin.
-    pub steps_since_origin: u64,
+    steps_since_origin: u64,
     /// Wall time of the clock origin (reset on resume so a pause never causes a catch-up burst).
-    pub origin: Instant,
+    origin: Instant,
     /// Frames published.
-    pub frame_seq: u64,
+    frame_seq: u64,
     /// When the next frame is due.
-    pub next_frame: Instant,
+    next_frame: Instant,
     /// Per-arm kinematics scratch for frames.
-    pub kin: [KinData; 2],
+    kin: [KinData; 2],
     /// Relief events already recorded.
-    pub relief_recorded: u64,
+    relief_recorded: u64,
     /// Grasp state at the last record row (events on change).
-    pub last_grasp: &'static str,
+    last_grasp: GraspState,
     /// Both jaws are driven open until this simulated time (release/drop).
-    pub release_until_s: f64,
+    release_until_s: f64,
     /// Redundancy resolvers for Cartesian mode, one per arm (preallocated).
-    pub redundancy: [Redundancy; 2],
+    redundancy: [Redundancy; 2],
+}
+
+impl Live {
+    /// The simulation (read-only).
+    pub fn sim(&self) -> &Simulation {
+        &self.sim
+    }
+
+    /// Current settings.
+    pub fn settings(&self) -> Settings {
+        self.settings
+    }
+
+    /// Whether the clock is paused.
+    pub fn paused(&self) -> bool {
+        self.paused
+    }
+
+    /// Active faults.
+    pub fn faults(&self) -> &[ActiveFault] {
+        &self.faults
+    }
+
+    /// New stick input: in joint mode the axes drive the valves, in Cartesian mode they are
+    /// end-effector velocity fractions (resolved every step); the grips drive the jaws.
+    pub fn apply_input(&mut self, input: &StickInput) {
+        for (arm, sticks) in input.arms.iter().enumerate() {
+            match self.settings.control_mode {
+                ControlMode::Joint => {
+                    self.input.arms[arm].valves = sticks.axes;
+                    self.cartesian[arm] = [0.0; 6];
+                }
+                ControlMode::Cartesian => {
+                    self.input.arms[arm].valves = [0.0; 6];
+                    self.cartesian[arm] = sticks.axes;
+                }
+            }
+            self.input.arms[arm].jaw = sticks.grip;
+        }
+        for (i, (v, f)) in self
+            .input
+            .object_velocity
+            .iter_mut()
+            .zip(input.object)
+            .enumerate()
+        {
+            let max = if i < 3 {
+                CARTESIAN_MAX_LINEAR_M_S
+            } else {
+                CARTESIAN_MAX_ANGULAR_RAD_S
+            };
+            *v = f * max;
+        }
+        self.input_seq = self.input_seq.max(input.seq);
+    }
+
+    /// Changes settings; a mode change stops every stick command.
+    pub fn apply_settings(&mut self, change: &SettingsChange) {
+        if let Some(s) = change.arm_speed {
+            self.settings.arm_speed = s;
+        }
+        if let Some(m) = change.control_mode {
+            self.settings.control_mode = m;
+            self.cartesian = [[0.0; 6]; 2];
+            for a in &mut self.input.arms {
+                a.valves = [0.0; 6];
+            }
+        }
+        if let Some(m) = change.control_method {
+            self.settings.control_method = m;
+        }
+    }
+
+    /// Back to the initial position (Lim §4.1): simulation reset, inputs cleared.
+    pub fn reset(&mut self) {
+        self.sim.reset();
+        self.input.arms = Default::default();
+        self.input.object_velocity = [0.0; 6];
+        self.cartesian = [[0.0; 6]; 2];
+        self.relief_recorded = 0;
+    }
+
+    /// Pauses or resumes the clock.
+    pub fn set_paused(&mut self, paused: bool) {
+        self.paused = paused;
+    }
+
+    /// Drives both jaws open for `duration_s` of simulated time, whatever the sticks say.
+    pub fn release(&mut self, duration_s: f64) {
+        self.release_until_s = self.sim.time_s() + duration_s;
+    }
+
+    /// Injects a fault, replacing one of the same kind on the same arm and actuator.
+    pub fn inject_fault(&mut self, fault: ActiveFault) {
+        fault.fault.apply_to(self.sim.faults_mut(fault.arm.index()));
+        self.faults.retain(|f| !f.same_slot(&fault));
+        self.faults.push(fault);
+    }
+
+    /// Removes every fault.
+    pub fn clear_faults(&mut self) {
+        for arm in command::Arm::BOTH {
+            *self.sim.faults_mut(arm.index()) = Default::default();
+        }
+        self.faults.clear();
+    }
 }
 
 /// One trainee's session.
@@ -183,6 +303,10 @@ pub struct Session {
     pub overloads: AtomicU64,
     /// Models (left, right) for `hello`.
     pub models: [Arc<Model>; 2],
+    /// The client that created it (for the per-client cap).
+    pub client: ClientKey,
+    /// Set once a trainee has connected (sessions never joined end after a grace period).
+    pub joined: AtomicBool,
 }
 
 impl Session {
@@ -209,6 +333,16 @@ impl Session {
             .unwrap_or_else(|e| e.into_inner())
             .clone()
     }
+
+    /// Sets the scenario name (the caller resets the simulation).
+    pub fn set_scenario(&self, name: &str) {
+        *self.scenario.lock().unwrap_or_else(|e| e.into_inner()) = name.to_string();
+    }
+
+    /// Seconds since creation.
+    pub fn age_seconds(&self) -> f64 {
+        unix_now() - self.created_unix
+    }
 }
 
 /// Builds the simulation of a scenario.
@@ -227,6 +361,9 @@ pub enum CreateError {
     /// The cap is reached.
     #[error("the server is full ({0} live sessions); try again later")]
     Full(usize),
+    /// This client already has its share of live sessions.
+    #[error("this client already has {0} live sessions (the most per client); end one first")]
+    ClientFull(usize),
     /// Unknown scenario.
     #[error("unknown scenario `{0}`")]
     UnknownScenario(String),
@@ -275,9 +412,10 @@ impl SessionManager {
         self.live.lock().unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Creates a session and starts stepping it.
+    /// Creates a session for `client` and starts stepping it.
     pub fn create(
         &self,
+        client: ClientKey,
         scenario: Option<String>,
         mode: Option<ControlMode>,
         method: Option<ControlMethod>,
@@ -287,12 +425,7 @@ impl SessionManager {
         if !LIVE_SCENARIOS.iter().any(|(n, _)| *n == scenario) {
             return Err(CreateError::UnknownScenario(scenario));
         }
-        {
-            let map = self.map();
-            if map.len() >= self.config.max_sessions {
-                return Err(CreateError::Full(map.len()));
-            }
-        }
+        self.check_caps(&self.map(), client)?;
         let models = [self.magnum.clone(), self.magnum.clone()];
         let sim = build_sim(&models).map_err(|e| CreateError::Sim(e.to_string()))?;
         let settings = Settings {
@@ -316,7 +449,7 @@ impl SessionManager {
             next_frame: now,
             kin,
             relief_recorded: 0,
-            last_grasp: "free",
+            last_grasp: GraspState::Free,
             release_until_s: 0.0,
             redundancy: [
                 Redundancy::new(&models[0], RedundancyParams::default()),
@@ -340,12 +473,12 @@ impl SessionManager {
             ended: AtomicBool::new(false),
             overloads: AtomicU64::new(0),
             models,
+            client,
+            joined: AtomicBool::new(false),
         });
         {
             let mut map = self.map();
-            if map.len() >= self.config.max_sessions {
-                return Err(CreateError::Full(map.len()));
-            }
+            self.check_caps(&map, client)?;
             map.insert(session.id.clone(), session.clone());
         }
         self.recorder.send(RecordMsg::Created {
@@ -364,6 +497,24 @@ impl SessionManager {
             .store(self.map().len() as u64, Ordering::Relaxed);
         tracing::info!(id = %session.id, "session created");
         Ok(session)
+    }
+
+    /// The global cap and the per-client cap.
+    fn check_caps(
+        &self,
+        map: &HashMap<String, Arc<Session>>,
+        client: ClientKey,
+    ) -> Result<(), CreateError> {
+        if map.len() >= self.config.max_sessions {
+            return Err(CreateError::Full(map.len()));
+        }
+        if client != ClientKey::Exempt {
+            let mine = map.values().filter(|s| s.client == client).count();
+            if mine >= self.config.max_sessions_per_client {
+                return Err(CreateError::ClientFull(mine));
+            }
+        }
+        Ok(())
     }
 
     /// A live session by id.
@@ -407,18 +558,28 @@ impl SessionManager {
         tracing::info!(%id, reason, "session ended");
     }
 
-    /// Ends sessions idle for longer than the configured timeout.
+    /// Ends sessions idle for longer than the configured timeout, and sessions no trainee
+    /// has joined within the grace period.
     pub fn expire_idle(&self) {
         let limit = self.config.idle_timeout.as_secs_f64();
-        let idle: Vec<String> = self
-            .all()
-            .into_iter()
-            .filter(|s| s.trainees.load(Ordering::Relaxed) == 0 && s.idle_seconds() > limit)
-            .map(|s| s.id.clone())
-            .collect();
-        for id in idle {
-            self.end(&id, "idle timeout");
+        let grace = self.config.unjoined_grace.as_secs_f64();
+        for s in self.all() {
+            if s.trainees.load(Ordering::Relaxed) != 0 {
+                continue;
+            }
+            if !s.joined.load(Ordering::Relaxed) && s.age_seconds() > grace {
+                self.end(&s.id, "no trainee joined");
+            } else if s.idle_seconds() > limit {
+                self.end(&s.id, "idle timeout");
+            }
         }
+    }
+
+    /// How often [`SessionManager::expire_idle`] should run: a quarter of the shorter of
+    /// the idle timeout and the grace period, between 0.25 s and 5 s.
+    pub fn expiry_interval(&self) -> Duration {
+        let shorter = self.config.idle_timeout.min(self.config.unjoined_grace);
+        (shorter / 4).clamp(Duration::from_millis(250), Duration::from_secs(5))
     }
 
     /// Ends every session (graceful shutdown) and flushes the recorder.

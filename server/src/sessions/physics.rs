@@ -21,7 +21,7 @@ use super::record::{RecordMsg, RecordSender};
 use super::snapshot::build_frame;
 use super::{Frame, Live, Session};
 use crate::metrics::Metrics;
-use crate::protocol::{ControlMethod, ControlMode, ServerMessage};
+use crate::protocol::{ControlMethod, ControlMode, ServerMessage, grasp_name};
 
 /// Most 1 ms steps one session may run in one wake-up to catch up (50 ms of simulated time).
 pub const MAX_CATCH_UP_STEPS: u64 = 50;
@@ -221,8 +221,8 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
     for v in sim.internal_wrench() {
         let _ = write!(line, ",{v:.2}");
     }
-    let grasp = sim.grasp_state().as_str();
-    let _ = write!(line, ",{grasp},{}", sim.relief_events());
+    let grasp = sim.grasp_state();
+    let _ = write!(line, ",{},{}", grasp_name(grasp), sim.relief_events());
     line.push('\n');
     recorder.send(RecordMsg::Row {
         id: session.id.clone(),
@@ -244,8 +244,9 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
     if grasp != live.last_grasp {
         recorder.send(RecordMsg::Event {
             id: session.id.clone(),
-            json: serde_json::json!({"t": sim.time_s(), "event": "grasp", "state": grasp})
-                .to_string(),
+            json:
+                serde_json::json!({"t": sim.time_s(), "event": "grasp", "state": grasp_name(grasp)})
+                    .to_string(),
         });
         live.last_grasp = grasp;
     }

@@ -6,35 +6,45 @@ use std::sync::Arc;
 
 use axum::Json;
 use axum::extract::{Path, Query, State};
-use axum::http::{HeaderMap, StatusCode, header};
+use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use seaarms_core::analysis::TRANSLATIONAL_ROWS;
 use seaarms_core::manipulability::{jlm, measures};
 use seaarms_core::sim::{LEFT, RIGHT};
 use serde::{Deserialize, Serialize};
 
-use super::record::{RecordMsg, SessionRecord, valid_id};
+use super::admission::{ClientKey, Peer, client_ip};
+use super::command::{self, ActiveFault, Actor, Command, CommandError, Fault};
+use super::record::{SessionRecord, valid_id};
 use super::{CreateError, LIVE_SCENARIOS, Session, token_eq};
 use crate::app::AppState;
 use crate::error::ApiError;
 use crate::json::ApiJson;
-use crate::protocol::{ControlMethod, ControlMode, ServerMessage};
+use crate::protocol::{
+    ControlMethod, ControlMode, fault_kind_name, grasp_name, parse_arm, parse_fault_kind,
+};
+use crate::security::ws_base;
 
 fn forbidden(msg: &str) -> ApiError {
-    ApiError {
-        status: StatusCode::FORBIDDEN,
-        error: msg.into(),
-        detail: None,
-    }
+    ApiError::new(StatusCode::FORBIDDEN, msg)
 }
 
+/// The token of `Authorization: Bearer <token>`, exactly as sent (no trimming).
 fn bearer(headers: &HeaderMap) -> Option<&str> {
-    headers
+    let (scheme, token) = headers
         .get(header::AUTHORIZATION)?
         .to_str()
         .ok()?
-        .strip_prefix("Bearer ")
-        .map(str::trim)
+        .split_once(' ')?;
+    scheme.eq_ignore_ascii_case("bearer").then_some(token)
+}
+
+impl From<CommandError> for ApiError {
+    fn from(e: CommandError) -> ApiError {
+        match e {
+            CommandError::Forbidden(m) => ApiError::new(StatusCode::FORBIDDEN, m),
+            CommandError::Invalid(m) => ApiError::bad_request(m),
+        }
+    }
 }
 
 /// Who a request acts as.
@@ -86,6 +96,9 @@ pub struct CreateRequest {
     /// Trainee label shown to instructors.
     #[serde(default)]
     pub label: Option<String>,
+    /// The class join code, when the server requires one (or send `X-Join-Code`).
+    #[serde(default)]
+    pub join_code: Option<String>,
 }
 
 /// Answer of `POST /api/sessions`.
@@ -99,42 +112,74 @@ pub struct Created {
     pub ws_url: String,
 }
 
-/// `POST /api/sessions`: 201, or 503 when the server is full.
+/// `POST /api/sessions`: 201; 403 without the class join code (when one is configured);
+/// 429 (with `Retry-After`) when this client creates sessions too fast or holds too many;
+/// 503 when the server is full. The instructor token (as a bearer) is exempt from the join
+/// code and the per-client limits.
 pub async fn create(
     State(state): State<AppState>,
+    Peer(peer): Peer,
     headers: HeaderMap,
     body: axum::body::Bytes,
 ) -> Result<Response, ApiError> {
     let req: CreateRequest = if body.iter().all(u8::is_ascii_whitespace) {
         CreateRequest::default()
     } else {
-        serde_json::from_slice(&body)
-            .map_err(|e| ApiError::bad_request(format!("invalid request: {e}")))?
+        crate::json::parse(&body)?
     };
+    let instructor = bearer(&headers).is_some_and(|t| token_eq(t, &state.instructor_token));
+    let client = if instructor {
+        ClientKey::Exempt
+    } else {
+        let ip = client_ip(peer.as_ref(), &headers, &state.policy.trusted_proxies)
+            .unwrap_or(std::net::Ipv4Addr::UNSPECIFIED.into());
+        ClientKey::from_ip(ip)
+    };
+    if let Err(wait) = state.creation_limiter.check(client) {
+        return Ok(too_many(
+            format!(
+                "too many new sessions from this client: at most {} at once, then {} per minute",
+                state.creation_limiter.burst(),
+                state.creation_limiter.per_minute()
+            ),
+            wait,
+        ));
+    }
+    if let (Some(code), false) = (&state.join_code, instructor) {
+        let presented = req
+            .join_code
+            .as_deref()
+            .or_else(|| headers.get("x-join-code").and_then(|v| v.to_str().ok()));
+        if !presented.is_some_and(|p| token_eq(p, code)) {
+            return Err(forbidden(
+                "this server needs the class join code (`join_code` field or X-Join-Code header)",
+            ));
+        }
+    }
+    let base = ws_base(&state.policy, &headers, peer.as_ref())
+        .ok_or_else(|| ApiError::bad_request("missing or malformed Host header"))?;
     let sessions = state.sessions.clone();
-    let session = tokio::task::spawn_blocking(move || sessions.create(req.scenario, req.control_mode, req.control_method, req.label))
-        .await
-        .map_err(|e| ApiError { status: StatusCode::INTERNAL_SERVER_ERROR, error: e.to_string(), detail: None })?
-        .map_err(|e| match e {
-            CreateError::Full(_) => ApiError { status: StatusCode::SERVICE_UNAVAILABLE, error: e.to_string(), detail: None },
-            CreateError::UnknownScenario(_) => ApiError::bad_request(e.to_string())
-                .with_detail(serde_json::json!({"known": LIVE_SCENARIOS.iter().map(|(n, _)| *n).collect::<Vec<_>>()})),
-            CreateError::Sim(_) => ApiError { status: StatusCode::INTERNAL_SERVER_ERROR, error: e.to_string(), detail: None },
-        })?;
-    let host = headers
-        .get(header::HOST)
-        .and_then(|h| h.to_str().ok())
-        .unwrap_or("127.0.0.1:8080");
-    // Behind a TLS-terminating proxy (classroom deployments) the page must use wss://.
-    let scheme = match headers
-        .get("x-forwarded-proto")
-        .and_then(|h| h.to_str().ok())
-    {
-        Some(p) if p.eq_ignore_ascii_case("https") => "wss",
-        _ => "ws",
-    };
+    let session = tokio::task::spawn_blocking(move || {
+        sessions.create(
+            client,
+            req.scenario,
+            req.control_mode,
+            req.control_method,
+            req.label,
+        )
+    })
+    .await
+    .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
+    .map_err(|e| match e {
+        CreateError::Full(_) => ApiError::new(StatusCode::SERVICE_UNAVAILABLE, e.to_string()),
+        CreateError::ClientFull(_) => ApiError::new(StatusCode::TOO_MANY_REQUESTS, e.to_string()),
+        CreateError::UnknownScenario(_) => ApiError::bad_request(e.to_string()).with_detail(
+            serde_json::json!({"known": LIVE_SCENARIOS.iter().map(|(n, _)| *n).collect::<Vec<_>>()}),
+        ),
+        CreateError::Sim(_) => ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
+    })?;
     let ws_url = format!(
-        "{scheme}://{host}/ws/sessions/{}?token={}",
+        "{base}/ws/sessions/{}?token={}",
         session.id, session.control_token
     );
     let body = Created {
@@ -143,6 +188,17 @@ pub async fn create(
         ws_url,
     };
     Ok((StatusCode::CREATED, Json(body)).into_response())
+}
+
+/// 429 with `Retry-After` (whole seconds, at least 1) in the header and the body.
+fn too_many(message: String, wait: std::time::Duration) -> Response {
+    let secs = wait.as_secs_f64().ceil().max(1.0) as u64;
+    let mut resp = ApiError::new(StatusCode::TOO_MANY_REQUESTS, message)
+        .with_detail(serde_json::json!({"retry_after_s": secs}))
+        .into_response();
+    resp.headers_mut()
+        .insert(header::RETRY_AFTER, HeaderValue::from(secs));
+    resp
 }
 
 /// Translational measures of one arm in a summary.
@@ -179,7 +235,7 @@ pub struct SessionSummary {
     pub end_reason: Option<String>,
     /// Simulated seconds.
     pub sim_seconds: f64,
-    /// Grasp state (live only).
+    /// Grasp state (live only; wire names of [`crate::protocol::grasp_name`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub grasp: Option<&'static str>,
     /// Paused (live only).
@@ -193,23 +249,23 @@ pub struct SessionSummary {
     pub measures: Option<[ArmSummary; 2]>,
     /// Relief-valve events (overloads).
     pub overload_count: u64,
-    /// Active faults (live only).
+    /// Active faults (live only; labels of [`crate::protocol::fault_label`]).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub faults: Option<Vec<String>>,
+    pub faults: Option<Vec<ActiveFault>>,
 }
 
 fn live_summary(s: &Session) -> SessionSummary {
     let live = s.live();
+    let sim = live.sim();
     let arm = |i: usize| {
-        let jt = live.sim.jacobian_world(i).fixed_rows::<3>(0).into_owned();
+        let jt = sim.jacobian_world(i).fixed_rows::<3>(0).into_owned();
         let j = nalgebra::DMatrix::from_column_slice(3, 6, jt.as_slice());
         let m = measures(&j).ok();
-        let _ = TRANSLATIONAL_ROWS;
         ArmSummary {
             yoshikawa: m.as_ref().map_or(0.0, |m| m.yoshikawa),
             isotropy: m.as_ref().map_or(0.0, |m| m.isotropy),
             hong: m.as_ref().map_or(0.0, |m| m.hong),
-            jlm: jlm(&s.models[i], &live.sim.arm(i).q),
+            jlm: jlm(&s.models[i], &sim.arm(i).q),
         }
     };
     SessionSummary {
@@ -220,13 +276,13 @@ fn live_summary(s: &Session) -> SessionSummary {
         created_unix: s.created_unix,
         ended_unix: None,
         end_reason: None,
-        sim_seconds: live.sim.time_s(),
-        grasp: Some(live.sim.grasp_state().as_str()),
-        paused: Some(live.paused),
+        sim_seconds: sim.time_s(),
+        grasp: Some(grasp_name(sim.grasp_state())),
+        paused: Some(live.paused()),
         trainees: Some(s.trainees.load(std::sync::atomic::Ordering::Relaxed)),
         measures: Some([arm(LEFT), arm(RIGHT)]),
         overload_count: s.overloads.load(std::sync::atomic::Ordering::Relaxed),
-        faults: Some(live.faults.clone()),
+        faults: Some(live.faults().to_vec()),
     }
 }
 
@@ -296,30 +352,38 @@ pub async fn get_one(
         .ok_or_else(|| ApiError::not_found(format!("no session `{id}`")))
 }
 
-/// `DELETE /api/sessions/{id}`: end a session (instructor, or its own trainee).
+/// `DELETE /api/sessions/{id}`: end a live session (the instructor any, a trainee its own);
+/// 404 when no such session is live.
 pub async fn end(
     State(state): State<AppState>,
     headers: HeaderMap,
     Path(id): Path<String>,
 ) -> Result<StatusCode, ApiError> {
-    let s = state
-        .sessions
-        .get(&id)
-        .ok_or_else(|| ApiError::not_found(format!("no live session `{id}`")))?;
-    let who = caller(&state, bearer(&headers), Some(&s))?;
+    let s = live_session(&state, &id)?;
+    let actor = actor(&state, &headers, &s)?;
     let sessions = state.sessions.clone();
-    let reason = if who == Caller::Instructor {
-        "ended by instructor"
-    } else {
-        "ended by trainee"
-    };
-    tokio::task::spawn_blocking(move || sessions.end(&id, reason))
+    tokio::task::spawn_blocking(move || command::apply(&sessions, &s, actor, Command::End))
         .await
-        .ok();
+        .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))??;
     Ok(StatusCode::NO_CONTENT)
 }
 
-/// Instructor (and, for the first four, trainee) actions on a session.
+fn live_session(state: &AppState, id: &str) -> Result<Arc<Session>, ApiError> {
+    state
+        .sessions
+        .get(id)
+        .ok_or_else(|| ApiError::not_found(format!("no live session `{id}`")))
+}
+
+fn actor(state: &AppState, headers: &HeaderMap, s: &Session) -> Result<Actor, ApiError> {
+    Ok(match caller(state, bearer(headers), Some(s))? {
+        Caller::Instructor => Actor::Instructor,
+        Caller::Trainee => Actor::Trainee,
+    })
+}
+
+/// Instructor actions on a session (a trainee may give `reset`, `pause`, `resume` and
+/// `release` to its own session).
 #[derive(Debug, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Action {
@@ -359,6 +423,41 @@ pub enum Action {
     },
 }
 
+impl TryFrom<Action> for Command {
+    type Error = CommandError;
+
+    /// The REST edge: an action's wire fields to a typed command.
+    fn try_from(action: Action) -> Result<Command, CommandError> {
+        Ok(match action {
+            Action::Reset => Command::Reset,
+            Action::Pause => Command::Pause,
+            Action::Resume => Command::Resume,
+            Action::Release => Command::Release,
+            Action::Scenario { scenario } => Command::scenario(&scenario)?,
+            Action::Fault {
+                fault,
+                arm,
+                joint,
+                value,
+            } => {
+                let arm = parse_arm(&arm).ok_or_else(|| {
+                    CommandError::Invalid(format!("arm must be `left` or `right`, got `{arm}`"))
+                })?;
+                let kind = parse_fault_kind(&fault).ok_or_else(|| {
+                    CommandError::Invalid(format!(
+                        "unknown fault `{fault}` ({})",
+                        command::FaultKind::ALL.map(fault_kind_name).join(", ")
+                    ))
+                })?;
+                let fault = Fault::new(kind, joint, value).map_err(CommandError::Invalid)?;
+                Command::InjectFault(ActiveFault { arm, fault })
+            }
+            Action::ClearFaults => Command::ClearFaults,
+            Action::Message { text } => Command::message(&text)?,
+        })
+    }
+}
+
 /// `POST /api/sessions/{id}/actions`.
 pub async fn act(
     State(state): State<AppState>,
@@ -366,128 +465,10 @@ pub async fn act(
     Path(id): Path<String>,
     ApiJson(action): ApiJson<Action>,
 ) -> Result<StatusCode, ApiError> {
-    let s = state
-        .sessions
-        .get(&id)
-        .ok_or_else(|| ApiError::not_found(format!("no live session `{id}`")))?;
-    let who = caller(&state, bearer(&headers), Some(&s))?;
-    let trainee_allowed = matches!(
-        action,
-        Action::Reset | Action::Pause | Action::Resume | Action::Release
-    );
-    if who == Caller::Trainee && !trainee_allowed {
-        return Err(forbidden("instructor token required for this action"));
-    }
-    let by = if who == Caller::Instructor {
-        "instructor"
-    } else {
-        "trainee"
-    };
-    let mut event = serde_json::json!({"event": "action", "by": by});
-    {
-        let mut live = s.live();
-        let t = live.sim.time_s();
-        event["t"] = serde_json::json!(t);
-        match &action {
-            Action::Reset => super::ws::reset(&mut live),
-            Action::Pause => live.paused = true,
-            Action::Resume => live.paused = false,
-            Action::Release => live.release_until_s = t + 1.0,
-            Action::Scenario { scenario } => {
-                if !LIVE_SCENARIOS.iter().any(|(n, _)| n == scenario) {
-                    return Err(ApiError::bad_request(format!(
-                        "unknown scenario `{scenario}`"
-                    )));
-                }
-                *s.scenario.lock().unwrap_or_else(|e| e.into_inner()) = scenario.clone();
-                super::ws::reset(&mut live);
-            }
-            Action::Fault {
-                fault,
-                arm,
-                joint,
-                value,
-            } => {
-                let a = match arm.as_str() {
-                    "left" => LEFT,
-                    "right" => RIGHT,
-                    _ => {
-                        return Err(ApiError::bad_request(format!(
-                            "arm must be `left` or `right`, got `{arm}`"
-                        )));
-                    }
-                };
-                let joint_index = || -> Result<usize, ApiError> {
-                    match joint {
-                        Some(j) if *j < 6 => Ok(*j),
-                        _ => Err(ApiError::bad_request("this fault needs `joint` in 0..=5")),
-                    }
-                };
-                let in_range = |lo: f64, hi: f64| -> Result<f64, ApiError> {
-                    if value.is_finite() && *value >= lo && *value <= hi {
-                        Ok(*value)
-                    } else {
-                        Err(ApiError::bad_request(format!(
-                            "`value` for {fault} must be in [{lo}, {hi}], got {value}"
-                        )))
-                    }
-                };
-                let label = match fault.as_str() {
-                    "supply_drop" => {
-                        let v = in_range(0.0, 6.89e6)?;
-                        live.sim.faults_mut(a).supply_drop_pa = v;
-                        format!("supply_drop:{arm}:{v:.0}Pa")
-                    }
-                    "stuck_valve" => {
-                        let (j, v) = (joint_index()?, in_range(-1.0, 1.0)?);
-                        live.sim.faults_mut(a).stuck_valve[j] = Some(v);
-                        format!("stuck_valve:{arm}:{j}:{v}")
-                    }
-                    "leak" => {
-                        let (j, v) = (joint_index()?, in_range(0.0, 1e-9)?);
-                        live.sim.faults_mut(a).leak_m3_s_pa[j] = v;
-                        format!("leak:{arm}:{j}:{v:e}")
-                    }
-                    "air" => {
-                        let v = in_range(0.01, 1.0)?;
-                        live.sim.faults_mut(a).bulk_modulus_scale = v;
-                        format!("air:{arm}:{v}")
-                    }
-                    other => {
-                        return Err(ApiError::bad_request(format!(
-                            "unknown fault `{other}` (supply_drop, stuck_valve, leak, air)"
-                        )));
-                    }
-                };
-                live.faults.push(label);
-            }
-            Action::ClearFaults => {
-                for a in [LEFT, RIGHT] {
-                    *live.sim.faults_mut(a) = Default::default();
-                }
-                live.faults.clear();
-            }
-            Action::Message { text } => {
-                if text.chars().count() > 500 {
-                    return Err(ApiError::bad_request(
-                        "message text is limited to 500 characters",
-                    ));
-                }
-                let msg = ServerMessage::Message {
-                    from: "instructor".into(),
-                    text: text.clone(),
-                };
-                let _ = s
-                    .notices
-                    .send(serde_json::to_string(&msg).unwrap_or_default().into());
-            }
-        }
-    }
-    event["action"] = serde_json::to_value(format!("{action:?}")).unwrap_or_default();
-    state.sessions.recorder.send(RecordMsg::Event {
-        id: s.id.clone(),
-        json: event.to_string(),
-    });
+    let s = live_session(&state, &id)?;
+    let actor = actor(&state, &headers, &s)?;
+    let command = Command::try_from(action)?;
+    command::apply(&state.sessions, &s, actor, command)?;
     Ok(StatusCode::NO_CONTENT)
 }
 

@@ -138,7 +138,7 @@ pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
             pose: (&object.pose).into(),
             velocity: [v.x, v.y, v.z],
         },
-        grasp: sim.grasp_state().as_str(),
+        grasp: sim.grasp_state(),
         internal_force_n: [internal[0], internal[1], internal[2]],
         internal_torque_nm: [internal[3], internal[4], internal[5]],
         relief_events: sim.relief_events(),

@@ -4,30 +4,49 @@
 //! latest frame whenever one is published (a client that is slow to take frames skips the
 //! ones it missed: latest state wins), instructor notices and replies. Nothing a client sends
 //! can stop the simulation: every bad message gets an `error` reply and the session goes on;
-//! a message over 16 KiB closes the connection with 1008 (policy violation).
+//! a message over [`MAX_CLIENT_MESSAGE_BYTES`] closes the connection with a close frame, code
+//! 1009 (message too big). The transport accepts up to [`WS_TRANSPORT_MAX_BYTES`] so that
+//! messages a little over the limit are read and refused here, with the close handshake
+//! completed; beyond the transport limit the close frame is sent and the connection held
+//! open for [`CLOSE_LINGER`] (unread data would make the close a TCP reset) before it drops.
+//!
+//! Client messages become [`Command`]s here (the WebSocket edge) and take effect through
+//! [`command::apply`], like REST actions.
 
 use std::sync::Arc;
 use std::sync::atomic::Ordering;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use axum::extract::ws::{CloseFrame, Message, Utf8Bytes, WebSocket, WebSocketUpgrade, close_code};
 use axum::extract::{Path, Query, State};
 use axum::response::{IntoResponse, Response};
+use futures_util::stream::SplitStream;
 use futures_util::{SinkExt, StreamExt};
 use seaarms_core::sim::{LEFT, RIGHT};
 use serde::Deserialize;
 use tokio::sync::mpsc;
 
-use super::record::RecordMsg;
-use super::snapshot::{CARTESIAN_MAX_ANGULAR_RAD_S, CARTESIAN_MAX_LINEAR_M_S};
-use super::{Live, Session};
+use super::Session;
+use super::admission::TokenBucket;
+use super::command::{self, Actor, ArmSticks, Command, StickInput};
 use crate::api::wire::PoseOut;
 use crate::app::AppState;
 use crate::error::ApiError;
 use crate::protocol::{
-    ArmAxes, ArmModelOut, ClientMessage, ControlMode, Hello, MAX_CLIENT_MESSAGE_BYTES,
+    ArmAxes, ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, MAX_INPUT_SEQ,
     ObjectModelOut, ServerMessage,
 };
+
+/// Largest message (and frame) the WebSocket transport reads (bytes): 4 × the documented
+/// limit, so oversize messages up to here are read whole and refused with a clean close.
+pub const WS_TRANSPORT_MAX_BYTES: usize = 4 * MAX_CLIENT_MESSAGE_BYTES;
+/// After closing for a message over the transport limit, how long the connection is held
+/// (without reading) so the client receives the close frame before the socket drops.
+pub const CLOSE_LINGER: Duration = Duration::from_secs(1);
+/// After closing for any other reason, how long the peer's close frame is awaited.
+pub const CLOSE_HANDSHAKE_TIMEOUT: Duration = Duration::from_secs(2);
+/// Close code 1009, "message too big" (RFC 6455 §7.4.1).
+pub const CLOSE_TOO_BIG: u16 = close_code::SIZE;
 
 /// Query of the WebSocket URL.
 #[derive(Debug, Deserialize)]
@@ -68,16 +87,13 @@ pub async fn upgrade(
     } else if super::token_eq(&token, &state.instructor_token) {
         Role::Observer
     } else {
-        return ApiError {
-            status: axum::http::StatusCode::FORBIDDEN,
-            error: "wrong or missing token".into(),
-            detail: None,
-        }
-        .into_response();
+        return ApiError::new(axum::http::StatusCode::FORBIDDEN, "wrong or missing token")
+            .into_response();
     };
     // tungstenite's 128 KiB default read buffer is re-zeroed on reads; client messages are
     // small (≤ 16 KiB), so a small buffer saves that work on every connection.
-    ws.max_message_size(4 * MAX_CLIENT_MESSAGE_BYTES)
+    ws.max_message_size(WS_TRANSPORT_MAX_BYTES)
+        .max_frame_size(WS_TRANSPORT_MAX_BYTES)
         .read_buffer_size(WS_READ_BUFFER_BYTES)
         .on_upgrade(move |socket| serve_socket(socket, state, session, role))
 }
@@ -94,7 +110,7 @@ fn error_text(message: impl Into<String>) -> Utf8Bytes {
 
 fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
     let live = session.live();
-    let params = live.sim.params();
+    let params = live.sim().params();
     let arm = |i: usize| ArmModelOut {
         model: session.models[i].spec.clone(),
         base: PoseOut::from(&params.arms[i].base),
@@ -112,7 +128,7 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
             mass_kg: params.object.mass_kg,
         },
         seabed_z_m: params.object.seabed_z_m,
-        settings: live.settings,
+        settings: live.settings(),
         scenario: session.scenario(),
         frame_hz: state.sessions.config.frame_hz,
     }));
@@ -122,7 +138,38 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
 /// What the reader asks the writer to send.
 enum Outgoing {
     Text(Utf8Bytes),
-    Close(u16, &'static str),
+    Close(u16, String),
+}
+
+/// How a connection's reading ended, after the server sent a close frame or not.
+enum Ending {
+    /// The peer closed or went away; nothing more to do.
+    Plain,
+    /// We closed after reading a whole message: the peer's close frame is awaited.
+    AwaitPeerClose,
+    /// The transport refused a message and nothing more may be read: the connection is held
+    /// for [`CLOSE_LINGER`] so the close frame arrives before the socket drops.
+    Linger,
+}
+
+/// Whether a read error is the transport's size limit (tungstenite's `Capacity` error).
+fn is_capacity_error(e: &axum::Error) -> bool {
+    std::error::Error::source(e)
+        .and_then(|inner| inner.downcast_ref::<tokio_tungstenite::tungstenite::Error>())
+        .is_some_and(|e| matches!(e, tokio_tungstenite::tungstenite::Error::Capacity(_)))
+}
+
+/// Reads (and drops) what the peer still sends until its close frame arrives, the stream
+/// ends or [`CLOSE_HANDSHAKE_TIMEOUT`] passes (the transport limit bounds each message).
+async fn await_peer_close(stream: &mut SplitStream<WebSocket>) {
+    let _ = tokio::time::timeout(CLOSE_HANDSHAKE_TIMEOUT, async {
+        while let Some(Ok(msg)) = stream.next().await {
+            if matches!(msg, Message::Close(_)) {
+                break;
+            }
+        }
+    })
+    .await;
 }
 
 async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>, role: Role) {
@@ -130,6 +177,7 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
     metrics.ws_clients.fetch_add(1, Ordering::Relaxed);
     if role == Role::Trainee {
         session.trainees.fetch_add(1, Ordering::Relaxed);
+        session.joined.store(true, Ordering::Relaxed);
         session.touch();
     }
     let (mut sink, mut stream) = socket.split();
@@ -152,7 +200,7 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
                 let out = tokio::select! {
                     changed = frames.changed() => {
                         if changed.is_err() || session.ended.load(Ordering::Relaxed) {
-                            Outgoing::Close(close_code::NORMAL, "session ended")
+                            Outgoing::Close(close_code::NORMAL, "session ended".into())
                         } else {
                             let frame = frames.borrow_and_update().clone();
                             let Some(frame) = frame else { continue };
@@ -169,7 +217,7 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
                     notice = notices.recv() => match notice {
                         Ok(text) => Outgoing::Text(text),
                         Err(tokio::sync::broadcast::error::RecvError::Lagged(_)) => continue,
-                        Err(_) => Outgoing::Close(close_code::NORMAL, "session ended"),
+                        Err(_) => Outgoing::Close(close_code::NORMAL, "session ended".into()),
                     },
                     reply = reply_rx.recv() => match reply {
                         Some(r) => r,
@@ -196,35 +244,46 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
         })
     };
 
-    let mut limiter = RateLimiter::new(state.sessions.config.max_messages_per_second);
+    let rate = f64::from(state.sessions.config.max_messages_per_second.max(1));
+    // Bursts of up to two seconds' worth of messages.
+    let mut limiter = TokenBucket::new(2.0 * rate, rate, Instant::now());
     let mut last_rate_notice: Option<Instant> = None;
-    while let Some(Ok(msg)) = stream.next().await {
-        let text = match msg {
-            Message::Text(t) => t,
-            Message::Binary(b) => {
-                if b.len() > MAX_CLIENT_MESSAGE_BYTES {
-                    let _ = reply_tx
-                        .send(Outgoing::Close(close_code::POLICY, "message over 16 KiB"))
-                        .await;
-                    break;
-                }
+    let too_big = format!("message over {} KiB", MAX_CLIENT_MESSAGE_BYTES / 1024);
+    let mut ending = Ending::Plain;
+    while let Some(item) = stream.next().await {
+        // Over the documented limit: read whole (under the transport limit) and the close
+        // handshake completed, or refused by the transport (nothing more can be read).
+        let oversize = match &item {
+            Ok(Message::Text(t)) => t.len() > MAX_CLIENT_MESSAGE_BYTES,
+            Ok(Message::Binary(b)) => b.len() > MAX_CLIENT_MESSAGE_BYTES,
+            Ok(_) => false,
+            Err(_) => false,
+        };
+        if oversize || item.as_ref().err().is_some_and(is_capacity_error) {
+            metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
+            let _ = reply_tx
+                .send(Outgoing::Close(CLOSE_TOO_BIG, too_big.clone()))
+                .await;
+            ending = if oversize {
+                Ending::AwaitPeerClose
+            } else {
+                Ending::Linger
+            };
+            break;
+        }
+        let text = match item {
+            Ok(Message::Text(t)) => t,
+            Ok(Message::Binary(_)) => {
                 metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
                 let _ = reply_tx.try_send(Outgoing::Text(error_text(
                     "binary messages are not supported; send JSON text",
                 )));
                 continue;
             }
-            Message::Close(_) => break,
-            Message::Ping(_) | Message::Pong(_) => continue,
+            Ok(Message::Ping(_) | Message::Pong(_)) => continue,
+            Ok(Message::Close(_)) | Err(_) => break,
         };
-        if text.len() > MAX_CLIENT_MESSAGE_BYTES {
-            metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
-            let _ = reply_tx
-                .send(Outgoing::Close(close_code::POLICY, "message over 16 KiB"))
-                .await;
-            break;
-        }
-        if !limiter.allow() {
+        if !limiter.try_take(Instant::now()) {
             metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
             if last_rate_notice.is_none_or(|t| t.elapsed().as_secs_f64() >= 1.0) {
                 last_rate_notice = Some(Instant::now());
@@ -251,6 +310,11 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
     }
     drop(reply_tx);
     let _ = writer.await;
+    match ending {
+        Ending::Linger => tokio::time::sleep(CLOSE_LINGER).await,
+        Ending::AwaitPeerClose => await_peer_close(&mut stream).await,
+        Ending::Plain => {}
+    }
     metrics.ws_clients.fetch_sub(1, Ordering::Relaxed);
     if role == Role::Trainee {
         session.trainees.fetch_sub(1, Ordering::Relaxed);
@@ -258,40 +322,10 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
     }
 }
 
-/// Token bucket: `rate` messages per second, bursts of up to 2·`rate`.
-struct RateLimiter {
-    rate: f64,
-    tokens: f64,
-    last: Instant,
-}
-
-impl RateLimiter {
-    fn new(rate: u32) -> RateLimiter {
-        let rate = f64::from(rate.max(1));
-        RateLimiter {
-            rate,
-            tokens: 2.0 * rate,
-            last: Instant::now(),
-        }
-    }
-    fn allow(&mut self) -> bool {
-        let now = Instant::now();
-        self.tokens = (self.tokens + now.duration_since(self.last).as_secs_f64() * self.rate)
-            .min(2.0 * self.rate);
-        self.last = now;
-        if self.tokens >= 1.0 {
-            self.tokens -= 1.0;
-            true
-        } else {
-            false
-        }
-    }
-}
-
 /// Validates one arm's axes: six values (an empty list means all zero), each clamped to
 /// [−1, 1]; clamping is reported.
-fn arm_axes(name: &str, a: &ArmAxes, notes: &mut Vec<String>) -> Result<([f64; 6], f64), String> {
-    let mut out = [0.0; 6];
+fn arm_sticks(name: &str, a: &ArmAxes, notes: &mut Vec<String>) -> Result<ArmSticks, String> {
+    let mut axes = [0.0; 6];
     if !a.axes.is_empty() && a.axes.len() != 6 {
         return Err(format!(
             "arms.{name}.axes must have 6 values, got {}",
@@ -299,10 +333,10 @@ fn arm_axes(name: &str, a: &ArmAxes, notes: &mut Vec<String>) -> Result<([f64; 6
         ));
     }
     for (i, v) in a.axes.iter().enumerate() {
-        out[i] = clamp_unit(*v, &format!("arms.{name}.axes[{i}]"), notes);
+        axes[i] = clamp_unit(*v, &format!("arms.{name}.axes[{i}]"), notes);
     }
     let grip = clamp_unit(a.grip, &format!("arms.{name}.grip"), notes);
-    Ok((out, grip))
+    Ok(ArmSticks { axes, grip })
 }
 
 fn clamp_unit(v: f64, what: &str, notes: &mut Vec<String>) -> f64 {
@@ -317,16 +351,51 @@ fn clamp_unit(v: f64, what: &str, notes: &mut Vec<String>) -> f64 {
     v
 }
 
-fn record_event(state: &AppState, session: &Session, t: f64, event: serde_json::Value) {
-    let mut e = event;
-    e["t"] = serde_json::json!(t);
-    state.sessions.recorder.send(RecordMsg::Event {
-        id: session.id.clone(),
-        json: e.to_string(),
-    });
+/// The WebSocket edge: a client message to a typed command (values validated, clamping
+/// reported in `notes`). `Ping` is answered by the connection itself and is no command.
+fn parse(msg: ClientMessage, notes: &mut Vec<String>) -> Result<Command, String> {
+    Ok(match msg {
+        ClientMessage::Input { seq, arms, object } => {
+            if seq > MAX_INPUT_SEQ {
+                return Err(format!(
+                    "seq must be at most 2^53 - 1 = {MAX_INPUT_SEQ} (exact in JavaScript), got {seq}; input ignored"
+                ));
+            }
+            let mut input = StickInput {
+                seq,
+                ..StickInput::default()
+            };
+            for (i, name, a) in [(LEFT, "left", &arms.left), (RIGHT, "right", &arms.right)] {
+                if let Some(a) = a {
+                    input.arms[i] = arm_sticks(name, a, notes)?;
+                }
+            }
+            if let Some(o) = &object {
+                if o.len() != 6 {
+                    return Err(format!("object must have 6 values, got {}", o.len()));
+                }
+                for (i, v) in o.iter().enumerate() {
+                    input.object[i] = clamp_unit(*v, &format!("object[{i}]"), notes);
+                }
+            }
+            Command::Input(input)
+        }
+        ClientMessage::Settings {
+            control_mode,
+            control_method,
+            arm_speed,
+        } => {
+            Command::settings(control_mode, control_method, arm_speed).map_err(|e| e.to_string())?
+        }
+        ClientMessage::Reset => Command::Reset,
+        ClientMessage::Pause => Command::Pause,
+        ClientMessage::Resume => Command::Resume,
+        ClientMessage::Release => Command::Release,
+        ClientMessage::Ping { .. } => return Err("ping is not a command".into()),
+    })
 }
 
-/// Applies one client message; returns the replies.
+/// Handles one client message; returns the replies.
 fn handle(
     session: &Session,
     state: &AppState,
@@ -336,140 +405,21 @@ fn handle(
     if let ClientMessage::Ping { t } = msg {
         return vec![ServerMessage::Pong { t }];
     }
-    if role == Role::Observer {
-        return vec![ServerMessage::Error {
-            message: "observers cannot control this session".into(),
-        }];
-    }
-    session.touch();
+    let actor = match role {
+        Role::Trainee => Actor::Trainee,
+        Role::Observer => Actor::Observer,
+    };
     let mut notes = Vec::new();
-    let mut guard = session.live();
-    let live: &mut Live = &mut guard;
-    let t = live.sim.time_s();
-    match msg {
-        ClientMessage::Input { seq, arms, object } => {
-            let mut parsed = [([0.0; 6], 0.0); 2];
-            for (i, (name, a)) in [("left", &arms.left), ("right", &arms.right)]
-                .into_iter()
-                .enumerate()
-            {
-                if let Some(a) = a {
-                    match arm_axes(name, a, &mut notes) {
-                        Ok(v) => parsed[i] = v,
-                        Err(e) => return vec![ServerMessage::Error { message: e }],
-                    }
-                }
-            }
-            let mut twist = [0.0; 6];
-            if let Some(o) = &object {
-                if o.len() != 6 {
-                    return vec![ServerMessage::Error {
-                        message: format!("object must have 6 values, got {}", o.len()),
-                    }];
-                }
-                for (i, v) in o.iter().enumerate() {
-                    let f = clamp_unit(*v, &format!("object[{i}]"), &mut notes);
-                    twist[i] = f * if i < 3 {
-                        CARTESIAN_MAX_LINEAR_M_S
-                    } else {
-                        CARTESIAN_MAX_ANGULAR_RAD_S
-                    };
-                }
-            }
-            for (arm, (axes, grip)) in parsed.into_iter().enumerate() {
-                match live.settings.control_mode {
-                    ControlMode::Joint => {
-                        live.input.arms[arm].valves = axes;
-                        live.cartesian[arm] = [0.0; 6];
-                    }
-                    ControlMode::Cartesian => {
-                        live.input.arms[arm].valves = [0.0; 6];
-                        live.cartesian[arm] = axes;
-                    }
-                }
-                live.input.arms[arm].jaw = grip;
-            }
-            live.input.object_velocity = twist;
-            live.input_seq = live.input_seq.max(seq);
-        }
-        ClientMessage::Settings {
-            control_mode,
-            control_method,
-            arm_speed,
-        } => {
-            if let Some(s) = arm_speed {
-                if !(s.is_finite() && s > 0.0 && s <= 1.0) {
-                    return vec![ServerMessage::Error {
-                        message: format!("arm_speed must be in (0, 1], got {s}"),
-                    }];
-                }
-                live.settings.arm_speed = s;
-            }
-            if let Some(m) = control_mode {
-                live.settings.control_mode = m;
-                live.cartesian = [[0.0; 6]; 2];
-                for a in &mut live.input.arms {
-                    a.valves = [0.0; 6];
-                }
-            }
-            if let Some(m) = control_method {
-                live.settings.control_method = m;
-            }
-            record_event(
-                state,
-                session,
-                t,
-                serde_json::json!({"event": "settings", "settings": live.settings}),
-            );
-        }
-        ClientMessage::Reset => {
-            reset(live);
-            record_event(
-                state,
-                session,
-                t,
-                serde_json::json!({"event": "reset", "by": "trainee"}),
-            );
-        }
-        ClientMessage::Pause => {
-            live.paused = true;
-            record_event(
-                state,
-                session,
-                t,
-                serde_json::json!({"event": "pause", "by": "trainee"}),
-            );
-        }
-        ClientMessage::Resume => {
-            live.paused = false;
-            record_event(
-                state,
-                session,
-                t,
-                serde_json::json!({"event": "resume", "by": "trainee"}),
-            );
-        }
-        ClientMessage::Release => {
-            // Open both jaws for 1 s (7.5 cm at 10.2 cm/s takes 0.74 s, Lim Table 1-1),
-            // whatever grip the sticks send meanwhile.
-            live.release_until_s = t + 1.0;
-            record_event(state, session, t, serde_json::json!({"event": "release"}));
-        }
-        ClientMessage::Ping { .. } => {}
+    let result = parse(msg, &mut notes).and_then(|c| {
+        command::apply(&state.sessions, session, actor, c).map_err(|e| e.to_string())
+    });
+    match result {
+        Ok(()) => notes
+            .into_iter()
+            .map(|n| ServerMessage::Error {
+                message: format!("adjusted: {n}"),
+            })
+            .collect(),
+        Err(message) => vec![ServerMessage::Error { message }],
     }
-    notes
-        .into_iter()
-        .map(|n| ServerMessage::Error {
-            message: format!("adjusted: {n}"),
-        })
-        .collect()
-}
-
-/// Back to the initial position (Lim §4.1): simulation reset, inputs cleared.
-pub fn reset(live: &mut Live) {
-    live.sim.reset();
-    live.input.arms = Default::default();
-    live.input.object_velocity = [0.0; 6];
-    live.cartesian = [[0.0; 6]; 2];
-    live.relief_recorded = 0;
 }

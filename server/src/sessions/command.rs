@@ -1,0 +1,506 @@
+//! Session commands: one typed [`Command`] that both edges (the WebSocket in [`super::ws`],
+//! REST in [`super::rest`]) parse their wire messages into, and one function, [`apply`], that
+//! checks who may give it, applies it to the session and records it.
+//!
+//! Wire strings (`"left"`, `"supply_drop:left:3000000Pa"`, …) live in [`crate::protocol`];
+//! here arms, faults and actors are enums.
+
+use std::sync::atomic::Ordering;
+
+use serde_json::json;
+
+use super::record::RecordMsg;
+use super::{LIVE_SCENARIOS, Session, SessionManager};
+use crate::protocol::{ControlMethod, ControlMode, ServerMessage};
+
+/// Largest instructor message to a trainee (characters).
+pub const MAX_MESSAGE_CHARS: usize = 500;
+/// How long `release` drives both jaws open (s): 7.5 cm at 10.2 cm/s takes 0.74 s (Lim
+/// Table 1-1), so 1 s opens them fully whatever grip the sticks send meanwhile.
+pub const RELEASE_DURATION_S: f64 = 1.0;
+/// Supply-pressure drop range (Pa): up to the full supply of 6.89 MPa (Lim Table 1-1).
+pub const SUPPLY_DROP_RANGE_PA: (f64, f64) = (0.0, 6.89e6);
+/// Stuck-valve spool position range.
+pub const STUCK_SPOOL_RANGE: (f64, f64) = (-1.0, 1.0);
+/// Cross-piston leakage coefficient range (m³/(s·Pa)).
+pub const LEAK_RANGE_M3_S_PA: (f64, f64) = (0.0, 1e-9);
+/// Entrained-air bulk-modulus scale range.
+pub const AIR_SCALE_RANGE: (f64, f64) = (0.01, 1.0);
+/// Actuators per arm (swing, shoulder, elbow, pitch, yaw, rotate).
+pub const JOINTS: usize = 6;
+
+/// One of the two arms.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Arm {
+    /// Index 0.
+    Left,
+    /// Index 1.
+    Right,
+}
+
+impl Arm {
+    /// Both arms, left first.
+    pub const BOTH: [Arm; 2] = [Arm::Left, Arm::Right];
+
+    /// Index into the simulation's arrays (`seaarms_core::sim::LEFT`/`RIGHT`).
+    pub fn index(self) -> usize {
+        match self {
+            Arm::Left => seaarms_core::sim::LEFT,
+            Arm::Right => seaarms_core::sim::RIGHT,
+        }
+    }
+}
+
+/// An instructor-injected hydraulic fault on one arm (sizes validated on construction).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Fault {
+    /// The supply pressure drops by this much (Pa).
+    SupplyDrop {
+        /// Drop (Pa), in [`SUPPLY_DROP_RANGE_PA`].
+        drop_pa: f64,
+    },
+    /// A valve's spool sticks at a position whatever the command.
+    StuckValve {
+        /// Actuator 0..5.
+        joint: usize,
+        /// Spool position in [−1, 1].
+        spool: f64,
+    },
+    /// Cross-piston leakage in one actuator.
+    Leak {
+        /// Actuator 0..5.
+        joint: usize,
+        /// Leakage coefficient (m³/(s·Pa)), in [`LEAK_RANGE_M3_S_PA`].
+        coefficient_m3_s_pa: f64,
+    },
+    /// Entrained air: the bulk modulus is scaled down.
+    Air {
+        /// Bulk-modulus scale, in [`AIR_SCALE_RANGE`].
+        bulk_modulus_scale: f64,
+    },
+}
+
+/// The kinds of [`Fault`], for keeping one entry per (arm, kind, joint).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FaultKind {
+    /// [`Fault::SupplyDrop`].
+    SupplyDrop,
+    /// [`Fault::StuckValve`].
+    StuckValve,
+    /// [`Fault::Leak`].
+    Leak,
+    /// [`Fault::Air`].
+    Air,
+}
+
+impl FaultKind {
+    /// Every kind.
+    pub const ALL: [FaultKind; 4] = [
+        FaultKind::SupplyDrop,
+        FaultKind::StuckValve,
+        FaultKind::Leak,
+        FaultKind::Air,
+    ];
+}
+
+impl Fault {
+    /// Builds a fault from its kind, joint and size, checking ranges (messages name the field).
+    pub fn new(kind: FaultKind, joint: Option<usize>, value: f64) -> Result<Fault, String> {
+        let in_range = |(lo, hi): (f64, f64)| -> Result<f64, String> {
+            if value.is_finite() && value >= lo && value <= hi {
+                Ok(value)
+            } else {
+                Err(format!(
+                    "`value` for {} must be in [{lo}, {hi}], got {value}",
+                    crate::protocol::fault_kind_name(kind)
+                ))
+            }
+        };
+        let joint = || match joint {
+            Some(j) if j < JOINTS => Ok(j),
+            _ => Err(format!("this fault needs `joint` in 0..={}", JOINTS - 1)),
+        };
+        Ok(match kind {
+            FaultKind::SupplyDrop => Fault::SupplyDrop {
+                drop_pa: in_range(SUPPLY_DROP_RANGE_PA)?,
+            },
+            FaultKind::StuckValve => Fault::StuckValve {
+                joint: joint()?,
+                spool: in_range(STUCK_SPOOL_RANGE)?,
+            },
+            FaultKind::Leak => Fault::Leak {
+                joint: joint()?,
+                coefficient_m3_s_pa: in_range(LEAK_RANGE_M3_S_PA)?,
+            },
+            FaultKind::Air => Fault::Air {
+                bulk_modulus_scale: in_range(AIR_SCALE_RANGE)?,
+            },
+        })
+    }
+
+    /// Its kind.
+    pub fn kind(&self) -> FaultKind {
+        match self {
+            Fault::SupplyDrop { .. } => FaultKind::SupplyDrop,
+            Fault::StuckValve { .. } => FaultKind::StuckValve,
+            Fault::Leak { .. } => FaultKind::Leak,
+            Fault::Air { .. } => FaultKind::Air,
+        }
+    }
+
+    /// The actuator it acts on, for per-joint faults.
+    pub fn joint(&self) -> Option<usize> {
+        match self {
+            Fault::StuckValve { joint, .. } | Fault::Leak { joint, .. } => Some(*joint),
+            Fault::SupplyDrop { .. } | Fault::Air { .. } => None,
+        }
+    }
+
+    /// Writes the fault into the simulation's fault set of its arm.
+    pub fn apply_to(&self, faults: &mut seaarms_core::hydraulics::Faults) {
+        match *self {
+            Fault::SupplyDrop { drop_pa } => faults.supply_drop_pa = drop_pa,
+            Fault::StuckValve { joint, spool } => faults.stuck_valve[joint] = Some(spool),
+            Fault::Leak {
+                joint,
+                coefficient_m3_s_pa,
+            } => faults.leak_m3_s_pa[joint] = coefficient_m3_s_pa,
+            Fault::Air { bulk_modulus_scale } => faults.bulk_modulus_scale = bulk_modulus_scale,
+        }
+    }
+}
+
+/// A fault active on one arm (shown to users through [`crate::protocol`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ActiveFault {
+    /// Which arm.
+    pub arm: Arm,
+    /// What and how much.
+    pub fault: Fault,
+}
+
+impl ActiveFault {
+    /// Whether `other` replaces this one (same arm, kind and actuator).
+    pub fn same_slot(&self, other: &ActiveFault) -> bool {
+        self.arm == other.arm
+            && self.fault.kind() == other.fault.kind()
+            && self.fault.joint() == other.fault.joint()
+    }
+}
+
+/// One arm's validated sticks: six axes and a grip, each in [−1, 1].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ArmSticks {
+    /// Joint mode: valve commands; Cartesian mode: end-effector twist fractions.
+    pub axes: [f64; 6],
+    /// Jaw: +1 opens, −1 closes.
+    pub grip: f64,
+}
+
+/// Validated stick input (an absent arm is all zero).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StickInput {
+    /// Sequence number (≤ [`crate::protocol::MAX_INPUT_SEQ`]).
+    pub seq: u64,
+    /// Left and right.
+    pub arms: [ArmSticks; 2],
+    /// Closed loop: commanded object twist [vx, vy, vz, wx, wy, wz] (world frame) as
+    /// fractions of the controller's maximum speeds, each in [−1, 1].
+    pub object: [f64; 6],
+}
+
+/// Settings changes (absent fields unchanged; `arm_speed` validated).
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SettingsChange {
+    /// Joint or Cartesian.
+    pub control_mode: Option<ControlMode>,
+    /// Open or closed loop.
+    pub control_method: Option<ControlMethod>,
+    /// Arm speed in (0, 1].
+    pub arm_speed: Option<f64>,
+}
+
+/// Everything that can be done to a live session, from either edge.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Command {
+    /// New stick input.
+    Input(StickInput),
+    /// Change settings.
+    Settings(SettingsChange),
+    /// Back to the initial position (Lim §4.1).
+    Reset,
+    /// Pause the simulation clock.
+    Pause,
+    /// Resume it.
+    Resume,
+    /// Open both jaws for [`RELEASE_DURATION_S`].
+    Release,
+    /// Switch scenario (resets the session); the name is a known live scenario.
+    Scenario(String),
+    /// Inject a fault.
+    InjectFault(ActiveFault),
+    /// Remove every fault.
+    ClearFaults,
+    /// Show an instructor's message on every client of the session.
+    Message(String),
+    /// End the session.
+    End,
+}
+
+/// Who gives a command.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Actor {
+    /// The instructor token: every command.
+    Instructor,
+    /// The session's own control token: driving, settings, reset/pause/resume/release, end.
+    Trainee,
+    /// A read-only connection: nothing.
+    Observer,
+}
+
+impl Actor {
+    /// Name in records and messages.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Actor::Instructor => "instructor",
+            Actor::Trainee => "trainee",
+            Actor::Observer => "observer",
+        }
+    }
+}
+
+/// Why a command was refused.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CommandError {
+    /// The actor may not give this command.
+    #[error("{0}")]
+    Forbidden(String),
+    /// The command's values are invalid.
+    #[error("{0}")]
+    Invalid(String),
+}
+
+impl Command {
+    /// Builds a settings change, checking `arm_speed` ∈ (0, 1].
+    pub fn settings(
+        control_mode: Option<ControlMode>,
+        control_method: Option<ControlMethod>,
+        arm_speed: Option<f64>,
+    ) -> Result<Command, CommandError> {
+        if let Some(s) = arm_speed {
+            if !(s.is_finite() && s > 0.0 && s <= 1.0) {
+                return Err(CommandError::Invalid(format!(
+                    "arm_speed must be in (0, 1], got {s}"
+                )));
+            }
+        }
+        Ok(Command::Settings(SettingsChange {
+            control_mode,
+            control_method,
+            arm_speed,
+        }))
+    }
+
+    /// Builds a scenario switch, checking the name against [`LIVE_SCENARIOS`].
+    pub fn scenario(name: &str) -> Result<Command, CommandError> {
+        if LIVE_SCENARIOS.iter().any(|(n, _)| *n == name) {
+            Ok(Command::Scenario(name.to_string()))
+        } else {
+            Err(CommandError::Invalid(format!("unknown scenario `{name}`")))
+        }
+    }
+
+    /// Builds an instructor message, checking its length.
+    pub fn message(text: &str) -> Result<Command, CommandError> {
+        if text.chars().count() > MAX_MESSAGE_CHARS {
+            return Err(CommandError::Invalid(format!(
+                "message text is limited to {MAX_MESSAGE_CHARS} characters"
+            )));
+        }
+        Ok(Command::Message(text.to_string()))
+    }
+
+    /// Name in records.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Command::Input(_) => "input",
+            Command::Settings(_) => "settings",
+            Command::Reset => "reset",
+            Command::Pause => "pause",
+            Command::Resume => "resume",
+            Command::Release => "release",
+            Command::Scenario(_) => "scenario",
+            Command::InjectFault(_) => "fault",
+            Command::ClearFaults => "clear_faults",
+            Command::Message(_) => "message",
+            Command::End => "end",
+        }
+    }
+
+    /// Whether `actor` may give this command.
+    pub fn permitted(&self, actor: Actor) -> bool {
+        match actor {
+            Actor::Instructor => true,
+            Actor::Trainee => matches!(
+                self,
+                Command::Input(_)
+                    | Command::Settings(_)
+                    | Command::Reset
+                    | Command::Pause
+                    | Command::Resume
+                    | Command::Release
+                    | Command::End
+            ),
+            Actor::Observer => false,
+        }
+    }
+}
+
+/// Applies `command` to `session` on behalf of `actor`: the one place where commands take
+/// effect, whichever edge they came from. Every command but stick input is recorded as an
+/// event `{"t", "event", "by", …}`.
+pub fn apply(
+    manager: &SessionManager,
+    session: &Session,
+    actor: Actor,
+    command: Command,
+) -> Result<(), CommandError> {
+    if !command.permitted(actor) {
+        return Err(CommandError::Forbidden(match actor {
+            Actor::Observer => "observers cannot control this session".to_string(),
+            _ => format!("instructor token required for `{}`", command.name()),
+        }));
+    }
+    if session.ended.load(Ordering::Relaxed) {
+        return Err(CommandError::Invalid("the session has ended".into()));
+    }
+    // Trainee activity keeps a session from idling out; an instructor's does not.
+    if actor == Actor::Trainee {
+        session.touch();
+    }
+    if command == Command::End {
+        let reason = format!("ended by {}", actor.as_str());
+        record(manager, session, actor, &command, json!({}));
+        manager.end(&session.id, &reason);
+        return Ok(());
+    }
+    let detail = {
+        let mut live = session.live();
+        match &command {
+            Command::Input(input) => {
+                live.apply_input(input);
+                return Ok(());
+            }
+            Command::Settings(change) => {
+                live.apply_settings(change);
+                json!({"settings": live.settings()})
+            }
+            Command::Reset => {
+                live.reset();
+                json!({})
+            }
+            Command::Pause => {
+                live.set_paused(true);
+                json!({})
+            }
+            Command::Resume => {
+                live.set_paused(false);
+                json!({})
+            }
+            Command::Release => {
+                live.release(RELEASE_DURATION_S);
+                json!({})
+            }
+            Command::Scenario(name) => {
+                session.set_scenario(name);
+                live.reset();
+                json!({"scenario": name})
+            }
+            Command::InjectFault(f) => {
+                live.inject_fault(*f);
+                json!({"fault": f})
+            }
+            Command::ClearFaults => {
+                live.clear_faults();
+                json!({})
+            }
+            Command::Message(text) => {
+                let msg = ServerMessage::Message {
+                    from: actor.as_str().into(),
+                    text: text.clone(),
+                };
+                let _ = session
+                    .notices
+                    .send(serde_json::to_string(&msg).unwrap_or_default().into());
+                json!({"text": text})
+            }
+            Command::End => json!({}),
+        }
+    };
+    record(manager, session, actor, &command, detail);
+    Ok(())
+}
+
+fn record(
+    manager: &SessionManager,
+    session: &Session,
+    actor: Actor,
+    command: &Command,
+    detail: serde_json::Value,
+) {
+    let mut event = detail;
+    event["t"] = json!(session.live().sim().time_s());
+    event["event"] = json!(command.name());
+    event["by"] = json!(actor.as_str());
+    manager.recorder.send(RecordMsg::Event {
+        id: session.id.clone(),
+        json: event.to_string(),
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fault_ranges_are_checked_and_name_the_field() {
+        assert!(Fault::new(FaultKind::SupplyDrop, None, 3e6).is_ok());
+        assert!(Fault::new(FaultKind::SupplyDrop, None, 7e6).is_err());
+        assert!(Fault::new(FaultKind::Air, None, f64::NAN).is_err());
+        let e = Fault::new(FaultKind::StuckValve, None, 0.5).unwrap_err();
+        assert!(e.contains("joint"), "{e}");
+        assert!(Fault::new(FaultKind::Leak, Some(6), 1e-10).is_err());
+        assert_eq!(
+            Fault::new(FaultKind::Leak, Some(5), 1e-10),
+            Ok(Fault::Leak {
+                joint: 5,
+                coefficient_m3_s_pa: 1e-10
+            })
+        );
+    }
+
+    #[test]
+    fn a_second_fault_of_the_same_kind_on_the_same_actuator_replaces_the_first() {
+        let a = |arm, joint, v| ActiveFault {
+            arm,
+            fault: Fault::new(FaultKind::StuckValve, Some(joint), v).unwrap(),
+        };
+        assert!(a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Left, 2, -0.5)));
+        assert!(!a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Left, 3, 0.5)));
+        assert!(!a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Right, 2, 0.5)));
+    }
+
+    #[test]
+    fn permissions() {
+        for c in [Command::Reset, Command::Pause, Command::End] {
+            assert!(c.permitted(Actor::Trainee));
+            assert!(c.permitted(Actor::Instructor));
+            assert!(!c.permitted(Actor::Observer));
+        }
+        assert!(!Command::ClearFaults.permitted(Actor::Trainee));
+        assert!(!Command::Message("x".into()).permitted(Actor::Trainee));
+        assert!(Command::settings(None, None, Some(0.0)).is_err());
+        assert!(Command::settings(None, None, Some(1.0)).is_ok());
+        assert!(Command::scenario("nope").is_err());
+    }
+}

@@ -43,7 +43,6 @@
 //! * Buoyancy (optional) uses the mean link density; drag is an optional quadratic joint term.
 
 pub mod scenario;
-pub mod sci;
 
 use nalgebra::{Isometry3, Matrix3, Matrix6, Translation3, UnitQuaternion, Vector3, Vector6};
 

@@ -116,7 +116,7 @@ pub async fn create(
         .await
         .map_err(|e| ApiError { status: StatusCode::INTERNAL_SERVER_ERROR, error: e.to_string(), detail: None })?
         .map_err(|e| match e {
-            CreateError::Full(_) => ApiError { status: StatusCode::SERVICE_UNAVAILABLE, error: e.to_string(), detail: None },
+            CreateError::Full(_) | CreateError::Recording(_) => ApiError { status: StatusCode::SERVICE_UNAVAILABLE, error: e.to_string(), detail: None },
             CreateError::UnknownScenario(_) => ApiError::bad_request(e.to_string())
                 .with_detail(serde_json::json!({"known": LIVE_SCENARIOS.iter().map(|(n, _)| *n).collect::<Vec<_>>()})),
             CreateError::Sim(_) => ApiError { status: StatusCode::INTERNAL_SERVER_ERROR, error: e.to_string(), detail: None },
@@ -196,9 +196,11 @@ pub struct SessionSummary {
     /// Active faults (live only).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub faults: Option<Vec<String>>,
+    /// `ok`, or `failed` when part of the session's record could not be written.
+    pub recording: &'static str,
 }
 
-fn live_summary(s: &Session) -> SessionSummary {
+fn live_summary(s: &Session, recording: &'static str) -> SessionSummary {
     let live = s.live();
     let arm = |i: usize| {
         let jt = live.sim.jacobian_world(i).fixed_rows::<3>(0).into_owned();
@@ -227,6 +229,7 @@ fn live_summary(s: &Session) -> SessionSummary {
         measures: Some([arm(LEFT), arm(RIGHT)]),
         overload_count: s.overloads.load(std::sync::atomic::Ordering::Relaxed),
         faults: Some(live.faults.clone()),
+        recording,
     }
 }
 
@@ -249,6 +252,7 @@ fn ended_summary(r: SessionRecord) -> SessionSummary {
         measures: None,
         overload_count: r.overloads.unwrap_or(0),
         faults: None,
+        recording: if r.recording_failed { "failed" } else { "ok" },
     }
 }
 
@@ -267,7 +271,11 @@ pub async fn list(
             .await
             .unwrap_or_default()
     };
-    let mut out: Vec<SessionSummary> = live.iter().map(|s| live_summary(s)).collect();
+    let recorder = &state.sessions.recorder;
+    let mut out: Vec<SessionSummary> = live
+        .iter()
+        .map(|s| live_summary(s, recorder.recording(&s.id)))
+        .collect();
     out.extend(
         recorder_index
             .into_iter()
@@ -285,7 +293,10 @@ pub async fn get_one(
 ) -> Result<Json<SessionSummary>, ApiError> {
     if let Some(s) = state.sessions.get(&id) {
         caller(&state, bearer(&headers), Some(&s))?;
-        return Ok(Json(live_summary(&s)));
+        return Ok(Json(live_summary(
+            &s,
+            state.sessions.recorder.recording(&s.id),
+        )));
     }
     require_instructor(&state, &headers)?;
     let index = state.sessions.recorder.index();
@@ -520,9 +531,11 @@ pub async fn log_csv(
     tokio::task::spawn_blocking(move || sessions.recorder.flush())
         .await
         .ok();
-    let bytes = tokio::fs::read(&path)
+    let mut bytes = tokio::fs::read(&path)
         .await
         .map_err(|_| ApiError::not_found(format!("no record for session `{id}`")))?;
+    // Only whole rows, even if a write is under way or a crash cut the last one.
+    bytes.truncate(crate::csv_out::complete_lines(&bytes).len());
     Ok((
         [
             (header::CONTENT_TYPE, "text/csv; charset=utf-8".to_string()),

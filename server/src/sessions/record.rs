@@ -32,7 +32,7 @@ pub use row::{ArmRow, SessionRow};
 
 use std::collections::{HashMap, HashSet};
 use std::fs::{File, OpenOptions};
-use std::io::{self, BufRead, BufReader, Read, Write};
+use std::io::{self, BufRead, BufReader, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, TrySendError, sync_channel};
@@ -49,6 +49,8 @@ use crate::metrics::Metrics;
 pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
 /// Messages queued for the recorder before new ones are dropped (counted in /metrics).
 pub const QUEUE_CAPACITY: usize = 65_536;
+/// Start-up repair reads this much of the end of an interrupted record.
+const REPAIR_TAIL_BYTES: u64 = 64 << 10;
 /// The index is compacted by a retention pass once it is larger than this.
 const COMPACT_INDEX_BYTES: u64 = 4 << 20;
 
@@ -275,8 +277,6 @@ impl Recorder {
             metrics,
             thread: Mutex::new(Some(thread)),
         };
-        // Sets the free-space gauge.
-        let _ = recorder.admit();
         Ok(recorder)
     }
 
@@ -381,18 +381,27 @@ fn events_path(dir: &Path, id: &str) -> PathBuf {
     dir.join("sessions").join(format!("{id}.events.jsonl"))
 }
 
-/// Cuts a file after its last newline (a line cut by a crash). Missing files are fine.
+/// Cuts a file after its last newline (a line cut by a crash). Missing files are fine. Only
+/// the tail is read (a row is far shorter than [`REPAIR_TAIL_BYTES`]).
 fn cut_to_last_line(path: &Path) -> io::Result<()> {
     let mut file = match OpenOptions::new().read(true).write(true).open(path) {
         Ok(f) => f,
         Err(e) if e.kind() == io::ErrorKind::NotFound => return Ok(()),
         Err(e) => return Err(e),
     };
-    let mut bytes = Vec::new();
-    file.read_to_end(&mut bytes)?;
-    let keep = crate::csv_out::complete_lines(&bytes).len();
-    if keep < bytes.len() {
-        file.set_len(keep as u64)?;
+    let len = file.metadata()?.len();
+    let start = len.saturating_sub(REPAIR_TAIL_BYTES);
+    file.seek(SeekFrom::Start(start))?;
+    let mut tail = Vec::new();
+    file.read_to_end(&mut tail)?;
+    let keep = crate::csv_out::complete_lines(&tail).len() as u64;
+    if keep == 0 && start > 0 {
+        tracing::warn!(
+            "{}: no line end in its last {REPAIR_TAIL_BYTES} bytes; left alone",
+            path.display()
+        );
+    } else if start + keep < len {
+        file.set_len(start + keep)?;
         tracing::info!("cut {} back to its last whole line", path.display());
     }
     Ok(())
@@ -837,6 +846,11 @@ impl RecorderState {
     /// large, or `compact` is set (start-up).
     fn maintain(&mut self, compact: bool) {
         self.last_maintenance = Instant::now();
+        if let Some(free) = free_disk_bytes(&self.dir) {
+            self.metrics
+                .data_disk_free_bytes
+                .store(free, Ordering::Relaxed);
+        }
         let index_path = self.dir.join("sessions.jsonl");
         let records = read_index(&index_path);
         let sized: Vec<(SessionRecord, u64)> = records
@@ -959,6 +973,30 @@ mod tests {
         assert_eq!(err.kind(), io::ErrorKind::StorageFull);
         assert_eq!(f.file.data, b"t,x\n0,1\n");
         assert_eq!(f.len, 8);
+    }
+
+    /// Start-up repair cuts a row left half-written by a killed process, reading only the
+    /// tail of a long file, and leaves a whole file alone.
+    #[test]
+    fn repair_cuts_a_half_row() {
+        let dir =
+            std::env::temp_dir().join(format!("seaarms-repair-{}", super::super::random_hex(6)));
+        std::fs::create_dir_all(&dir).expect("dir");
+        let path = dir.join("x.csv");
+        let mut whole = b"t,x\n".to_vec();
+        for i in 0..20_000 {
+            whole.extend_from_slice(format!("{i},{}\n", i * 7).as_bytes());
+        }
+        assert!(whole.len() as u64 > REPAIR_TAIL_BYTES);
+        let mut cut = whole.clone();
+        cut.extend_from_slice(b"20000,14");
+        std::fs::write(&path, &cut).expect("write");
+        cut_to_last_line(&path).expect("repair");
+        assert_eq!(std::fs::read(&path).expect("read"), whole);
+        cut_to_last_line(&path).expect("repair again");
+        assert_eq!(std::fs::read(&path).expect("read"), whole);
+        cut_to_last_line(&dir.join("missing.csv")).expect("a missing file is fine");
+        let _ = std::fs::remove_dir_all(&dir);
     }
 
     #[test]

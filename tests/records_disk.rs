@@ -1,4 +1,4 @@
-//! Disk use of session records on a real server: a full disk (a 4 MiB tmpfs mounted by the
+//! Disk use of session records on the real binary: a full disk (a 4 MiB tmpfs mounted by the
 //! test) marks the session's recording `failed`, counts the failure in /metrics, leaves only
 //! whole rows, and refuses new sessions below the free-space floor; retention deletes the
 //! oldest ended records (by size and by age) and never a live one.
@@ -11,9 +11,7 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-use records_common::{
-    Csv, InProcess, TEACHER, config, create, eventually, get_json, metric, temp_dir,
-};
+use records_common::{Binary, Csv, TEACHER, create, eventually, get_json, metric, temp_dir};
 use serde_json::{Value, json};
 
 /// Unmounts (lazily) when dropped, also when the test fails.
@@ -74,26 +72,31 @@ async fn a_full_disk_is_reported_and_refuses_new_sessions() {
              only the free-space floor (503) against the real disk"
         );
         let dir = temp_dir("diskfloor");
-        let mut cfg = config(&dir);
-        cfg.min_free_disk_mb = u64::MAX >> 21;
-        let s = InProcess::start(cfg).await;
+        // A floor of 1 EiB: more than any real disk has free.
+        let s = Binary::start(&dir, &["--min-free-disk-mb", "1099511627776"]);
         let (st, body) = create(&s.base, json!({})).await;
         assert_eq!(st, 503, "{body}");
         assert!(
             body["error"].as_str().unwrap().contains("nearly full"),
             "{body}"
         );
-        s.stop().await;
+        s.stop();
         let _ = std::fs::remove_dir_all(&dir);
         let _ = std::fs::remove_dir(&root);
         return;
     };
     let dir = root.join("data");
-    let mut cfg = config(&dir);
-    cfg.min_free_disk_mb = 1;
-    cfg.retention_days = 0.0;
-    cfg.retention_max_mb = 0.0;
-    let s = InProcess::start(cfg).await;
+    let s = Binary::start(
+        &dir,
+        &[
+            "--min-free-disk-mb",
+            "1",
+            "--retention-days",
+            "0",
+            "--retention-max-mb",
+            "0",
+        ],
+    );
     let (st, c) = create(&s.base, json!({"label": "on a small disk"})).await;
     assert_eq!(st, 201, "{c}");
     let id = c["id"].as_str().unwrap().to_string();
@@ -152,7 +155,7 @@ async fn a_full_disk_is_reported_and_refuses_new_sessions() {
     std::fs::remove_file(&filler).unwrap();
     let (st, body) = create(&s.base, json!({})).await;
     assert_eq!(st, 201, "space freed: {body}");
-    s.stop().await;
+    s.stop();
     drop(mount);
     let _ = std::fs::remove_dir_all(&root);
 }
@@ -161,10 +164,7 @@ async fn a_full_disk_is_reported_and_refuses_new_sessions() {
 async fn retention_deletes_oldest_ended_records_never_live_ones() {
     let dir = temp_dir("retention");
     // 1. Two real records, A then B, with retention off.
-    let mut cfg = config(&dir);
-    cfg.retention_days = 0.0;
-    cfg.retention_max_mb = 0.0;
-    let s = InProcess::start(cfg.clone()).await;
+    let s = Binary::start(&dir, &["--retention-days", "0", "--retention-max-mb", "0"]);
     let mut ids = Vec::new();
     for label in ["A", "B"] {
         let (st, c) = create(&s.base, json!({"label": label})).await;
@@ -174,16 +174,25 @@ async fn retention_deletes_oldest_ended_records_never_live_ones() {
         end(&s.base, &id).await;
         ids.push(id);
     }
-    s.stop().await;
+    s.stop();
     let (a, b) = (ids[0].clone(), ids[1].clone());
     let (size_a, size_b) = (record_bytes(&dir, &a), record_bytes(&dir, &b));
     assert!(size_a > 10_000 && size_b > 10_000, "{size_a} {size_b}");
 
     // 2. A cap that holds B but not A + B: start-up deletes A, the oldest, and keeps B.
     let cap = size_b + size_a / 2;
-    cfg.retention_max_mb = cap as f64 / 1_048_576.0;
-    cfg.retention_check_secs = 1;
-    let s = InProcess::start(cfg.clone()).await;
+    let cap_mb = (cap as f64 / 1_048_576.0).to_string();
+    let s = Binary::start(
+        &dir,
+        &[
+            "--retention-days",
+            "0",
+            "--retention-max-mb",
+            &cap_mb,
+            "--retention-check-secs",
+            "1",
+        ],
+    );
     assert!(!record_exists(&dir, &a), "A kept over the cap");
     assert!(record_exists(&dir, &b), "B deleted although it fits");
     assert_eq!(metric(&s.base, "seaarms_records_pruned_total").await, 1);
@@ -228,13 +237,14 @@ async fn retention_deletes_oldest_ended_records_never_live_ones() {
     assert_eq!(summary(&s.base, &id_c).await["status"], "live");
     // A at start-up, B now: nothing else.
     assert_eq!(metric(&s.base, "seaarms_records_pruned_total").await, 2);
-    s.stop().await;
+    s.stop();
 
     // 4. By age: C ended at the shutdown above; a retention of ~0.9 s deletes it at start-up.
     tokio::time::sleep(Duration::from_millis(1200)).await;
-    cfg.retention_max_mb = 0.0;
-    cfg.retention_days = 1e-5;
-    let s = InProcess::start(cfg).await;
+    let s = Binary::start(
+        &dir,
+        &["--retention-days", "0.00001", "--retention-max-mb", "0"],
+    );
     assert!(
         !record_exists(&dir, &id_c),
         "C older than the retention age kept"
@@ -246,6 +256,6 @@ async fn retention_deletes_oldest_ended_records_never_live_ones() {
             .unwrap()
             .is_empty()
     );
-    s.stop().await;
+    s.stop();
     let _ = std::fs::remove_dir_all(&dir);
 }

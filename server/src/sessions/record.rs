@@ -20,7 +20,7 @@
 //!   sessions back to their last whole line.
 //! * New sessions are refused while the data disk has less free space than the configured
 //!   floor or the records folder cannot be written ([`Recorder::admit`]).
-//! * Retention ([`retention`]): at start-up and periodically, records older than the
+//! * Retention ([`Retention`]): at start-up and periodically, records older than the
 //!   retention age, then the oldest ended records beyond the size cap, are deleted — never
 //!   a live session's.
 

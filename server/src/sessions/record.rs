@@ -24,23 +24,24 @@
 //!   retention age, then the oldest ended records beyond the size cap, are deleted — never
 //!   a live session's.
 
+mod index;
 mod retention;
 mod row;
 
+use index::IndexLine;
+pub use index::{SessionRecord, read_index};
 pub use retention::Retention;
 pub use row::{ArmRow, SessionRow};
 
 use std::collections::{HashMap, HashSet};
 use std::fs::{File, OpenOptions};
-use std::io::{self, BufRead, BufReader, Read, Seek, SeekFrom, Write};
+use std::io::{self, Read, Seek, SeekFrom, Write};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::Ordering;
 use std::sync::mpsc::{Receiver, RecvTimeoutError, SyncSender, TrySendError, sync_channel};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-
-use serde::{Deserialize, Serialize};
 
 use crate::csv_out::CsvOut;
 use crate::metrics::Metrics;
@@ -112,66 +113,6 @@ pub enum RecordMsg {
     Flush(SyncSender<()>),
     /// Flush everything, answer and stop.
     Shutdown(SyncSender<()>),
-}
-
-/// One session of the index, folded over its lines.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
-pub struct SessionRecord {
-    /// Id.
-    pub id: String,
-    /// Trainee label.
-    #[serde(default)]
-    pub label: String,
-    /// Scenario.
-    #[serde(default)]
-    pub scenario: String,
-    /// Unix seconds.
-    #[serde(default)]
-    pub created_unix: f64,
-    /// Unix seconds, when ended.
-    #[serde(default)]
-    pub ended_unix: Option<f64>,
-    /// Simulated seconds: at the end, or of the last row written while it ran.
-    #[serde(default)]
-    pub sim_seconds: Option<f64>,
-    /// Why it ended.
-    #[serde(default)]
-    pub end_reason: Option<String>,
-    /// Relief events over the session (so far, while it runs).
-    #[serde(default)]
-    pub overloads: Option<u64>,
-    /// Part of the record could not be written.
-    #[serde(default)]
-    pub recording_failed: bool,
-}
-
-#[derive(Debug, Serialize, Deserialize)]
-#[serde(tag = "event", rename_all = "snake_case")]
-enum IndexLine {
-    Created {
-        id: String,
-        label: String,
-        scenario: String,
-        created_unix: f64,
-    },
-    Progress {
-        id: String,
-        sim_seconds: f64,
-        overloads: u64,
-        #[serde(default)]
-        recording_failed: bool,
-    },
-    Ended {
-        id: String,
-        ended_unix: f64,
-        sim_seconds: f64,
-        reason: String,
-        overloads: u64,
-        #[serde(default)]
-        recording_failed: bool,
-    },
-    /// A whole folded record (written by compaction).
-    Record(SessionRecord),
 }
 
 /// Cloneable, never-blocking handle for sending records.
@@ -392,85 +333,6 @@ fn cut_to_last_line(path: &Path) -> io::Result<()> {
         tracing::info!("cut {} back to its last whole line", path.display());
     }
     Ok(())
-}
-
-/// Reads and folds an index file (the last line of a session wins); unparsable lines (a
-/// line cut by a crash) are skipped.
-pub fn read_index(path: &Path) -> Vec<SessionRecord> {
-    let Ok(file) = File::open(path) else {
-        return Vec::new();
-    };
-    let mut order: Vec<String> = Vec::new();
-    let mut by_id: HashMap<String, SessionRecord> = HashMap::new();
-    for line in BufReader::new(file).lines().map_while(Result::ok) {
-        let Ok(line) = serde_json::from_str::<IndexLine>(&line) else {
-            continue;
-        };
-        match line {
-            IndexLine::Created {
-                id,
-                label,
-                scenario,
-                created_unix,
-            } => {
-                if !by_id.contains_key(&id) {
-                    order.push(id.clone());
-                }
-                by_id.insert(
-                    id.clone(),
-                    SessionRecord {
-                        id,
-                        label,
-                        scenario,
-                        created_unix,
-                        ended_unix: None,
-                        sim_seconds: None,
-                        end_reason: None,
-                        overloads: None,
-                        recording_failed: false,
-                    },
-                );
-            }
-            IndexLine::Record(r) => {
-                if !by_id.contains_key(&r.id) {
-                    order.push(r.id.clone());
-                }
-                by_id.insert(r.id.clone(), r);
-            }
-            IndexLine::Progress {
-                id,
-                sim_seconds,
-                overloads,
-                recording_failed,
-            } => {
-                if let Some(r) = by_id.get_mut(&id) {
-                    r.sim_seconds = Some(sim_seconds);
-                    r.overloads = Some(overloads);
-                    r.recording_failed |= recording_failed;
-                }
-            }
-            IndexLine::Ended {
-                id,
-                ended_unix,
-                sim_seconds,
-                reason,
-                overloads,
-                recording_failed,
-            } => {
-                if let Some(r) = by_id.get_mut(&id) {
-                    r.ended_unix = Some(ended_unix);
-                    r.sim_seconds = Some(sim_seconds);
-                    r.end_reason = Some(reason);
-                    r.overloads = Some(overloads);
-                    r.recording_failed |= recording_failed;
-                }
-            }
-        }
-    }
-    order
-        .into_iter()
-        .filter_map(|id| by_id.remove(&id))
-        .collect()
 }
 
 /// A file written in whole pieces: `len` is its length after the last piece that was
@@ -983,32 +845,6 @@ mod tests {
         cut_to_last_line(&path).expect("repair again");
         assert_eq!(std::fs::read(&path).expect("read"), whole);
         cut_to_last_line(&dir.join("missing.csv")).expect("a missing file is fine");
-        let _ = std::fs::remove_dir_all(&dir);
-    }
-
-    #[test]
-    fn the_last_index_line_of_a_session_wins() {
-        let dir =
-            std::env::temp_dir().join(format!("seaarms-index-{}", super::super::random_hex(6)));
-        std::fs::create_dir_all(&dir).expect("dir");
-        let path = dir.join("sessions.jsonl");
-        let lines = [
-            r#"{"event":"created","id":"a","label":"x","scenario":"training","created_unix":1.0}"#,
-            r#"{"event":"progress","id":"a","sim_seconds":3.5,"overloads":2}"#,
-            r#"{"event":"progress","id":"a","sim_seconds":4.25,"overloads":3,"recording_failed":true}"#,
-            r#"{"event":"created","id":"b","label":"","scenario":"training","created_unix":2.0}"#,
-            r#"{"event":"ended","id":"b","ended_unix":9.0,"sim_seconds":7.0,"reason":"r","overloads":1}"#,
-            r#"{"event":"progress","id":"b","sim_sec"#,
-        ];
-        std::fs::write(&path, lines.join("\n")).expect("write");
-        let v = read_index(&path);
-        assert_eq!(v.len(), 2);
-        assert_eq!(v[0].sim_seconds, Some(4.25));
-        assert_eq!(v[0].overloads, Some(3));
-        assert!(v[0].recording_failed);
-        assert_eq!(v[0].ended_unix, None);
-        assert_eq!(v[1].sim_seconds, Some(7.0));
-        assert!(!v[1].recording_failed);
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -62,7 +62,7 @@ impl AppState {
     pub fn new(config: &ServeConfig) -> anyhow::Result<AppState> {
         let robots = Arc::new(Robots::load()?);
         let metrics = Arc::new(Metrics::default());
-        let recorder = Recorder::open(&config.data_dir, metrics.clone())?;
+        let recorder = Recorder::open(&config.data_dir, metrics.clone(), config.record_config())?;
         let magnum = robots
             .get("magnum")
             .ok_or_else(|| anyhow::anyhow!("built-in model magnum missing"))?;

@@ -191,6 +191,54 @@ pub struct ServeConfig {
     /// request's Host header, and its origin is allowed.
     #[arg(long, env = "SEAARMS_PUBLIC_URL", global = true)]
     pub public_url: Option<String>,
+
+    // --- Session records: free-space floor and retention (see sessions::record). ---
+    /// New sessions are refused (503) while the data disk has less free space than this (MB).
+    #[arg(
+        long,
+        env = "SEAARMS_MIN_FREE_DISK_MB",
+        default_value_t = 256,
+        global = true
+    )]
+    pub min_free_disk_mb: u64,
+    /// Session records that ended more than this many days ago are deleted (0 = kept however
+    /// old; fractions allowed).
+    #[arg(long, env = "SEAARMS_RETENTION_DAYS", default_value_t = 0.0, value_parser = non_negative, global = true)]
+    pub retention_days: f64,
+    /// Session records are kept below this many MB by deleting the oldest ended ones
+    /// (live sessions never; 0 = no cap; fractions allowed).
+    #[arg(long, env = "SEAARMS_RETENTION_MAX_MB", default_value_t = 10240.0, value_parser = non_negative, global = true)]
+    pub retention_max_mb: f64,
+    /// Seconds between retention passes (one also runs at start-up).
+    #[arg(
+        long,
+        env = "SEAARMS_RETENTION_CHECK_SECS",
+        default_value_t = 60,
+        value_parser = clap::value_parser!(u64).range(1..),
+        global = true
+    )]
+    pub retention_check_secs: u64,
+}
+
+fn non_negative(s: &str) -> Result<f64, String> {
+    match s.parse::<f64>() {
+        Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
+        _ => Err(format!("expected a finite number ≥ 0, got `{s}`")),
+    }
+}
+
+impl ServeConfig {
+    /// The recorder's settings.
+    pub fn record_config(&self) -> crate::sessions::record::RecordConfig {
+        crate::sessions::record::RecordConfig {
+            min_free_disk_bytes: self.min_free_disk_mb.saturating_mul(1 << 20),
+            retention: crate::sessions::record::Retention {
+                max_age_days: self.retention_days,
+                max_bytes: (self.retention_max_mb * 1_048_576.0) as u64,
+            },
+            retention_interval: std::time::Duration::from_secs(self.retention_check_secs),
+        }
+    }
 }
 
 impl Default for ServeConfig {
@@ -212,6 +260,10 @@ impl Default for ServeConfig {
             join_code: None,
             allowed_origins: Vec::new(),
             public_url: None,
+            min_free_disk_mb: 256,
+            retention_days: 0.0,
+            retention_max_mb: 10240.0,
+            retention_check_secs: 60,
         }
     }
 }

@@ -14,12 +14,14 @@
 //! * [`sessions`]: live sessions — physics threads, frames, WebSocket, REST, records.
 //! * [`metrics`]: Prometheus counters; [`load`]: the `seaarms load` client.
 //! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
+//! * [`csv_out`]: the one CSV writer (one number format) for every CSV the server writes.
 
 pub mod analysis_ext;
 pub mod api;
 pub mod app;
 pub mod assets;
 pub mod config;
+pub mod csv_out;
 pub mod error;
 pub mod json;
 pub mod load;

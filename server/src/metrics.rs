@@ -26,15 +26,22 @@ pub struct Metrics {
     pub ws_clients: AtomicU64,
     /// Client messages refused (malformed, out of range, over the rate).
     pub ws_messages_rejected: AtomicU64,
-    /// Records dropped because the recorder queue was full.
+    /// Records (rows, events) dropped: the recorder queue was full or the record could not
+    /// be written.
     pub records_dropped: AtomicU64,
+    /// Failed writes of session records or the index (disk full, I/O errors).
+    pub record_write_errors: AtomicU64,
+    /// Session records deleted by retention.
+    pub records_pruned: AtomicU64,
+    /// Free bytes on the data disk at the last check.
+    pub data_disk_free_bytes: AtomicU64,
 }
 
 impl Metrics {
     /// The Prometheus text exposition.
     pub fn render(&self) -> String {
         let mut out = String::new();
-        let rows: [(&str, &str, &str, &AtomicU64); 11] = [
+        let rows: [(&str, &str, &str, &AtomicU64); 14] = [
             (
                 "seaarms_http_requests_total",
                 "counter",
@@ -98,8 +105,26 @@ impl Metrics {
             (
                 "seaarms_records_dropped_total",
                 "counter",
-                "Records dropped (recorder queue full)",
+                "Record rows and events dropped (recorder queue full or record not writable)",
                 &self.records_dropped,
+            ),
+            (
+                "seaarms_record_write_errors_total",
+                "counter",
+                "Failed writes of session records or the session index",
+                &self.record_write_errors,
+            ),
+            (
+                "seaarms_records_pruned_total",
+                "counter",
+                "Session records deleted by retention",
+                &self.records_pruned,
+            ),
+            (
+                "seaarms_data_disk_free_bytes",
+                "gauge",
+                "Free bytes on the data disk at the last check",
+                &self.data_disk_free_bytes,
             ),
         ];
         for (name, kind, help, v) in rows {

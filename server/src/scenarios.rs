@@ -5,6 +5,8 @@
 use std::time::Instant;
 
 use seaarms_core::sim::scenario::{self, Row, SCENARIOS};
+
+use crate::csv_out::CsvOut;
 use seaarms_core::{Model, ModelSpec, robots};
 use serde::Serialize;
 
@@ -20,6 +22,9 @@ pub enum ScenarioError {
     /// The built-in Magnum model did not load.
     #[error("built-in model: {0}")]
     Model(String),
+    /// Writing the CSV failed.
+    #[error("CSV: {0}")]
+    Csv(#[from] std::io::Error),
 }
 
 /// Summary of a run (the core's summary plus wall-clock figures).
@@ -83,19 +88,31 @@ pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioErr
     }
     let m = magnum()?;
     let sc = scenario::scenario(name, &m, &m)?;
-    // Rows are written straight into one buffer (Row::write_csv): every field is a number or
-    // a fixed identifier, so no CSV quoting is needed.
-    let mut text = Row::header().join(",").into_bytes();
-    text.push(b'\n');
+    // Every row goes through the one CSV writer (crate::csv_out) into one buffer.
+    let mut out = CsvOut::new(Vec::with_capacity(1 << 20));
+    out.header(&Row::header())?;
     let mut rows = 0usize;
+    let mut failed: Option<std::io::Error> = None;
     let t0 = Instant::now();
     let s = scenario::run(&sc, &m, &m, |r| {
-        r.write_csv(&mut text);
-        text.push(b'\n');
-        rows += 1;
+        let mut res = Ok(());
+        r.cells(|c| {
+            if res.is_ok() {
+                res = out.field(c.into());
+            }
+        });
+        match res.and_then(|()| out.end_row()) {
+            Ok(()) => rows += 1,
+            Err(e) => {
+                failed.get_or_insert(e);
+            }
+        }
     })?;
+    if let Some(e) = failed {
+        return Err(e.into());
+    }
     // Numbers, identifiers and commas only: always valid UTF-8.
-    let text = String::from_utf8(text)
+    let text = String::from_utf8(out.into_inner()?)
         .unwrap_or_else(|e| String::from_utf8_lossy(e.as_bytes()).into_owned());
     let wall = t0.elapsed().as_secs_f64();
     Ok((
@@ -136,6 +153,47 @@ mod tests {
             run_scenario("nope"),
             Err(ScenarioError::Unknown(_))
         ));
+    }
+
+    /// The core's rows, written by the one CSV module and read back by the `csv` crate's
+    /// reader, are the same f64 values bit for bit (shortest round-trip format). The rows are
+    /// produced twice — once collected in memory, once written — relying on the runner's
+    /// determinism (server/core/tests/determinism.rs).
+    #[test]
+    fn scenario_rows_round_trip_through_the_csv() {
+        let m = magnum().expect("magnum");
+        let sc = scenario::scenario("case2-single-arm-load", &m, &m).expect("scenario");
+        let mut expected: Vec<Vec<crate::csv_out::Field<'static>>> = Vec::new();
+        scenario::run(&sc, &m, &m, |r| {
+            let mut v = Vec::new();
+            r.cells(|c| v.push(c.into()));
+            expected.push(v);
+        })
+        .expect("run");
+        let (summary, text) = run_scenario("case2-single-arm-load").expect("run");
+        assert_eq!(summary.rows, expected.len());
+        let mut reader = csv::Reader::from_reader(text.as_bytes());
+        assert_eq!(reader.headers().expect("header").len(), Row::header().len());
+        let mut n = 0;
+        let mut numbers = 0;
+        for (rec, want) in reader.records().zip(&expected) {
+            let rec = rec.expect("row");
+            assert_eq!(rec.len(), want.len());
+            for (field, w) in rec.iter().zip(want) {
+                match *w {
+                    crate::csv_out::Field::Num(x) => {
+                        let back: f64 = field.parse().expect("number");
+                        assert_eq!(back.to_bits(), x.to_bits(), "{x:e} written as {field}");
+                        numbers += 1;
+                    }
+                    crate::csv_out::Field::Text(s) => assert_eq!(field, s),
+                    ref other => panic!("unexpected field {other:?}"),
+                }
+            }
+            n += 1;
+        }
+        assert_eq!(n, expected.len());
+        assert!(numbers > 100_000, "{numbers} numbers compared");
     }
 
     #[test]

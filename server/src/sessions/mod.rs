@@ -370,6 +370,9 @@ pub enum CreateError {
     /// The simulation refused its parameters.
     #[error("simulation: {0}")]
     Sim(String),
+    /// Records cannot be written (disk below the free-space floor, folder not writable).
+    #[error("{0}")]
+    Recording(String),
 }
 
 /// All sessions of the server.
@@ -426,6 +429,7 @@ impl SessionManager {
             return Err(CreateError::UnknownScenario(scenario));
         }
         self.check_caps(&self.map(), client)?;
+        self.recorder.admit().map_err(CreateError::Recording)?;
         let models = [self.magnum.clone(), self.magnum.clone()];
         let sim = build_sim(&models).map_err(|e| CreateError::Sim(e.to_string()))?;
         let settings = Settings {

@@ -8,7 +8,6 @@
 //! so resuming never causes a burst. Publishing a frame never waits on a client: the frame is
 //! put on a `watch` channel and each connection sends whatever is latest when it can.
 
-use std::fmt::Write as _;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
@@ -17,7 +16,7 @@ use std::time::{Duration, Instant};
 use seaarms_core::control::teleop::cartesian_to_joint_velocity;
 use seaarms_core::sim::{LEFT, RIGHT};
 
-use super::record::{RecordMsg, RecordSender};
+use super::record::{RecordMsg, RecordSender, SessionRow};
 use super::snapshot::build_frame;
 use super::{Frame, Live, Session};
 use crate::metrics::Metrics;
@@ -201,34 +200,8 @@ fn apply_control(live: &mut Live, models: &[Arc<seaarms_core::Model>; 2]) {
 
 fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
     let sim = &live.sim;
-    let mut line = String::with_capacity(1024);
-    let _ = write!(line, "{:.3}", sim.time_s());
-    for arm in [LEFT, RIGHT] {
-        let a = sim.arm(arm);
-        for v in a.q.iter().chain(&a.qd) {
-            let _ = write!(line, ",{v:.6}");
-        }
-        for v in a.p_in.iter().chain(&a.p_out) {
-            let _ = write!(line, ",{v:.0}");
-        }
-        let _ = write!(line, ",{:.4},{}", a.jaw_opening_m, u8::from(a.holding));
-        for v in &a.contact_wrench {
-            let _ = write!(line, ",{v:.2}");
-        }
-    }
-    let o = sim.object().pose.translation.vector;
-    let _ = write!(line, ",{:.5},{:.5},{:.5}", o.x, o.y, o.z);
-    for v in sim.internal_wrench() {
-        let _ = write!(line, ",{v:.2}");
-    }
+    let row = Box::new(SessionRow::from_sim(sim));
     let grasp = sim.grasp_state();
-    let _ = write!(line, ",{},{}", grasp_name(grasp), sim.relief_events());
-    line.push('\n');
-    recorder.send(RecordMsg::Row {
-        id: session.id.clone(),
-        line,
-    });
-
     let relief = sim.relief_events();
     if relief > live.relief_recorded {
         session
@@ -241,6 +214,11 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
         });
     }
     live.relief_recorded = relief;
+    recorder.send(RecordMsg::Row {
+        id: session.id.clone(),
+        row,
+        overloads: session.overloads.load(Ordering::Relaxed),
+    });
     if grasp != live.last_grasp {
         recorder.send(RecordMsg::Event {
             id: session.id.clone(),
@@ -250,26 +228,4 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
         });
         live.last_grasp = grasp;
     }
-}
-
-/// CSV header matching the rows written by the workers.
-pub fn csv_header() -> String {
-    let mut h = String::from("t");
-    for arm in ["left", "right"] {
-        for name in ["q", "qd", "p_in", "p_out"] {
-            for j in 1..=6 {
-                let _ = write!(h, ",{arm}_{name}{j}");
-            }
-        }
-        let _ = write!(h, ",{arm}_jaw_m,{arm}_holding");
-        for c in ["fx", "fy", "fz", "tx", "ty", "tz"] {
-            let _ = write!(h, ",{arm}_contact_{c}");
-        }
-    }
-    h.push_str(",object_x,object_y,object_z");
-    for c in ["fx", "fy", "fz", "tx", "ty", "tz"] {
-        let _ = write!(h, ",internal_{c}");
-    }
-    h.push_str(",grasp,relief_events\n");
-    h
 }

@@ -171,7 +171,7 @@ pub async fn create(
     .await
     .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
     .map_err(|e| match e {
-        CreateError::Full(_) => ApiError::new(StatusCode::SERVICE_UNAVAILABLE, e.to_string()),
+        CreateError::Full(_) | CreateError::Recording(_) => ApiError::new(StatusCode::SERVICE_UNAVAILABLE, e.to_string()),
         CreateError::ClientFull(_) => ApiError::new(StatusCode::TOO_MANY_REQUESTS, e.to_string()),
         CreateError::UnknownScenario(_) => ApiError::bad_request(e.to_string()).with_detail(
             serde_json::json!({"known": LIVE_SCENARIOS.iter().map(|(n, _)| *n).collect::<Vec<_>>()}),
@@ -252,9 +252,11 @@ pub struct SessionSummary {
     /// Active faults (live only; labels of [`crate::protocol::fault_label`]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub faults: Option<Vec<ActiveFault>>,
+    /// `ok`, or `failed` when part of the session's record could not be written.
+    pub recording: &'static str,
 }
 
-fn live_summary(s: &Session) -> SessionSummary {
+fn live_summary(s: &Session, recording: &'static str) -> SessionSummary {
     let live = s.live();
     let sim = live.sim();
     let arm = |i: usize| {
@@ -283,6 +285,7 @@ fn live_summary(s: &Session) -> SessionSummary {
         measures: Some([arm(LEFT), arm(RIGHT)]),
         overload_count: s.overloads.load(std::sync::atomic::Ordering::Relaxed),
         faults: Some(live.faults().to_vec()),
+        recording,
     }
 }
 
@@ -305,6 +308,7 @@ fn ended_summary(r: SessionRecord) -> SessionSummary {
         measures: None,
         overload_count: r.overloads.unwrap_or(0),
         faults: None,
+        recording: if r.recording_failed { "failed" } else { "ok" },
     }
 }
 
@@ -323,7 +327,11 @@ pub async fn list(
             .await
             .unwrap_or_default()
     };
-    let mut out: Vec<SessionSummary> = live.iter().map(|s| live_summary(s)).collect();
+    let recorder = &state.sessions.recorder;
+    let mut out: Vec<SessionSummary> = live
+        .iter()
+        .map(|s| live_summary(s, recorder.recording(&s.id)))
+        .collect();
     out.extend(
         recorder_index
             .into_iter()
@@ -341,7 +349,10 @@ pub async fn get_one(
 ) -> Result<Json<SessionSummary>, ApiError> {
     if let Some(s) = state.sessions.get(&id) {
         caller(&state, bearer(&headers), Some(&s))?;
-        return Ok(Json(live_summary(&s)));
+        return Ok(Json(live_summary(
+            &s,
+            state.sessions.recorder.recording(&s.id),
+        )));
     }
     require_instructor(&state, &headers)?;
     let index = state.sessions.recorder.index();
@@ -501,9 +512,11 @@ pub async fn log_csv(
     tokio::task::spawn_blocking(move || sessions.recorder.flush())
         .await
         .ok();
-    let bytes = tokio::fs::read(&path)
+    let mut bytes = tokio::fs::read(&path)
         .await
         .map_err(|_| ApiError::not_found(format!("no record for session `{id}`")))?;
+    // Only whole rows, even if a write is under way or a crash cut the last one.
+    bytes.truncate(crate::csv_out::complete_lines(&bytes).len());
     Ok((
         [
             (header::CONTENT_TYPE, "text/csv; charset=utf-8".to_string()),

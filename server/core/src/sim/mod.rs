@@ -56,7 +56,6 @@ mod constraint;
 mod object;
 mod pipeline;
 pub mod scenario;
-pub mod sci;
 mod setup;
 
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};

@@ -1,0 +1,209 @@
+//! Helpers of the record tests: the real binary as a server, session creation, WebSocket
+//! driving, reading a record CSV.
+#![allow(dead_code, clippy::unwrap_used)]
+
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use futures_util::SinkExt;
+use serde_json::{Value, json};
+use tokio_tungstenite::tungstenite::Message;
+
+pub(crate) const TEACHER: &str = "teacher-token";
+
+pub(crate) fn temp_dir(tag: &str) -> PathBuf {
+    std::env::temp_dir().join(format!(
+        "seaarms-{tag}-{}",
+        seaarms::sessions::random_hex(6)
+    ))
+}
+
+/// The real `seaarms` binary serving on a free port; killed (SIGKILL) when dropped.
+pub(crate) struct Binary {
+    pub(crate) base: String,
+    child: Child,
+}
+
+impl Binary {
+    pub(crate) fn start(dir: &Path, extra: &[&str]) -> Binary {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_seaarms"))
+            .args([
+                "serve",
+                "--bind",
+                "127.0.0.1:0",
+                "--instructor-token",
+                TEACHER,
+            ])
+            .arg("--data-dir")
+            .arg(dir)
+            .args(extra)
+            .env("RUST_LOG", "warn")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        let stdout = child.stdout.take().unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                if let Some(url) = line.strip_prefix("seaarms serving on ") {
+                    let _ = tx.send(url.trim().to_string());
+                }
+            }
+        });
+        let base = match rx.recv_timeout(Duration::from_secs(30)) {
+            Ok(b) => b,
+            Err(_) => {
+                let _ = child.kill();
+                panic!("the server did not print its address within 30 s");
+            }
+        };
+        Binary { base, child }
+    }
+
+    /// SIGTERM: a graceful stop (every session ends, records are flushed); waits up to 20 s.
+    pub(crate) fn stop(mut self) {
+        let pid = self.child.id().to_string();
+        let _ = Command::new("kill").args(["-TERM", &pid]).status();
+        let end = Instant::now() + Duration::from_secs(20);
+        while Instant::now() < end {
+            if let Ok(Some(_)) = self.child.try_wait() {
+                return;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+        panic!("the server did not stop within 20 s of SIGTERM");
+    }
+
+    /// SIGKILL: no shutdown code runs.
+    pub(crate) fn kill9(mut self) {
+        self.child.kill().unwrap();
+        self.child.wait().unwrap();
+    }
+}
+
+impl Drop for Binary {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+pub(crate) async fn create(base: &str, body: Value) -> (u16, Value) {
+    let r = reqwest::Client::new()
+        .post(format!("{base}/api/sessions"))
+        .json(&body)
+        .send()
+        .await
+        .unwrap();
+    let st = r.status().as_u16();
+    (st, r.json().await.unwrap())
+}
+
+/// GET with the instructor token; the body as text.
+pub(crate) async fn get_text(url: &str) -> String {
+    reqwest::Client::new()
+        .get(url)
+        .bearer_auth(TEACHER)
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap()
+}
+
+pub(crate) async fn get_json(url: &str) -> Value {
+    let text = get_text(url).await;
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{url}: {e}: {text}"))
+}
+
+/// The value of a metric in `/metrics`.
+pub(crate) async fn metric(base: &str, name: &str) -> u64 {
+    let text = reqwest::get(format!("{base}/metrics"))
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap();
+    text.lines()
+        .find_map(|l| l.strip_prefix(&format!("{name} ")))
+        .unwrap_or_else(|| panic!("no {name} in {text}"))
+        .trim()
+        .parse()
+        .unwrap()
+}
+
+/// Drives session `c` (the creation answer) over its WebSocket for `seconds`: full stick on
+/// `joint` of both arms, 25 messages a second.
+pub(crate) async fn drive(c: &Value, joint: usize, seconds: f64) {
+    let url = c["ws_url"].as_str().unwrap();
+    let (mut ws, _) = tokio_tungstenite::connect_async(url).await.unwrap();
+    let mut axes = [0.0; 6];
+    axes[joint] = 1.0;
+    let n = (seconds * 25.0) as u64;
+    for seq in 1..=n {
+        let msg = json!({"type": "input", "seq": seq,
+            "arms": {"left": {"axes": axes, "grip": 0}, "right": {"axes": axes, "grip": 0}}});
+        ws.send(Message::Text(msg.to_string().into()))
+            .await
+            .unwrap();
+        tokio::time::sleep(Duration::from_millis(40)).await;
+    }
+    let _ = ws.close(None).await;
+}
+
+/// A record CSV as read from disk: the header, the whole rows, and the bytes after the last
+/// newline (a row cut by a crash; 0 when the file ends with a whole row).
+pub(crate) struct Csv {
+    pub(crate) header: Vec<String>,
+    pub(crate) rows: Vec<Vec<String>>,
+    pub(crate) cut_tail: usize,
+}
+
+impl Csv {
+    pub(crate) fn read(path: &Path) -> Csv {
+        let bytes = std::fs::read(path).unwrap();
+        let whole = seaarms::csv_out::complete_lines(&bytes);
+        let cut_tail = bytes.len() - whole.len();
+        let mut r = csv::Reader::from_reader(whole);
+        let header: Vec<String> = r.headers().unwrap().iter().map(String::from).collect();
+        let rows = r
+            .records()
+            .map(|rec| {
+                let rec = rec.unwrap_or_else(|e| panic!("{}: bad row: {e}", path.display()));
+                assert_eq!(rec.len(), header.len(), "{}: short row", path.display());
+                rec.iter().map(String::from).collect()
+            })
+            .collect();
+        Csv {
+            header,
+            rows,
+            cut_tail,
+        }
+    }
+
+    /// Column `name` of the last row, as f64.
+    pub(crate) fn last(&self, name: &str) -> f64 {
+        let i = self.header.iter().position(|h| h == name).unwrap();
+        self.rows.last().unwrap()[i].parse().unwrap()
+    }
+}
+
+/// Polls `f` every 100 ms until it gives Some, for at most `limit`.
+pub(crate) async fn eventually<T, F, Fut>(limit: Duration, mut f: F) -> Option<T>
+where
+    F: FnMut() -> Fut,
+    Fut: std::future::Future<Output = Option<T>>,
+{
+    let end = Instant::now() + limit;
+    while Instant::now() < end {
+        if let Some(v) = f().await {
+            return Some(v);
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    None
+}

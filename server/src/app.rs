@@ -12,6 +12,7 @@ use axum::routing::{get, post};
 
 use crate::api;
 use crate::assets;
+use crate::compute::{ComputePool, ComputeSettings};
 use crate::config::ServeConfig;
 use crate::error::ApiError;
 use crate::json::MAX_BODY_BYTES;
@@ -33,6 +34,8 @@ pub struct AppState {
     pub instructor_token: Arc<str>,
     /// Recent scenario runs' CSVs, for download.
     pub scenario_runs: Arc<api::scenarios::RunStore>,
+    /// The bounded pool of CPU-heavy requests.
+    pub compute: Arc<ComputePool>,
 }
 
 impl AppState {
@@ -65,12 +68,22 @@ impl AppState {
             Some(t) if !t.is_empty() => t.as_str().into(),
             _ => sessions::random_hex(16).into(),
         };
+        let compute = Arc::new(ComputePool::new(
+            &ComputeSettings {
+                threads: usize::from(config.compute_threads),
+                queue: config.compute_queue,
+                deadline: Duration::from_secs(config.compute_deadline_secs),
+                priority: config.compute_priority,
+            },
+            metrics.clone(),
+        )?);
         Ok(AppState {
             robots,
             sessions,
             metrics,
             instructor_token,
             scenario_runs: Arc::default(),
+            compute,
         })
     }
 }

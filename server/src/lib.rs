@@ -4,7 +4,10 @@
 //! * [`config`]: command line / environment (one `clap` struct).
 //! * [`app`]: shared state and the router.
 //! * [`api`]: HTTP handlers and their wire types.
-//! * [`analysis_ext`]: optimal posture and manipulability studies (request/response types).
+//! * [`posture`]: optimal posture requests and answers; [`studies`]: the manipulability
+//!   studies and workspace map (parameters, limits, documents).
+//! * [`limits`]: the work limits of every computing route; [`compute`]: the bounded pool
+//!   those routes compute on.
 //! * [`robots`]: built-in model registry and `"robot"` field resolution.
 //! * [`json`]: the JSON extractor whose rejections are JSON errors.
 //! * [`protocol`]: WebSocket wire types (the page contract).
@@ -14,19 +17,22 @@
 //! * [`metrics`]: Prometheus counters; [`load`]: the `seaarms load` client.
 //! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
 
-pub mod analysis_ext;
 pub mod api;
 pub mod app;
 pub mod assets;
+pub mod compute;
 pub mod config;
 pub mod error;
 pub mod json;
+pub mod limits;
 pub mod load;
 pub mod metrics;
+pub mod posture;
 pub mod protocol;
 pub mod robots;
 pub mod scenarios;
 pub mod sessions;
+pub mod studies;
 
 use std::future::Future;
 

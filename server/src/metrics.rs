@@ -28,13 +28,21 @@ pub struct Metrics {
     pub ws_messages_rejected: AtomicU64,
     /// Records dropped because the recorder queue was full.
     pub records_dropped: AtomicU64,
+    /// Compute-pool jobs finished (any outcome).
+    pub compute_jobs: AtomicU64,
+    /// Compute requests running or queued now.
+    pub compute_in_flight: AtomicU64,
+    /// Compute requests refused with 503 (queue full).
+    pub compute_busy: AtomicU64,
+    /// Compute requests answered 504 (deadline passed).
+    pub compute_deadline_exceeded: AtomicU64,
 }
 
 impl Metrics {
     /// The Prometheus text exposition.
     pub fn render(&self) -> String {
         let mut out = String::new();
-        let rows: [(&str, &str, &str, &AtomicU64); 11] = [
+        let rows: [(&str, &str, &str, &AtomicU64); 15] = [
             (
                 "seaarms_http_requests_total",
                 "counter",
@@ -100,6 +108,30 @@ impl Metrics {
                 "counter",
                 "Records dropped (recorder queue full)",
                 &self.records_dropped,
+            ),
+            (
+                "seaarms_compute_jobs_total",
+                "counter",
+                "Compute-pool jobs finished",
+                &self.compute_jobs,
+            ),
+            (
+                "seaarms_compute_in_flight",
+                "gauge",
+                "Compute requests running or queued",
+                &self.compute_in_flight,
+            ),
+            (
+                "seaarms_compute_busy_total",
+                "counter",
+                "Compute requests refused (queue full, 503)",
+                &self.compute_busy,
+            ),
+            (
+                "seaarms_compute_deadline_exceeded_total",
+                "counter",
+                "Compute requests past their deadline (504)",
+                &self.compute_deadline_exceeded,
             ),
         ];
         for (name, kind, help, v) in rows {

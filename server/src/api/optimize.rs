@@ -4,6 +4,7 @@
 
 use axum::Json;
 use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
 use axum::extract::{Path, Query, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
@@ -13,7 +14,7 @@ use serde_json::Value;
 use crate::app::AppState;
 use crate::compute::ComputeError;
 use crate::error::ApiError;
-use crate::json::ApiJson;
+use crate::json::{ApiJson, body_rejection};
 use crate::posture::{PostureAnswer, PostureRequest};
 use crate::studies::{self, STUDIES};
 
@@ -66,8 +67,9 @@ pub async fn study(
     State(state): State<AppState>,
     Path(name): Path<String>,
     Query(q): Query<StudyQuery>,
-    body: Bytes,
+    body: Result<Bytes, BytesRejection>,
 ) -> Result<Response, ComputeError> {
+    let body = body.map_err(body_rejection)?;
     if !STUDIES.iter().any(|(n, _)| *n == name) {
         let known: Vec<&str> = STUDIES.iter().map(|(n, _)| *n).collect();
         return Err(ApiError::not_found(format!("unknown study `{name}`"))

@@ -342,20 +342,20 @@ mod tests {
     async fn a_full_queue_is_a_503_with_retry_after_and_a_late_job_a_504() {
         let (p, metrics) = pool(1, 1, Duration::from_millis(300));
         let p = Arc::new(p);
-        // One job holds the thread until it is cancelled (deadline), one waits: the third is
-        // refused at once.
+        // One job holds the thread until it is cancelled (deadline) and 100 ms more, so the
+        // waiting one is past its own deadline when the thread frees: the third is refused
+        // at once.
         let (started_tx, started_rx) = std::sync::mpsc::channel();
         let spin = {
             let p = p.clone();
             tokio::spawn(async move {
                 p.run(move |c| {
                     let _ = started_tx.send(());
-                    loop {
-                        c.check()?;
+                    while c.check().is_ok() {
                         std::thread::sleep(Duration::from_millis(5));
                     }
-                    #[allow(unreachable_code)]
-                    Ok(())
+                    std::thread::sleep(Duration::from_millis(100));
+                    c.check()
                 })
                 .await
             })

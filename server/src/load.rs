@@ -100,6 +100,8 @@ pub struct HeavyStats {
     pub bytes: u64,
     /// Slowest answer (s).
     pub max_seconds: f64,
+    /// Slowest answer other than a 503 (s), by request name.
+    pub slowest_seconds: std::collections::BTreeMap<&'static str, f64>,
 }
 
 impl HeavyStats {
@@ -112,6 +114,10 @@ impl HeavyStats {
         self.failed += o.failed;
         self.bytes += o.bytes;
         self.max_seconds = self.max_seconds.max(o.max_seconds);
+        for (name, s) in &o.slowest_seconds {
+            let e = self.slowest_seconds.entry(name).or_default();
+            *e = e.max(*s);
+        }
     }
 }
 
@@ -247,7 +253,12 @@ async fn heavy_client(
             }
             Err(_) => 0,
         };
-        stats.max_seconds = stats.max_seconds.max(t0.elapsed().as_secs_f64());
+        let seconds = t0.elapsed().as_secs_f64();
+        stats.max_seconds = stats.max_seconds.max(seconds);
+        if status != 503 {
+            let e = stats.slowest_seconds.entry(r.name).or_default();
+            *e = e.max(seconds);
+        }
         match status {
             200..=299 => stats.ok += 1,
             503 => {

@@ -33,6 +33,9 @@ pub const MAX_MAP_CELLS: usize = 65_536;
 /// 16 of a 32-joint one); each start is an IK solve plus one SQP run of up to 400
 /// evaluations.
 pub const MAX_POSTURE_START_JOINTS: usize = 512;
+/// Largest |q| of an analysis request (rad or m): anything larger is a client error, not a
+/// posture.
+pub const MAX_ABS_Q: f64 = 1.0e4;
 /// Largest |coordinate| of a posture target or of an arm's base position (m).
 pub const MAX_POSITION_M: f64 = 1.0e3;
 /// Seconds a client is told to wait (`Retry-After`) when the compute queue is full.

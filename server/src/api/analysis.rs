@@ -18,10 +18,7 @@ use crate::app::AppState;
 use crate::compute::ComputeError;
 use crate::error::ApiError;
 use crate::json::ApiJson;
-use crate::limits::MAX_POSITION_M;
-
-/// Largest |q| accepted (rad or m): anything larger is a client error, not a posture.
-pub const MAX_ABS_Q: f64 = 1.0e4;
+use crate::limits::{MAX_ABS_Q, MAX_POSITION_M};
 
 /// Body of `POST /api/analysis`.
 #[derive(Debug, Deserialize)]
@@ -111,9 +108,10 @@ fn check_q(model: &Model, q: &[f64]) -> Result<(), ApiError> {
     model.check_q(q)?;
     if let Some(i) = q.iter().position(|v| v.abs() > MAX_ABS_Q) {
         return Err(ApiError::bad_request(format!(
-            "q[{i}] = {} is out of range (|q| ≤ {MAX_ABS_Q})",
+            "q[{i}] = {} is out of range (|q| ≤ {MAX_ABS_Q}, limit max_abs_q)",
             q[i]
-        )));
+        ))
+        .with_detail(serde_json::json!({"limit": "max_abs_q", "value": MAX_ABS_Q})));
     }
     Ok(())
 }

@@ -12,6 +12,7 @@ use axum::routing::{get, post};
 
 use crate::api;
 use crate::assets;
+use crate::compute::{ComputePool, ComputeSettings};
 use crate::config::ServeConfig;
 use crate::error::ApiError;
 use crate::json::MAX_BODY_BYTES;
@@ -41,6 +42,8 @@ pub struct AppState {
     pub creation_limiter: Arc<CreationLimiter>,
     /// Class code required to create a session, when configured.
     pub join_code: Option<Arc<str>>,
+    /// The bounded pool of CPU-heavy requests.
+    pub compute: Arc<ComputePool>,
 }
 
 /// Checks an operator-supplied secret (instructor token, join code): it must travel intact
@@ -108,6 +111,15 @@ impl AppState {
             config.sessions_per_minute.is_finite() && config.sessions_per_minute > 0.0,
             "--sessions-per-minute must be a positive number"
         );
+        let compute = Arc::new(ComputePool::new(
+            &ComputeSettings {
+                threads: usize::from(config.compute_threads),
+                queue: config.compute_queue,
+                deadline: Duration::from_secs(config.compute_deadline_secs),
+                priority: config.compute_priority,
+            },
+            metrics.clone(),
+        )?);
         Ok(AppState {
             robots,
             sessions,
@@ -120,6 +132,7 @@ impl AppState {
                 config.sessions_per_minute,
             )),
             join_code,
+            compute,
         })
     }
 }

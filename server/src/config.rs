@@ -218,6 +218,29 @@ pub struct ServeConfig {
         global = true
     )]
     pub retention_check_secs: u64,
+    /// Threads of the compute pool (polytopes, optimal posture, studies, scenario runs).
+    #[arg(long, env = "SEAARMS_COMPUTE_THREADS", default_value_t = 1, value_parser = clap::value_parser!(u16).range(1..=64), global = true)]
+    pub compute_threads: u16,
+    /// Compute requests that may wait beyond the running ones (503 + Retry-After beyond).
+    #[arg(
+        long,
+        env = "SEAARMS_COMPUTE_QUEUE",
+        default_value_t = 4,
+        global = true
+    )]
+    pub compute_queue: usize,
+    /// Deadline of one compute request, queueing included (s; 504 beyond).
+    #[arg(long, env = "SEAARMS_COMPUTE_DEADLINE_SECS", default_value_t = 20, value_parser = clap::value_parser!(u64).range(1..=3600), global = true)]
+    pub compute_deadline_secs: u64,
+    /// OS priority of the compute threads: `idle` (Linux SCHED_IDLE), `low` (nice 19) or `normal`.
+    #[arg(
+        long,
+        env = "SEAARMS_COMPUTE_PRIORITY",
+        value_enum,
+        default_value = "idle",
+        global = true
+    )]
+    pub compute_priority: crate::compute::ComputePriority,
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {
@@ -264,6 +287,10 @@ impl Default for ServeConfig {
             retention_days: 0.0,
             retention_max_mb: 10240.0,
             retention_check_secs: 60,
+            compute_threads: 1,
+            compute_queue: 4,
+            compute_deadline_secs: 20,
+            compute_priority: crate::compute::ComputePriority::Idle,
         }
     }
 }

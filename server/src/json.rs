@@ -2,6 +2,7 @@
 //! malformed JSON (with line and column), wrong types, bodies over the limit (413).
 
 use axum::body::Bytes;
+use axum::extract::rejection::BytesRejection;
 use axum::extract::{FromRequest, Request};
 use serde::de::DeserializeOwned;
 
@@ -9,6 +10,18 @@ use crate::error::ApiError;
 
 /// Largest REST request body accepted (bytes).
 pub const MAX_BODY_BYTES: usize = 64 * 1024;
+
+/// The API error of a body that could not be read (413 over [`MAX_BODY_BYTES`]).
+pub fn body_rejection(rejection: BytesRejection) -> ApiError {
+    ApiError {
+        status: rejection.status(),
+        error: match rejection.status().as_u16() {
+            413 => crate::error::body_too_large_message(),
+            _ => rejection.body_text(),
+        },
+        detail: None,
+    }
+}
 
 /// `Json<T>` with API errors.
 #[derive(Debug, Clone)]
@@ -20,14 +33,7 @@ impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for ApiJson<T> {
     async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
         let bytes = Bytes::from_request(req, state)
             .await
-            .map_err(|rejection| ApiError {
-                status: rejection.status(),
-                error: match rejection.status().as_u16() {
-                    413 => crate::error::body_too_large_message(),
-                    _ => rejection.body_text(),
-                },
-                detail: None,
-            })?;
+            .map_err(body_rejection)?;
         parse(&bytes).map(ApiJson)
     }
 }

@@ -4,7 +4,10 @@
 //! * [`config`]: command line / environment (one `clap` struct).
 //! * [`app`]: shared state and the router.
 //! * [`api`]: HTTP handlers and their wire types.
-//! * [`analysis_ext`]: optimal posture and manipulability studies (request/response types).
+//! * [`posture`]: optimal posture requests and answers; [`studies`]: the manipulability
+//!   studies and workspace map (parameters, limits, documents).
+//! * [`limits`]: the work limits of every computing route; [`compute`]: the bounded pool
+//!   those routes compute on.
 //! * [`robots`]: built-in model registry and `"robot"` field resolution.
 //! * [`json`]: the JSON extractor whose rejections are JSON errors.
 //! * [`protocol`]: WebSocket wire types (the page contract).
@@ -16,21 +19,24 @@
 //! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
 //! * [`csv_out`]: the one CSV writer (one number format) for every CSV the server writes.
 
-pub mod analysis_ext;
 pub mod api;
 pub mod app;
 pub mod assets;
+pub mod compute;
 pub mod config;
 pub mod csv_out;
 pub mod error;
 pub mod json;
+pub mod limits;
 pub mod load;
 pub mod metrics;
+pub mod posture;
 pub mod protocol;
 pub mod robots;
 pub mod scenarios;
 pub mod security;
 pub mod sessions;
+pub mod studies;
 
 use std::future::Future;
 

@@ -1,7 +1,10 @@
 //! `seaarms load`: opens N trainee sessions that send random stick input at a steady rate,
 //! plus M observers, against a running server, for a bounded time; reports frame interval
-//! and input-to-state latency percentiles, skipped frames and errors. Only loopback or the
-//! URL given is contacted; the run stops by itself after `--seconds`.
+//! and input-to-state latency percentiles, skipped frames and errors. With
+//! `--heavy-clients K`, K more clients meanwhile send the heaviest requests the limits accept
+//! ([`heavy_requests`]) back to back, and the report adds how they were answered and the
+//! server's step overruns during the run (from `/metrics`). Only loopback or the URL given is
+//! contacted; the run stops by itself after `--seconds`.
 
 use std::collections::VecDeque;
 use std::time::{Duration, Instant};
@@ -28,6 +31,9 @@ pub struct LoadArgs {
     /// Stick messages per second per trainee.
     #[arg(long, default_value_t = 50.0)]
     pub input_hz: f64,
+    /// Clients sending the heaviest accepted compute requests back to back meanwhile.
+    #[arg(long, default_value_t = 0)]
+    pub heavy_clients: usize,
 }
 
 /// What one client measured.
@@ -65,8 +71,206 @@ pub struct LoadReport {
     pub errors: usize,
     /// Up to 10 error messages.
     pub error_samples: Vec<String>,
-    /// p99 frame interval ≤ 25 ms, p99 latency ≤ 20 ms and no errors.
+    /// Simulation steps the server dropped to stay real time during the run (`/metrics`).
+    pub step_overruns: u64,
+    /// How the heavy requests were answered (all zero without `--heavy-clients`).
+    pub heavy: HeavyStats,
+    /// p99 frame interval ≤ 25 ms, p99 latency ≤ 20 ms, no errors and no step overruns.
     pub meets_target: bool,
+}
+
+/// Answers to the heavy clients' requests.
+#[derive(Debug, Default, Clone, Serialize)]
+pub struct HeavyStats {
+    /// Heavy clients.
+    pub clients: usize,
+    /// Requests sent.
+    pub sent: u64,
+    /// Answered 2xx.
+    pub ok: u64,
+    /// Answered 4xx (an unreachable posture target is a 422).
+    pub client_errors: u64,
+    /// Refused with 503 (compute queue full).
+    pub busy_503: u64,
+    /// Answered 504 (past the deadline).
+    pub deadline_504: u64,
+    /// Other statuses and transport errors.
+    pub failed: u64,
+    /// Bytes of answer received.
+    pub bytes: u64,
+    /// Slowest answer (s).
+    pub max_seconds: f64,
+    /// Slowest answer other than a 503 (s), by request name.
+    pub slowest_seconds: std::collections::BTreeMap<&'static str, f64>,
+}
+
+impl HeavyStats {
+    fn add(&mut self, o: &HeavyStats) {
+        self.sent += o.sent;
+        self.ok += o.ok;
+        self.client_errors += o.client_errors;
+        self.busy_503 += o.busy_503;
+        self.deadline_504 += o.deadline_504;
+        self.failed += o.failed;
+        self.bytes += o.bytes;
+        self.max_seconds = self.max_seconds.max(o.max_seconds);
+        for (name, s) in &o.slowest_seconds {
+            let e = self.slowest_seconds.entry(name).or_default();
+            *e = e.max(*s);
+        }
+    }
+}
+
+/// One heavy request: what it is, the path, and the JSON body (`None`: no body).
+#[derive(Debug, Clone)]
+pub struct HeavyRequest {
+    /// Short name for reports.
+    pub name: &'static str,
+    /// Path below the base URL (POST).
+    pub path: &'static str,
+    /// JSON body.
+    pub body: Option<serde_json::Value>,
+}
+
+/// An n-joint spatial chain (alternating ±90° twists, 0.05 m links, limits ±3 rad) as an
+/// inline model: the largest arm the core accepts has [`seaarms_core::model::MAX_JOINTS`].
+pub fn chain_robot(n: usize) -> serde_json::Value {
+    let joints: Vec<serde_json::Value> = (0..n)
+        .map(|i| {
+            let twist = if i % 2 == 0 { 1.0 } else { -1.0 } * std::f64::consts::FRAC_PI_2;
+            serde_json::json!({"type": "revolute", "a": 0.05, "alpha": twist, "d": 0.05,
+                               "limits": [-3.0, 3.0], "max_velocity": 1.0 + 0.01 * i as f64})
+        })
+        .collect();
+    serde_json::json!({"name": format!("chain{n}"), "dh": "standard", "joints": joints})
+}
+
+/// The heaviest request of each compute route that the limits of [`crate::limits`] accept
+/// (release build, 2-core machine: each well under 2 s of one core).
+pub fn heavy_requests() -> Vec<HeavyRequest> {
+    use crate::limits::{MAX_MAP_CELLS, MAX_POSTURE_START_JOINTS, MAX_STUDY_SERIES};
+    use serde_json::json;
+    let n = seaarms_core::model::MAX_JOINTS;
+    let q = |sign: f64| -> Vec<f64> {
+        (0..n)
+            .map(|i| sign * (0.3 * ((i % 3) as f64 - 1.0) + 0.1))
+            .collect()
+    };
+    let side = (MAX_MAP_CELLS as f64).sqrt().floor() as usize;
+    // dual-pitch-yaw: every row is computed (no boundary stop); 64 points × 2 × 156 angles.
+    let points: Vec<_> = (0..MAX_STUDY_SERIES)
+        .map(|i| json!({"name": format!("P{i}"), "position": [0.9 + 0.01 * i as f64, 0.0, 0.2]}))
+        .collect();
+    vec![
+        HeavyRequest {
+            name: "dual analysis, 2 × 32 joints, polytope",
+            path: "/api/analysis/dual",
+            body: Some(json!({"arms": [
+                {"robot": chain_robot(n), "q": q(1.0)},
+                {"robot": chain_robot(n), "q": q(-1.0), "base": {"position": [0.0, 0.5, 0.0]}}
+            ], "polytope": true})),
+        },
+        HeavyRequest {
+            name: "analysis, 32 joints, polytope",
+            path: "/api/analysis",
+            body: Some(json!({"robot": chain_robot(n), "q": q(1.0), "polytope": true})),
+        },
+        HeavyRequest {
+            name: "workspace map at the cell limit, free orientation, inside the reach",
+            path: "/api/studies/workspace-map",
+            body: Some(
+                json!({"robot": "pa10", "orientation": "free", "nx": side, "nz": side,
+                              "x_range": [-0.6, 0.6], "z_range": [-0.6, 0.6], "y": 0.6}),
+            ),
+        },
+        HeavyRequest {
+            name: "optimal posture, starts × joints at the limit, unreachable target",
+            path: "/api/optimal-posture",
+            body: Some(
+                json!({"robot": chain_robot(n), "target_position": [3.0, 0.3, 0.2],
+                              "alpha": 0.8, "starts": MAX_POSTURE_START_JOINTS / n}),
+            ),
+        },
+        HeavyRequest {
+            name: "dual pitch/yaw study at the row limit",
+            path: "/api/studies/dual-pitch-yaw",
+            body: Some(
+                json!({"points": points, "pitch_deg": [0.0, 155.0], "yaw_deg": [0.0, 155.0], "step_deg": 1.0}),
+            ),
+        },
+        HeavyRequest {
+            name: "scenario run, case 4",
+            path: "/api/scenarios/case4-dual-closed-loop/run",
+            body: None,
+        },
+    ]
+}
+
+/// `seaarms_step_overruns_total` from the server's `/metrics`.
+async fn step_overruns(http: &reqwest::Client, url: &str) -> anyhow::Result<u64> {
+    let text = http
+        .get(format!("{url}/metrics"))
+        .send()
+        .await?
+        .text()
+        .await?;
+    text.lines()
+        .find_map(|l| l.strip_prefix("seaarms_step_overruns_total "))
+        .and_then(|v| v.trim().parse().ok())
+        .ok_or_else(|| anyhow::anyhow!("no seaarms_step_overruns_total in /metrics"))
+}
+
+/// Sends the heavy requests (starting at `first`) back to back until `deadline`; after a 503
+/// it pauses 100 ms (not the `Retry-After`: the point is to keep the queue full).
+async fn heavy_client(
+    http: reqwest::Client,
+    url: String,
+    requests: std::sync::Arc<Vec<HeavyRequest>>,
+    first: usize,
+    deadline: Instant,
+) -> HeavyStats {
+    let mut stats = HeavyStats::default();
+    let mut i = first;
+    while Instant::now() < deadline {
+        let r = &requests[i % requests.len()];
+        i += 1;
+        let mut req = http.post(format!("{url}{}", r.path));
+        if let Some(body) = &r.body {
+            req = req.json(body);
+        }
+        let t0 = Instant::now();
+        stats.sent += 1;
+        let status = match req.send().await {
+            Ok(resp) => {
+                let status = resp.status().as_u16();
+                match resp.bytes().await {
+                    Ok(b) => {
+                        stats.bytes += b.len() as u64;
+                        status
+                    }
+                    Err(_) => 0,
+                }
+            }
+            Err(_) => 0,
+        };
+        let seconds = t0.elapsed().as_secs_f64();
+        stats.max_seconds = stats.max_seconds.max(seconds);
+        if status != 503 {
+            let e = stats.slowest_seconds.entry(r.name).or_default();
+            *e = e.max(seconds);
+        }
+        match status {
+            200..=299 => stats.ok += 1,
+            503 => {
+                stats.busy_503 += 1;
+                tokio::time::sleep(Duration::from_millis(100)).await;
+            }
+            504 => stats.deadline_504 += 1,
+            400..=499 => stats.client_errors += 1,
+            _ => stats.failed += 1,
+        }
+    }
+    stats
 }
 
 #[derive(Deserialize)]
@@ -120,7 +324,20 @@ pub async fn run(args: LoadArgs, instructor_token: Option<String>) -> anyhow::Re
         }
         created.push(resp.json::<Created>().await?);
     }
+    let overruns_before = step_overruns(&http, &args.url).await?;
     let deadline = Instant::now() + Duration::from_secs_f64(args.seconds);
+    let requests = std::sync::Arc::new(heavy_requests());
+    let heavy_tasks: Vec<_> = (0..args.heavy_clients)
+        .map(|k| {
+            tokio::spawn(heavy_client(
+                http.clone(),
+                args.url.clone(),
+                requests.clone(),
+                k,
+                deadline,
+            ))
+        })
+        .collect();
     let mut tasks = Vec::new();
     for (i, c) in created.iter().enumerate() {
         let url = format!(
@@ -161,6 +378,16 @@ pub async fn run(args: LoadArgs, instructor_token: Option<String>) -> anyhow::Re
         all.skipped += s.skipped;
         all.errors.extend(s.errors);
     }
+    let mut heavy = HeavyStats {
+        clients: args.heavy_clients,
+        ..HeavyStats::default()
+    };
+    for t in heavy_tasks {
+        heavy.add(&t.await?);
+    }
+    let overruns = step_overruns(&http, &args.url)
+        .await?
+        .saturating_sub(overruns_before);
     for c in &created {
         let _ = http
             .delete(format!("{}/api/sessions/{}", args.url, c.id))
@@ -184,7 +411,12 @@ pub async fn run(args: LoadArgs, instructor_token: Option<String>) -> anyhow::Re
         skipped_frames: all.skipped,
         errors: all.errors.len(),
         error_samples: all.errors.iter().take(10).cloned().collect(),
-        meets_target: fi99 <= 25.0 && (args.sessions == 0 || l99 <= 20.0) && all.errors.is_empty(),
+        step_overruns: overruns,
+        heavy,
+        meets_target: fi99 <= 25.0
+            && (args.sessions == 0 || l99 <= 20.0)
+            && all.errors.is_empty()
+            && overruns == 0,
     })
 }
 

@@ -35,13 +35,15 @@ async fn main() -> anyhow::Result<()> {
                 .get(&robot)
                 .ok_or_else(|| anyhow::anyhow!("unknown robot `{robot}`"))?;
             anyhow::ensure!(target.len() == 3, "--target takes x,y,z");
-            let req = seaarms::analysis_ext::OptimalPostureRequest {
+            let req = seaarms::posture::PostureRequest {
+                robot: robot.into(),
                 target_position: [target[0], target[1], target[2]],
                 alpha,
                 rows: None,
                 starts: Some(starts),
             };
-            let result = seaarms::analysis_ext::optimal_posture(&model, &req)?;
+            let result = seaarms::posture::optimal_posture(&model, &req)
+                .map_err(|e| anyhow::anyhow!(e.error))?;
             println!("{}", serde_json::to_string_pretty(&result)?);
             Ok(())
         }
@@ -50,11 +52,13 @@ async fn main() -> anyhow::Result<()> {
                 Some(p) => serde_json::from_str(&p)?,
                 None => serde_json::Value::Null,
             };
-            let (doc, csv) = seaarms::analysis_ext::run_study(&name, &params)?;
+            let plan =
+                seaarms::studies::plan(&name, &params).map_err(|e| anyhow::anyhow!(e.error))?;
+            let study = plan.run(&seaarms::compute::Cancel::never())?;
             if let Some(path) = out {
-                std::fs::write(&path, csv)?;
+                std::fs::write(&path, study.csv())?;
             }
-            println!("{}", serde_json::to_string_pretty(&doc)?);
+            println!("{}", String::from_utf8_lossy(&study.json(true)?));
             Ok(())
         }
         Some(Command::Healthcheck { url }) => {

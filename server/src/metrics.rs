@@ -35,13 +35,21 @@ pub struct Metrics {
     pub records_pruned: AtomicU64,
     /// Free bytes on the data disk at the last check.
     pub data_disk_free_bytes: AtomicU64,
+    /// Compute-pool jobs finished (any outcome).
+    pub compute_jobs: AtomicU64,
+    /// Compute requests running or queued now.
+    pub compute_in_flight: AtomicU64,
+    /// Compute requests refused with 503 (queue full).
+    pub compute_busy: AtomicU64,
+    /// Compute requests answered 504 (deadline passed).
+    pub compute_deadline_exceeded: AtomicU64,
 }
 
 impl Metrics {
     /// The Prometheus text exposition.
     pub fn render(&self) -> String {
         let mut out = String::new();
-        let rows: [(&str, &str, &str, &AtomicU64); 14] = [
+        let rows: [(&str, &str, &str, &AtomicU64); 18] = [
             (
                 "seaarms_http_requests_total",
                 "counter",
@@ -125,6 +133,30 @@ impl Metrics {
                 "gauge",
                 "Free bytes on the data disk at the last check",
                 &self.data_disk_free_bytes,
+            ),
+            (
+                "seaarms_compute_jobs_total",
+                "counter",
+                "Compute-pool jobs finished",
+                &self.compute_jobs,
+            ),
+            (
+                "seaarms_compute_in_flight",
+                "gauge",
+                "Compute requests running or queued",
+                &self.compute_in_flight,
+            ),
+            (
+                "seaarms_compute_busy_total",
+                "counter",
+                "Compute requests refused (queue full, 503)",
+                &self.compute_busy,
+            ),
+            (
+                "seaarms_compute_deadline_exceeded_total",
+                "counter",
+                "Compute requests past their deadline (504)",
+                &self.compute_deadline_exceeded,
             ),
         ];
         for (name, kind, help, v) in rows {

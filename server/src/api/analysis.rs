@@ -1,10 +1,13 @@
 //! `POST /api/analysis` (one arm) and `POST /api/analysis/dual` (two arms, Lim eq. 3.68).
 
+use std::sync::Arc;
+
 use axum::Json;
 use axum::extract::State;
 use nalgebra::{DMatrix, Matrix3};
 use seaarms_core::analysis::{TRANSLATIONAL_ROWS, analyze};
 use seaarms_core::kinematics::jacobian_at;
+use seaarms_core::manipulability::polytope::{self, Polytope};
 use seaarms_core::manipulability::{dual_measures, measures};
 use seaarms_core::model::Model;
 use serde::{Deserialize, Serialize};
@@ -12,11 +15,10 @@ use serde_json::Value;
 
 use super::wire::{MeasuresOut, PoseOut, columns, rows};
 use crate::app::AppState;
+use crate::compute::ComputeError;
 use crate::error::ApiError;
 use crate::json::ApiJson;
-
-/// Largest |q| accepted (rad or m): anything larger is a client error, not a posture.
-pub const MAX_ABS_Q: f64 = 1.0e4;
+use crate::limits::{MAX_ABS_Q, MAX_POSITION_M};
 
 /// Body of `POST /api/analysis`.
 #[derive(Debug, Deserialize)]
@@ -106,40 +108,34 @@ fn check_q(model: &Model, q: &[f64]) -> Result<(), ApiError> {
     model.check_q(q)?;
     if let Some(i) = q.iter().position(|v| v.abs() > MAX_ABS_Q) {
         return Err(ApiError::bad_request(format!(
-            "q[{i}] = {} is out of range (|q| ≤ {MAX_ABS_Q})",
+            "q[{i}] = {} is out of range (|q| ≤ {MAX_ABS_Q}, limit max_abs_q)",
             q[i]
-        )));
+        ))
+        .with_detail(serde_json::json!({"limit": "max_abs_q", "value": MAX_ABS_Q})));
     }
     Ok(())
 }
 
-fn polytope_of(model: &Model, jt: &DMatrix<f64>) -> Result<PolytopeOut, ApiError> {
-    let p = seaarms_core::manipulability::polytope::velocity_polytope(jt, &model.max_velocities())?;
-    Ok(PolytopeOut {
-        vertices: p.vertices,
-        facets: p.facets,
-        volume: p.volume,
-        w_p: p.w_p,
-    })
+impl From<Polytope> for PolytopeOut {
+    fn from(p: Polytope) -> PolytopeOut {
+        PolytopeOut {
+            vertices: p.vertices,
+            facets: p.facets,
+            volume: p.volume,
+            w_p: p.w_p,
+        }
+    }
 }
 
-/// Handler of `POST /api/analysis`.
-pub async fn single(
-    State(state): State<AppState>,
-    ApiJson(req): ApiJson<AnalysisRequest>,
-) -> Result<Json<AnalysisResponse>, ApiError> {
-    let model = state.robots.resolve(&req.robot)?;
-    check_q(&model, &req.q)?;
-    let a = analyze(&model, &req.q, req.rows.as_deref())?;
+fn analysis_response(model: &Model, req: &AnalysisRequest) -> Result<AnalysisResponse, ApiError> {
+    let a = analyze(model, &req.q, req.rows.as_deref())?;
     let polytope = if req.polytope {
-        Some(polytope_of(
-            &model,
-            &a.jacobian.select_rows(&TRANSLATIONAL_ROWS),
-        )?)
+        let jt = a.jacobian.select_rows(&TRANSLATIONAL_ROWS);
+        Some(polytope::velocity_polytope(&jt, &model.max_velocities())?.into())
     } else {
         None
     };
-    Ok(Json(AnalysisResponse {
+    Ok(AnalysisResponse {
         robot: model.name.clone(),
         pose: (&a.pose).into(),
         joint_frames: a.joint_frames.iter().map(PoseOut::from).collect(),
@@ -161,7 +157,25 @@ pub async fn single(
             unreachable: columns(&a.subspaces.unreachable),
         },
         polytope,
-    }))
+    })
+}
+
+/// Handler of `POST /api/analysis`: answered at once, or on the compute pool when a polytope
+/// is asked for (a 32-joint arm's polytope takes milliseconds).
+pub async fn single(
+    State(state): State<AppState>,
+    ApiJson(req): ApiJson<AnalysisRequest>,
+) -> Result<Json<AnalysisResponse>, ComputeError> {
+    let model = state.robots.resolve(&req.robot)?;
+    check_q(&model, &req.q)?;
+    if !req.polytope {
+        return Ok(Json(analysis_response(&model, &req)?));
+    }
+    let answer = state
+        .compute
+        .run(move |_| Ok(analysis_response(&model, &req)?))
+        .await?;
+    Ok(Json(answer))
 }
 
 /// Where an arm's base sits in the common (world) frame.
@@ -227,8 +241,13 @@ fn base_rotation(base: &Option<BaseIn>, arm: usize) -> Result<(Matrix3<f64>, [f6
         return Ok((Matrix3::identity(), [0.0; 3]));
     };
     let bad = |what: &str| ApiError::bad_request(format!("arms[{arm}].base: {what}"));
-    if b.position.iter().any(|v| !v.is_finite() || v.abs() > 1.0e3) {
-        return Err(bad("position must be finite and within ±1000 m"));
+    if b.position
+        .iter()
+        .any(|v| !v.is_finite() || v.abs() > MAX_POSITION_M)
+    {
+        return Err(bad(&format!(
+            "position must be finite and within ±{MAX_POSITION_M} m (limit max_position_m)"
+        )));
     }
     let r = match b.rotation {
         Some(rr) => Matrix3::from_fn(|i, j| rr[i][j]),
@@ -247,63 +266,87 @@ fn base_rotation(base: &Option<BaseIn>, arm: usize) -> Result<(Matrix3<f64>, [f6
     Ok((r, b.position))
 }
 
-/// Handler of `POST /api/analysis/dual`.
+/// One arm of a dual request, checked: model, joint values, base rotation and position.
+struct DualArm {
+    model: Arc<Model>,
+    q: Vec<f64>,
+    rotation: Matrix3<f64>,
+    position: [f64; 3],
+}
+
+fn dual_response(arms: &[DualArm], polytope: bool) -> Result<DualResponse, ApiError> {
+    let mut world_j = Vec::with_capacity(2);
+    let mut out = Vec::with_capacity(2);
+    for arm in arms {
+        let (model, r, p) = (&arm.model, arm.rotation, arm.position);
+        let jt = jacobian_at(model, &arm.q).select_rows(&TRANSLATIONAL_ROWS);
+        let rd = DMatrix::from_column_slice(3, 3, r.as_slice());
+        let jw = &rd * jt;
+        let local = seaarms_core::kinematics::end_effector_pose(model, &arm.q);
+        let base = nalgebra::Isometry3::from_parts(
+            nalgebra::Translation3::new(p[0], p[1], p[2]),
+            nalgebra::UnitQuaternion::from_matrix(&r),
+        );
+        out.push(DualArmOut {
+            robot: model.name.clone(),
+            pose: (&(base * local)).into(),
+            translational: (&measures(&jw)?).into(),
+        });
+        world_j.push(jw);
+    }
+    let dual = dual_measures(&world_j[0], &world_j[1])?;
+    let polytope = if polytope {
+        let p = polytope::dual_velocity_polytope(
+            &world_j[0],
+            &arms[0].model.max_velocities(),
+            &world_j[1],
+            &arms[1].model.max_velocities(),
+        )?;
+        Some(p.into())
+    } else {
+        None
+    };
+    Ok(DualResponse {
+        translational: (&dual).into(),
+        arms: out,
+        polytope,
+    })
+}
+
+/// Handler of `POST /api/analysis/dual`: answered at once, or on the compute pool when the
+/// dual polytope is asked for (2 × 32 joints: ~40 ms).
 pub async fn dual(
     State(state): State<AppState>,
     ApiJson(req): ApiJson<DualRequest>,
-) -> Result<Json<DualResponse>, ApiError> {
+) -> Result<Json<DualResponse>, ComputeError> {
     if req.arms.len() != 2 {
         return Err(ApiError::bad_request(format!(
             "`arms` must hold exactly 2 arms, got {}",
             req.arms.len()
-        )));
+        ))
+        .into());
     }
-    let mut world_j = Vec::with_capacity(2);
     let mut arms = Vec::with_capacity(2);
-    let mut qmax = Vec::with_capacity(2);
-    for (i, arm) in req.arms.iter().enumerate() {
+    for (i, arm) in req.arms.into_iter().enumerate() {
         let model = state.robots.resolve(&arm.robot)?;
         check_q(&model, &arm.q).map_err(|e| ApiError {
             error: format!("arms[{i}]: {}", e.error),
             ..e
         })?;
-        let (r, p) = base_rotation(&arm.base, i)?;
-        let jt = jacobian_at(&model, &arm.q).select_rows(&TRANSLATIONAL_ROWS);
-        let rd = DMatrix::from_column_slice(3, 3, r.as_slice());
-        let jw = &rd * jt;
-        let local = seaarms_core::kinematics::end_effector_pose(&model, &arm.q);
-        let base = nalgebra::Isometry3::from_parts(
-            nalgebra::Translation3::new(p[0], p[1], p[2]),
-            nalgebra::UnitQuaternion::from_matrix(&r),
-        );
-        arms.push(DualArmOut {
-            robot: model.name.clone(),
-            pose: (&(base * local)).into(),
-            translational: (&measures(&jw)?).into(),
+        let (rotation, position) = base_rotation(&arm.base, i)?;
+        arms.push(DualArm {
+            model,
+            q: arm.q,
+            rotation,
+            position,
         });
-        qmax.push(model.max_velocities());
-        world_j.push(jw);
     }
-    let dual = dual_measures(&world_j[0], &world_j[1])?;
-    let polytope = if req.polytope {
-        let p = seaarms_core::manipulability::polytope::dual_velocity_polytope(
-            &world_j[0],
-            &qmax[0],
-            &world_j[1],
-            &qmax[1],
-        )?;
-        Some(PolytopeOut {
-            vertices: p.vertices,
-            facets: p.facets,
-            volume: p.volume,
-            w_p: p.w_p,
-        })
-    } else {
-        None
-    };
-    Ok(Json(DualResponse {
-        translational: (&dual).into(),
-        arms,
-        polytope,
-    }))
+    if !req.polytope {
+        return Ok(Json(dual_response(&arms, false)?));
+    }
+    let answer = state
+        .compute
+        .run(move |_| Ok(dual_response(&arms, true)?))
+        .await?;
+    Ok(Json(answer))
 }

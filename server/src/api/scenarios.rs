@@ -10,6 +10,7 @@ use axum::response::{IntoResponse, Response};
 use serde::Serialize;
 
 use crate::app::AppState;
+use crate::compute::ComputeError;
 use crate::error::ApiError;
 use crate::scenarios::{ScenarioError, list_scenarios, run_scenario};
 
@@ -55,32 +56,31 @@ pub async fn list() -> Json<Vec<ScenarioInfo>> {
     )
 }
 
-/// Runs one scenario (seconds of CPU, on the blocking pool) and returns its summary with
-/// `csv_url` for the post-processing data.
+/// Runs one scenario on the compute pool (a fixed ~40 s of simulated time, well under a
+/// second of CPU) and returns its summary with `csv_url` for the post-processing data.
 pub async fn run(
     State(state): State<AppState>,
     Path(name): Path<String>,
-) -> Result<Response, ApiError> {
+) -> Result<Response, ComputeError> {
+    if !list_scenarios().iter().any(|(n, _)| *n == name) {
+        return Err(ApiError::not_found(ScenarioError::Unknown(name).to_string()).into());
+    }
     let n = name.clone();
-    let result = tokio::task::spawn_blocking(move || run_scenario(&n))
-        .await
-        .map_err(|e| ApiError {
-            status: axum::http::StatusCode::INTERNAL_SERVER_ERROR,
-            error: e.to_string(),
-            detail: None,
-        })?;
-    let (summary, csv) = result.map_err(|e| match e {
-        ScenarioError::Unknown(_) => ApiError::not_found(e.to_string()),
-        other => ApiError {
-            status: axum::http::StatusCode::INTERNAL_SERVER_ERROR,
-            error: other.to_string(),
-            detail: None,
-        },
-    })?;
+    let (summary, csv) = state
+        .compute
+        .run(move |_| {
+            run_scenario(&n).map_err(|e| {
+                ComputeError::Api(ApiError {
+                    status: axum::http::StatusCode::INTERNAL_SERVER_ERROR,
+                    error: e.to_string(),
+                    detail: None,
+                })
+            })
+        })
+        .await?;
     let run_id = format!("{name}-{}.csv", crate::sessions::random_hex(4));
     state.scenario_runs.put(run_id.clone(), csv);
-    let mut body =
-        serde_json::to_value(&summary).map_err(|e| ApiError::bad_request(e.to_string()))?;
+    let mut body = serde_json::to_value(&summary).map_err(|_| ComputeError::Failed)?;
     body["csv_url"] = serde_json::json!(format!("/api/scenarios/runs/{run_id}"));
     Ok(Json(body).into_response())
 }

@@ -310,11 +310,14 @@ pub async fn run(args: LoadArgs, instructor_token: Option<String>) -> anyhow::Re
     let http = reqwest::Client::new();
     let mut created = Vec::new();
     for i in 0..args.sessions {
-        let resp = http
+        // The instructor token lifts the per-client creation limits (one client opens them all).
+        let mut req = http
             .post(format!("{}/api/sessions", args.url))
-            .json(&serde_json::json!({"label": format!("load-{i}")}))
-            .send()
-            .await?;
+            .json(&serde_json::json!({"label": format!("load-{i}")}));
+        if let Some(token) = &instructor_token {
+            req = req.bearer_auth(token);
+        }
+        let resp = req.send().await?;
         if !resp.status().is_success() {
             anyhow::bail!(
                 "creating session {i}: {} {}",

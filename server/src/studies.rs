@@ -676,46 +676,8 @@ const ROW_COLUMNS: &[&str] = &[
     "distance_m",
 ];
 
-fn csv_field(s: &str) -> String {
-    if s.contains([',', '"', '\n', '\r']) {
-        format!("\"{}\"", s.replace('"', "\"\""))
-    } else {
-        s.to_string()
-    }
-}
-
-fn num(v: Option<f64>) -> String {
-    v.map(|x| format!("{x}")).unwrap_or_default()
-}
-
 fn rows_csv(rows: &[StudyRowOut]) -> String {
-    let mut out = ROW_COLUMNS.join(",");
-    out.push('\n');
-    for r in rows {
-        let fields = [
-            csv_field(&r.series),
-            num(Some(r.parameter)),
-            num(Some(r.x)),
-            num(Some(r.y)),
-            num(Some(r.z)),
-            num(Some(r.pitch_deg)),
-            num(Some(r.yaw_deg)),
-            r.reachable.to_string(),
-            num(r.yoshikawa),
-            num(r.isotropy),
-            num(r.hong),
-            num(r.left_yoshikawa),
-            num(r.left_isotropy),
-            num(r.left_hong),
-            num(r.dual_yoshikawa),
-            num(r.dual_isotropy),
-            num(r.dual_hong),
-            num(r.distance_m),
-        ];
-        out.push_str(&fields.join(","));
-        out.push('\n');
-    }
-    out
+    crate::csv_out::table_of(ROW_COLUMNS, rows)
 }
 
 /// Per series: row counts, the last reachable parameter (the boundary of a sweep) and where
@@ -796,19 +758,20 @@ fn map_document<'a>(
 }
 
 fn map_csv(map: &WorkspaceMap) -> String {
-    let mut csv = String::from("x,z,reachable,yoshikawa,isotropy,hong\n");
-    for c in &map.cells {
-        csv.push_str(&format!(
-            "{},{},{},{},{},{}\n",
-            c.x,
-            c.z,
-            c.measures.is_some(),
-            num(c.measures.map(|m| m.yoshikawa)),
-            num(c.measures.map(|m| m.isotropy)),
-            num(c.measures.map(|m| m.hong))
-        ));
-    }
-    csv
+    crate::csv_out::table(
+        &["x", "z", "reachable", "yoshikawa", "isotropy", "hong"],
+        map.cells.iter().map(|c| {
+            let m = c.measures;
+            [
+                c.x.into(),
+                c.z.into(),
+                m.is_some().into(),
+                m.map(|m| m.yoshikawa).into(),
+                m.map(|m| m.isotropy).into(),
+                m.map(|m| m.hong).into(),
+            ]
+        }),
+    )
 }
 
 #[cfg(test)]

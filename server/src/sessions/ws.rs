@@ -22,19 +22,18 @@ use axum::extract::{Path, Query, State};
 use axum::response::{IntoResponse, Response};
 use futures_util::stream::SplitStream;
 use futures_util::{SinkExt, StreamExt};
-use seaarms_core::sim::{LEFT, RIGHT};
 use serde::Deserialize;
 use tokio::sync::mpsc;
 
 use super::Session;
 use super::admission::TokenBucket;
-use super::command::{self, Actor, ArmSticks, Command, StickInput};
+use super::command::{self, Actor, Arm, ArmSticks, Command, StickInput};
 use crate::api::wire::PoseOut;
 use crate::app::AppState;
 use crate::error::ApiError;
 use crate::protocol::{
     ArmAxes, ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, MAX_INPUT_SEQ,
-    ObjectModelOut, ServerMessage,
+    ObjectModelOut, ServerMessage, arm_name,
 };
 
 /// Largest message (and frame) the WebSocket transport reads (bytes): 4 × the documented
@@ -111,9 +110,9 @@ fn error_text(message: impl Into<String>) -> Utf8Bytes {
 fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
     let live = session.live();
     let params = live.sim().params();
-    let arm = |i: usize| ArmModelOut {
-        model: session.models[i].spec.clone(),
-        base: PoseOut::from(&params.arms[i].base),
+    let arm = |arm: Arm| ArmModelOut {
+        model: session.models[arm.index()].spec.clone(),
+        base: PoseOut::from(&params.arms[arm.index()].base),
     };
     let size = params.object.size_m;
     let msg = ServerMessage::Hello(Box::new(Hello {
@@ -122,7 +121,7 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
             Role::Trainee => "trainee",
             Role::Observer => "observer",
         },
-        arms: [arm(LEFT), arm(RIGHT)],
+        arms: Arm::BOTH.map(arm),
         object: ObjectModelOut {
             size_m: [size.x, size.y, size.z],
             mass_kg: params.object.mass_kg,
@@ -365,9 +364,9 @@ fn parse(msg: ClientMessage, notes: &mut Vec<String>) -> Result<Command, String>
                 seq,
                 ..StickInput::default()
             };
-            for (i, name, a) in [(LEFT, "left", &arms.left), (RIGHT, "right", &arms.right)] {
+            for (arm, a) in [(Arm::Left, &arms.left), (Arm::Right, &arms.right)] {
                 if let Some(a) = a {
-                    input.arms[i] = arm_sticks(name, a, notes)?;
+                    input.arms[arm.index()] = arm_sticks(arm_name(arm), a, notes)?;
                 }
             }
             if let Some(o) = &object {

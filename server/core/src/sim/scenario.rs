@@ -13,7 +13,7 @@
 
 use nalgebra::{DMatrix, Point3, Vector3};
 
-use super::{ControlMethod, Input, LEFT, RIGHT, SimParams, Simulation};
+use super::{Arm, ControlMethod, Input, SimParams, Simulation};
 use crate::Error;
 use crate::grasp::GraspState;
 use crate::hydraulics::N_ACT;
@@ -163,14 +163,15 @@ pub fn ik_position(
     })
 }
 
-/// Postures of arm `arm` above its handle (`above_m` higher) and at it.
+/// Postures of `arm` above its handle (`above_m` higher) and at it.
 fn approach(
     params: &SimParams,
     model: &Model,
-    arm: usize,
+    arm: Arm,
     above_m: f64,
 ) -> Result<([f64; N_ACT], [f64; N_ACT]), Error> {
     let op = &params.object;
+    let arm = arm.index();
     let base = &params.arms[arm].base;
     let mut obj = op.initial_pose;
     obj.translation.vector.z -= op.mass_kg * 9.81 / (4.0 * op.contact_stiffness_n_m);
@@ -225,7 +226,7 @@ pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Err
             segments.push(Segment::open("B", 4.0, rest, rest));
         }
         1 => {
-            let (pre, at) = approach(&params, left, LEFT, 0.10)?;
+            let (pre, at) = approach(&params, left, Arm::Left, 0.10)?;
             segments.push(Segment::open(
                 "A",
                 6.0,
@@ -251,8 +252,8 @@ pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Err
             segments.push(Segment::open("D", 4.0, rest, rest));
         }
         _ => {
-            let (lpre, lat) = approach(&params, left, LEFT, 0.10)?;
-            let (rpre, rat) = approach(&params, right, RIGHT, 0.10)?;
+            let (lpre, lat) = approach(&params, left, Arm::Left, 0.10)?;
+            let (rpre, rat) = approach(&params, right, Arm::Right, 0.10)?;
             let tgt = |q: [f64; N_ACT], jaw: f64| ArmCommand::JointTarget { q, jaw };
             segments.push(Segment::open("A", 6.0, tgt(lpre, open), tgt(rpre, open)));
             segments.push(Segment::open("A", 4.0, tgt(lpre, open), tgt(rat, open)));
@@ -327,14 +328,15 @@ impl Scenario {
             speed_scale: 1.0,
             ..Input::default()
         };
-        for (i, cmd) in seg.arms.iter().enumerate() {
+        for (arm, cmd) in Arm::BOTH.into_iter().zip(&seg.arms) {
+            let i = arm.index();
             match *cmd {
                 ArmCommand::Valves { valves, jaw } => {
                     input.arms[i].valves = valves;
                     input.arms[i].jaw = jaw;
                 }
                 ArmCommand::JointTarget { q, jaw } => {
-                    let a = sim.arm(i);
+                    let a = sim.arm(arm);
                     let acts = &sim.params().arms[i].hydraulics.actuators;
                     let r: [f64; N_ACT] = core::array::from_fn(|j| {
                         let lim = 0.5 * acts[j].nominal_speed_rad_s;
@@ -433,7 +435,7 @@ pub fn run(
         for _ in 0..n {
             let input = sc.input_at(&sim, seg, sim.time_s());
             sim.step(&input);
-            for a in 0..2 {
+            for a in Arm::BOTH {
                 let arm = sim.arm(a);
                 for j in 0..N_ACT {
                     s.peak_line_pressure_pa =

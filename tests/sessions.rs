@@ -385,13 +385,7 @@ async fn bad_messages_get_errors_and_the_session_keeps_running() {
         "{e}"
     );
     next_of(&mut ws, "state", Duration::from_secs(5)).await;
-    // Over 16 KiB: closed with 1009 (message too big, RFC 6455 §7.4.1).
-    let big = json!({"type": "input", "seq": 1, "pad": "x".repeat(17 * 1024)}).to_string();
-    ws.send(Message::Text(big.into())).await.unwrap();
-    assert_eq!(close_code(&mut ws).await, 1009);
-    // The session survives its client: a new connection still streams it.
-    let mut again = connect(&s, id, &format!("token={tok}")).await.unwrap();
-    next_of(&mut again, "state", Duration::from_secs(5)).await;
+    // Oversize messages: admission_and_security.rs, oversize_messages_close_with_1009.
     s.stop().await;
 }
 

@@ -90,14 +90,6 @@ impl Arm {
             Arm::Right => 1,
         }
     }
-
-    /// The other arm.
-    pub const fn other(self) -> Arm {
-        match self {
-            Arm::Left => Arm::Right,
-            Arm::Right => Arm::Left,
-        }
-    }
 }
 
 /// Integration parameters (each default in its doc).

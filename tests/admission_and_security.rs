@@ -149,15 +149,7 @@ async fn the_join_code_is_enforced() {
 }
 
 async fn status_of(s: &Server, id: &str) -> Value {
-    reqwest::Client::new()
-        .get(format!("{}/api/sessions/{id}", s.base))
-        .bearer_auth(TEACHER)
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap()
+    get_json(&format!("{}/api/sessions/{id}", s.base)).await
 }
 
 /// A session no trainee connects to ends after the grace period (1 s here); one a trainee

@@ -5,13 +5,15 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod common;
 mod records_common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-use records_common::{Binary, Csv, TEACHER, create, eventually, get_json, metric, temp_dir};
+use common::{TEACHER, create_at, get_json};
+use records_common::{Binary, Csv, eventually, metric, temp_dir};
 use serde_json::{Value, json};
 
 /// Unmounts (lazily) when dropped, also when the test fails.
@@ -74,7 +76,7 @@ async fn a_full_disk_is_reported_and_refuses_new_sessions() {
         let dir = temp_dir("diskfloor");
         // A floor of 1 EiB: more than any real disk has free.
         let s = Binary::start(&dir, &["--min-free-disk-mb", "1099511627776"]);
-        let (st, body) = create(&s.base, json!({})).await;
+        let (st, body) = create_at(&s.base, json!({})).await;
         assert_eq!(st, 503, "{body}");
         assert!(
             body["error"].as_str().unwrap().contains("nearly full"),
@@ -97,7 +99,7 @@ async fn a_full_disk_is_reported_and_refuses_new_sessions() {
             "0",
         ],
     );
-    let (st, c) = create(&s.base, json!({"label": "on a small disk"})).await;
+    let (st, c) = create_at(&s.base, json!({"label": "on a small disk"})).await;
     assert_eq!(st, 201, "{c}");
     let id = c["id"].as_str().unwrap().to_string();
     assert_eq!(summary(&s.base, &id).await["recording"], "ok");
@@ -106,7 +108,7 @@ async fn a_full_disk_is_reported_and_refuses_new_sessions() {
     let free = seaarms::sessions::record::free_disk_bytes(&root).unwrap();
     let filler = root.join("filler");
     std::fs::write(&filler, vec![0u8; (free - 300 * 1024) as usize]).unwrap();
-    let (st, body) = create(&s.base, json!({})).await;
+    let (st, body) = create_at(&s.base, json!({})).await;
     assert_eq!(st, 503, "below the floor: {body}");
     let msg = body["error"].as_str().unwrap();
     assert!(
@@ -153,7 +155,7 @@ async fn a_full_disk_is_reported_and_refuses_new_sessions() {
     end(&s.base, &id).await;
     assert_eq!(summary(&s.base, &id).await["recording"], "failed");
     std::fs::remove_file(&filler).unwrap();
-    let (st, body) = create(&s.base, json!({})).await;
+    let (st, body) = create_at(&s.base, json!({})).await;
     assert_eq!(st, 201, "space freed: {body}");
     s.stop();
     drop(mount);
@@ -167,7 +169,7 @@ async fn retention_deletes_oldest_ended_records_never_live_ones() {
     let s = Binary::start(&dir, &["--retention-days", "0", "--retention-max-mb", "0"]);
     let mut ids = Vec::new();
     for label in ["A", "B"] {
-        let (st, c) = create(&s.base, json!({"label": label})).await;
+        let (st, c) = create_at(&s.base, json!({"label": label})).await;
         assert_eq!(st, 201);
         let id = c["id"].as_str().unwrap().to_string();
         tokio::time::sleep(Duration::from_millis(1300)).await;
@@ -209,7 +211,7 @@ async fn retention_deletes_oldest_ended_records_never_live_ones() {
     );
 
     // 3. A live session C outgrows the cap on its own: the next passes delete B, never C.
-    let (st, c) = create(&s.base, json!({"label": "C"})).await;
+    let (st, c) = create_at(&s.base, json!({"label": "C"})).await;
     assert_eq!(st, 201);
     let id_c = c["id"].as_str().unwrap().to_string();
     let b_gone = eventually(Duration::from_secs(30), || async {

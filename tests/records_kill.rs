@@ -6,11 +6,13 @@
 
 #![allow(clippy::unwrap_used)]
 
+mod common;
 mod records_common;
 
 use std::time::Duration;
 
-use records_common::{Binary, Csv, create, drive, get_json, get_text, temp_dir};
+use common::{create_at, get_json, get_text};
+use records_common::{Binary, Csv, drive, temp_dir};
 use serde_json::json;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -20,7 +22,7 @@ async fn kill_9_leaves_true_figures_and_whole_rows() {
     let server = Binary::start(&dir, &keep_all);
     let mut sessions = Vec::new();
     for (label, scenario) in [("a", "training"), ("b", "case4-dual-closed-loop")] {
-        let (st, c) = create(&server.base, json!({"label": label, "scenario": scenario})).await;
+        let (st, c) = create_at(&server.base, json!({"label": label, "scenario": scenario})).await;
         assert_eq!(st, 201, "{c}");
         sessions.push(c);
     }

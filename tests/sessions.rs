@@ -123,15 +123,7 @@ async fn stick_input_moves_the_joint_and_observers_see_it_read_only() {
     );
 
     // Instructor list shows it with live measures.
-    let list: Value = reqwest::Client::new()
-        .get(format!("{}/api/sessions", s.base))
-        .bearer_auth(TEACHER)
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let list = get_json(&format!("{}/api/sessions", s.base)).await;
     let entry = list
         .as_array()
         .unwrap()
@@ -393,13 +385,7 @@ async fn bad_messages_get_errors_and_the_session_keeps_running() {
         "{e}"
     );
     next_of(&mut ws, "state", Duration::from_secs(5)).await;
-    // Over 16 KiB: closed with 1009 (message too big, RFC 6455 §7.4.1).
-    let big = json!({"type": "input", "seq": 1, "pad": "x".repeat(17 * 1024)}).to_string();
-    ws.send(Message::Text(big.into())).await.unwrap();
-    assert_eq!(close_code(&mut ws).await, 1009);
-    // The session survives its client: a new connection still streams it.
-    let mut again = connect(&s, id, &format!("token={tok}")).await.unwrap();
-    next_of(&mut again, "state", Duration::from_secs(5)).await;
+    // Oversize messages: admission_and_security.rs, oversize_messages_close_with_1009.
     s.stop().await;
 }
 
@@ -443,19 +429,12 @@ async fn a_stalled_client_does_not_slow_another_session() {
         "B received {frames} frames in {real:.2} s (60 Hz configured)"
     );
     // A's simulation also kept real time although its client reads nothing.
-    let a_summary: Value = reqwest::Client::new()
-        .get(format!(
-            "{}/api/sessions/{}",
-            s.base,
-            a["id"].as_str().unwrap()
-        ))
-        .bearer_auth(TEACHER)
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let a_summary = get_json(&format!(
+        "{}/api/sessions/{}",
+        s.base,
+        a["id"].as_str().unwrap()
+    ))
+    .await;
     assert!(a_summary["sim_seconds"].as_f64().unwrap() > 1.5);
     s.stop().await;
 }
@@ -474,15 +453,7 @@ async fn records_survive_a_restart() {
     s.stop().await;
     // Same data directory, new server.
     let s2 = start_with(dir.clone(), |_| {}).await;
-    let list: Value = reqwest::Client::new()
-        .get(format!("{}/api/sessions", s2.base))
-        .bearer_auth(TEACHER)
-        .send()
-        .await
-        .unwrap()
-        .json()
-        .await
-        .unwrap();
+    let list = get_json(&format!("{}/api/sessions", s2.base)).await;
     let entry = list
         .as_array()
         .unwrap()
@@ -494,15 +465,7 @@ async fn records_survive_a_restart() {
     assert_eq!(entry["scenario"], "case3-dual-open-loop");
     assert_eq!(entry["end_reason"], "server shutdown");
     assert!(entry["sim_seconds"].as_f64().unwrap() > 1.0);
-    let csv = reqwest::Client::new()
-        .get(format!("{}/api/sessions/{id}/log.csv", s2.base))
-        .bearer_auth(TEACHER)
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
+    let csv = get_text(&format!("{}/api/sessions/{id}/log.csv", s2.base)).await;
     let rows = csv.lines().count() - 1;
     assert!(rows >= 100, "100 Hz record of > 1 s has {rows} rows");
     s2.stop().await;

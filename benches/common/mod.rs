@@ -1,8 +1,8 @@
 //! Fixtures shared by `benches/step.rs` and `examples/step_loop.rs` (included by path), so
 //! the benchmark and the instruction-count workload step exactly the same states.
 
-use seaarms_core::sim::Simulation;
 use seaarms_core::sim::scenario::scenario;
+use seaarms_core::sim::{Arm, Simulation};
 use seaarms_core::{Model, ModelSpec, robots};
 
 /// The built-in Magnum model.
@@ -18,7 +18,7 @@ pub(crate) fn holding_sim(m: &Model) -> Simulation {
     let mut sim = Simulation::new(m.clone(), m.clone(), sc.params.clone()).expect("sim");
     let mut t = 0.0;
     for seg in &sc.segments {
-        if sim.arm(0).holding && sim.arm(1).holding {
+        if sim.arm(Arm::Left).holding && sim.arm(Arm::Right).holding {
             break;
         }
         let n = (seg.duration_s / 1e-3).round() as usize;

@@ -68,9 +68,34 @@ pub async fn start() -> Server {
     start_with(temp_dir(), |_| {}).await
 }
 
+/// GET with the instructor token; the body as text.
+pub async fn get_text(url: &str) -> String {
+    reqwest::Client::new()
+        .get(url)
+        .bearer_auth(TEACHER)
+        .send()
+        .await
+        .unwrap()
+        .text()
+        .await
+        .unwrap()
+}
+
+/// GET with the instructor token; the body as JSON.
+pub async fn get_json(url: &str) -> Value {
+    let text = get_text(url).await;
+    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{url}: {e}: {text}"))
+}
+
+/// Creates a session on `s`; the status and the body.
 pub async fn create(s: &Server, body: Value) -> (u16, Value) {
+    create_at(&s.base, body).await
+}
+
+/// Creates a session on the server at `base`; the status and the body.
+pub async fn create_at(base: &str, body: Value) -> (u16, Value) {
     let r = reqwest::Client::new()
-        .post(format!("{}/api/sessions", s.base))
+        .post(format!("{base}/api/sessions"))
         .json(&body)
         .send()
         .await

@@ -11,7 +11,7 @@ use futures_util::SinkExt;
 use serde_json::{Value, json};
 use tokio_tungstenite::tungstenite::Message;
 
-pub(crate) const TEACHER: &str = "teacher-token";
+use crate::common::TEACHER;
 
 pub(crate) fn temp_dir(tag: &str) -> PathBuf {
     std::env::temp_dir().join(format!(
@@ -89,35 +89,6 @@ impl Drop for Binary {
         let _ = self.child.kill();
         let _ = self.child.wait();
     }
-}
-
-pub(crate) async fn create(base: &str, body: Value) -> (u16, Value) {
-    let r = reqwest::Client::new()
-        .post(format!("{base}/api/sessions"))
-        .json(&body)
-        .send()
-        .await
-        .unwrap();
-    let st = r.status().as_u16();
-    (st, r.json().await.unwrap())
-}
-
-/// GET with the instructor token; the body as text.
-pub(crate) async fn get_text(url: &str) -> String {
-    reqwest::Client::new()
-        .get(url)
-        .bearer_auth(TEACHER)
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap()
-}
-
-pub(crate) async fn get_json(url: &str) -> Value {
-    let text = get_text(url).await;
-    serde_json::from_str(&text).unwrap_or_else(|e| panic!("{url}: {e}: {text}"))
 }
 
 /// The value of a metric in `/metrics`.

@@ -7,7 +7,7 @@ mod common;
 use nalgebra::Vector3;
 use seaarms_core::dynamics::{DynData, Inertials, MAGNUM_LINK_DENSITY_KGM3, rnea};
 use seaarms_core::kinematics::{KinData, forward_kinematics};
-use seaarms_core::sim::{Input, LEFT, SimParams, Simulation};
+use seaarms_core::sim::{Arm, Input, SimParams, Simulation};
 
 #[test]
 fn buoyancy_scales_gravity_torques() {
@@ -43,13 +43,13 @@ fn drag_slows_the_arm_and_water_run_is_finite() {
         p.step.joint_drag = drag;
         let mut s = Simulation::new(m.clone(), m, p).expect("sim");
         let mut inp = Input::default();
-        inp.arms[LEFT].valves[5] = 1.0;
-        let q0 = s.arm(LEFT).q[5];
+        inp.arms[Arm::Left.index()].valves[5] = 1.0;
+        let q0 = s.arm(Arm::Left).q[5];
         for _ in 0..1000 {
             s.step(&inp);
         }
         assert_eq!(s.numerical_faults(), 0);
-        s.arm(LEFT).q[5] - q0
+        s.arm(Arm::Left).q[5] - q0
     };
     let free = run(false, 0.0);
     let dragged = run(true, 20.0);

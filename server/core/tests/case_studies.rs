@@ -8,7 +8,7 @@
 mod common;
 
 use seaarms_core::grasp::GraspState;
-use seaarms_core::sim::LEFT;
+use seaarms_core::sim::Arm;
 use seaarms_core::sim::scenario::{Row, Summary, run, scenario};
 
 fn run_case(name: &str) -> (Summary, Vec<Row>) {
@@ -36,7 +36,11 @@ fn case1_pressures_bounded_and_arm_settles() {
     let (s, rows) = run_case("case1-single-arm");
     let min = rows
         .iter()
-        .flat_map(|r| r.p_in[LEFT].iter().chain(r.p_out[LEFT].iter()))
+        .flat_map(|r| {
+            r.p_in[Arm::Left.index()]
+                .iter()
+                .chain(r.p_out[Arm::Left.index()].iter())
+        })
         .fold(f64::INFINITY, |a, &b| a.min(b));
     assert!(min >= 0.0, "negative line pressure {min}");
     assert!(
@@ -55,11 +59,11 @@ fn case1_pressures_bounded_and_arm_settles() {
     for j in 0..6 {
         let span = rows
             .iter()
-            .map(|r| r.q[LEFT][j])
+            .map(|r| r.q[Arm::Left.index()][j])
             .fold(f64::NEG_INFINITY, f64::max)
             - rows
                 .iter()
-                .map(|r| r.q[LEFT][j])
+                .map(|r| r.q[Arm::Left.index()][j])
                 .fold(f64::INFINITY, f64::min);
         assert!(span > 0.2, "joint {} moved only {span} rad", j + 1);
     }
@@ -69,8 +73,14 @@ fn mean_link2(rows: &[Row], t0: f64, t1: f64) -> (f64, f64) {
     let sel: Vec<&Row> = rows.iter().filter(|r| r.t_s >= t0 && r.t_s <= t1).collect();
     let n = sel.len() as f64;
     (
-        sel.iter().map(|r| r.p_in[LEFT][1]).sum::<f64>() / n,
-        sel.iter().map(|r| r.p_out[LEFT][1]).sum::<f64>() / n,
+        sel.iter()
+            .map(|r| r.p_in[Arm::Left.index()][1])
+            .sum::<f64>()
+            / n,
+        sel.iter()
+            .map(|r| r.p_out[Arm::Left.index()][1])
+            .sum::<f64>()
+            / n,
     )
 }
 

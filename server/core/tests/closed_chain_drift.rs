@@ -6,7 +6,7 @@ mod common;
 
 use common::scenario_util::{run_while, start};
 use seaarms_core::grasp::GraspState;
-use seaarms_core::sim::{ControlMethod, Input};
+use seaarms_core::sim::{Arm, ControlMethod, Input};
 
 fn hold_for_60_s(method: ControlMethod, lifted: bool) {
     let (sc, mut sim) = start("case4-dual-closed-loop");
@@ -16,7 +16,7 @@ fn hold_for_60_s(method: ControlMethod, lifted: bool) {
         if lifted {
             seg.stage != "D"
         } else {
-            !(s.arm(0).holding && s.arm(1).holding)
+            !(s.arm(Arm::Left).holding && s.arm(Arm::Right).holding)
         }
     });
     assert_eq!(sim.grasp_state(), GraspState::BothHolding);
@@ -28,14 +28,19 @@ fn hold_for_60_s(method: ControlMethod, lifted: bool) {
     let mut worst: f64 = 0.0;
     for _ in 0..60_000 {
         sim.step(&input);
-        worst = worst.max(sim.grasp_error(0).0).max(sim.grasp_error(1).0);
+        worst = worst
+            .max(sim.grasp_error(Arm::Left).0)
+            .max(sim.grasp_error(Arm::Right).0);
         // The runner's per-step monitor is the same position error.
-        for a in 0..2 {
+        for a in Arm::BOTH {
             assert!((sim.grasp_position_error(a) - sim.grasp_error(a).0).abs() < 1e-15);
         }
     }
     let moved = (sim.object().pose.translation.vector - p0).norm();
-    let cw = [sim.arm(0).contact_wrench, sim.arm(1).contact_wrench];
+    let cw = [
+        sim.arm(Arm::Left).contact_wrench,
+        sim.arm(Arm::Right).contact_wrench,
+    ];
     let lift = cw[0][2] + cw[1][2];
     println!(
         "{method:?} lifted={lifted}: worst grasp error {worst:.2e} m, object moved {moved:.2e} m, jaws carry {lift:.1} N"

@@ -4,12 +4,12 @@
 mod common;
 
 use common::rng::Rng;
-use seaarms_core::sim::{ControlMethod, Input, SimParams, Simulation};
+use seaarms_core::sim::{Arm, ControlMethod, Input, SimParams, Simulation};
 
 fn fingerprint(s: &Simulation) -> Vec<u64> {
     let mut v = Vec::new();
-    for i in 0..2 {
-        let a = s.arm(i);
+    for arm in Arm::BOTH {
+        let a = s.arm(arm);
         for x in
             a.q.iter()
                 .chain(&a.qd)

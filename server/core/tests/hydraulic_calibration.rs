@@ -6,16 +6,16 @@
 mod common;
 
 use seaarms_core::hydraulics::{MAGNUM_FULL_EXTENSION, MAGNUM_SPEEDS_DEG_S};
-use seaarms_core::sim::{Input, LEFT, SimParams, Simulation};
+use seaarms_core::sim::{Arm, Input, SimParams, Simulation};
 
 fn sim_with(q: [f64; 6], payload_kg: f64) -> Simulation {
     let m = common::builtin("magnum");
     let mut p = SimParams::case_study(&m, &m).expect("params");
-    p.arms[LEFT].initial_q = q;
+    p.arms[Arm::Left.index()].initial_q = q;
     if payload_kg > 0.0 {
         let tool = m.flange.transform_point(&m.tool.into()).coords;
-        let l = p.arms[LEFT].inertials.links[5];
-        p.arms[LEFT].inertials.links[5] = l.with_point_mass(&tool, payload_kg);
+        let l = p.arms[Arm::Left.index()].inertials.links[5];
+        p.arms[Arm::Left.index()].inertials.links[5] = l.with_point_mass(&tool, payload_kg);
     }
     Simulation::new(m.clone(), m, p).expect("sim")
 }
@@ -29,15 +29,15 @@ fn full_command_gives_nominal_speed_within_15_percent() {
         for dir in [1.0, -1.0] {
             let mut s = sim_with(MID, 0.0);
             let mut inp = Input::default();
-            inp.arms[LEFT].valves[j] = dir;
+            inp.arms[Arm::Left.index()].valves[j] = dir;
             let mut q0 = 0.0;
             for k in 0..600 {
                 s.step(&inp);
                 if k == 199 {
-                    q0 = s.arm(LEFT).q[j];
+                    q0 = s.arm(Arm::Left).q[j];
                 }
             }
-            let speed = ((s.arm(LEFT).q[j] - q0) / 0.4).to_degrees();
+            let speed = ((s.arm(Arm::Left).q[j] - q0) / 0.4).to_degrees();
             println!(
                 "joint {} dir {dir:+}: {speed:.2} °/s (nominal {nominal})",
                 j + 1
@@ -55,22 +55,22 @@ fn full_command_gives_nominal_speed_within_15_percent() {
 /// drop (m), the peak line pressure (Pa) and the relief events.
 fn hold(payload_kg: f64) -> (f64, f64, u64, f64) {
     let mut s = sim_with(MAGNUM_FULL_EXTENSION, payload_kg);
-    let z0 = s.end_effector(LEFT).translation.z;
+    let z0 = s.end_effector(Arm::Left).translation.z;
     let mut inp = Input::default();
-    inp.arms[LEFT].joint_velocity_ref = Some([0.0; 6]);
+    inp.arms[Arm::Left.index()].joint_velocity_ref = Some([0.0; 6]);
     let mut peak: f64 = 0.0;
     for _ in 0..5000 {
         s.step(&inp);
-        let a = s.arm(LEFT);
+        let a = s.arm(Arm::Left);
         for j in 0..6 {
             peak = peak.max(a.p_in[j]).max(a.p_out[j]);
         }
     }
-    let relief = s.params().arms[LEFT].hydraulics.relief_pa;
+    let relief = s.params().arms[Arm::Left.index()].hydraulics.relief_pa;
     (
-        z0 - s.end_effector(LEFT).translation.z,
+        z0 - s.end_effector(Arm::Left).translation.z,
         peak,
-        s.arm(LEFT).relief_events,
+        s.arm(Arm::Left).relief_events,
         relief,
     )
 }

@@ -5,7 +5,7 @@
 mod common;
 
 use common::scenario_util::start;
-use seaarms_core::sim::{Simulation, StepParams};
+use seaarms_core::sim::{Arm, Simulation, StepParams};
 
 fn run_to(name: &str, substeps: usize, seconds: f64) -> Simulation {
     let (mut sc, _) = start(name);
@@ -31,7 +31,7 @@ fn compare(name: &str, seconds: f64, tol_q: f64, tol_p: f64) {
     let b = run_to(name, 32, seconds);
     let mut dq: f64 = 0.0;
     let mut dp: f64 = 0.0;
-    for i in 0..2 {
+    for i in Arm::BOTH {
         for j in 0..6 {
             dq = dq.max((a.arm(i).q[j] - b.arm(i).q[j]).abs());
             dp = dp

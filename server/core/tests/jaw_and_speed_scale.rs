@@ -3,7 +3,7 @@
 
 mod common;
 
-use seaarms_core::sim::{Input, LEFT, SimParams, Simulation};
+use seaarms_core::sim::{Arm, Input, SimParams, Simulation};
 
 fn sim() -> Simulation {
     let m = common::builtin("magnum");
@@ -14,13 +14,13 @@ fn sim() -> Simulation {
 #[test]
 fn jaw_closes_fully_in_0_735_s() {
     let mut s = sim();
-    assert!((s.arm(LEFT).jaw_opening_m - 0.075).abs() < 1e-12);
+    assert!((s.arm(Arm::Left).jaw_opening_m - 0.075).abs() < 1e-12);
     let mut close = Input::default();
-    close.arms[LEFT].jaw = -1.0;
+    close.arms[Arm::Left.index()].jaw = -1.0;
     for _ in 0..700 {
         s.step(&close);
     }
-    let left = s.arm(LEFT).jaw_opening_m;
+    let left = s.arm(Arm::Left).jaw_opening_m;
     assert!(
         (left - (0.075 - 0.102 * 0.7)).abs() < 1e-9,
         "after 0.7 s: {left} m"
@@ -28,9 +28,21 @@ fn jaw_closes_fully_in_0_735_s() {
     for _ in 0..100 {
         s.step(&close);
     }
-    assert_eq!(s.arm(LEFT).jaw_opening_m, 0.0);
-    assert_eq!(s.arm(LEFT).clamp_force_n, 0.0, "no clamp force on nothing");
-    assert!((s.params().arms[LEFT].hydraulics.jaw.clamp_force_n - 1471.0).abs() < 1.0);
+    assert_eq!(s.arm(Arm::Left).jaw_opening_m, 0.0);
+    assert_eq!(
+        s.arm(Arm::Left).clamp_force_n,
+        0.0,
+        "no clamp force on nothing"
+    );
+    assert!(
+        (s.params().arms[Arm::Left.index()]
+            .hydraulics
+            .jaw
+            .clamp_force_n
+            - 1471.0)
+            .abs()
+            < 1.0
+    );
 }
 
 #[test]
@@ -41,12 +53,12 @@ fn speed_setting_scales_joint_motion() {
             speed_scale: scale,
             ..Input::default()
         };
-        inp.arms[LEFT].valves[4] = 1.0;
-        let q0 = s.arm(LEFT).q[4];
+        inp.arms[Arm::Left.index()].valves[4] = 1.0;
+        let q0 = s.arm(Arm::Left).q[4];
         for _ in 0..300 {
             s.step(&inp);
         }
-        s.arm(LEFT).q[4] - q0
+        s.arm(Arm::Left).q[4] - q0
     };
     let (full, half) = (run(1.0), run(0.5));
     assert!(

@@ -5,7 +5,7 @@
 mod common;
 
 use common::scenario_util::{run_while, start};
-use seaarms_core::sim::{ControlMethod, Input};
+use seaarms_core::sim::{Arm, ControlMethod, Input};
 
 #[test]
 fn step_does_not_allocate() {
@@ -21,7 +21,7 @@ fn step_does_not_allocate() {
     assert_eq!(free.count_total, 0, "free arms");
     sim.reset();
     run_while(&sc, &mut sim, |_, s| {
-        !(s.arm(0).holding && s.arm(1).holding)
+        !(s.arm(Arm::Left).holding && s.arm(Arm::Right).holding)
     });
     let coop = Input {
         method: ControlMethod::ClosedLoop,

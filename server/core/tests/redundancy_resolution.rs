@@ -16,6 +16,18 @@ fn example_q() -> Vec<f64> {
     EXAMPLE_DEG.iter().map(|d| d.to_radians()).collect()
 }
 
+/// Resolution without damping or velocity limits (the equations as written).
+fn undamped(model: &seaarms_core::Model) -> Redundancy {
+    Redundancy::new(
+        model,
+        RedundancyParams {
+            max_damping: 0.0,
+            limit_velocity: false,
+            ..Default::default()
+        },
+    )
+}
+
 fn task_velocity(model: &seaarms_core::Model, q: &[f64], qdot: &[f64], rows: &[usize]) -> Vec<f64> {
     let j = select_rows(&jacobian_at(model, q), rows).expect("rows");
     (0..rows.len())
@@ -155,14 +167,7 @@ fn null_space_term_does_not_disturb_the_task() {
     let model = common::builtin("orion");
     let q = example_q();
     let rows = [0usize, 1, 2];
-    let mut r = Redundancy::new(
-        &model,
-        RedundancyParams {
-            max_damping: 0.0,
-            limit_velocity: false,
-            ..Default::default()
-        },
-    );
+    let mut r = undamped(&model);
     let v = [0.1, 0.08, -0.08];
     r.params.epsilon = 0.0;
     let qd = r.step(&model, &q, &v, &rows, 0.01).expect("step").to_vec();
@@ -227,14 +232,7 @@ fn null_space_motion_raises_the_performance_index() {
 fn second_task_has_lower_priority() {
     let model = common::builtin("orion");
     let q = example_q();
-    let mut r = Redundancy::new(
-        &model,
-        RedundancyParams {
-            max_damping: 0.0,
-            limit_velocity: false,
-            ..Default::default()
-        },
-    );
+    let mut r = undamped(&model);
     let v1 = [0.05, 0.0, -0.02];
     let v2 = [0.1, -0.2];
     let qd = r

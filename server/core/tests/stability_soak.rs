@@ -8,7 +8,7 @@ mod common;
 
 use common::rng::Rng;
 use common::scenario_util::{run_while, start};
-use seaarms_core::sim::{ControlMethod, Input, Simulation};
+use seaarms_core::sim::{Arm, ControlMethod, Input, Simulation};
 
 const STEPS: usize = 600_000; // 10 min at 1 ms
 
@@ -19,13 +19,13 @@ fn check(s: &Simulation, what: &str) {
         "{what}: rolled-back steps at t={}",
         s.time_s()
     );
-    for i in 0..2 {
-        let a = s.arm(i);
-        let relief = s.params().arms[i].hydraulics.relief_pa;
+    for arm in Arm::BOTH {
+        let a = s.arm(arm);
+        let relief = s.params().arms[arm.index()].hydraulics.relief_pa;
         for j in 0..6 {
             assert!(
                 a.q[j].is_finite() && a.qd[j].abs() < 50.0,
-                "{what}: arm {i} joint {j} q {} qd {}",
+                "{what}: arm {arm:?} joint {j} q {} qd {}",
                 a.q[j],
                 a.qd[j]
             );
@@ -57,7 +57,7 @@ fn check(s: &Simulation, what: &str) {
 
 /// Random faults switched on and off every few seconds.
 fn random_faults(s: &mut Simulation, r: &mut Rng) {
-    for arm in 0..2 {
+    for arm in Arm::BOTH {
         let f = s.faults_mut(arm);
         *f = Default::default();
         if r.next() < 0.3 {
@@ -165,7 +165,7 @@ fn closed_loop_input(r: &mut Rng, _: &Simulation) -> Input {
 fn holding_case4() -> Simulation {
     let (sc, mut sim) = start("case4-dual-closed-loop");
     run_while(&sc, &mut sim, |_, s| {
-        !(s.arm(0).holding && s.arm(1).holding)
+        !(s.arm(Arm::Left).holding && s.arm(Arm::Right).holding)
     });
     sim
 }

@@ -29,27 +29,7 @@ pub const AIR_SCALE_RANGE: (f64, f64) = (0.01, 1.0);
 /// Actuators per arm (swing, shoulder, elbow, pitch, yaw, rotate).
 pub const JOINTS: usize = 6;
 
-/// One of the two arms.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
-pub enum Arm {
-    /// Index 0.
-    Left,
-    /// Index 1.
-    Right,
-}
-
-impl Arm {
-    /// Both arms, left first.
-    pub const BOTH: [Arm; 2] = [Arm::Left, Arm::Right];
-
-    /// Index into the simulation's arrays (`seaarms_core::sim::LEFT`/`RIGHT`).
-    pub fn index(self) -> usize {
-        match self {
-            Arm::Left => seaarms_core::sim::LEFT,
-            Arm::Right => seaarms_core::sim::RIGHT,
-        }
-    }
-}
+pub use seaarms_core::sim::Arm;
 
 /// An instructor-injected hydraulic fault on one arm (sizes validated on construction).
 #[derive(Debug, Clone, Copy, PartialEq)]

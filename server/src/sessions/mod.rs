@@ -261,7 +261,7 @@ impl Live {
 
     /// Injects a fault, replacing one of the same kind on the same arm and actuator.
     pub fn inject_fault(&mut self, fault: ActiveFault) {
-        fault.fault.apply_to(self.sim.faults_mut(fault.arm.index()));
+        fault.fault.apply_to(self.sim.faults_mut(fault.arm));
         self.faults.retain(|f| !f.same_slot(&fault));
         self.faults.push(fault);
     }
@@ -269,7 +269,7 @@ impl Live {
     /// Removes every fault.
     pub fn clear_faults(&mut self) {
         for arm in command::Arm::BOTH {
-            *self.sim.faults_mut(arm.index()) = Default::default();
+            *self.sim.faults_mut(arm) = Default::default();
         }
         self.faults.clear();
     }

@@ -14,7 +14,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use seaarms_core::control::teleop::cartesian_to_joint_velocity;
-use seaarms_core::sim::{LEFT, RIGHT};
+use seaarms_core::sim::Arm;
 
 use super::record::{RecordMsg, RecordSender, SessionRow};
 use super::snapshot::build_frame;
@@ -180,18 +180,19 @@ fn apply_control(live: &mut Live, models: &[Arc<seaarms_core::Model>; 2]) {
         ControlMethod::Closed => seaarms_core::sim::ControlMethod::ClosedLoop,
     };
     let releasing = live.sim.time_s() < live.release_until_s;
-    for arm in [LEFT, RIGHT] {
+    for arm in Arm::BOTH {
+        let i = arm.index();
         if releasing {
-            live.input.arms[arm].jaw = 1.0;
+            live.input.arms[i].jaw = 1.0;
         }
-        live.input.arms[arm].joint_velocity_ref = match live.settings.control_mode {
+        live.input.arms[i].joint_velocity_ref = match live.settings.control_mode {
             ControlMode::Joint => None,
             ControlMode::Cartesian => Some(cartesian_to_joint_velocity(
-                &mut live.redundancy[arm],
-                &models[arm],
-                &live.sim.params().arms[arm].base.rotation,
+                &mut live.redundancy[i],
+                &models[i],
+                &live.sim.params().arms[i].base.rotation,
                 &live.sim.arm(arm).q,
-                &live.cartesian[arm],
+                &live.cartesian[i],
                 1e-3,
             )),
         };

@@ -9,7 +9,7 @@ use axum::extract::{Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use seaarms_core::manipulability::{jlm, measures};
-use seaarms_core::sim::{LEFT, RIGHT};
+use seaarms_core::sim::Arm;
 use serde::{Deserialize, Serialize};
 
 use super::admission::{ClientKey, Peer, client_ip};
@@ -259,15 +259,15 @@ pub struct SessionSummary {
 fn live_summary(s: &Session, recording: &'static str) -> SessionSummary {
     let live = s.live();
     let sim = live.sim();
-    let arm = |i: usize| {
-        let jt = sim.jacobian_world(i).fixed_rows::<3>(0).into_owned();
+    let arm = |arm: Arm| {
+        let jt = sim.jacobian_world(arm).fixed_rows::<3>(0).into_owned();
         let j = nalgebra::DMatrix::from_column_slice(3, 6, jt.as_slice());
         let m = measures(&j).ok();
         ArmSummary {
             yoshikawa: m.as_ref().map_or(0.0, |m| m.yoshikawa),
             isotropy: m.as_ref().map_or(0.0, |m| m.isotropy),
             hong: m.as_ref().map_or(0.0, |m| m.hong),
-            jlm: jlm(&s.models[i], &sim.arm(i).q),
+            jlm: jlm(&s.models[arm.index()], &sim.arm(arm).q),
         }
     };
     SessionSummary {
@@ -282,7 +282,7 @@ fn live_summary(s: &Session, recording: &'static str) -> SessionSummary {
         grasp: Some(grasp_name(sim.grasp_state())),
         paused: Some(live.paused()),
         trainees: Some(s.trainees.load(std::sync::atomic::Ordering::Relaxed)),
-        measures: Some([arm(LEFT), arm(RIGHT)]),
+        measures: Some(Arm::BOTH.map(arm)),
         overload_count: s.overloads.load(std::sync::atomic::Ordering::Relaxed),
         faults: Some(live.faults().to_vec()),
         recording,

@@ -5,12 +5,13 @@
 use nalgebra::{DMatrix, Isometry3, Matrix6};
 use seaarms_core::kinematics::forward_kinematics;
 use seaarms_core::manipulability::{Measures, dual_measures, jlm, measures};
-use seaarms_core::sim::{LEFT, RIGHT};
+use seaarms_core::sim::Arm;
 
 use super::{Live, Session};
 use crate::api::wire::PoseOut;
 use crate::protocol::{
     ArmFrame, ArmsFrame, DualFrame, EllipsoidFrame, MeasuresFrame, ObjectFrame, StateFrame,
+    arm_name,
 };
 
 /// Isotropy below which an arm is reported near a singularity.
@@ -53,12 +54,12 @@ fn translational(j: &Matrix6<f64>) -> DMatrix<f64> {
 fn arm_frame(
     session: &Session,
     live: &mut Live,
-    arm: usize,
-    name: &str,
+    arm: Arm,
     warnings: &mut Vec<String>,
 ) -> (ArmFrame, DMatrix<f64>) {
+    let name = arm_name(arm);
     let sim = &live.sim;
-    let model = &session.models[arm];
+    let model = &session.models[arm.index()];
     let state = sim.arm(arm);
     let jt = translational(sim.jacobian_world(arm));
     let m = measures(&jt)
@@ -81,10 +82,10 @@ fn arm_frame(
             warnings.push(format!("relief:{name}:{i}"));
         }
     }
-    let base: Isometry3<f64> = sim.params().arms[arm].base;
-    forward_kinematics(model, &mut live.kin[arm], &state.q);
+    let base: Isometry3<f64> = sim.params().arms[arm.index()].base;
+    forward_kinematics(model, &mut live.kin[arm.index()], &state.q);
     let base_m = seaarms_core::model::as_matrix_isometry(&base);
-    let joint_frames = live.kin[arm]
+    let joint_frames = live.kin[arm.index()]
         .joint_frames
         .iter()
         .map(|f| PoseOut::from(&(base_m * f)))
@@ -112,8 +113,8 @@ fn arm_frame(
 /// Builds the frame for the session's current state.
 pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
     let mut warnings = Vec::new();
-    let (left, jl) = arm_frame(session, live, LEFT, "left", &mut warnings);
-    let (right, jr) = arm_frame(session, live, RIGHT, "right", &mut warnings);
+    let (left, jl) = arm_frame(session, live, Arm::Left, &mut warnings);
+    let (right, jr) = arm_frame(session, live, Arm::Right, &mut warnings);
     let sim = &live.sim;
     let dual = if left.holding && right.holding {
         dual_measures(&jl, &jr).ok().map(|m| DualFrame {

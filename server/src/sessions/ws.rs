@@ -20,21 +20,21 @@ use std::time::{Duration, Instant};
 use axum::extract::ws::{CloseFrame, Message, Utf8Bytes, WebSocket, WebSocketUpgrade, close_code};
 use axum::extract::{Path, Query, State};
 use axum::response::{IntoResponse, Response};
-use futures_util::stream::SplitStream;
+use futures_util::stream::{SplitSink, SplitStream};
 use futures_util::{SinkExt, StreamExt};
-use seaarms_core::sim::{LEFT, RIGHT};
 use serde::Deserialize;
 use tokio::sync::mpsc;
 
 use super::Session;
 use super::admission::TokenBucket;
-use super::command::{self, Actor, ArmSticks, Command, StickInput};
+use super::command::{self, Actor, Arm, ArmSticks, Command, StickInput};
 use crate::api::wire::PoseOut;
 use crate::app::AppState;
 use crate::error::ApiError;
+use crate::metrics::Metrics;
 use crate::protocol::{
     ArmAxes, ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, MAX_INPUT_SEQ,
-    ObjectModelOut, ServerMessage,
+    ObjectModelOut, ServerMessage, arm_name,
 };
 
 /// Largest message (and frame) the WebSocket transport reads (bytes): 4 × the documented
@@ -111,9 +111,9 @@ fn error_text(message: impl Into<String>) -> Utf8Bytes {
 fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
     let live = session.live();
     let params = live.sim().params();
-    let arm = |i: usize| ArmModelOut {
-        model: session.models[i].spec.clone(),
-        base: PoseOut::from(&params.arms[i].base),
+    let arm = |arm: Arm| ArmModelOut {
+        model: session.models[arm.index()].spec.clone(),
+        base: PoseOut::from(&params.arms[arm.index()].base),
     };
     let size = params.object.size_m;
     let msg = ServerMessage::Hello(Box::new(Hello {
@@ -122,7 +122,7 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
             Role::Trainee => "trainee",
             Role::Observer => "observer",
         },
-        arms: [arm(LEFT), arm(RIGHT)],
+        arms: Arm::BOTH.map(arm),
         object: ObjectModelOut {
             size_m: [size.x, size.y, size.z],
             mass_kg: params.object.mass_kg,
@@ -172,104 +172,188 @@ async fn await_peer_close(stream: &mut SplitStream<WebSocket>) {
     .await;
 }
 
+/// One WebSocket connection: a writer task sends the hello, frames, notices and replies; this
+/// task reads the client's messages until it stops, then closes the connection cleanly.
 async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>, role: Role) {
     let metrics = state.metrics.clone();
+    connected(&metrics, &session, role);
+    let (sink, mut stream) = socket.split();
+    let (reply_tx, reply_rx) = mpsc::channel::<Outgoing>(64);
+    let hello = hello(&session, &state, role);
+    let writer = tokio::spawn(write_loop(
+        sink,
+        session.clone(),
+        metrics.clone(),
+        hello,
+        reply_rx,
+    ));
+    let ending = read_loop(&mut stream, &state, &session, role, &reply_tx).await;
+    drop(reply_tx);
+    let _ = writer.await;
+    match ending {
+        Ending::Linger => tokio::time::sleep(CLOSE_LINGER).await,
+        Ending::AwaitPeerClose => await_peer_close(&mut stream).await,
+        Ending::Plain => {}
+    }
+    disconnected(&metrics, &session, role);
+}
+
+/// Counts a new connection (and a trainee joining its session).
+fn connected(metrics: &Metrics, session: &Session, role: Role) {
     metrics.ws_clients.fetch_add(1, Ordering::Relaxed);
     if role == Role::Trainee {
         session.trainees.fetch_add(1, Ordering::Relaxed);
         session.joined.store(true, Ordering::Relaxed);
         session.touch();
     }
-    let (mut sink, mut stream) = socket.split();
-    let (reply_tx, mut reply_rx) = mpsc::channel::<Outgoing>(64);
+}
 
-    let writer = {
-        let session = session.clone();
-        let metrics = metrics.clone();
-        let hello = hello(&session, &state, role);
-        tokio::spawn(async move {
-            if sink.send(Message::Text(hello)).await.is_err() {
-                return;
-            }
-            let mut frames = session.frames.subscribe();
-            let mut notices = session.notices.subscribe();
-            let mut last_seq: Option<u64> = None;
-            // A late joiner gets the current snapshot at once.
-            frames.mark_changed();
-            loop {
-                let out = tokio::select! {
-                    changed = frames.changed() => {
-                        if changed.is_err() || session.ended.load(Ordering::Relaxed) {
-                            Outgoing::Close(close_code::NORMAL, "session ended".into())
-                        } else {
-                            let frame = frames.borrow_and_update().clone();
-                            let Some(frame) = frame else { continue };
-                            if let Some(prev) = last_seq {
-                                if frame.seq > prev + 1 {
-                                    metrics.frames_skipped.fetch_add(frame.seq - prev - 1, Ordering::Relaxed);
-                                }
-                            }
-                            last_seq = Some(frame.seq);
-                            metrics.frames_sent.fetch_add(1, Ordering::Relaxed);
-                            Outgoing::Text(frame.json)
+/// Counts a connection gone (and a trainee leaving its session).
+fn disconnected(metrics: &Metrics, session: &Session, role: Role) {
+    metrics.ws_clients.fetch_sub(1, Ordering::Relaxed);
+    if role == Role::Trainee {
+        session.trainees.fetch_sub(1, Ordering::Relaxed);
+        session.touch();
+    }
+}
+
+/// The writer: sends `hello`, then the latest frame whenever it changes (a slow client skips
+/// frames, counted in `frames_skipped`), notices and the reader's replies, until the session
+/// ends, the reader is done or the client is gone.
+async fn write_loop(
+    mut sink: SplitSink<WebSocket, Message>,
+    session: Arc<Session>,
+    metrics: Arc<Metrics>,
+    hello: Utf8Bytes,
+    mut reply_rx: mpsc::Receiver<Outgoing>,
+) {
+    if sink.send(Message::Text(hello)).await.is_err() {
+        return;
+    }
+    let mut frames = session.frames.subscribe();
+    let mut notices = session.notices.subscribe();
+    let mut last_seq: Option<u64> = None;
+    // A late joiner gets the current snapshot at once.
+    frames.mark_changed();
+    loop {
+        let out = tokio::select! {
+            changed = frames.changed() => {
+                if changed.is_err() || session.ended.load(Ordering::Relaxed) {
+                    Outgoing::Close(close_code::NORMAL, "session ended".into())
+                } else {
+                    let frame = frames.borrow_and_update().clone();
+                    let Some(frame) = frame else { continue };
+                    if let Some(prev) = last_seq {
+                        if frame.seq > prev + 1 {
+                            metrics.frames_skipped.fetch_add(frame.seq - prev - 1, Ordering::Relaxed);
                         }
                     }
-                    notice = notices.recv() => match notice {
-                        Ok(text) => Outgoing::Text(text),
-                        Err(tokio::sync::broadcast::error::RecvError::Lagged(_)) => continue,
-                        Err(_) => Outgoing::Close(close_code::NORMAL, "session ended".into()),
-                    },
-                    reply = reply_rx.recv() => match reply {
-                        Some(r) => r,
-                        None => break,
-                    },
-                };
-                match out {
-                    Outgoing::Text(t) => {
-                        if sink.send(Message::Text(t)).await.is_err() {
-                            break;
-                        }
-                    }
-                    Outgoing::Close(code, reason) => {
-                        let _ = sink
-                            .send(Message::Close(Some(CloseFrame {
-                                code,
-                                reason: reason.into(),
-                            })))
-                            .await;
-                        break;
-                    }
+                    last_seq = Some(frame.seq);
+                    metrics.frames_sent.fetch_add(1, Ordering::Relaxed);
+                    Outgoing::Text(frame.json)
                 }
             }
-        })
-    };
+            notice = notices.recv() => match notice {
+                Ok(text) => Outgoing::Text(text),
+                Err(tokio::sync::broadcast::error::RecvError::Lagged(_)) => continue,
+                Err(_) => Outgoing::Close(close_code::NORMAL, "session ended".into()),
+            },
+            reply = reply_rx.recv() => match reply {
+                Some(r) => r,
+                None => break,
+            },
+        };
+        match out {
+            Outgoing::Text(t) => {
+                if sink.send(Message::Text(t)).await.is_err() {
+                    break;
+                }
+            }
+            Outgoing::Close(code, reason) => {
+                let _ = sink
+                    .send(Message::Close(Some(CloseFrame {
+                        code,
+                        reason: reason.into(),
+                    })))
+                    .await;
+                break;
+            }
+        }
+    }
+}
 
-    let rate = f64::from(state.sessions.config.max_messages_per_second.max(1));
-    // Bursts of up to two seconds' worth of messages.
-    let mut limiter = TokenBucket::new(2.0 * rate, rate, Instant::now());
-    let mut last_rate_notice: Option<Instant> = None;
-    let too_big = format!("message over {} KiB", MAX_CLIENT_MESSAGE_BYTES / 1024);
-    let mut ending = Ending::Plain;
+/// A connection's message rate limit: a token bucket allowing bursts of up to two seconds'
+/// worth of messages, and at most one notice a second about dropped ones.
+struct RateLimit {
+    bucket: TokenBucket,
+    per_second: u32,
+    last_notice: Option<Instant>,
+}
+
+impl RateLimit {
+    fn new(per_second: u32) -> RateLimit {
+        let rate = f64::from(per_second.max(1));
+        RateLimit {
+            bucket: TokenBucket::new(2.0 * rate, rate, Instant::now()),
+            per_second,
+            last_notice: None,
+        }
+    }
+
+    /// Takes a token for one message: `Ok` if within the limit, else `Err` with the notice to
+    /// send the client, if one is due.
+    fn admit(&mut self) -> Result<(), Option<Utf8Bytes>> {
+        if self.bucket.try_take(Instant::now()) {
+            return Ok(());
+        }
+        if self
+            .last_notice
+            .is_some_and(|t| t.elapsed().as_secs_f64() < 1.0)
+        {
+            return Err(None);
+        }
+        self.last_notice = Some(Instant::now());
+        Err(Some(error_text(format!(
+            "too many messages: at most {} per second; extra messages are dropped",
+            self.per_second
+        ))))
+    }
+}
+
+/// Whether a message is over [`MAX_CLIENT_MESSAGE_BYTES`] (read whole: under the transport
+/// limit).
+fn is_oversize(item: &Result<Message, axum::Error>) -> bool {
+    match item {
+        Ok(Message::Text(t)) => t.len() > MAX_CLIENT_MESSAGE_BYTES,
+        Ok(Message::Binary(b)) => b.len() > MAX_CLIENT_MESSAGE_BYTES,
+        Ok(_) | Err(_) => false,
+    }
+}
+
+/// The reader: takes the client's messages until it closes, goes away or sends one too big,
+/// handing replies to the writer; returns how the reading ended.
+async fn read_loop(
+    stream: &mut SplitStream<WebSocket>,
+    state: &AppState,
+    session: &Session,
+    role: Role,
+    reply_tx: &mpsc::Sender<Outgoing>,
+) -> Ending {
+    let metrics = &state.metrics;
+    let mut rate = RateLimit::new(state.sessions.config.max_messages_per_second);
     while let Some(item) = stream.next().await {
         // Over the documented limit: read whole (under the transport limit) and the close
         // handshake completed, or refused by the transport (nothing more can be read).
-        let oversize = match &item {
-            Ok(Message::Text(t)) => t.len() > MAX_CLIENT_MESSAGE_BYTES,
-            Ok(Message::Binary(b)) => b.len() > MAX_CLIENT_MESSAGE_BYTES,
-            Ok(_) => false,
-            Err(_) => false,
-        };
+        let oversize = is_oversize(&item);
         if oversize || item.as_ref().err().is_some_and(is_capacity_error) {
             metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
-            let _ = reply_tx
-                .send(Outgoing::Close(CLOSE_TOO_BIG, too_big.clone()))
-                .await;
-            ending = if oversize {
+            let too_big = format!("message over {} KiB", MAX_CLIENT_MESSAGE_BYTES / 1024);
+            let _ = reply_tx.send(Outgoing::Close(CLOSE_TOO_BIG, too_big)).await;
+            return if oversize {
                 Ending::AwaitPeerClose
             } else {
                 Ending::Linger
             };
-            break;
         }
         let text = match item {
             Ok(Message::Text(t)) => t,
@@ -283,42 +367,42 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
             Ok(Message::Ping(_) | Message::Pong(_)) => continue,
             Ok(Message::Close(_)) | Err(_) => break,
         };
-        if !limiter.try_take(Instant::now()) {
+        if let Err(notice) = rate.admit() {
             metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
-            if last_rate_notice.is_none_or(|t| t.elapsed().as_secs_f64() >= 1.0) {
-                last_rate_notice = Some(Instant::now());
-                let _ = reply_tx.try_send(Outgoing::Text(error_text(format!(
-                    "too many messages: at most {} per second; extra messages are dropped",
-                    state.sessions.config.max_messages_per_second
-                ))));
+            if let Some(notice) = notice {
+                let _ = reply_tx.try_send(Outgoing::Text(notice));
             }
             continue;
         }
-        let replies = match serde_json::from_str::<ClientMessage>(&text) {
-            Ok(m) => handle(&session, &state, role, m),
-            Err(e) => vec![ServerMessage::Error {
-                message: format!("invalid message: {e}"),
-            }],
-        };
-        for r in replies {
-            if matches!(r, ServerMessage::Error { .. }) {
-                metrics.ws_messages_rejected.fetch_add(1, Ordering::Relaxed);
-            }
-            let text: Utf8Bytes = serde_json::to_string(&r).unwrap_or_default().into();
-            let _ = reply_tx.try_send(Outgoing::Text(text));
+        reply(&text, state, session, role, reply_tx);
+    }
+    Ending::Plain
+}
+
+/// Parses and handles one client message, handing the replies to the writer (errors counted
+/// as rejected messages).
+fn reply(
+    text: &str,
+    state: &AppState,
+    session: &Session,
+    role: Role,
+    reply_tx: &mpsc::Sender<Outgoing>,
+) {
+    let replies = match serde_json::from_str::<ClientMessage>(text) {
+        Ok(m) => handle(session, state, role, m),
+        Err(e) => vec![ServerMessage::Error {
+            message: format!("invalid message: {e}"),
+        }],
+    };
+    for r in replies {
+        if matches!(r, ServerMessage::Error { .. }) {
+            state
+                .metrics
+                .ws_messages_rejected
+                .fetch_add(1, Ordering::Relaxed);
         }
-    }
-    drop(reply_tx);
-    let _ = writer.await;
-    match ending {
-        Ending::Linger => tokio::time::sleep(CLOSE_LINGER).await,
-        Ending::AwaitPeerClose => await_peer_close(&mut stream).await,
-        Ending::Plain => {}
-    }
-    metrics.ws_clients.fetch_sub(1, Ordering::Relaxed);
-    if role == Role::Trainee {
-        session.trainees.fetch_sub(1, Ordering::Relaxed);
-        session.touch();
+        let text: Utf8Bytes = serde_json::to_string(&r).unwrap_or_default().into();
+        let _ = reply_tx.try_send(Outgoing::Text(text));
     }
 }
 
@@ -365,9 +449,9 @@ fn parse(msg: ClientMessage, notes: &mut Vec<String>) -> Result<Command, String>
                 seq,
                 ..StickInput::default()
             };
-            for (i, name, a) in [(LEFT, "left", &arms.left), (RIGHT, "right", &arms.right)] {
+            for (arm, a) in [(Arm::Left, &arms.left), (Arm::Right, &arms.right)] {
                 if let Some(a) = a {
-                    input.arms[i] = arm_sticks(name, a, notes)?;
+                    input.arms[arm.index()] = arm_sticks(arm_name(arm), a, notes)?;
                 }
             }
             if let Some(o) = &object {

@@ -91,9 +91,8 @@ pub fn mobility_block_general_lower(r: &Vector3<f64>, x: &Matrix6<f64>) -> Matri
 
 /// [`mobility_block_general`], the lower triangle only if `lower`. Products with a skew
 /// matrix as cross products: M·Sᵏ has rows mᵢ × rᵏ (mᵢᵀ·Sᵏ = (Sᵏᵀ·mᵢ)ᵀ = (mᵢ × rᵏ)ᵀ, for the
-/// rows mᵢ of M) and Sⁱ·M columns rⁱ × m_j. Inlined with `lower` a constant, the entries it
-/// does not store are never computed.
-#[inline(always)]
+/// rows mᵢ of M) and Sⁱ·M columns rⁱ × m_j. Where the compiler inlines it with `lower` a
+/// constant, the entries it does not store are never computed.
 fn mobility_general_impl(
     ri: &Vector3<f64>,
     rk: &Vector3<f64>,

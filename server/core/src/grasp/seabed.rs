@@ -78,7 +78,6 @@ struct DashpotSums {
 impl DashpotSums {
     /// Adds the dashpots of one corner at r from the COM: c_t along the seabed's x and y,
     /// c_n along z.
-    #[inline(always)]
     fn add(&mut self, r: &Vector3<f64>, c_t: f64, c_n: f64) {
         let tr = r * c_t;
         let nr = r * c_n;

@@ -168,7 +168,6 @@ trait Sweep {
 /// carry them (dgesvj keeps its norms by such updates throughout; Drmač & Veselić 2008,
 /// §3.2); they stay correct to about 10⁴ε relative, which is all the angle and the stopping
 /// test need, and the σ themselves are taken from the final vectors.
-#[inline(always)]
 fn sweep_until_quiet<S: Sweep>(
     problem: &mut S,
     l: usize,
@@ -207,7 +206,6 @@ fn sweep_until_quiet<S: Sweep>(
 /// r = √(δ² + 4γ²), h = |δ| + r and g = 2γ·sign δ, t = g/h, cos θ = √(h/2r) and
 /// sin θ = t·cos θ — one square root fewer on the critical path, and no overflow of ζ² when
 /// γ ≪ |δ|.
-#[inline(always)]
 fn rotation(alpha: f64, beta: f64, gamma: f64, tol2: f64) -> Option<(f64, f64, f64)> {
     if gamma * gamma <= tol2 * (alpha * beta) {
         return None;
@@ -226,7 +224,6 @@ fn rotation(alpha: f64, beta: f64, gamma: f64, tol2: f64) -> Option<(f64, f64, f
 /// A squared norm `old` after the rotation, given its update `new` (α − tγ or β + tγ, exact
 /// in exact arithmetic; GVL §8.6.4): `new`, or `fresh()` recomputed from the vector where
 /// the update cancels (as LAPACK dgesvj does).
-#[inline(always)]
 fn updated_norm(old: f64, new: f64, fresh: impl FnOnce() -> f64) -> f64 {
     if new < 1e-4 * old { fresh() } else { new }
 }
@@ -355,7 +352,6 @@ struct Fixed<const H: usize, const G: usize, const HG: usize, const N: usize> {
 }
 
 impl<const H: usize, const G: usize, const HG: usize, const N: usize> Sweep for Fixed<H, G, HG, N> {
-    #[inline(always)]
     fn refresh_norms(&mut self) {
         for (dg, ag) in self.d.iter_mut().zip(self.a.iter()) {
             for (dp, x) in dg.iter_mut().zip(ag) {
@@ -366,7 +362,6 @@ impl<const H: usize, const G: usize, const HG: usize, const N: usize> Sweep for 
 
     /// The vectors and their accumulator columns are copied out, rotated in registers and
     /// stored back.
-    #[inline(always)]
     fn rotate_pairs(&mut self, p: usize, q: usize, tol2: f64) -> bool {
         let mut rotated = false;
         for ((a, w), d) in self
@@ -396,7 +391,6 @@ impl<const H: usize, const G: usize, const HG: usize, const N: usize> Sweep for 
 }
 
 /// x·y summed lane by lane (even and odd entries), then the two lanes.
-#[inline(always)]
 fn dot_lanes<const H: usize>(x: &Lanes<H>, y: &Lanes<H>) -> f64 {
     let mut s = [0.0; 2];
     for (a, b) in x.iter().zip(y) {
@@ -407,7 +401,6 @@ fn dot_lanes<const H: usize>(x: &Lanes<H>, y: &Lanes<H>) -> f64 {
 }
 
 /// x ← c·x − s·y, y ← s·x + c·y, lane by lane.
-#[inline(always)]
 fn rotate_lanes<const H: usize>(x: &mut Lanes<H>, y: &mut Lanes<H>, c: f64, s: f64) {
     for (a, b) in x.iter_mut().zip(y.iter_mut()) {
         let (a0, a1, b0, b1) = (a[0], a[1], b[0], b[1]);
@@ -460,7 +453,6 @@ const fn sweep_pair(g: usize, n: usize) -> (usize, usize) {
 /// The player at seat `seat` in round `round` of a round-robin tournament of `players`
 /// (even): player 0 stays at seat 0, the others move one seat along per round; seats s and
 /// players − 1 − s play each other.
-#[inline(always)]
 const fn tournament_seat(seat: usize, round: usize, players: usize) -> usize {
     if seat == 0 {
         0
@@ -470,13 +462,11 @@ const fn tournament_seat(seat: usize, round: usize, players: usize) -> usize {
 }
 
 /// x·y.
-#[inline(always)]
 fn dot(x: &[f64], y: &[f64]) -> f64 {
     x.iter().zip(y).map(|(a, b)| a * b).sum()
 }
 
 /// x ← c·x − s·y, y ← s·x + c·y.
-#[inline(always)]
 fn rotate(x: &mut [f64], y: &mut [f64], c: f64, s: f64) {
     for (xi, yi) in x.iter_mut().zip(y.iter_mut()) {
         let (a, b) = (*xi, *yi);

@@ -3,6 +3,13 @@
 //! its Cholesky factor and the solve A ↦ M⁻¹A. Shared by the TOMM gradient
 //! ([`super::objective`]) and the damped pseudo-inverse of [`crate::redundancy`]; nothing here
 //! allocates.
+//!
+//! The Cholesky factor here sits beside [`crate::linalg::Ldlt`] because the two serve
+//! different shapes: k is chosen at run time (the task rows a caller selects, 1 to
+//! [`MAX_ROWS`]) and the factor takes a shift (M − σ₀²I, the definiteness test of the damped
+//! pseudo-inverse) and a pivot floor, while `Ldlt<N>` has its size fixed at compile time (N = 6 in
+//! the allocation-free 1 kHz step: constant loop bounds, N×N arrays and nalgebra's static
+//! matrices in and out).
 
 use super::objective::MAX_ROWS;
 

@@ -70,10 +70,27 @@ use crate::hydraulics::{Faults, HydraulicParams, N_ACT};
 use crate::kinematics::{self, KinData};
 use crate::model::Model;
 
-/// Index of the left arm in every per-arm array.
-pub const LEFT: usize = 0;
-/// Index of the right arm in every per-arm array.
-pub const RIGHT: usize = 1;
+/// One of the two arms. Per-arm arrays (`[T; 2]`) are indexed by [`Arm::index`], left first.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Arm {
+    /// The left arm (index 0).
+    Left,
+    /// The right arm (index 1).
+    Right,
+}
+
+impl Arm {
+    /// Both arms, left first (the order of every per-arm array).
+    pub const BOTH: [Arm; 2] = [Arm::Left, Arm::Right];
+
+    /// Index of this arm in every per-arm array: 0 left, 1 right.
+    pub const fn index(self) -> usize {
+        match self {
+            Arm::Left => 0,
+            Arm::Right => 1,
+        }
+    }
+}
 
 /// Integration parameters (each default in its doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -343,8 +360,8 @@ impl Simulation {
         };
         // Bases composed into the models: kinematics and dynamics come out in the world frame.
         let models = [
-            left.based_at(&params.arms[LEFT].base),
-            right.based_at(&params.arms[RIGHT].base),
+            left.based_at(&params.arms[Arm::Left.index()].base),
+            right.based_at(&params.arms[Arm::Right.index()].base),
         ];
         let mut sim = Simulation {
             models,
@@ -438,9 +455,9 @@ impl Simulation {
     pub fn params(&self) -> &SimParams {
         &self.params
     }
-    /// Fault injection of arm `arm` (0 left, 1 right); changes apply from the next step.
-    pub fn faults_mut(&mut self, arm: usize) -> &mut Faults {
-        &mut self.params.arms[arm.min(1)].faults
+    /// Fault injection of `arm`; changes apply from the next step.
+    pub fn faults_mut(&mut self, arm: Arm) -> &mut Faults {
+        &mut self.params.arms[arm.index()].faults
     }
     /// Simulated time since reset (s).
     pub fn time_s(&self) -> f64 {
@@ -450,21 +467,21 @@ impl Simulation {
     pub fn steps(&self) -> u64 {
         self.state.steps
     }
-    /// State of arm `arm` (0 left, 1 right).
-    pub fn arm(&self, arm: usize) -> &ArmState {
-        &self.state.arms[arm.min(1)]
+    /// State of `arm`.
+    pub fn arm(&self, arm: Arm) -> &ArmState {
+        &self.state.arms[arm.index()]
     }
     /// Object state.
     pub fn object(&self) -> &ObjectState {
         &self.state.object
     }
     /// World pose of arm `arm`'s end-effector (tool point, flange orientation).
-    pub fn end_effector(&self, arm: usize) -> Isometry3<f64> {
-        self.work[arm.min(1)].tool
+    pub fn end_effector(&self, arm: Arm) -> Isometry3<f64> {
+        self.work[arm.index()].tool
     }
     /// World-frame 6×6 Jacobian of arm `arm`'s tool point.
-    pub fn jacobian_world(&self, arm: usize) -> &Matrix6<f64> {
-        &self.work[arm.min(1)].jw
+    pub fn jacobian_world(&self, arm: Arm) -> &Matrix6<f64> {
+        &self.work[arm.index()].jw
     }
     /// Internal force/torque F_int (eq. 3.41; 6) while both jaws hold, else zeros.
     pub fn internal_wrench(&self) -> [f64; 6] {
@@ -494,8 +511,8 @@ impl Simulation {
     /// Grasp position error of arm `arm` while holding (m): the distance of the tool point
     /// from where the grasp fixes it on the object; 0 when not holding. The cheap half of
     /// [`Simulation::grasp_error`], for per-step monitoring.
-    pub fn grasp_position_error(&self, arm: usize) -> f64 {
-        let i = arm.min(1);
+    pub fn grasp_position_error(&self, arm: Arm) -> f64 {
+        let i = arm.index();
         let a = &self.state.arms[i];
         if !a.holding {
             return 0.0;
@@ -505,8 +522,8 @@ impl Simulation {
     }
 
     /// Grasp constraint error of arm `arm` while holding: (position m, orientation rad).
-    pub fn grasp_error(&self, arm: usize) -> (f64, f64) {
-        let i = arm.min(1);
+    pub fn grasp_error(&self, arm: Arm) -> (f64, f64) {
+        let i = arm.index();
         let a = &self.state.arms[i];
         if !a.holding {
             return (0.0, 0.0);

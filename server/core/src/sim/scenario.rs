@@ -13,7 +13,7 @@
 
 use nalgebra::{DMatrix, Point3, Vector3};
 
-use super::{ControlMethod, Input, LEFT, RIGHT, SimParams, Simulation};
+use super::{Arm, ControlMethod, Input, SimParams, Simulation};
 use crate::Error;
 use crate::grasp::GraspState;
 use crate::hydraulics::N_ACT;
@@ -163,14 +163,15 @@ pub fn ik_position(
     })
 }
 
-/// Postures of arm `arm` above its handle (`above_m` higher) and at it.
+/// Postures of `arm` above its handle (`above_m` higher) and at it.
 fn approach(
     params: &SimParams,
     model: &Model,
-    arm: usize,
+    arm: Arm,
     above_m: f64,
 ) -> Result<([f64; N_ACT], [f64; N_ACT]), Error> {
     let op = &params.object;
+    let arm = arm.index();
     let base = &params.arms[arm].base;
     let mut obj = op.initial_pose;
     obj.translation.vector.z -= op.mass_kg * 9.81 / (4.0 * op.contact_stiffness_n_m);
@@ -185,132 +186,145 @@ fn approach(
     Ok((pre, at))
 }
 
+/// Jaw command that opens the jaw fully.
+const OPEN: f64 = 1.0;
+/// Jaw command that closes the jaw fully.
+const CLOSE: f64 = -1.0;
+/// Both valves and jaw at rest.
+const REST: ArmCommand = ArmCommand::jaw(0.0);
+
 /// Builds scenario `name` for the two models.
 pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Error> {
     let params = SimParams::case_study(left, right)?;
-    let (desc, idx) = match SCENARIOS.iter().position(|(n, _)| *n == name) {
-        Some(i) => (SCENARIOS[i].1, i),
-        None => {
-            return Err(Error::InvalidParameter {
-                what: "scenario",
-                reason: format!("unknown scenario {name:?}"),
-            });
+    let Some(idx) = SCENARIOS.iter().position(|(n, _)| *n == name) else {
+        return Err(Error::InvalidParameter {
+            what: "scenario",
+            reason: format!("unknown scenario {name:?}"),
+        });
+    };
+    let (name, description) = SCENARIOS[idx];
+    let mut commanded_lift_m = None;
+    let segments = match idx {
+        0 => joint_sweep(),
+        1 => single_arm_load(&params, left)?,
+        _ => {
+            let mut segments = dual_grasp(&params, left, right)?;
+            if idx == 2 {
+                segments.extend(open_loop_lift());
+            } else {
+                let (lift, lift_m) = closed_loop_lift();
+                segments.extend(lift);
+                commanded_lift_m = Some(lift_m);
+            }
+            segments
         }
     };
-    let name: &'static str = SCENARIOS[idx].0;
-    let open = 1.0;
-    let close = -1.0;
-    let rest = ArmCommand::jaw(0.0);
-    let mut segments = Vec::new();
-    let mut commanded_lift_m = None;
-    match idx {
-        0 => {
-            // Each joint: +0.6 for 2 s, pause 1 s, −0.6 for 2 s, pause 1 s; then 4 s at rest.
-            for j in 0..N_ACT {
-                segments.push(Segment::open(
-                    "A",
-                    2.0,
-                    ArmCommand::valve(j, 0.6, 0.0),
-                    rest,
-                ));
-                segments.push(Segment::open("A", 1.0, rest, rest));
-                segments.push(Segment::open(
-                    "A",
-                    2.0,
-                    ArmCommand::valve(j, -0.6, 0.0),
-                    rest,
-                ));
-                segments.push(Segment::open("A", 1.0, rest, rest));
-            }
-            segments.push(Segment::open("B", 4.0, rest, rest));
-        }
-        1 => {
-            let (pre, at) = approach(&params, left, LEFT, 0.10)?;
-            segments.push(Segment::open(
-                "A",
-                6.0,
-                ArmCommand::JointTarget { q: pre, jaw: open },
-                rest,
-            ));
-            segments.push(Segment::open(
-                "A",
-                4.0,
-                ArmCommand::JointTarget { q: at, jaw: open },
-                rest,
-            ));
-            segments.push(Segment::open("B", 1.5, ArmCommand::jaw(close), rest));
-            segments.push(Segment::open("B", 3.5, rest, rest));
-            segments.push(Segment::open(
-                "C",
-                2.0,
-                ArmCommand::valve(1, 0.3, 0.0),
-                rest,
-            ));
-            segments.push(Segment::open("C", 4.0, rest, rest));
-            segments.push(Segment::open("D", 1.0, ArmCommand::jaw(open), rest));
-            segments.push(Segment::open("D", 4.0, rest, rest));
-        }
-        _ => {
-            let (lpre, lat) = approach(&params, left, LEFT, 0.10)?;
-            let (rpre, rat) = approach(&params, right, RIGHT, 0.10)?;
-            let tgt = |q: [f64; N_ACT], jaw: f64| ArmCommand::JointTarget { q, jaw };
-            segments.push(Segment::open("A", 6.0, tgt(lpre, open), tgt(rpre, open)));
-            segments.push(Segment::open("A", 4.0, tgt(lpre, open), tgt(rat, open)));
-            segments.push(Segment::open("A", 1.5, rest, ArmCommand::jaw(close)));
-            segments.push(Segment::open("A", 2.5, rest, rest));
-            segments.push(Segment::open("B", 4.0, tgt(lat, open), rest));
-            segments.push(Segment::open("B", 1.5, ArmCommand::jaw(close), rest));
-            if idx == 2 {
-                segments.push(Segment::open("B", 3.0, rest, rest));
-                // C: lift with the shoulders (signal 2) and elbows (signal 3) of both arms.
-                let lift = ArmCommand::Valves {
-                    valves: [0.0, 0.4, 0.2, 0.0, 0.0, 0.0],
-                    jaw: 0.0,
-                };
-                segments.push(Segment::open("C", 3.0, lift, lift));
-                segments.push(Segment::open("C", 2.0, rest, rest));
-                // D: move left: both swing joints the same way.
-                segments.push(Segment::open(
-                    "D",
-                    2.0,
-                    ArmCommand::valve(0, 0.4, 0.0),
-                    ArmCommand::valve(0, 0.4, 0.0),
-                ));
-                segments.push(Segment::open("D", 2.0, rest, rest));
-                segments.push(Segment::open(
-                    "E",
-                    1.0,
-                    ArmCommand::jaw(open),
-                    ArmCommand::jaw(open),
-                ));
-                segments.push(Segment::open("E", 4.0, rest, rest));
-            } else {
-                segments.push(Segment::open("B", 1.0, rest, rest));
-                segments.push(Segment::closed("B", 2.0, 0.0, [0.0; 6]));
-                let v = 0.05;
-                let t = 4.0;
-                commanded_lift_m = Some(v * t);
-                segments.push(Segment::closed("C", t, 0.0, [0.0, 0.0, v, 0.0, 0.0, 0.0]));
-                segments.push(Segment::closed("C", 2.0, 0.0, [0.0; 6]));
-                segments.push(Segment::closed("D", 2.0, 0.0, [0.0, v, 0.0, 0.0, 0.0, 0.0]));
-                segments.push(Segment::closed("D", 2.0, 0.0, [0.0; 6]));
-                segments.push(Segment::open(
-                    "E",
-                    1.0,
-                    ArmCommand::jaw(open),
-                    ArmCommand::jaw(open),
-                ));
-                segments.push(Segment::open("E", 4.0, rest, rest));
-            }
-        }
-    }
     Ok(Scenario {
         name,
-        description: desc,
+        description,
         params,
         segments,
         commanded_lift_m,
     })
+}
+
+/// Case study 1: each joint of the left arm +0.6 for 2 s, pause 1 s, −0.6 for 2 s, pause 1 s;
+/// then 4 s at rest.
+fn joint_sweep() -> Vec<Segment> {
+    let mut segments = Vec::new();
+    for j in 0..N_ACT {
+        segments.push(Segment::open(
+            "A",
+            2.0,
+            ArmCommand::valve(j, 0.6, 0.0),
+            REST,
+        ));
+        segments.push(Segment::open("A", 1.0, REST, REST));
+        segments.push(Segment::open(
+            "A",
+            2.0,
+            ArmCommand::valve(j, -0.6, 0.0),
+            REST,
+        ));
+        segments.push(Segment::open("A", 1.0, REST, REST));
+    }
+    segments.push(Segment::open("B", 4.0, REST, REST));
+    segments
+}
+
+/// Case study 2: the left arm reaches the handle (A), grabs (B), lifts with the shoulder open
+/// loop and holds (C), releases (D).
+fn single_arm_load(params: &SimParams, left: &Model) -> Result<Vec<Segment>, Error> {
+    let (pre, at) = approach(params, left, Arm::Left, 0.10)?;
+    Ok(vec![
+        Segment::open(
+            "A",
+            6.0,
+            ArmCommand::JointTarget { q: pre, jaw: OPEN },
+            REST,
+        ),
+        Segment::open("A", 4.0, ArmCommand::JointTarget { q: at, jaw: OPEN }, REST),
+        Segment::open("B", 1.5, ArmCommand::jaw(CLOSE), REST),
+        Segment::open("B", 3.5, REST, REST),
+        Segment::open("C", 2.0, ArmCommand::valve(1, 0.3, 0.0), REST),
+        Segment::open("C", 4.0, REST, REST),
+        Segment::open("D", 1.0, ArmCommand::jaw(OPEN), REST),
+        Segment::open("D", 4.0, REST, REST),
+    ])
+}
+
+/// Case studies 3 and 4, stages A–B: the right arm reaches and grabs its handle, then the
+/// left arm.
+fn dual_grasp(params: &SimParams, left: &Model, right: &Model) -> Result<Vec<Segment>, Error> {
+    let (lpre, lat) = approach(params, left, Arm::Left, 0.10)?;
+    let (rpre, rat) = approach(params, right, Arm::Right, 0.10)?;
+    let tgt = |q: [f64; N_ACT], jaw: f64| ArmCommand::JointTarget { q, jaw };
+    Ok(vec![
+        Segment::open("A", 6.0, tgt(lpre, OPEN), tgt(rpre, OPEN)),
+        Segment::open("A", 4.0, tgt(lpre, OPEN), tgt(rat, OPEN)),
+        Segment::open("A", 1.5, REST, ArmCommand::jaw(CLOSE)),
+        Segment::open("A", 2.5, REST, REST),
+        Segment::open("B", 4.0, tgt(lat, OPEN), REST),
+        Segment::open("B", 1.5, ArmCommand::jaw(CLOSE), REST),
+    ])
+}
+
+/// Case study 3 after the grasp: lift open loop (C), move left (D), release (E).
+fn open_loop_lift() -> Vec<Segment> {
+    // C: lift with the shoulders (signal 2) and elbows (signal 3) of both arms.
+    let lift = ArmCommand::Valves {
+        valves: [0.0, 0.4, 0.2, 0.0, 0.0, 0.0],
+        jaw: 0.0,
+    };
+    // D: move left: both swing joints the same way.
+    let swing = ArmCommand::valve(0, 0.4, 0.0);
+    vec![
+        Segment::open("B", 3.0, REST, REST),
+        Segment::open("C", 3.0, lift, lift),
+        Segment::open("C", 2.0, REST, REST),
+        Segment::open("D", 2.0, swing, swing),
+        Segment::open("D", 2.0, REST, REST),
+        Segment::open("E", 1.0, ArmCommand::jaw(OPEN), ArmCommand::jaw(OPEN)),
+        Segment::open("E", 4.0, REST, REST),
+    ]
+}
+
+/// Case study 4 after the grasp: switch to the cooperative closed loop, lift (C), move left
+/// (D), release (E). Returns the segments and the commanded lift (m).
+fn closed_loop_lift() -> (Vec<Segment>, f64) {
+    let v = 0.05;
+    let t = 4.0;
+    let segments = vec![
+        Segment::open("B", 1.0, REST, REST),
+        Segment::closed("B", 2.0, 0.0, [0.0; 6]),
+        Segment::closed("C", t, 0.0, [0.0, 0.0, v, 0.0, 0.0, 0.0]),
+        Segment::closed("C", 2.0, 0.0, [0.0; 6]),
+        Segment::closed("D", 2.0, 0.0, [0.0, v, 0.0, 0.0, 0.0, 0.0]),
+        Segment::closed("D", 2.0, 0.0, [0.0; 6]),
+        Segment::open("E", 1.0, ArmCommand::jaw(OPEN), ArmCommand::jaw(OPEN)),
+        Segment::open("E", 4.0, REST, REST),
+    ];
+    (segments, v * t)
 }
 
 impl Scenario {
@@ -327,14 +341,15 @@ impl Scenario {
             speed_scale: 1.0,
             ..Input::default()
         };
-        for (i, cmd) in seg.arms.iter().enumerate() {
+        for (arm, cmd) in Arm::BOTH.into_iter().zip(&seg.arms) {
+            let i = arm.index();
             match *cmd {
                 ArmCommand::Valves { valves, jaw } => {
                     input.arms[i].valves = valves;
                     input.arms[i].jaw = jaw;
                 }
                 ArmCommand::JointTarget { q, jaw } => {
-                    let a = sim.arm(i);
+                    let a = sim.arm(arm);
                     let acts = &sim.params().arms[i].hydraulics.actuators;
                     let r: [f64; N_ACT] = core::array::from_fn(|j| {
                         let lim = 0.5 * acts[j].nominal_speed_rad_s;
@@ -433,7 +448,7 @@ pub fn run(
         for _ in 0..n {
             let input = sc.input_at(&sim, seg, sim.time_s());
             sim.step(&input);
-            for a in 0..2 {
+            for a in Arm::BOTH {
                 let arm = sim.arm(a);
                 for j in 0..N_ACT {
                     s.peak_line_pressure_pa =

@@ -3,7 +3,7 @@
 use std::io::{self, Write};
 
 use seaarms_core::hydraulics::N_ACT;
-use seaarms_core::sim::{LEFT, RIGHT, Simulation};
+use seaarms_core::sim::{Arm, Simulation};
 
 use crate::csv_out::{CsvOut, Field};
 
@@ -48,8 +48,8 @@ const WRENCH: [&str; 6] = ["fx", "fy", "fz", "tx", "ty", "tz"];
 impl SessionRow {
     /// The row of the simulation's current state.
     pub fn from_sim(sim: &Simulation) -> SessionRow {
-        let arm = |i: usize| {
-            let a = sim.arm(i);
+        let arm = |arm: Arm| {
+            let a = sim.arm(arm);
             ArmRow {
                 q: a.q,
                 qd: a.qd,
@@ -63,7 +63,7 @@ impl SessionRow {
         let o = sim.object().pose.translation.vector;
         SessionRow {
             t_s: sim.time_s(),
-            arms: [arm(LEFT), arm(RIGHT)],
+            arms: Arm::BOTH.map(arm),
             object_xyz: [o.x, o.y, o.z],
             internal: sim.internal_wrench(),
             grasp: sim.grasp_state().as_str(),

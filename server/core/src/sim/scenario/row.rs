@@ -7,7 +7,7 @@ use nalgebra::{DMatrix, Isometry3};
 use crate::grasp::GraspState;
 use crate::hydraulics::N_ACT;
 use crate::manipulability::{dual_measures, measures};
-use crate::sim::Simulation;
+use crate::sim::{Arm, Simulation};
 
 /// One value of a [`Row`].
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -157,8 +157,9 @@ pub fn row(sim: &Simulation, stage: &'static str) -> Row {
     let mut yoshikawa = [0.0; 2];
     let mut isotropy = [0.0; 2];
     let mut jt: Vec<DMatrix<f64>> = Vec::with_capacity(2);
-    for i in 0..2 {
-        let a = sim.arm(i);
+    for arm in Arm::BOTH {
+        let i = arm.index();
+        let a = sim.arm(arm);
         q[i] = a.q;
         qd[i] = a.qd;
         u[i] = a.spool;
@@ -166,7 +167,7 @@ pub fn row(sim: &Simulation, stage: &'static str) -> Row {
         p_out[i] = a.p_out;
         contact[i] = a.contact_wrench;
         jaw_m[i] = a.jaw_opening_m;
-        let j = sim.jacobian_world(i);
+        let j = sim.jacobian_world(arm);
         let jtr = DMatrix::from_fn(3, N_ACT, |r, c| j[(r, c)]);
         if let Ok(m) = measures(&jtr) {
             yoshikawa[i] = m.yoshikawa;

@@ -299,14 +299,27 @@ fn check_step(what: &'static str, start: f64, end: f64, step: f64) -> Result<usi
             reason: "start ≤ end, step > 0, all finite".into(),
         });
     }
-    let n = ((end - start) / step + 1e-9).floor() as usize + 1;
-    if n > MAX_ROWS {
+    // Counted in f64 (finite inputs, step > 0: n ≥ 1 or +∞, never NaN): a huge span over a
+    // tiny step is refused, not overflowed.
+    let n = ((end - start) / step + 1e-9).floor() + 1.0;
+    if n > MAX_ROWS as f64 {
         return Err(Error::InvalidParameter {
             what,
             reason: format!("more than {MAX_ROWS} rows"),
         });
     }
-    Ok(n)
+    Ok(n as usize)
+}
+
+/// `series` series of up to `rows` rows each: at most [`MAX_ROWS`] rows in all.
+fn check_total(what: &'static str, series: usize, rows: usize) -> Result<(), Error> {
+    if series.saturating_mul(rows) > MAX_ROWS {
+        return Err(Error::InvalidParameter {
+            what,
+            reason: format!("{series} series of {rows} rows: more than {MAX_ROWS} rows in all"),
+        });
+    }
+    Ok(())
 }
 
 fn check_finite(what: &'static str, v: &[f64]) -> Result<(), Error> {
@@ -369,6 +382,7 @@ impl Rig<'_> {
     fn sweep_x(&self, spec: &SweepX) -> Result<Vec<StudyRow>, Error> {
         let n = check_step("x sweep", spec.start, spec.end, spec.step)?;
         check_finite("z_levels", &spec.z_levels)?;
+        check_total("z_levels", spec.z_levels.len(), n)?;
         let rot = nominal_orientation(self.model);
         let mut rows = Vec::new();
         for &z in &spec.z_levels {
@@ -390,6 +404,7 @@ impl Rig<'_> {
     fn sweep_z(&self, spec: &SweepZ) -> Result<Vec<StudyRow>, Error> {
         let n = check_step("z sweep", spec.start, spec.end, spec.step)?;
         check_finite("x_levels", &spec.x_levels)?;
+        check_total("x_levels", spec.x_levels.len(), n)?;
         let rot = nominal_orientation(self.model);
         let mut rows = Vec::new();
         for &x in &spec.x_levels {
@@ -417,6 +432,7 @@ impl Rig<'_> {
             spec.step_deg,
         )?;
         let ny = check_step("yaw range", spec.yaw_deg[0], spec.yaw_deg[1], spec.step_deg)?;
+        check_total("points", spec.points.len(), np + ny)?;
         let nominal = nominal_orientation(self.model);
         let mut rows = Vec::new();
         for (name, p) in &spec.points {
@@ -504,6 +520,7 @@ pub fn dual_distance(
         spec.swing_max_deg,
         spec.step_deg,
     )?;
+    check_total("x_levels", spec.x_levels.len(), n)?;
     let rot = nominal_orientation(model);
     let offset = Vector3::new(0.0, setup.left_base_y_m, 0.0);
     let mut rows = Vec::new();

@@ -586,15 +586,68 @@ fn server() -> SyncServer {
     })
 }
 
-/// A live session of `srv` with a trainee socket on it: (id, control token, socket).
-fn live_session(srv: &SyncServer) -> (String, String, Ws) {
+/// A live session with a trainee and an observer connection on it.
+struct LiveSession {
+    id: String,
+    token: String,
+    trainee: Ws,
+    observer: Ws,
+}
+
+fn live_session(srv: &SyncServer) -> LiveSession {
     srv.block_on(async {
         let (id, token) = common::new_session(&srv.server).await;
-        let ws = common::connect(&srv.server, &id, &format!("token={token}"))
-            .await
-            .unwrap();
-        (id, token, ws)
+        let mut sockets = Vec::new();
+        for query in [
+            format!("token={token}"),
+            format!("token={token}&role=observer"),
+        ] {
+            sockets.push(common::connect(&srv.server, &id, &query).await.unwrap());
+        }
+        let observer = sockets.pop().unwrap();
+        let trainee = sockets.pop().unwrap();
+        LiveSession {
+            id,
+            token,
+            trainee,
+            observer,
+        }
     })
+}
+
+/// A server with a live session whose trainee socket is read after every case.
+struct Watched {
+    srv: SyncServer,
+    id: String,
+    token: String,
+    ws: std::cell::RefCell<Ws>,
+    seq: std::cell::Cell<u64>,
+}
+
+impl Watched {
+    fn start() -> Watched {
+        let srv = server();
+        let LiveSession {
+            id, token, trainee, ..
+        } = live_session(&srv);
+        Watched {
+            srv,
+            id,
+            token,
+            ws: std::cell::RefCell::new(trainee),
+            seq: std::cell::Cell::new(0),
+        }
+    }
+
+    /// The session streams on: `frames` new finite state frames with increasing `seq`.
+    fn streams_on(&self, frames: usize, after: &str) -> Result<(), TestCaseError> {
+        let mut seq = self.seq.get();
+        let r = self
+            .srv
+            .block_on(keeps_streaming(&mut self.ws.borrow_mut(), &mut seq, frames));
+        self.seq.set(seq);
+        r.map_err(|e| TestCaseError::fail(format!("session after {after}: {e}")))
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -789,39 +842,65 @@ fn opt_num(lo: f64, hi: f64) -> BoxedStrategy<Option<J>> {
     option::of((lo..hi).prop_map(num)).boxed()
 }
 
-fn sweep_x_params() -> BoxedStrategy<J> {
-    let f = opt_num;
-    (
-        levels(-0.5, 1.0),
-        f(0.3, 0.8),
-        f(0.05, 0.3),
-        f(0.8, 2.0),
-        f(-1.0, 2.0),
-    )
-        .prop_map(|(z, x0, dx, x1, y)| {
-            obj(vec![
-                ("z_levels", Some(z)),
-                ("x_start", x0),
-                ("x_step", dx),
-                ("x_end", x1),
-                ("left_base_y_m", y),
-            ])
+/// Study parameters made of one list of levels (key, range) and optional numbers (key,
+/// range each).
+type LevelShape = (
+    &'static str,
+    (f64, f64),
+    &'static [(&'static str, f64, f64)],
+);
+
+const SWEEP_X: LevelShape = (
+    "z_levels",
+    (-0.5, 1.0),
+    &[
+        ("x_start", 0.3, 0.8),
+        ("x_step", 0.05, 0.3),
+        ("x_end", 0.8, 2.0),
+        ("left_base_y_m", -1.0, 2.0),
+    ],
+);
+const SWEEP_Z: LevelShape = (
+    "x_levels",
+    (0.5, 1.6),
+    &[
+        ("z_start", -0.5, 0.2),
+        ("z_step", 0.05, 0.3),
+        ("z_end", 0.2, 1.0),
+    ],
+);
+const DISTANCE: LevelShape = (
+    "x_levels",
+    (0.5, 1.6),
+    &[
+        ("z", -0.5, 0.8),
+        ("swing_max_deg", 0.0, 30.0),
+        ("step_deg", 2.0, 10.0),
+        ("left_base_y_m", -1.0, 2.0),
+    ],
+);
+
+fn level_params((levels_key, range, fields): LevelShape) -> BoxedStrategy<J> {
+    let numbers: Vec<_> = fields.iter().map(|(_, lo, hi)| opt_num(*lo, *hi)).collect();
+    (levels(range.0, range.1), numbers)
+        .prop_map(move |(lv, values)| {
+            let mut kv = vec![(levels_key, Some(lv))];
+            kv.extend(fields.iter().map(|f| f.0).zip(values));
+            obj(kv)
         })
         .boxed()
 }
 
+fn sweep_x_params() -> BoxedStrategy<J> {
+    level_params(SWEEP_X)
+}
+
 fn sweep_z_params() -> BoxedStrategy<J> {
-    let f = opt_num;
-    (levels(0.5, 1.6), f(-0.5, 0.2), f(0.05, 0.3), f(0.2, 1.0))
-        .prop_map(|(x, z0, dz, z1)| {
-            obj(vec![
-                ("x_levels", Some(x)),
-                ("z_start", z0),
-                ("z_step", dz),
-                ("z_end", z1),
-            ])
-        })
-        .boxed()
+    level_params(SWEEP_Z)
+}
+
+fn distance_params() -> BoxedStrategy<J> {
+    level_params(DISTANCE)
 }
 
 fn pitch_yaw_params() -> BoxedStrategy<J> {
@@ -847,27 +926,6 @@ fn pitch_yaw_params() -> BoxedStrategy<J> {
                 ("points", Some(J::Arr(points))),
                 ("pitch_deg", pitch.map(|(a, b)| nums(&[a, b]))),
                 ("yaw_deg", yaw.map(|(a, b)| nums(&[a, b]))),
-                ("step_deg", step),
-                ("left_base_y_m", y),
-            ])
-        })
-        .boxed()
-}
-
-fn distance_params() -> BoxedStrategy<J> {
-    let f = opt_num;
-    (
-        levels(0.5, 1.6),
-        f(-0.5, 0.8),
-        f(0.0, 30.0),
-        f(2.0, 10.0),
-        f(-1.0, 2.0),
-    )
-        .prop_map(|(x, z, swing, step, y)| {
-            obj(vec![
-                ("x_levels", Some(x)),
-                ("z", z),
-                ("swing_max_deg", swing),
                 ("step_deg", step),
                 ("left_base_y_m", y),
             ])
@@ -1266,10 +1324,8 @@ fn session_creation_bodies() {
 
 #[test]
 fn session_action_bodies() {
-    let srv = server();
-    let (id, token, ws) = live_session(&srv);
-    let ws = std::cell::RefCell::new(ws);
-    let last_seq = std::cell::Cell::new(0u64);
+    let w = Watched::start();
+    let (srv, id, token) = (&w.srv, &w.id, &w.token);
     let valid_token = prop_oneof![
         6 => Just(Auth::Teacher),
         3 => Just(Auth::Control),
@@ -1283,12 +1339,9 @@ fn session_action_bodies() {
     )| {
         let target = which.unwrap_or_else(|| id.clone());
         let path = format!("/api/sessions/{}/actions", pct(&target));
-        request(&srv, "POST", &path, &h, &token, body, true)?;
+        request(srv, "POST", &path, &h, token, body, true)?;
         // The session streams on, finite, whatever the action (faults of any allowed size).
-        let mut seq = last_seq.get();
-        srv.block_on(keeps_streaming(&mut ws.borrow_mut(), &mut seq, 2))
-            .map_err(|e| TestCaseError::fail(format!("session after {path}: {e}")))?;
-        last_seq.set(seq);
+        w.streams_on(2, &path)?;
     });
 }
 
@@ -1333,10 +1386,8 @@ fn query() -> BoxedStrategy<String> {
 
 #[test]
 fn paths_and_queries() {
-    let srv = server();
-    let (id, token, ws) = live_session(&srv);
-    let ws = std::cell::RefCell::new(ws);
-    let last_seq = std::cell::Cell::new(0u64);
+    let w = Watched::start();
+    let (srv, id, token) = (&w.srv, &w.id, &w.token);
     let teacher = Hdrs {
         content_type: None,
         origin: OriginKind::None,
@@ -1353,23 +1404,20 @@ fn paths_and_queries() {
         // A DELETE of the live session with a valid token would end it: those get a
         // wrong token, so the property "a refused DELETE leaves the session live" is tested.
         let seg = if own && !seg.is_empty() { id.clone() } else { pct(&seg) };
-        if method == "DELETE" && seg == id {
+        if method == "DELETE" && seg == *id {
             h.auth = Auth::Raw(format!("Bearer {TEACHER}x").into_bytes());
         }
         let path = format!("{}{q}", template.replace("{}", &seg));
-        let r = request(&srv, method, &path, &h, &token, Vec::new(), false)?;
+        let r = request(srv, method, &path, &h, token, Vec::new(), false)?;
         if method == "GET" && template == "/api/robots/{}" && r.status == 200 {
             prop_assert!(ROBOTS.contains(&seg.as_str()), "{}", r.describe());
         }
         // The session is live and streaming after every request.
-        let live = request(&srv, "GET", &format!("/api/sessions/{id}"), &teacher, "none", Vec::new(), false)?;
+        let live = request(srv, "GET", &format!("/api/sessions/{id}"), &teacher, "none", Vec::new(), false)?;
         prop_assert_eq!(live.status, 200, "{}", live.describe());
         let summary = live.json().unwrap_or_default();
         prop_assert_eq!(summary["status"].as_str(), Some("live"), "{}", live.describe());
-        let mut seq = last_seq.get();
-        srv.block_on(keeps_streaming(&mut ws.borrow_mut(), &mut seq, 1))
-            .map_err(|e| TestCaseError::fail(format!("session after {method} {path}: {e}")))?;
-        last_seq.set(seq);
+        w.streams_on(1, &format!("{method} {path}"))?;
     });
 }
 
@@ -1455,14 +1503,9 @@ async fn send_frame(ws: &mut Ws, f: &Frame) -> Result<(), String> {
 #[test]
 fn ws_client_messages() {
     let srv = server();
-    let (id, token, trainee) = live_session(&srv);
-    let observer = srv
-        .block_on(common::connect(
-            &srv.server,
-            &id,
-            &format!("token={token}&role=observer"),
-        ))
-        .unwrap();
+    let LiveSession {
+        trainee, observer, ..
+    } = live_session(&srv);
     let socks = std::cell::RefCell::new([(trainee, 0u64), (observer, 0u64)]);
     proptest!(config(600), |(frames in vec((ws_frame(), 0usize..2), 1..4))| {
         let mut socks = socks.borrow_mut();
@@ -1497,15 +1540,13 @@ async fn close_code_of(ws: &mut Ws) -> Result<Option<u16>, String> {
 #[test]
 fn ws_oversize_messages_close_1009_and_the_session_streams_on() {
     let srv = server();
-    let (id, token, first) = live_session(&srv);
-    let observer = srv
-        .block_on(common::connect(
-            &srv.server,
-            &id,
-            &format!("token={token}&role=observer"),
-        ))
-        .unwrap();
-    let state = std::cell::RefCell::new((Some(first), observer, 0u64));
+    let LiveSession {
+        id,
+        token,
+        trainee,
+        observer,
+    } = live_session(&srv);
+    let state = std::cell::RefCell::new((Some(trainee), observer, 0u64));
     proptest!(config(16), |(
         len in prop_oneof![
             (MAX_WS_MESSAGE_BYTES + 1)..(4 * MAX_WS_MESSAGE_BYTES),

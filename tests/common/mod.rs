@@ -208,3 +208,269 @@ pub async fn state_after(ws: &mut Ws, t_min: f64) -> Value {
         }
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// Synchronous harness for the property tests (tests/fuzz_rest.rs, tests/fuzz_ws.rs):
+// proptest runs its cases on the test thread, so the server lives on a runtime built once
+// and the async client calls run through `block_on`.
+// ---------------------------------------------------------------------------------------
+
+/// A server on its own multi-threaded runtime, for synchronous tests.
+pub struct SyncServer {
+    /// The runtime the server (and every client call) runs on.
+    pub rt: tokio::runtime::Runtime,
+    /// The server.
+    pub server: Server,
+    /// `/api/openapi.json` as the server serves it.
+    pub openapi: Value,
+}
+
+impl SyncServer {
+    /// Starts a server on port 0 with `tweak` applied to the configuration.
+    pub fn start(tweak: impl FnOnce(&mut seaarms::config::ServeConfig)) -> SyncServer {
+        let rt = tokio::runtime::Builder::new_multi_thread()
+            .worker_threads(2)
+            .enable_all()
+            .build()
+            .unwrap();
+        let server = rt.block_on(start_with(temp_dir(), tweak));
+        let openapi = rt.block_on(async {
+            reqwest::get(format!("{}/api/openapi.json", server.base))
+                .await
+                .unwrap()
+                .json::<Value>()
+                .await
+                .unwrap()
+        });
+        SyncServer {
+            rt,
+            server,
+            openapi,
+        }
+    }
+
+    /// Runs a future to completion on the server's runtime.
+    pub fn block_on<F: std::future::Future>(&self, f: F) -> F::Output {
+        self.rt.block_on(f)
+    }
+
+    /// The 5xx statuses `/api/openapi.json` documents for `method` on `path` (a concrete
+    /// path, matched against the spec's `{param}` templates; `{path}` matches the rest).
+    pub fn documented_5xx(&self, method: &str, path: &str) -> Vec<u16> {
+        let path = path.split('?').next().unwrap_or(path);
+        let Some(paths) = self.openapi["paths"].as_object() else {
+            return Vec::new();
+        };
+        for (template, ops) in paths {
+            if !template_matches(template, path) {
+                continue;
+            }
+            let Some(responses) = ops[method.to_ascii_lowercase()]["responses"].as_object() else {
+                continue;
+            };
+            return responses
+                .keys()
+                .filter_map(|k| k.parse::<u16>().ok())
+                .filter(|s| *s >= 500)
+                .collect();
+        }
+        Vec::new()
+    }
+
+    /// `GET /healthz` answers 200 `ok` (the server did not die or wedge).
+    pub fn healthy(&self) -> Result<(), String> {
+        self.block_on(async {
+            let r = reqwest::Client::new()
+                .get(format!("{}/healthz", self.server.base))
+                .timeout(Duration::from_secs(10))
+                .send()
+                .await
+                .map_err(|e| format!("/healthz: {e}"))?;
+            let status = r.status().as_u16();
+            let text = r.text().await.map_err(|e| format!("/healthz body: {e}"))?;
+            if status == 200 && text == "ok" {
+                Ok(())
+            } else {
+                Err(format!("/healthz answered {status}: {text}"))
+            }
+        })
+    }
+}
+
+fn template_matches(template: &str, path: &str) -> bool {
+    let t: Vec<&str> = template.split('/').collect();
+    let p: Vec<&str> = path.split('/').collect();
+    for (i, seg) in t.iter().enumerate() {
+        if *seg == "{path}" {
+            return p.len() > i;
+        }
+        match p.get(i) {
+            Some(ps) if seg.starts_with('{') || seg == ps => {}
+            _ => return false,
+        }
+    }
+    t.len() == p.len()
+}
+
+/// An HTTP answer, read whole.
+#[derive(Debug, Clone)]
+pub struct Reply {
+    /// Status code.
+    pub status: u16,
+    /// `Content-Type`, when sent.
+    pub content_type: Option<String>,
+    /// Body bytes.
+    pub body: Vec<u8>,
+}
+
+impl Reply {
+    /// The body as JSON, when it is.
+    pub fn json(&self) -> Option<Value> {
+        serde_json::from_slice(&self.body).ok()
+    }
+
+    /// A short description for failure messages.
+    pub fn describe(&self) -> String {
+        let text = String::from_utf8_lossy(&self.body);
+        let cut: String = text.chars().take(400).collect();
+        format!("{} ({:?}): {cut}", self.status, self.content_type)
+    }
+
+    /// An error answer (4xx/5xx) is `application/json` with a string `error` field.
+    pub fn check_error_body(&self) -> Result<(), String> {
+        if self.status < 400 {
+            return Ok(());
+        }
+        let json_type = self
+            .content_type
+            .as_deref()
+            .is_some_and(|c| c.starts_with("application/json"));
+        let ok = json_type && self.json().is_some_and(|v| v["error"].is_string());
+        if ok {
+            Ok(())
+        } else {
+            Err(format!(
+                "error without a JSON `error` body: {}",
+                self.describe()
+            ))
+        }
+    }
+}
+
+/// Sends one request (raw body bytes, headers as given; values that are not valid header
+/// bytes are skipped) and reads the answer; `Err` when the connection fails or the
+/// answer takes more than 60 s (a hang guard, not a speed check).
+pub async fn send(
+    http: &reqwest::Client,
+    method: &str,
+    url: &str,
+    headers: &[(String, Vec<u8>)],
+    body: Option<Vec<u8>>,
+) -> Result<Reply, String> {
+    let method = reqwest::Method::from_bytes(method.as_bytes()).map_err(|e| e.to_string())?;
+    let mut req = http.request(method, url).timeout(Duration::from_secs(60));
+    for (k, v) in headers {
+        if let (Ok(name), Ok(value)) = (
+            reqwest::header::HeaderName::from_bytes(k.as_bytes()),
+            reqwest::header::HeaderValue::from_bytes(v),
+        ) {
+            req = req.header(name, value);
+        }
+    }
+    if let Some(b) = body {
+        req = req.body(b);
+    }
+    let resp = req.send().await.map_err(|e| format!("{url}: {e:?}"))?;
+    let status = resp.status().as_u16();
+    let content_type = resp
+        .headers()
+        .get(reqwest::header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+        .map(str::to_string);
+    let body = resp
+        .bytes()
+        .await
+        .map_err(|e| format!("{url} body: {e}"))?
+        .to_vec();
+    Ok(Reply {
+        status,
+        content_type,
+        body,
+    })
+}
+
+/// JSON paths (object keys) whose value may be `null` in a state frame: no dual ellipsoid
+/// unless both jaws hold, and no condition number at a singularity (protocol.rs).
+const NULLABLE_STATE_KEYS: &[&str] = &["dual", "condition_number"];
+
+/// Checks a state frame: every number finite (serde_json writes NaN and ±∞ as `null`, so a
+/// `null` outside [`NULLABLE_STATE_KEYS`] is a non-finite value).
+pub fn check_state_finite(frame: &Value) -> Result<(), String> {
+    fn walk(v: &Value, key: &str, path: &mut String) -> Result<(), String> {
+        match v {
+            Value::Null if !NULLABLE_STATE_KEYS.contains(&key) => {
+                Err(format!("state frame has null (non-finite) at {path}"))
+            }
+            Value::Number(n) if n.as_f64().is_none_or(|f| !f.is_finite()) => {
+                Err(format!("state frame has non-finite number at {path}"))
+            }
+            Value::Array(a) => {
+                for (i, x) in a.iter().enumerate() {
+                    let len = path.len();
+                    path.push_str(&format!("[{i}]"));
+                    walk(x, key, path)?;
+                    path.truncate(len);
+                }
+                Ok(())
+            }
+            Value::Object(o) => {
+                for (k, x) in o {
+                    let len = path.len();
+                    path.push('.');
+                    path.push_str(k);
+                    walk(x, k, path)?;
+                    path.truncate(len);
+                }
+                Ok(())
+            }
+            _ => Ok(()),
+        }
+    }
+    walk(frame, "", &mut String::new())
+}
+
+/// Reads the socket until `frames` new state frames have arrived (within 5 s each): every
+/// text message is JSON with a known `type`, state frames have strictly increasing `seq`
+/// (above `last_seq`, which is updated) and are finite. `Err` describes what broke.
+pub async fn keeps_streaming(ws: &mut Ws, last_seq: &mut u64, frames: usize) -> Result<(), String> {
+    let mut seen = 0;
+    while seen < frames {
+        let msg = tokio::time::timeout(Duration::from_secs(5), ws.next())
+            .await
+            .map_err(|_| format!("no message for 5 s after seq {last_seq}"))?;
+        let text = match msg {
+            Some(Ok(Message::Text(t))) => t,
+            Some(Ok(Message::Ping(_) | Message::Pong(_))) => continue,
+            other => return Err(format!("socket ended or sent {other:?}")),
+        };
+        let v: Value =
+            serde_json::from_str(&text).map_err(|e| format!("non-JSON message ({e}): {text}"))?;
+        match v["type"].as_str() {
+            Some("state") => {
+                let seq = v["seq"]
+                    .as_u64()
+                    .ok_or_else(|| format!("state frame without seq: {text}"))?;
+                if seq <= *last_seq {
+                    return Err(format!("state seq {seq} after {last_seq}"));
+                }
+                check_state_finite(&v)?;
+                *last_seq = seq;
+                seen += 1;
+            }
+            Some("error") if v["message"].is_string() => {}
+            Some("pong" | "message" | "hello") => {}
+            _ => return Err(format!("unexpected message: {text}")),
+        }
+    }
+    Ok(())
+}

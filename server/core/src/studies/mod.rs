@@ -191,14 +191,16 @@ fn check_step(what: &'static str, start: f64, end: f64, step: f64) -> Result<usi
             reason: "start ≤ end, step > 0, all finite".into(),
         });
     }
-    let n = ((end - start) / step + 1e-9).floor() as usize + 1;
-    if n > MAX_ROWS {
+    // Counted in f64 and compared before the cast: a huge span over a tiny step would
+    // saturate `as usize` and wrap the `+ 1` to 0 rows.
+    let n = ((end - start) / step + 1e-9).floor() + 1.0;
+    if !(n <= MAX_ROWS as f64) {
         return Err(Error::InvalidParameter {
             what,
             reason: format!("more than {MAX_ROWS} rows"),
         });
     }
-    Ok(n)
+    Ok(n as usize)
 }
 
 fn check_finite(what: &'static str, v: &[f64]) -> Result<(), Error> {
@@ -439,4 +441,19 @@ pub fn dual_distance(
         }
     }
     Ok(rows)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn row_counts_are_exact_and_huge_ones_are_refused() {
+        // 0, 0.1, …, 1.0: eleven rows (the 1e-9 guard keeps the end point).
+        assert!(matches!(check_step("x", 0.0, 1.0, 0.1), Ok(11)));
+        // A span of 2e300 over a step of 1e-300 once saturated the cast and wrapped to 0 rows.
+        assert!(check_step("x", -1e300, 1e300, 1e-300).is_err());
+        assert!(check_step("x", 0.0, MAX_ROWS as f64, 1.0).is_err());
+        assert!(matches!(check_step("x", 0.0, (MAX_ROWS - 1) as f64, 1.0), Ok(n) if n == MAX_ROWS));
+    }
 }

@@ -42,14 +42,14 @@
 //!   pairs; and
 //! * slices for every other shape ([`Slices`]).
 //!
-//! The fixed-size form is kept because one generic slice path misses the analysis budget
-//! (≤ 5 µs for a 6-DOF arm). Such a path was measured and not kept (vectors in zero-padded
-//! blocks of six, the block count a compile-time constant for single blocks): against the
-//! fixed-size form it took 1.7× the instructions of the 6×6 `full_svd` and 1.9× those of the
-//! translational/rotational pair, 1.58× those of the whole magnum analysis and 1.57× those
-//! of the RX90's (callgrind, `examples/analysis_loop`), and 1.3–1.5× the wall-clock time of
-//! the analysis in interleaved runs — the RX90's 4.2 µs (README, Speed) would become about
-//! 5.5 µs.
+//! The fixed-size form was kept when one generic slice path measured too slow for the
+//! analysis budget (≤ 5 µs for a 6-DOF arm): with vectors in zero-padded blocks of six, it
+//! took 1.7× the instructions of the 6×6 `full_svd`, 1.9× those of the translational/
+//! rotational pair and 1.57–1.58× those of the whole magnum and RX90 analyses (callgrind,
+//! `examples/analysis_loop`), 1.3–1.5× the wall-clock time, taking the RX90's 4.2 µs of
+//! then to about 5.5 µs. On the portable build the RX90 analysis now takes about 2.7 µs
+//! (docs/speed.md), so the generic path alone would likely meet the budget: dropping the
+//! fixed-size form is an open simplification, to be decided by `cargo bench --bench analysis`.
 //!
 //! Vectors shorter than about 10⁻⁶⁰ of the longest are beyond the reach of the squared
 //! norms and products in the stopping test and count as zero (see `full_svd`).

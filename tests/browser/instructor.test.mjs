@@ -74,7 +74,7 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
   }
 });
 
-test('a session ended by the instructor: the trainee page says so and starts a new one', { timeout: 60000 }, async () => {
+test('a session ended by the instructor: the trainee page shows the typed reason and starts a new one', { timeout: 60000 }, async () => {
   const url = await server();
   const b = await openBrowser();
   try {
@@ -82,7 +82,10 @@ test('a session ended by the instructor: the trainee page says so and starts a n
     const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
     const r = await fetch(`${url}/api/sessions/${id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
     assert.ok(r.ok, `DELETE: ${r.status}`);
-    await b.page.waitForFunction(() => /session has ended/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
+    // The server says why with a typed `ended` message (server/src/protocol.rs EndReason) and
+    // the page shows its text; nothing is read out of an error string.
+    await b.page.waitForFunction(() => /session has ended \(ended by instructor\)/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
+    assert.deepEqual(await b.page.evaluate(() => window.__seaarms.ended), { type: 'ended', reason: 'instructor', text: 'ended by instructor' });
     const id2 = await until(b.page, (old) => window.__seaarms.connection.open && window.__seaarms.connection.session !== old && window.__seaarms.connection.session, id);
     assert.notEqual(id2, id);
     await until(b.page, () => document.querySelector('#banner').hidden);

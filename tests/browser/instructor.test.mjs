@@ -108,3 +108,36 @@ test('the server is full: POST /api/sessions 503 gives a clear message', { timeo
     full.stop();
   }
 });
+
+test('a session whose record failed shows a recording warning in the instructor list', { timeout: 60000 }, async () => {
+  const url = await server();
+  const instr = await openBrowser();
+  try {
+    const ok = await createSession(url, { label: 'records fine' });
+    const bad = await createSession(url, { label: 'record failed' });
+    // The real list from the server, with one summary's `recording` set to `failed` as the server
+    // reports a session whose record could not be written (docs/api.md; provoking a real write
+    // failure needs a full disk).
+    await instr.context.route('**/api/sessions', async (route) => {
+      const resp = await route.fetch();
+      const list = await resp.json();
+      for (const s of list) if (s.id === bad.id) s.recording = 'failed';
+      await route.fulfill({ response: resp, json: list });
+    });
+    await instr.page.goto(`${url}${await instructorPath(url)}`);
+    await instr.page.fill('#token', INSTRUCTOR_TOKEN);
+    await instr.page.click('#token-form button');
+    const row = (id) => `#sessions tr[data-id="${id}"]`;
+    await instr.page.waitForSelector(row(bad.id), { timeout: 10000 });
+    await instr.page.waitForSelector(row(ok.id), { timeout: 10000 });
+    assert.match(await instr.page.textContent(`${row(bad.id)} td.warn`), /recording failed/);
+    assert.equal(await instr.page.getAttribute(row(bad.id), 'class'), 'rec-failed');
+    assert.doesNotMatch(await instr.page.textContent(`${row(ok.id)} td.warn`), /recording/);
+    assert.equal(await instr.page.getAttribute(row(ok.id), 'class'), '');
+    const [red, amber] = await Promise.all([row(bad.id), row(ok.id)].map((r) => instr.page.$eval(`${r} td.warn`, (e) => getComputedStyle(e).color)));
+    assert.notEqual(red, amber, 'the failed recording is styled apart');
+    for (const s of [ok, bad]) await fetch(`${url}/api/sessions/${s.id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
+  } finally {
+    await instr.close();
+  }
+});

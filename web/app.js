@@ -2,7 +2,7 @@
 
 import { View } from './view.js';
 import { Connection } from './connection.js';
-import { Input, MAPPING } from './input.js';
+import { Input, MAPPING, DEAD_ZONE } from './input.js';
 import { StatusBar } from './status.js';
 import { Plots } from './plots.js';
 
@@ -26,15 +26,43 @@ function showBanner(kind, text, ms = 0) {
   if (ms) bannerTimer = setTimeout(() => { banner.hidden = true; }, ms);
 }
 
+const params = new URLSearchParams(location.search);
+let lastEnded = null; // the last `ended` message ({reason, text}), for tests
+
+/** Shows the join-code prompt; resolves with the code the trainee types. */
+function askJoinCode(wrong) {
+  const form = $('join');
+  const field = $('join-code');
+  $('join-error').hidden = !wrong;
+  form.hidden = false;
+  field.value = '';
+  field.focus();
+  return new Promise((resolve) => {
+    form.onsubmit = (e) => {
+      e.preventDefault();
+      const code = field.value.trim();
+      if (!code) return;
+      form.hidden = true;
+      field.blur();
+      resolve(code);
+    };
+  });
+}
+
 const conn = new Connection({
   role: 'trainee',
+  joinCode: params.get('join'),
+  onJoinCode: askJoinCode,
+  onEnded(e) { lastEnded = e; },
   onHello(h) {
     view.setHello(h);
     settings = { ...h.settings };
     syncControls();
     plots.setSession(h.session, conn.session?.control_token);
     status.role(h.role);
-    if (h.scenario) $('sel-scenario').value = h.scenario;
+    input.setServerLimit(h.max_messages_per_second);
+    setScenarios(h.scenarios, h.scenario);
+    renderHelp();
   },
   onState(s) {
     view.setState(s);
@@ -135,37 +163,32 @@ $('chk-plots').addEventListener('change', (e) => {
 for (const el of document.querySelectorAll('#toolbar select')) el.addEventListener('change', () => el.blur());
 setInterval(() => { $('btn-pause').textContent = view.drawn?.paused ? 'Resume' : 'Pause'; }, 250);
 
-$('help').innerHTML = `<h3>Keyboard and gamepad</h3>
+function renderHelp() {
+  $('help').innerHTML = `<h3>Keyboard and gamepad</h3>
 <p>The selected arm (toolbar, <kbd>1</kbd>/<kbd>2</kbd>, LB/RB) follows the sticks. Joint mode: axis i drives
 joint i's valve. Cartesian mode: the axes are the end-effector velocity [vx vy vz wx wy wz] (world frame).
-Closed loop: the axes move the object; both jaws grip together. Dead zone ${Math.round(0.12 * 100)} % on sticks and triggers;
-input is sent at 50 Hz.</p>
+Closed loop: the axes move the object; both jaws grip together. Dead zone ${Math.round(DEAD_ZONE * 100)} % on sticks and triggers;
+input is sent at ${input.sendHz} Hz.</p>
 <table><tr><th>Function</th><th>Gamepad (standard mapping)</th><th>Keyboard</th></tr>
 ${MAPPING.map(([f, g, k]) => `<tr><td>${f}</td><td>${g}</td><td><kbd>${k}</kbd></td></tr>`).join('')}</table>
 <p>Views: drag the perspective view to orbit, wheel to zoom; ⤢ or double-click shows one large view. Press <kbd>?</kbd> to close.</p>`;
-
-async function loadScenarios() {
-  const sel = $('sel-scenario');
-  try {
-    const r = await fetch('/api/scenarios');
-    if (!r.ok) throw new Error();
-    const body = await r.json();
-    const list = Array.isArray(body) ? body : body.scenarios || [];
-    if (!list.some((s) => (typeof s === 'string' ? s : s.name) === 'training')) list.unshift({ name: 'training', description: 'Free play from the initial position' });
-    sel.innerHTML = list.map((s) => {
-      const name = typeof s === 'string' ? s : s.name || s.id;
-      const title = typeof s === 'string' ? s : s.title || s.description || name;
-      return `<option value="${name}" title="${String(title).replaceAll('"', '&quot;')}">${name}</option>`;
-    }).join('');
-    if (conn.hello?.scenario) sel.value = conn.hello.scenario;
-  } catch {
-    sel.innerHTML = '<option value="">default</option>';
-  }
 }
 
-loadScenarios();
+/** The scenario menu from `hello.scenarios` ([{name, description}], the server's list). */
+function setScenarios(list, current) {
+  const sel = $('sel-scenario');
+  sel.replaceChildren(...list.map(({ name, description }) => {
+    const o = document.createElement('option');
+    o.value = name;
+    o.textContent = name;
+    o.title = description;
+    return o;
+  }));
+  sel.value = current;
+}
+
+renderHelp();
 syncControls();
-const params = new URLSearchParams(location.search);
 conn.start(params.get('scenario') ? { scenario: params.get('scenario') } : {});
 
 window.__seaarms = view.debugHooks({
@@ -174,4 +197,5 @@ window.__seaarms = view.debugHooks({
   get lastInput() { return input.last; },
   get selectedArm() { return selectedArm; },
   statusText() { return $('status').innerText; },
+  get ended() { return lastEnded; },
 });

@@ -1,10 +1,16 @@
 // Session and WebSocket connection (protocol: server/src/protocol.rs). Creates or resumes a
 // trainee session (id + token kept in localStorage), or joins one read-only as an observer;
 // reconnects with exponential backoff after a drop or a server restart; measures latency with
-// ping/pong. Latest state wins: only the newest frame is kept for drawing.
+// ping/pong. Latest state wins: only the newest frame is kept for drawing. A session that ended
+// says so with an `ended` message ({reason, text}) before the close; the page never reads
+// meaning out of error texts. Session creation (docs/api.md): 403 = the class join code is
+// missing or wrong (asked for through `onJoinCode`), 429 = too many sessions from this client
+// (retried after `Retry-After`), 503 = the server is full or cannot record (retried).
 
 const STORE_KEY = 'seaarms.session';
 const BACKOFF_MS = [500, 1000, 2000, 4000, 8000];
+/** Retry delay after a 503 on session creation, or a 429 without `Retry-After` (ms). */
+const CREATE_RETRY_MS = 10000;
 
 /** Absolute WebSocket URL on this page's origin (only the path and query of the server's
  * `ws_url` are used, so the page also works behind a TLS proxy or another host name). */
@@ -22,8 +28,9 @@ async function jsonOrError(resp) {
 
 export class Connection {
   /**
-   * @param opts {role: 'trainee'|'observer', sessionId?, token?, onHello, onState, onMessage,
-   *              onError, onStatus(kind, text), onPong(ms)}
+   * @param opts {role: 'trainee'|'observer', sessionId?, token?, joinCode?, onHello, onState,
+   *              onMessage, onError, onEnded({reason, text}), onStatus(kind, text), onPong(ms),
+   *              onJoinCode(wrong: boolean) → Promise<string> (the class join code)}
    */
   constructor(opts) {
     this.opts = opts;
@@ -39,6 +46,8 @@ export class Connection {
     this.gotHello = false;
     this.pingTimer = null;
     this.retryTimer = null;
+    this.joinCode = opts.joinCode || null;
+    this.ended = null; // the `ended` message of the current session, once received
   }
 
   status(kind, text) { this.opts.onStatus?.(kind, text); }
@@ -76,9 +85,11 @@ export class Connection {
     }
   }
 
-  /** POST /api/sessions; returns false (and retries later) when the server is full or down. */
+  /** POST /api/sessions; returns false (and retries later) when the server is full, busy or
+   * down. A 403 (join code missing or wrong) asks `onJoinCode` for the code and tries again. */
   async create(extra = {}) {
     const body = { ...this.createOpts, ...extra };
+    if (this.joinCode) body.join_code = this.joinCode;
     let resp;
     try {
       resp = await fetch('/api/sessions', { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify(body) });
@@ -87,10 +98,19 @@ export class Connection {
       this.scheduleRetry(() => this.start(this.createOpts));
       return false;
     }
-    if (resp.status === 503) {
+    if (resp.status === 403 && this.opts.onJoinCode) {
+      this.status('info', this.joinCode ? 'Wrong class join code.' : 'This server needs the class join code.');
+      this.joinCode = await this.opts.onJoinCode(!!this.joinCode);
+      return this.create(extra);
+    }
+    if (resp.status === 429 || resp.status === 503) {
       const b = await jsonOrError(resp);
-      this.status('error', `The server is full (${b?.error || 'HTTP 503'}). Retrying in 10 s…`);
-      this.retryTimer = setTimeout(() => this.start(this.createOpts), 10000);
+      const secs = Number(resp.headers.get('retry-after'));
+      const ms = secs > 0 ? secs * 1000 : CREATE_RETRY_MS;
+      const why = resp.status === 429 ? 'Too many new sessions from this computer' : 'The server cannot start a session now';
+      this.status('error', `${why}: ${b?.error || 'HTTP ' + resp.status}. Retrying in ${Math.round(ms / 1000)} s…`);
+      clearTimeout(this.retryTimer);
+      this.retryTimer = setTimeout(() => this.start(this.createOpts), ms);
       return false;
     }
     if (!resp.ok) {
@@ -127,6 +147,7 @@ export class Connection {
     this.closedByUs = false;
     this.gotHello = false;
     this.lastError = null;
+    this.ended = null;
     let ws;
     try { ws = new WebSocket(this.url()); } catch (e) {
       this.status('error', `WebSocket: ${e.message}`);
@@ -169,6 +190,9 @@ export class Connection {
         this.lastError = msg.message;
         this.opts.onError?.(msg.message);
         break;
+      case 'ended':
+        this.ended = msg;
+        break;
       default:
         break;
     }
@@ -199,16 +223,17 @@ export class Connection {
       }
       return;
     }
-    if (/session ended/i.test(why)) {
-      this.opts.onEnded?.(why);
+    if (this.ended) {
+      const ended = this.ended;
+      this.opts.onEnded?.(ended);
       if (this.role === 'trainee') {
-        this.status('info', 'This session has ended (instructor, idle timeout or server). Starting a new session…');
+        this.status('info', `This session has ended (${ended.text}). Starting a new session…`);
         localStorage.removeItem(STORE_KEY);
         this.hello = null;
         await new Promise((r) => setTimeout(r, 1500));
         if (await this.create()) this.open();
       } else {
-        this.status('error', 'This session has ended.');
+        this.status('error', `This session has ended (${ended.text}).`);
       }
       return;
     }

@@ -1,11 +1,16 @@
 // Operator input: the Gamepad API (standard mapping) with a keyboard fallback covering the
-// same functions. Sampled and sent at a steady 50 Hz with increasing sequence numbers:
+// same functions. Sampled and sent at a steady SEND_HZ (below the server's
+// `hello.max_messages_per_second`, see setServerLimit) with increasing sequence numbers:
 // {"type":"input","seq":n,"arms":{"left":{"axes":[6],"grip":g},"right":{...}},"object":[6]?}.
 // Joint mode: axis i drives joint i of the selected arm. Cartesian mode: the same axes are
 // [vx, vy, vz, wx, wy, wz] of its end-effector. Closed loop: they drive the object instead.
 
+/** Input messages per second (at most; lowered to stay under the server's message limit). */
 export const SEND_HZ = 50;
+/** Dead zone of sticks and triggers: |v| below it reads 0, above it is rescaled to [0, 1]. */
 export const DEAD_ZONE = 0.12;
+/** Other messages per second the page sends besides input (the 1 Hz latency ping). */
+const OTHER_MESSAGES_HZ = 1;
 
 /** Keyboard: each pair drives axis i (+, −). */
 export const KEY_AXES = [
@@ -77,7 +82,17 @@ export class Input {
     window.addEventListener('blur', () => this.keys.clear());
     window.addEventListener('gamepadconnected', (e) => { this.padIndex = e.gamepad.index; ui.onPad?.(e.gamepad.id); });
     window.addEventListener('gamepaddisconnected', (e) => { if (this.padIndex === e.gamepad.index) this.padIndex = null; ui.onPad?.(null); });
-    this.timer = setInterval(() => this.tick(), 1000 / SEND_HZ);
+    this.sendHz = SEND_HZ;
+    this.timer = setInterval(() => this.tick(), 1000 / this.sendHz);
+  }
+
+  /** Keeps input (plus the ping) within the server's `max_messages_per_second` (hello). */
+  setServerLimit(maxMessagesPerSecond) {
+    const hz = Math.max(1, Math.min(SEND_HZ, maxMessagesPerSecond - OTHER_MESSAGES_HZ));
+    if (!(hz > 0) || hz === this.sendHz) return;
+    this.sendHz = hz;
+    clearInterval(this.timer);
+    this.timer = setInterval(() => this.tick(), 1000 / this.sendHz);
   }
 
   onKey(e, down) {

@@ -39,7 +39,7 @@ function banner(kind, text) {
 const esc = (s) => String(s ?? '').replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
 
 /** One row of GET /api/sessions: {id, status, label, scenario, sim_seconds, grasp?, paused?,
- * trainees?, measures?: [left, right], overload_count, faults?}. */
+ * trainees?, measures?: [left, right], overload_count, faults?, recording: 'ok'|'failed'}. */
 function summary(s) {
   const w = (i) => (s.measures && s.measures[i] ? fmt(s.measures[i].yoshikawa, 3) : '—');
   return {
@@ -51,7 +51,9 @@ function summary(s) {
     t: s.sim_seconds === undefined ? '' : Number(s.sim_seconds).toFixed(1),
     grasp: s.grasp ?? '',
     w: `${w(0)} / ${w(1)}`,
-    warn: [...(s.faults || []), s.overload_count ? `${s.overload_count} overload(s)` : ''].filter(Boolean).join(', '),
+    recordingFailed: s.recording === 'failed',
+    warn: [s.recording === 'failed' ? 'recording failed (record incomplete)' : '', ...(s.faults || []),
+      s.overload_count ? `${s.overload_count} overload(s)` : ''].filter(Boolean).join(', '),
   };
 }
 
@@ -60,7 +62,7 @@ function renderList() {
   tb.innerHTML = sessions.map((s) => {
     const r = summary(s);
     const btn = r.status === 'live' ? `<button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button>` : '';
-    return `<tr data-id="${esc(r.id)}" data-status="${esc(r.status)}" class="${r.id === observed ? 'open' : ''}"><td>${esc(r.id)}</td><td>${esc(r.status)}</td><td>${esc(r.label)}</td>
+    return `<tr data-id="${esc(r.id)}" data-status="${esc(r.status)}" class="${[r.id === observed ? 'open' : '', r.recordingFailed ? 'rec-failed' : ''].join(' ').trim()}"><td>${esc(r.id)}</td><td>${esc(r.status)}</td><td>${esc(r.label)}</td>
       <td>${esc(r.scenario)}</td><td>${esc(r.clients)}</td><td>${esc(r.t)}</td><td>${esc(r.grasp)}</td><td>${esc(r.w)}</td>
       <td class="warn">${esc(r.warn)}</td><td>${btn}</td></tr>`;
   }).join('') || '<tr><td colspan="10">no sessions</td></tr>';

@@ -4,7 +4,9 @@
 //!
 //! Client → server: [`ClientMessage`]. Server → client: a one-time [`Hello`], then a
 //! [`StateFrame`] at the frame rate (latest state wins: a slow client skips frames), plus
-//! [`ServerMessage::Error`], [`ServerMessage::Message`] and [`ServerMessage::Pong`].
+//! [`ServerMessage::Error`], [`ServerMessage::Message`] and [`ServerMessage::Pong`]; when the
+//! session ends, one [`ServerMessage::Ended`] (with its [`EndReason`]) right before the close
+//! frame (code 1000, reason `session ended`).
 
 use seaarms_core::grasp::GraspState;
 use serde::{Deserialize, Serialize, Serializer};
@@ -221,6 +223,16 @@ pub struct ObjectModelOut {
     pub mass_kg: f64,
 }
 
+/// A scenario a live session can start from (`hello.scenarios`, the `scenario` field of
+/// `POST /api/sessions`).
+#[derive(Debug, Clone, Serialize)]
+pub struct ScenarioOut {
+    /// Name to create a session with.
+    pub name: &'static str,
+    /// What it sets up.
+    pub description: &'static str,
+}
+
 /// First message on every connection.
 #[derive(Debug, Clone, Serialize)]
 pub struct Hello {
@@ -240,6 +252,41 @@ pub struct Hello {
     pub scenario: String,
     /// State frames per second.
     pub frame_hz: u32,
+    /// Most messages per second the server accepts from this connection (bursts of two
+    /// seconds' worth); the page sends input below this rate.
+    pub max_messages_per_second: u32,
+    /// Scenarios a new session can start from (the page's scenario menu).
+    pub scenarios: Vec<ScenarioOut>,
+}
+
+/// Why a session ended (the `ended` message; its [`EndReason::text`] is the session
+/// record's `end_reason`).
+#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum EndReason {
+    /// An instructor ended it (`DELETE /api/sessions/{id}` or the `end` action).
+    Instructor,
+    /// The trainee ended it.
+    Trainee,
+    /// No trainee connected and no input for the idle timeout.
+    IdleTimeout,
+    /// No trainee joined within the grace period after creation.
+    NoTraineeJoined,
+    /// The server is shutting down.
+    ServerShutdown,
+}
+
+impl EndReason {
+    /// Human text, as session records and summaries give it (`end_reason`).
+    pub fn text(self) -> &'static str {
+        match self {
+            EndReason::Instructor => "ended by instructor",
+            EndReason::Trainee => "ended by trainee",
+            EndReason::IdleTimeout => "idle timeout",
+            EndReason::NoTraineeJoined => "no trainee joined",
+            EndReason::ServerShutdown => "server shutdown",
+        }
+    }
 }
 
 /// Ellipsoid radii (m/s) along unit axes, world frame.
@@ -386,11 +433,44 @@ pub enum ServerMessage {
         /// The ping's timestamp.
         t: f64,
     },
+    /// The session has ended; the close frame follows. Reconnecting cannot resume it.
+    Ended {
+        /// Why, as a code.
+        reason: EndReason,
+        /// Why, as text (the record's `end_reason`).
+        text: &'static str,
+    },
+}
+
+impl ServerMessage {
+    /// The `ended` message for `reason`.
+    pub fn ended(reason: EndReason) -> Self {
+        ServerMessage::Ended {
+            reason,
+            text: reason.text(),
+        }
+    }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The `ended` message as web/connection.js reads it (`type`, `reason` code, `text`);
+    /// the texts are the record strings tests/sessions.rs and tests/admission_and_security.rs
+    /// read back as `end_reason`.
+    #[test]
+    fn ended_message_wire_shape() {
+        let v = serde_json::to_value(ServerMessage::ended(EndReason::Instructor)).unwrap();
+        assert_eq!(
+            v,
+            serde_json::json!({"type": "ended", "reason": "instructor", "text": "ended by instructor"})
+        );
+        let v = serde_json::to_value(ServerMessage::ended(EndReason::NoTraineeJoined)).unwrap();
+        assert_eq!(v["reason"], "no_trainee_joined");
+        assert_eq!(v["text"], "no trainee joined");
+        assert_eq!(EndReason::ServerShutdown.text(), "server shutdown");
+    }
 
     /// The wire strings the page and the instructor dashboard rely on (README "Protocol",
     /// web/instructor.js) are unchanged by the typed faults and grasp states.

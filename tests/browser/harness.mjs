@@ -9,6 +9,7 @@ import { tmpdir } from 'node:os';
 import { join, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import net from 'node:net';
+import { DEAD_ZONE } from '../../web/input.js'; // the page's own constant (no browser globals at load)
 
 const here = dirname(fileURLToPath(import.meta.url));
 export const ROOT = join(here, '..', '..');
@@ -168,9 +169,9 @@ export const FAKE_GAMEPAD = () => {
   window.__setButton = (i, v) => { buttons[i].value = v; buttons[i].pressed = v > 0.5; };
 };
 
-/** Stick value that comes out of the page's dead zone (0.12) as `v`. */
+/** Stick value that comes out of the page's dead zone (web/input.js DEAD_ZONE) as `v`. */
 export function stick(v) {
-  const dz = 0.12;
+  const dz = DEAD_ZONE;
   if (Math.abs(v) < 1e-3) return 0;
   return Math.sign(v) * (dz + Math.min(1, Math.abs(v)) * (1 - dz));
 }

@@ -74,7 +74,7 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
   }
 });
 
-test('a session ended by the instructor: the trainee page says so and starts a new one', { timeout: 60000 }, async () => {
+test('a session ended by the instructor: the trainee page shows the typed reason and starts a new one', { timeout: 60000 }, async () => {
   const url = await server();
   const b = await openBrowser();
   try {
@@ -82,7 +82,10 @@ test('a session ended by the instructor: the trainee page says so and starts a n
     const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
     const r = await fetch(`${url}/api/sessions/${id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
     assert.ok(r.ok, `DELETE: ${r.status}`);
-    await b.page.waitForFunction(() => /session has ended/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
+    // The server says why with a typed `ended` message (server/src/protocol.rs EndReason) and
+    // the page shows its text; nothing is read out of an error string.
+    await b.page.waitForFunction(() => /session has ended \(ended by instructor\)/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
+    assert.deepEqual(await b.page.evaluate(() => window.__seaarms.ended), { type: 'ended', reason: 'instructor', text: 'ended by instructor' });
     const id2 = await until(b.page, (old) => window.__seaarms.connection.open && window.__seaarms.connection.session !== old && window.__seaarms.connection.session, id);
     assert.notEqual(id2, id);
     await until(b.page, () => document.querySelector('#banner').hidden);
@@ -103,5 +106,38 @@ test('the server is full: POST /api/sessions 503 gives a clear message', { timeo
   } finally {
     await b.close();
     full.stop();
+  }
+});
+
+test('a session whose record failed shows a recording warning in the instructor list', { timeout: 60000 }, async () => {
+  const url = await server();
+  const instr = await openBrowser();
+  try {
+    const ok = await createSession(url, { label: 'records fine' });
+    const bad = await createSession(url, { label: 'record failed' });
+    // The real list from the server, with one summary's `recording` set to `failed` as the server
+    // reports a session whose record could not be written (docs/api.md; provoking a real write
+    // failure needs a full disk).
+    await instr.context.route('**/api/sessions', async (route) => {
+      const resp = await route.fetch();
+      const list = await resp.json();
+      for (const s of list) if (s.id === bad.id) s.recording = 'failed';
+      await route.fulfill({ response: resp, json: list });
+    });
+    await instr.page.goto(`${url}${await instructorPath(url)}`);
+    await instr.page.fill('#token', INSTRUCTOR_TOKEN);
+    await instr.page.click('#token-form button');
+    const row = (id) => `#sessions tr[data-id="${id}"]`;
+    await instr.page.waitForSelector(row(bad.id), { timeout: 10000 });
+    await instr.page.waitForSelector(row(ok.id), { timeout: 10000 });
+    assert.match(await instr.page.textContent(`${row(bad.id)} td.warn`), /recording failed/);
+    assert.equal(await instr.page.getAttribute(row(bad.id), 'class'), 'rec-failed');
+    assert.doesNotMatch(await instr.page.textContent(`${row(ok.id)} td.warn`), /recording/);
+    assert.equal(await instr.page.getAttribute(row(ok.id), 'class'), '');
+    const [red, amber] = await Promise.all([row(bad.id), row(ok.id)].map((r) => instr.page.$eval(`${r} td.warn`, (e) => getComputedStyle(e).color)));
+    assert.notEqual(red, amber, 'the failed recording is styled apart');
+    for (const s of [ok, bad]) await fetch(`${url}/api/sessions/${s.id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
+  } finally {
+    await instr.close();
   }
 });

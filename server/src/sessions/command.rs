@@ -11,7 +11,7 @@ use serde_json::json;
 
 use super::record::RecordMsg;
 use super::{LIVE_SCENARIOS, Session, SessionManager};
-use crate::protocol::{ControlMethod, ControlMode, ServerMessage};
+use crate::protocol::{ControlMethod, ControlMode, EndReason, ServerMessage};
 
 /// Largest instructor message to a trainee (characters).
 pub const MAX_MESSAGE_CHARS: usize = 500;
@@ -359,9 +359,13 @@ pub fn apply(
         session.touch();
     }
     if command == Command::End {
-        let reason = format!("ended by {}", actor.as_str());
         record(manager, session, actor, &command, json!({}));
-        manager.end(&session.id, &reason);
+        // `permitted` lets only instructors and trainees end a session.
+        let reason = match actor {
+            Actor::Instructor => EndReason::Instructor,
+            Actor::Trainee | Actor::Observer => EndReason::Trainee,
+        };
+        manager.end(&session.id, reason);
         return Ok(());
     }
     let detail = {

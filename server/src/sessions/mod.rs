@@ -20,7 +20,7 @@ pub mod ws;
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Mutex, MutexGuard};
+use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
 use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use axum::extract::ws::Utf8Bytes;
@@ -32,7 +32,7 @@ use seaarms_core::sim::{Input, SimParams, Simulation};
 use tokio::sync::watch;
 
 use crate::metrics::Metrics;
-use crate::protocol::{ControlMethod, ControlMode, Settings};
+use crate::protocol::{ControlMethod, ControlMode, EndReason, Settings};
 use admission::ClientKey;
 use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
@@ -299,6 +299,8 @@ pub struct Session {
     last_activity: AtomicU64,
     /// Set once the session has ended.
     pub ended: AtomicBool,
+    /// Why it ended (set with `ended`; sent to clients as the `ended` message).
+    pub end_reason: OnceLock<EndReason>,
     /// Relief events (overloads) since creation, all resets included.
     pub overloads: AtomicU64,
     /// Models (left, right) for `hello`.
@@ -475,6 +477,7 @@ impl SessionManager {
             trainees: AtomicU64::new(0),
             last_activity: AtomicU64::new(unix_now().to_bits()),
             ended: AtomicBool::new(false),
+            end_reason: OnceLock::new(),
             overloads: AtomicU64::new(0),
             models,
             client,
@@ -534,10 +537,11 @@ impl SessionManager {
     }
 
     /// Ends a session: stops stepping, records the end, tells clients.
-    pub fn end(&self, id: &str, reason: &str) {
+    pub fn end(&self, id: &str, reason: EndReason) {
         let Some(session) = self.map().remove(id) else {
             return;
         };
+        let _ = session.end_reason.set(reason);
         session.ended.store(true, Ordering::Relaxed);
         for w in &self.workers {
             w.remove(id);
@@ -547,19 +551,16 @@ impl SessionManager {
             id: id.to_string(),
             ended_unix: unix_now(),
             sim_seconds,
-            reason: reason.to_string(),
+            reason: reason.text().to_string(),
             overloads: session.overloads.load(Ordering::Relaxed),
         });
-        let _ = session.notices.send(Utf8Bytes::from(
-            serde_json::json!({"type": "error", "message": format!("session ended: {reason}")})
-                .to_string(),
-        ));
-        // Dropping the watch sender's last frame wakes every client; they see `ended`.
+        // Waking every client's writer: it sees `ended` and sends the `ended` message with
+        // `end_reason`, then the close frame.
         session.frames.send_modify(|_| {});
         self.metrics
             .sessions_live
             .store(self.map().len() as u64, Ordering::Relaxed);
-        tracing::info!(%id, reason, "session ended");
+        tracing::info!(%id, reason = reason.text(), "session ended");
     }
 
     /// Ends sessions idle for longer than the configured timeout, and sessions no trainee
@@ -572,9 +573,9 @@ impl SessionManager {
                 continue;
             }
             if !s.joined.load(Ordering::Relaxed) && s.age_seconds() > grace {
-                self.end(&s.id, "no trainee joined");
+                self.end(&s.id, EndReason::NoTraineeJoined);
             } else if s.idle_seconds() > limit {
-                self.end(&s.id, "idle timeout");
+                self.end(&s.id, EndReason::IdleTimeout);
             }
         }
     }
@@ -589,7 +590,7 @@ impl SessionManager {
     /// Ends every session (graceful shutdown) and flushes the recorder.
     pub fn shutdown(&self) {
         for s in self.all() {
-            self.end(&s.id, "server shutdown");
+            self.end(&s.id, EndReason::ServerShutdown);
         }
         for w in &self.workers {
             w.stop();

@@ -34,7 +34,7 @@ use crate::error::ApiError;
 use crate::metrics::Metrics;
 use crate::protocol::{
     ArmAxes, ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, MAX_INPUT_SEQ,
-    ObjectModelOut, ServerMessage, arm_name,
+    ObjectModelOut, ScenarioOut, ServerMessage, arm_name,
 };
 
 /// Largest message (and frame) the WebSocket transport reads (bytes): 4 × the documented
@@ -131,8 +131,21 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
         settings: live.settings(),
         scenario: session.scenario(),
         frame_hz: state.sessions.config.frame_hz,
+        max_messages_per_second: state.sessions.config.max_messages_per_second,
+        scenarios: super::LIVE_SCENARIOS
+            .iter()
+            .map(|&(name, description)| ScenarioOut { name, description })
+            .collect(),
     }));
     serde_json::to_string(&msg).unwrap_or_default().into()
+}
+
+/// The `ended` message, once the session has ended (sent right before the close frame).
+fn ended_text(session: &Session) -> Option<Utf8Bytes> {
+    let reason = *session.end_reason.get()?;
+    serde_json::to_string(&ServerMessage::ended(reason))
+        .ok()
+        .map(Utf8Bytes::from)
 }
 
 /// What the reader asks the writer to send.
@@ -219,7 +232,7 @@ fn disconnected(metrics: &Metrics, session: &Session, role: Role) {
 
 /// The writer: sends `hello`, then the latest frame whenever it changes (a slow client skips
 /// frames, counted in `frames_skipped`), notices and the reader's replies, until the session
-/// ends, the reader is done or the client is gone.
+/// ends (then the `ended` message and the close frame), the reader is done or the client is gone.
 async fn write_loop(
     mut sink: SplitSink<WebSocket, Message>,
     session: Arc<Session>,
@@ -270,6 +283,9 @@ async fn write_loop(
                 }
             }
             Outgoing::Close(code, reason) => {
+                if let Some(text) = ended_text(&session) {
+                    let _ = sink.send(Message::Text(text)).await;
+                }
                 let _ = sink
                     .send(Message::Close(Some(CloseFrame {
                         code,

@@ -18,6 +18,7 @@ function ellipsoidMesh(colour, parent) {
   const m = new THREE.Mesh(SPHERE, mat);
   m.matrixAutoUpdate = false;
   m.renderOrder = 2;
+  m.visible = false; // until the first state frame places it
   const wire = new THREE.LineSegments(new THREE.EdgesGeometry(new THREE.SphereGeometry(1, 12, 6), 1),
     new THREE.LineBasicMaterial({ color: colour, transparent: true, opacity: 0.5 }));
   m.add(wire);
@@ -60,6 +61,7 @@ export class Ellipsoids {
     const l = state.arms.left, r = state.arms.right;
     place(this.left, l.pose.position, l.ellipsoid, this.scale);
     place(this.right, r.pose.position, r.ellipsoid, this.scale);
+    this.left.visible = this.right.visible = true;
     if (state.dual) {
       this.dual.visible = true;
       place(this.dual, state.object.pose.position, state.dual.ellipsoid, this.scale);

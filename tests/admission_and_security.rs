@@ -203,6 +203,10 @@ async fn unjoined_sessions_end_and_the_instructor_ends_any() {
             .as_u16(),
         204
     );
+    // The trainee is told why, as a typed message, before the close frame.
+    let ended = next_of(&mut ws, "ended", Duration::from_secs(5)).await;
+    assert_eq!(ended["reason"], "instructor", "{ended}");
+    assert_eq!(ended["text"], "ended by instructor", "{ended}");
     assert_eq!(
         close_code(&mut ws).await,
         1000,

@@ -194,7 +194,7 @@ fn check_step(what: &'static str, start: f64, end: f64, step: f64) -> Result<usi
     // Counted in f64 and compared before the cast: a huge span over a tiny step would
     // saturate `as usize` and wrap the `+ 1` to 0 rows.
     let n = ((end - start) / step + 1e-9).floor() + 1.0;
-    if !(n <= MAX_ROWS as f64) {
+    if n > MAX_ROWS as f64 {
         return Err(Error::InvalidParameter {
             what,
             reason: format!("more than {MAX_ROWS} rows"),

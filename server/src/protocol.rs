@@ -59,13 +59,8 @@ pub fn parse_fault_kind(name: &str) -> Option<FaultKind> {
 
 /// Wire name of a grasp state (state frames, session summaries, records).
 pub fn grasp_name(state: GraspState) -> &'static str {
-    match state {
-        GraspState::Free => "free",
-        GraspState::OneOnSurface => "one_on_surface",
-        GraspState::OneLifted => "one_lifted",
-        GraspState::OneHoldingOtherContact => "one_holding_other_contact",
-        GraspState::BothHolding => "both_holding",
-    }
+    // The core's names are the wire names (pinned by this module's tests).
+    state.as_str()
 }
 
 fn serialize_grasp<S: Serializer>(state: &GraspState, s: S) -> Result<S::Ok, S::Error> {

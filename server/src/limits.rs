@@ -69,8 +69,8 @@ pub fn within(limit: &'static str, max: f64, what: &str, v: f64) -> Result<(), A
     Ok(())
 }
 
-/// Samples `start, start + step, …` up to `end` (the core's count: ⌊(end − start)/step⌋ + 1),
-/// computed in floating point and checked against [`MAX_STUDY_ROWS`] before any integer
+/// Samples `start, start + step, …` up to `end` (the core's
+/// [`seaarms_core::studies::sample_count`]), checked against [`MAX_STUDY_ROWS`] before any integer
 /// conversion; `start ≤ end`, `step > 0`, everything finite.
 pub fn samples(what: &str, start: f64, end: f64, step: f64) -> Result<usize, ApiError> {
     if !(start.is_finite() && end.is_finite() && step.is_finite()) {
@@ -83,7 +83,7 @@ pub fn samples(what: &str, start: f64, end: f64, step: f64) -> Result<usize, Api
             "{what}: needs start ≤ end and step > 0 (got start {start}, end {end}, step {step})"
         )));
     }
-    let n = ((end - start) / step + 1e-9).floor() + 1.0;
+    let n = seaarms_core::studies::sample_count(start, end, step);
     if n > MAX_STUDY_ROWS as f64 {
         return Err(exceeded(
             "max_study_rows",

@@ -184,6 +184,14 @@ fn triple(j: &DMatrix<f64>) -> Option<MeasureTriple> {
     measures(j).ok().map(|m| MeasureTriple::from(&m))
 }
 
+/// Samples `start, start + step, …` up to `end` of a study's sweep, ⌊(end − start)/step⌋ + 1
+/// (the 1e-9 keeps an end point that rounding puts a hair beyond), in f64 so a caller can
+/// compare it with a limit before converting: a huge span over a tiny step is +∞ or huge
+/// here, where `as usize` would saturate. Needs finite inputs, `step > 0`, `start ≤ end`.
+pub fn sample_count(start: f64, end: f64, step: f64) -> f64 {
+    ((end - start) / step + 1e-9).floor() + 1.0
+}
+
 fn check_step(what: &'static str, start: f64, end: f64, step: f64) -> Result<usize, Error> {
     if !(start.is_finite() && end.is_finite() && step.is_finite() && step > 0.0 && end >= start) {
         return Err(Error::InvalidParameter {
@@ -191,9 +199,7 @@ fn check_step(what: &'static str, start: f64, end: f64, step: f64) -> Result<usi
             reason: "start ≤ end, step > 0, all finite".into(),
         });
     }
-    // Counted in f64 and compared before the cast: a huge span over a tiny step would
-    // saturate `as usize` and wrap the `+ 1` to 0 rows.
-    let n = ((end - start) / step + 1e-9).floor() + 1.0;
+    let n = sample_count(start, end, step);
     if n > MAX_ROWS as f64 {
         return Err(Error::InvalidParameter {
             what,

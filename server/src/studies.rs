@@ -321,7 +321,7 @@ pub struct StudyPlan {
     pub rows: usize,
 }
 
-/// Parses and checks the parameters of study `name` (see [`list_studies`]; fields:
+/// Parses and checks the parameters of study `name` (see [`STUDIES`]; fields:
 /// `single-x`/`dual-x`: `z_levels, x_start, x_step, x_end, left_base_y_m`; `single-z`:
 /// `x_levels, z_start, z_step, z_end`; `*-pitch-yaw`: `points [{name, position}],
 /// pitch_deg [a, b], yaw_deg [a, b], step_deg, left_base_y_m`; `dual-distance`: `x_levels, z,

@@ -36,7 +36,7 @@ pub fn wrench_at_com(r: &Vector3<f64>, f: &Vector6<f64>) -> Vector6<f64> {
 
 /// Wⁱᵀ·M⁻¹·Wᵏ (6×6) for the object mobility M⁻¹ = diag(1/m·I, Q) (Q = world inverse inertia,
 /// symmetric),
-/// in 3×3 blocks with Sⁱ = [rⁱ]×: [[1/m·I − SⁱQSᵏ, −SⁱQ], [QSᵏ, Q]].
+/// in 3×3 blocks with Sⁱ = \[rⁱ\]×: [[1/m·I − SⁱQSᵏ, −SⁱQ], [QSᵏ, Q]].
 pub fn mobility_block(
     ri: &Vector3<f64>,
     rk: &Vector3<f64>,
@@ -71,7 +71,7 @@ pub fn mobility_block(
 
 /// Wⁱᵀ·X·Wᵏ (6×6) for a general symmetric object mobility X = [[A, B], [Bᵀ, D]] (3×3
 /// blocks; e.g. the inverse of the mass matrix with the seabed dashpots added), with
-/// Sⁱ = [rⁱ]×: X·Wᵏ = [[A + B·Sᵏ, B], [Bᵀ + D·Sᵏ, D]], then Wⁱᵀ = [[I, −Sⁱ], [0, I]] on the
+/// Sⁱ = \[rⁱ\]×: X·Wᵏ = [[A + B·Sᵏ, B], [Bᵀ + D·Sᵏ, D]], then Wⁱᵀ = [[I, −Sⁱ], [0, I]] on the
 /// left. [`mobility_block`] is the case B = 0, A = I/m.
 pub fn mobility_block_general(
     ri: &Vector3<f64>,
@@ -146,7 +146,7 @@ pub fn grasp_matrix(r: &[Vector3<f64>; 2]) -> SMatrix<f64, 6, 12> {
     w
 }
 
-/// W⁺ for equal load sharing (12×6, eq. 3.46): ½[I 0; −Rⁱ I] per arm, Rⁱ = [rⁱ]×.
+/// W⁺ for equal load sharing (12×6, eq. 3.46): ½[I 0; −Rⁱ I] per arm, Rⁱ = \[rⁱ\]×.
 /// W·W⁺ = I.
 pub fn grasp_pinv_equal_share(r: &[Vector3<f64>; 2]) -> SMatrix<f64, 12, 6> {
     arm_blocks(r, [0.5, 0.5])
@@ -163,7 +163,7 @@ pub fn internal_basis(r: &[Vector3<f64>; 2]) -> SMatrix<f64, 12, 6> {
     arm_blocks(r, [a(1), a(2)])
 }
 
-/// The 12×6 matrix of the two arms' blocks cⁱ[I 0; −Rⁱ I] (Rⁱ = [rⁱ]×) stacked, the shape
+/// The 12×6 matrix of the two arms' blocks cⁱ[I 0; −Rⁱ I] (Rⁱ = \[rⁱ\]×) stacked, the shape
 /// of both W⁺ (eq. 3.46) and V (eq. 3.47).
 fn arm_blocks(r: &[Vector3<f64>; 2], c: [f64; 2]) -> SMatrix<f64, 12, 6> {
     let mut out = SMatrix::<f64, 12, 6>::zeros();

@@ -39,7 +39,7 @@ pub(super) fn check_jacobian(j: &DMatrix<f64>) -> Result<(), Error> {
     Ok(())
 }
 
-/// Relative rank tolerance of every route ([`full_svd`], [`measures`], [`row_measures`]):
+/// Relative rank tolerance of every route ([`full_svd`], [`measures`](super::measures::measures), [`row_measures`](super::measures::row_measures)):
 /// σ ≤ this·σ₁ counts as zero.
 ///
 /// The one-sided Jacobi SVD itself is accurate to a few ε·σ₁ (relatively accurate, even),

@@ -1,10 +1,10 @@
 //! Manipulability: ellipsoid measures, joint-limit measure, dual-arm ellipsoid, polytopes.
 //!
-//! * [`measures`]: rank, Yoshikawa, condition number, isotropy, Hong, force measures,
+//! * [`measures`](mod@measures): rank, Yoshikawa, condition number, isotropy, Hong, force measures,
 //!   velocity and force ellipsoids, task rows (Lim §2.4, §3.5; Jun §2); it re-exports the
 //!   full SVD and its subspaces (`svd`) and the inline task-space storage (`task`).
 //! * `jacobi`: the one-sided Jacobi SVD behind them.
-//! * [`jlm`]: joint-limit measure and gradient (Jun eqs 11–16).
+//! * [`jlm`](mod@jlm): joint-limit measure and gradient (Jun eqs 11–16).
 //! * [`dual`]: dual-arm ellipsoid (Lim eq. 3.68).
 //! * [`polytope`]: velocity polytopes, single and dual (Kilic §3.2).
 

@@ -24,6 +24,11 @@ use crate::sim::{Arm, Simulation};
 
 /// Interval between assessment samples (s): 0.01 (100 Hz, the record rate).
 pub const SAMPLE_INTERVAL_S: f64 = 0.01;
+/// Interval of the tool positions the jerk is computed from (s): 0.05. The third difference
+/// over 50 ms passes the operator's motion (well under 5 Hz) and suppresses the hydraulic
+/// resonances (≳ 20 Hz) that no operator causes or can feel through the sticks; over 10 ms
+/// they dominate the figure.
+pub const JERK_INTERVAL_S: f64 = 0.05;
 
 /// Every metric of an attempt. All numbers are finite.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
@@ -204,6 +209,7 @@ pub struct Assessor {
     was_holding: bool,
     relief_at_start: u64,
     jerk: [JerkMeter; 2],
+    samples: u64,
     posture_samples: f64,
     yoshikawa_sum: f64,
     jlm_sum: f64,
@@ -230,6 +236,7 @@ impl Assessor {
             was_holding: false,
             relief_at_start: sim.relief_events(),
             jerk: Default::default(),
+            samples: 0,
             posture_samples: 0.0,
             yoshikawa_sum: 0.0,
             jlm_sum: 0.0,
@@ -335,9 +342,14 @@ impl Assessor {
         }
         m.relief_events = relief;
         let (mut near_s, mut near_l) = (false, false);
+        let every = (JERK_INTERVAL_S / dt).round().max(1.0) as u64;
+        let jerk_sample = self.samples % every == 0;
+        self.samples += 1;
         for &i in &self.working {
             let arm = Arm::BOTH[i];
-            self.jerk[i].add(sim.end_effector(arm).translation.vector, dt);
+            if jerk_sample {
+                self.jerk[i].add(sim.end_effector(arm).translation.vector, JERK_INTERVAL_S);
+            }
             let me = translational_measures(sim.jacobian_world(arm));
             let q = sim.arm(arm).q;
             self.yoshikawa_sum += me.yoshikawa;

@@ -187,15 +187,17 @@ pub async fn create(
     .await
     .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
     .map_err(|e| match e {
-        CreateError::Full(_) | CreateError::Recording(_) => ApiError::new(StatusCode::SERVICE_UNAVAILABLE, e.to_string()),
+        CreateError::Full(_) | CreateError::Recording(_) => {
+            ApiError::new(StatusCode::SERVICE_UNAVAILABLE, e.to_string())
+        }
         CreateError::ClientFull(_) => ApiError::new(StatusCode::TOO_MANY_REQUESTS, e.to_string()),
-        CreateError::UnknownScenario(_) => ApiError::bad_request(e.to_string()).with_detail(
-            serde_json::json!({
+        CreateError::UnknownScenario(_) => {
+            ApiError::bad_request(e.to_string()).with_detail(serde_json::json!({
                 "known": LIVE_SCENARIOS.iter().map(|(n, _)| (*n).to_string())
                     .chain(crate::exercises::EXERCISES.all().iter().map(|e| e.id.clone()))
                     .collect::<Vec<_>>()
-            }),
-        ),
+            }))
+        }
         CreateError::Sim(_) => ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
     })?;
     let ws_url = format!(
@@ -523,14 +525,23 @@ pub async fn assessment(
         .sessions
         .get(&id)
         .ok_or_else(|| ApiError::not_found(format!("no live session `{id}`")))?;
-    caller(&state, bearer(&headers).or(q.token.as_deref()), Some(&session))?;
+    caller(
+        &state,
+        bearer(&headers).or(q.token.as_deref()),
+        Some(&session),
+    )?;
     let live = session.live();
-    live.exercise().map(|r| Json(r.assessment())).ok_or_else(|| {
-        ApiError::new(
-            StatusCode::CONFLICT,
-            format!("session `{id}` runs `{}`, not an exercise", live.scenario().name()),
-        )
-    })
+    live.exercise()
+        .map(|r| Json(r.assessment()))
+        .ok_or_else(|| {
+            ApiError::new(
+                StatusCode::CONFLICT,
+                format!(
+                    "session `{id}` runs `{}`, not an exercise",
+                    live.scenario().name()
+                ),
+            )
+        })
 }
 
 /// `GET /api/sessions/{id}/log.csv`: the session's record (flushed first).

@@ -34,7 +34,7 @@ use crate::error::ApiError;
 use crate::metrics::Metrics;
 use crate::protocol::{
     ArmAxes, ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, MAX_INPUT_SEQ,
-    ObjectModelOut, SceneOut, ScenarioOut, ServerMessage, arm_name,
+    ObjectModelOut, ScenarioOut, SceneOut, ServerMessage, arm_name,
 };
 
 /// Largest message (and frame) the WebSocket transport reads (bytes): 4 × the documented

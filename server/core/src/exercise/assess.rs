@@ -24,6 +24,8 @@ use crate::sim::{Arm, Simulation};
 
 /// Interval between assessment samples (s): 0.01 (100 Hz, the record rate).
 pub const SAMPLE_INTERVAL_S: f64 = 0.01;
+/// A box let go with its lowest corner higher than this above the seabed is dropped (m): 0.02.
+pub const DROP_HEIGHT_M: f64 = 0.02;
 /// Interval of the tool positions the jerk is computed from (s): 0.05. The third difference
 /// over 50 ms passes the operator's motion (well under 5 Hz) and suppresses the hydraulic
 /// resonances (≳ 20 Hz) that no operator causes or can feel through the sticks; over 10 ms
@@ -42,7 +44,7 @@ pub struct Metrics {
     pub seabed_strikes: f64,
     /// Times an arm entered an obstacle box.
     pub obstacle_strikes: f64,
-    /// Times the box lost its last jaw while off the seabed.
+    /// Times the last jaw let go of the box with its lowest corner over 2 cm above the seabed.
     pub drops: f64,
     /// Highest jaw contact force (N).
     pub peak_contact_force_n: f64,
@@ -318,12 +320,17 @@ impl Assessor {
             .peak_internal_force_n
             .max(Vector3::new(w[0], w[1], w[2]).norm());
         let holding = Arm::BOTH.iter().any(|&a| sim.arm(a).holding);
-        let rest_z = sim.params().object.initial_pose.translation.z;
-        if self.was_holding
-            && !holding
-            && !super::condition::object_resting(sim)
-            && sim.object().pose.translation.z > rest_z + 0.02
-        {
+        // A drop: the last jaw lets go with the box's lowest corner more than
+        // DROP_HEIGHT_M above the seabed (it falls); a box set down, even on an edge, is not.
+        let pose = sim.object().pose;
+        let lowest = sim
+            .params()
+            .object
+            .corners()
+            .iter()
+            .map(|c| (pose * nalgebra::Point3::from(*c)).z)
+            .fold(f64::INFINITY, f64::min);
+        if self.was_holding && !holding && lowest - seabed > DROP_HEIGHT_M {
             m.drops += 1.0;
             events.push(Event {
                 kind: "drop",

@@ -40,6 +40,17 @@ fn default_tolerance_m() -> f64 {
     0.01
 }
 
+/// What `move` steers to the goal.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum Steer {
+    /// The arm's tool point.
+    #[default]
+    Tool,
+    /// The box's centre of mass (carried by the arm).
+    Object,
+}
+
 /// One scripted action (`"do"` names the variant in the file).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "do", rename_all = "snake_case", deny_unknown_fields)]
@@ -53,11 +64,18 @@ pub enum Action {
         #[serde(default)]
         method: Option<Method>,
     },
-    /// Cartesian mode: steer `arm`'s tool to `to` + `offset_m` (proportional control on the
-    /// linear sticks) until within `tolerance_m`.
+    /// Cartesian mode: steer `arm`'s tool (or the box it carries) to `to` + `offset_m`
+    /// (proportional control on the linear sticks) until within `tolerance_m`; with `level`,
+    /// the angular sticks keep the carried box level meanwhile.
     Move {
         /// Arm.
         arm: ArmName,
+        /// Tool or carried box.
+        #[serde(default)]
+        steer: Steer,
+        /// Keep the box level with the angular sticks.
+        #[serde(default)]
+        level: bool,
         /// Where.
         to: PointRef,
         /// Offset added to the point (m, world).
@@ -183,6 +201,21 @@ pub struct PilotOutput {
 
 /// Proportional gain of `move` (stick fraction per metre of error): full stick beyond 10 cm.
 const MOVE_GAIN_PER_M: f64 = 10.0;
+/// Proportional gain of `level` (angular stick fraction per radian of tilt): full stick
+/// beyond about 11°.
+const LEVEL_GAIN_PER_RAD: f64 = 5.0;
+
+/// Angular sticks that turn the box's z axis towards the world vertical: ω ∝ z_box × ẑ.
+fn level_sticks(sim: &Simulation) -> Vector3<f64> {
+    let z = sim.object().pose.rotation * Vector3::z();
+    let axis = z.cross(&Vector3::z());
+    let mut w = axis * LEVEL_GAIN_PER_RAD;
+    if w.norm() > 1.0 {
+        w /= w.norm();
+    }
+    w
+}
+
 /// Proportional gain of `joint` (stick fraction per degree of error): full stick beyond 10°.
 const JOINT_GAIN_PER_DEG: f64 = 0.1;
 
@@ -278,13 +311,19 @@ impl Autopilot {
             }
             Action::Move {
                 arm,
+                steer,
+                level,
                 to,
                 offset_m,
                 tolerance_m,
                 timeout_s,
             } => {
                 let goal = Self::point(sim, facts.scene, to) + Vector3::from(*offset_m);
-                let err = goal - sim.end_effector(Arm::BOTH[arm.index()]).translation.vector;
+                let now = match steer {
+                    Steer::Tool => sim.end_effector(Arm::BOTH[arm.index()]).translation.vector,
+                    Steer::Object => sim.object().pose.translation.vector,
+                };
+                let err = goal - now;
                 if err.norm() <= *tolerance_m || elapsed > *timeout_s {
                     true
                 } else {
@@ -293,6 +332,9 @@ impl Autopilot {
                         v /= v.norm();
                     }
                     out.axes[arm.index()][..3].copy_from_slice(v.as_slice());
+                    if *level {
+                        out.axes[arm.index()][3..].copy_from_slice(level_sticks(sim).as_slice());
+                    }
                     false
                 }
             }

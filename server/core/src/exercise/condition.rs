@@ -63,6 +63,8 @@ pub enum Condition {
     },
     /// No jaw holds anything.
     Released,
+    /// The box rests on the seabed (the seabed carries at least half its weight).
+    ObjectResting,
     /// Internal force magnitude below `force_n` (N) (zero unless both jaws hold).
     InternalForceBelow {
         /// Limit (N).
@@ -228,6 +230,7 @@ impl Condition {
                 }
             }
             Condition::Released => yes(Arm::BOTH.iter().all(|&a| !sim.arm(a).holding)),
+            Condition::ObjectResting => yes(object_resting(sim)),
             Condition::InternalForceBelow { force_n } => {
                 let w = sim.internal_wrench();
                 yes(Vector3::new(w[0], w[1], w[2]).norm() < *force_n)
@@ -333,6 +336,7 @@ impl Condition {
             }
             Condition::Holding { .. }
             | Condition::Released
+            | Condition::ObjectResting
             | Condition::ClosedLoop
             | Condition::ArmsStill { .. }
             | Condition::FaultInjected
@@ -391,6 +395,7 @@ impl Condition {
             Condition::All { of } => of.iter().try_for_each(|c| c.check(scene)),
             Condition::Holding { .. }
             | Condition::Released
+            | Condition::ObjectResting
             | Condition::ClosedLoop
             | Condition::FaultInjected
             | Condition::Diagnosed => Ok(()),

@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 use seaarms::exercises::{Driver, EXERCISES, run_headless};
 use seaarms_core::exercise::spec::DrillFault;
 
-/// Seeds 1..=16: the drill's splitmix64 draw over the file's four choices gives each fault
-/// kind at least twice (checked below, not assumed).
+/// Seeds 1..=16: the drill's splitmix64 draw over the file's eight choices (two per kind)
+/// gives each fault kind three to five times (checked below, not assumed).
 const SEEDS: std::ops::RangeInclusive<u64> = 1..=16;
 
 fn models() -> [std::sync::Arc<seaarms_core::Model>; 2] {

@@ -201,6 +201,8 @@ const ANSWERS_DEG: f64 = 2.0;
 /// Length of the wrist-rotate spin (s) and the window at its end the supply is read over (s).
 const SPIN_S: f64 = 0.6;
 const SPIN_READ_S: f64 = 0.2;
+/// Sticks centred after the spin while the rotate motor stops (s).
+const COAST_S: f64 = 0.5;
 /// Supply read from the spinning rotate motor below this fraction of the nameplate supply is
 /// a supply drop: 0.8.
 const SUPPLY_FRACTION: f64 = 0.8;
@@ -217,6 +219,7 @@ const LEAK_WATCH_S: f64 = 2.0;
 /// is leaking across its piston (Pa): 0.1 MPa; a shut healthy valve holds them to ≈ 0.01 MPa.
 const LEAK_DRIFT_PA: f64 = 1.0e5;
 
+/// The answers, as [`DrillFault::ANSWERS`] lists them.
 const SUPPLY_DROP: &str = DrillFault::ANSWERS[0];
 const STUCK_VALVE: &str = DrillFault::ANSWERS[1];
 const LEAK: &str = DrillFault::ANSWERS[2];
@@ -235,11 +238,12 @@ const AIR: &str = DrillFault::ANSWERS[3];
 /// 2. **Spin** the wrist rotate motor at full stick for [`SPIN_S`] (unloaded, equal-area
 ///    motor: in steady motion the two orifice drops are equal, so P_I + P_O = P_s, eq. 3.48):
 ///    a supply read below [`SUPPLY_FRACTION`] of the nameplate is a **supply drop**; a speed
-///    20 ms in below [`LAG_RATIO`] of the steady speed is **air** (the oil column's
-///    compliance V/β, eq. 3.49, delays the pressure build-up).
+///    20 ms in below [`LAG_RATIO`] of the steady speed is **air** (the pressure rate β/V of
+///    eq. 3.56 falls with β, so the pressure builds late).
 /// 3. **Leak test**: jog the loaded joints out and back, let them settle, watch the gauges with
 ///    the sticks centred: line pressures that keep drifting ([`LEAK_DRIFT_PA`]) as the two
-///    chambers bleed into each other (eq. 3.56) are a **leak**.
+///    chambers bleed into each other (the cross-piston leakage `hydraulics::chamber` adds to
+///    eq. 3.56) are a **leak**.
 ///
 /// If no test crosses its threshold the answer is the symptom closest to its threshold.
 #[derive(Debug, Clone, PartialEq, Default)]
@@ -260,18 +264,27 @@ pub struct Diagnosis {
 /// Where the procedure is.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 enum Phase {
+    /// Not begun.
     #[default]
     Start,
+    /// Sticks centred, watching ([`WATCH_S`]).
     Watch,
+    /// Full stick `dir` on `joint` ([`JOG_S`]); `at_limit`: jogged away from a stop rather
+    /// than against a runaway.
     Jog {
         joint: usize,
         dir: f64,
         at_limit: bool,
     },
+    /// Rotate at full stick ([`SPIN_S`]).
     Spin,
+    /// Sticks centred after the spin ([`COAST_S`]).
     Coast,
+    /// Leak-test jog k: joint `LEAK_JOINTS[k / 2]`, out for even k, back for odd.
     LeakJog(usize),
+    /// Sticks centred after the jogs ([`LEAK_SETTLE_S`]).
     LeakSettle,
+    /// Sticks centred, reading the gauges' drift ([`LEAK_WATCH_S`]).
     LeakWatch,
 }
 
@@ -396,7 +409,7 @@ impl Diagnosis {
                     };
                     self.begin(Phase::Coast, t, &st);
                 }
-                Phase::Coast if elapsed + 1e-9 >= 0.5 => {
+                Phase::Coast if elapsed + 1e-9 >= COAST_S => {
                     if self.supply_ratio < SUPPLY_FRACTION {
                         return Some(SUPPLY_DROP);
                     }
@@ -713,8 +726,34 @@ mod tests {
             "{} vs {expected}",
             d.supply_ratio
         );
-        let (a, _) = diagnose_with(|f| f.stuck_valve[3] = Some(-0.7));
+        // At its stop (wrist pitch at 21°/s reaches −57.5° from −20° within the 3 s) …
+        let (a, d) = diagnose_with(|f| f.stuck_valve[3] = Some(-0.7));
         assert_eq!(a, STUCK_VALVE);
+        assert!(
+            d.tested == [false; 6]
+                && matches!(
+                    d.phase,
+                    Phase::Jog {
+                        joint: 3,
+                        at_limit: true,
+                        ..
+                    }
+                )
+        );
+        // … and still running (swing at 4°/s is 12° from 0 after 3 s, 25° is its stop).
+        let (a, d) = diagnose_with(|f| f.stuck_valve[0] = Some(-0.2));
+        assert_eq!(a, STUCK_VALVE);
+        assert!(
+            matches!(
+                d.phase,
+                Phase::Jog {
+                    joint: 0,
+                    at_limit: false,
+                    ..
+                }
+            ),
+            "{d:?}"
+        );
         let (a, _) = diagnose_with(|f| f.leak_m3_s_pa[1] = 5e-11);
         assert_eq!(a, LEAK);
         let (a, d) = diagnose_with(|f| f.bulk_modulus_scale = 0.025);

@@ -6,28 +6,29 @@
 use std::collections::BTreeMap;
 
 use seaarms::exercises::{Driver, EXERCISES, run_headless};
+use seaarms_core::exercise::Assessment;
 use seaarms_core::exercise::spec::DrillFault;
 
 /// Seeds 1..=16: the drill's splitmix64 draw over the file's eight choices (two per kind)
 /// gives each fault kind three to five times (checked below, not assumed).
 const SEEDS: std::ops::RangeInclusive<u64> = 1..=16;
 
-fn models() -> [std::sync::Arc<seaarms_core::Model>; 2] {
+/// Runs one headless attempt at `fault-diagnosis`.
+fn attempt(driver: Driver, seed: u64) -> Assessment {
+    let spec = EXERCISES
+        .get("fault-diagnosis")
+        .expect("fault-diagnosis exercise");
     let robots = seaarms::robots::Robots::load().expect("robots");
     let m = robots.get("magnum").expect("magnum");
-    [m.clone(), m]
+    run_headless(spec, &[m.clone(), m], driver, seed).expect("run")
 }
 
 #[test]
 fn autopilot_names_every_fault_and_passes() {
-    let spec = EXERCISES
-        .get("fault-diagnosis")
-        .expect("fault-diagnosis exercise");
-    let models = models();
     let mut seen: BTreeMap<String, usize> = BTreeMap::new();
     let mut failures = Vec::new();
     for seed in SEEDS {
-        let a = run_headless(spec.clone(), &models, Driver::Autopilot, seed).expect("run");
+        let a = attempt(Driver::Autopilot, seed);
         let d = a.diagnosis.clone().expect("a drill has a diagnosis");
         println!(
             "seed {seed:2}: {:11} at {:5.2} s → answer {:11} passed {} score {:.1} time {:.1} s {:?}",
@@ -61,15 +62,11 @@ fn autopilot_names_every_fault_and_passes() {
 
 #[test]
 fn idle_attempt_fails_and_runs_are_deterministic() {
-    let spec = EXERCISES
-        .get("fault-diagnosis")
-        .expect("fault-diagnosis exercise");
-    let models = models();
-    let idle = run_headless(spec.clone(), &models, Driver::Idle, 3).expect("run");
+    let idle = attempt(Driver::Idle, 3);
     assert!(idle.done && !idle.passed, "{idle:?}");
     assert!(!idle.completed);
     assert_eq!(idle.diagnosis.as_ref().map(|d| d.answer.as_str()), Some(""));
-    let a = run_headless(spec.clone(), &models, Driver::Autopilot, 6).expect("run");
-    let b = run_headless(spec, &models, Driver::Autopilot, 6).expect("run");
+    let a = attempt(Driver::Autopilot, 6);
+    let b = attempt(Driver::Autopilot, 6);
     assert_eq!(a, b);
 }

@@ -219,23 +219,300 @@ fn level_sticks(sim: &Simulation) -> Vector3<f64> {
 /// Proportional gain of `joint` (stick fraction per degree of error): full stick beyond 10°.
 const JOINT_GAIN_PER_DEG: f64 = 0.1;
 
-/// The fault-diagnosis procedure, from what the page shows: joint angles and line pressures.
+/// Length of the sticks-centred watch that opens the diagnosis (s).
+const WATCH_S: f64 = 2.0;
+/// A joint that turns more than this in the watch with every stick centred is running away (°):
+/// a closed-centre valve holds a healthy joint to a small fraction of a degree.
+const RUNAWAY_DEG: f64 = 1.0;
+/// A limited joint within this of a limit (°) is tested for an open valve holding it there.
+const AT_LIMIT_DEG: f64 = 1.5;
+/// Length of a full-stick jog of one joint (s).
+const JOG_S: f64 = 0.6;
+/// A jogged joint that turns less than this in the commanded direction does not answer its
+/// stick (°); a healthy joint turns ≥ 9° in a [`JOG_S`] jog (Table 1-1's slowest 20°/s).
+const ANSWERS_DEG: f64 = 2.0;
+/// Length of the wrist-rotate spin (s) and the window at its end the supply is read over (s).
+const SPIN_S: f64 = 0.6;
+const SPIN_READ_S: f64 = 0.2;
+/// Sticks centred after the spin while the rotate motor stops (s).
+const COAST_S: f64 = 0.5;
+/// Supply read from the spinning rotate motor below this fraction of the nameplate supply is
+/// a supply drop: 0.8.
+const SUPPLY_FRACTION: f64 = 0.8;
+/// The rotate motor's speed 20 ms into a full-stick spin over its steady speed below this is
+/// air in the oil: 0.7 (healthy oil ≈ 0.98).
+const LAG_RATIO: f64 = 0.7;
+/// Leak test: the loaded joints jogged (shoulder, elbow, wrist pitch), each 0.3 s out and back.
+const LEAK_JOINTS: [usize; 3] = [1, 2, 3];
+const LEAK_JOG_S: f64 = 0.3;
+/// Leak test: settling time after the jogs (s), then the watch (s).
+const LEAK_SETTLE_S: f64 = 0.7;
+const LEAK_WATCH_S: f64 = 2.0;
+/// A joint whose two line pressures drift by more than this in total over a sticks-centred watch
+/// is leaking across its piston (Pa): 0.1 MPa; a shut healthy valve holds them to ≈ 0.01 MPa.
+const LEAK_DRIFT_PA: f64 = 1.0e5;
+
+/// The answers, as [`DrillFault::ANSWERS`] lists them.
+const SUPPLY_DROP: &str = DrillFault::ANSWERS[0];
+const STUCK_VALVE: &str = DrillFault::ANSWERS[1];
+const LEAK: &str = DrillFault::ANSWERS[2];
+const AIR: &str = DrillFault::ANSWERS[3];
+
+/// The fault-diagnosis procedure: what a pilot does with the sticks in joint mode (a centred
+/// stick shuts its closed-centre valve, so what the arm does then is the hydraulics) while
+/// reading the page: joint angles and speeds, the line pressures P_I, P_O, the joint limits
+/// and the nameplate supply pressure (Lim Table 1-1). It never reads the fault settings.
 ///
-/// 1. Sticks at zero for 1.5 s: a joint that moves by more than 2° with its stick at zero
-///    has a **stuck valve** (a spool held open drives it at a good fraction of full speed).
-/// 2. Still nothing? Drive the shoulder (joint 2) against its load at full stick for 1 s,
-///    then let go; compare the highest inlet-side line pressure seen against the nominal
-///    supply: below 75 % of it is a **supply drop**.
-/// 3. With the stick at zero after that, a joint whose two line pressures converge (their
-///    difference falls by more than half in 1.5 s) while it sags is **leaking** across the
-///    piston; otherwise the slow pressure build-up is **air** in the oil.
+/// 1. **Watch** ([`WATCH_S`], sticks centred): a joint that turns by more than
+///    [`RUNAWAY_DEG`] is jogged at full stick against its motion; a joint resting at a limit
+///    is jogged away from it. One that does not answer its stick ([`ANSWERS_DEG`]) has a
+///    **stuck valve** (the spool ignores the stick and drives it to its stop); a runaway joint
+///    that answers is creeping on a **leak**.
+/// 2. **Spin** the wrist rotate motor at full stick for [`SPIN_S`] (unloaded, equal-area
+///    motor: in steady motion the two orifice drops are equal, so P_I + P_O = P_s, eq. 3.48):
+///    a supply read below [`SUPPLY_FRACTION`] of the nameplate is a **supply drop**; a speed
+///    20 ms in below [`LAG_RATIO`] of the steady speed is **air** (the pressure rate β/V of
+///    eq. 3.56 falls with β, so the pressure builds late).
+/// 3. **Leak test**: jog the loaded joints out and back, let them settle, watch the gauges with
+///    the sticks centred: line pressures that keep drifting ([`LEAK_DRIFT_PA`]) as the two
+///    chambers bleed into each other (the cross-piston leakage `hydraulics::chamber` adds to
+///    eq. 3.56) are a **leak**.
+///
+/// If no test crosses its threshold the answer is the symptom closest to its threshold.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct Diagnosis {
-    phase: u8,
+    phase: Phase,
     t0: f64,
     q0: [f64; 6],
-    peak_p: f64,
-    dp0: f64,
+    p0: [[f64; 6]; 2],
+    tested: [bool; 6],
+    spin_first: Option<f64>,
+    spin_sum_pa: f64,
+    spin_n: u32,
+    supply_ratio: f64,
+    lag_ratio: f64,
+    leak_drift_pa: f64,
+}
+
+/// Where the procedure is.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+enum Phase {
+    /// Not begun.
+    #[default]
+    Start,
+    /// Sticks centred, watching ([`WATCH_S`]).
+    Watch,
+    /// Full stick `dir` on `joint` ([`JOG_S`]); `at_limit`: jogged away from a stop rather
+    /// than against a runaway.
+    Jog {
+        joint: usize,
+        dir: f64,
+        at_limit: bool,
+    },
+    /// Rotate at full stick ([`SPIN_S`]).
+    Spin,
+    /// Sticks centred after the spin ([`COAST_S`]).
+    Coast,
+    /// Leak-test jog k: joint `LEAK_JOINTS[k / 2]`, out for even k, back for odd.
+    LeakJog(usize),
+    /// Sticks centred after the jogs ([`LEAK_SETTLE_S`]).
+    LeakSettle,
+    /// Sticks centred, reading the gauges' drift ([`LEAK_WATCH_S`]).
+    LeakWatch,
+}
+
+impl Diagnosis {
+    fn begin(&mut self, phase: Phase, t: f64, st: &crate::sim::ArmState) {
+        self.phase = phase;
+        self.t0 = t;
+        self.q0 = st.q;
+        self.p0 = [st.p_in, st.p_out];
+    }
+
+    /// Largest total drift of a joint's two line pressures since the phase began (Pa).
+    fn pressure_drift(&self, st: &crate::sim::ArmState) -> f64 {
+        (0..6)
+            .map(|j| (st.p_in[j] - self.p0[0][j]).abs() + (st.p_out[j] - self.p0[1][j]).abs())
+            .fold(0.0, f64::max)
+    }
+
+    /// The next untested limited joint within [`AT_LIMIT_DEG`] of a limit, with the jog
+    /// direction away from it.
+    fn next_at_limit(&self, sim: &Simulation, arm: Arm) -> Option<(usize, f64)> {
+        let q = sim.arm(arm).q;
+        let near = AT_LIMIT_DEG.to_radians();
+        sim.model(arm)
+            .joints
+            .iter()
+            .enumerate()
+            .take(6)
+            .filter(|(j, joint)| joint.is_limited() && !self.tested[*j])
+            .find_map(|(j, joint)| {
+                if q[j] - joint.limits[0] < near {
+                    Some((j, 1.0))
+                } else if joint.limits[1] - q[j] < near {
+                    Some((j, -1.0))
+                } else {
+                    None
+                }
+            })
+    }
+
+    /// One 20 ms slot: sets `arm`'s sticks in `axes` and returns the answer once known.
+    fn tick(&mut self, sim: &Simulation, arm: Arm, axes: &mut [f64; 6]) -> Option<&'static str> {
+        let t = sim.time_s();
+        let st = *sim.arm(arm);
+        let supply_pa = sim.params().arms[arm.index()].hydraulics.supply_pa;
+        *axes = [0.0; 6];
+        // Phases end at the slot boundary; the next phase's sticks go out in the same slot.
+        loop {
+            let elapsed = t - self.t0;
+            match self.phase {
+                Phase::Start => self.begin(Phase::Watch, t, &st),
+                Phase::Watch if elapsed + 1e-9 >= WATCH_S => {
+                    self.leak_drift_pa = self.leak_drift_pa.max(self.pressure_drift(&st));
+                    let (j, dq) =
+                        (0..6)
+                            .map(|j| (j, st.q[j] - self.q0[j]))
+                            .fold(
+                                (0, 0.0_f64),
+                                |a, b| if b.1.abs() > a.1.abs() { b } else { a },
+                            );
+                    if dq.abs() > RUNAWAY_DEG.to_radians() {
+                        let dir = -dq.signum();
+                        self.begin(
+                            Phase::Jog {
+                                joint: j,
+                                dir,
+                                at_limit: false,
+                            },
+                            t,
+                            &st,
+                        );
+                    } else if let Some((joint, dir)) = self.next_at_limit(sim, arm) {
+                        self.begin(
+                            Phase::Jog {
+                                joint,
+                                dir,
+                                at_limit: true,
+                            },
+                            t,
+                            &st,
+                        );
+                    } else {
+                        self.begin(Phase::Spin, t, &st);
+                    }
+                }
+                Phase::Jog {
+                    joint,
+                    dir,
+                    at_limit,
+                } if elapsed + 1e-9 >= JOG_S => {
+                    let moved = (st.q[joint] - self.q0[joint]) * dir;
+                    if moved < ANSWERS_DEG.to_radians() {
+                        return Some(STUCK_VALVE);
+                    }
+                    if !at_limit {
+                        return Some(LEAK);
+                    }
+                    self.tested[joint] = true;
+                    match self.next_at_limit(sim, arm) {
+                        Some((joint, dir)) => self.begin(
+                            Phase::Jog {
+                                joint,
+                                dir,
+                                at_limit: true,
+                            },
+                            t,
+                            &st,
+                        ),
+                        None => self.begin(Phase::Spin, t, &st),
+                    }
+                }
+                Phase::Spin if elapsed + 1e-9 >= SPIN_S => {
+                    let steady = st.qd[5];
+                    self.supply_ratio = if self.spin_n > 0 {
+                        self.spin_sum_pa / f64::from(self.spin_n) / supply_pa
+                    } else {
+                        1.0
+                    };
+                    self.lag_ratio = match self.spin_first {
+                        Some(first) if steady.abs() > 1e-6 => first / steady,
+                        _ => 1.0,
+                    };
+                    self.begin(Phase::Coast, t, &st);
+                }
+                Phase::Coast if elapsed + 1e-9 >= COAST_S => {
+                    if self.supply_ratio < SUPPLY_FRACTION {
+                        return Some(SUPPLY_DROP);
+                    }
+                    if self.lag_ratio < LAG_RATIO {
+                        return Some(AIR);
+                    }
+                    self.begin(Phase::LeakJog(0), t, &st);
+                }
+                Phase::LeakJog(k) if elapsed + 1e-9 >= LEAK_JOG_S => {
+                    let next = if k + 1 < 2 * LEAK_JOINTS.len() {
+                        Phase::LeakJog(k + 1)
+                    } else {
+                        Phase::LeakSettle
+                    };
+                    self.begin(next, t, &st);
+                }
+                Phase::LeakSettle if elapsed + 1e-9 >= LEAK_SETTLE_S => {
+                    self.begin(Phase::LeakWatch, t, &st)
+                }
+                Phase::LeakWatch if elapsed + 1e-9 >= LEAK_WATCH_S => {
+                    self.leak_drift_pa = self.leak_drift_pa.max(self.pressure_drift(&st));
+                    return Some(self.closest());
+                }
+                _ => break,
+            }
+        }
+        let elapsed = t - self.t0;
+        match self.phase {
+            Phase::Jog { joint, dir, .. } => axes[joint] = dir,
+            Phase::Spin => {
+                axes[5] = 1.0;
+                // The first reading after one slot at full stick, then the supply read.
+                if self.spin_first.is_none() && elapsed > 0.5 * PILOT_INTERVAL_S {
+                    self.spin_first = Some(st.qd[5]);
+                }
+                if elapsed + 1e-9 >= SPIN_S - SPIN_READ_S {
+                    self.spin_sum_pa += st.p_in[5] + st.p_out[5];
+                    self.spin_n += 1;
+                }
+            }
+            Phase::LeakJog(k) => {
+                axes[LEAK_JOINTS[k / 2]] = if k % 2 == 0 { 1.0 } else { -1.0 };
+            }
+            _ => {}
+        }
+        None
+    }
+
+    /// The leak test found nothing past its threshold: the symptom nearest its threshold,
+    /// each scaled so that 1 is the threshold.
+    fn closest(&self) -> &'static str {
+        if self.leak_drift_pa > LEAK_DRIFT_PA {
+            return LEAK;
+        }
+        let scores = [
+            (
+                (1.0 - self.supply_ratio) / (1.0 - SUPPLY_FRACTION),
+                SUPPLY_DROP,
+            ),
+            ((1.0 - self.lag_ratio) / (1.0 - LAG_RATIO), AIR),
+            (self.leak_drift_pa / LEAK_DRIFT_PA, LEAK),
+        ];
+        scores
+            .iter()
+            .fold(
+                (f64::NEG_INFINITY, LEAK),
+                |a, b| if b.0 > a.0 { *b } else { a },
+            )
+            .1
+    }
 }
 
 /// Runs a script.
@@ -395,78 +672,20 @@ impl Autopilot {
     }
 
     fn diagnose(&mut self, sim: &Simulation, arm: Arm, out: &mut PilotOutput) -> bool {
-        let t = sim.time_s();
-        let st = sim.arm(arm);
-        let d = &mut self.diagnosis;
-        let supply = sim.params().arms[arm.index()].hydraulics.supply_pa;
-        let answer = |out: &mut PilotOutput, a: &'static str| {
-            out.answer = Some(a);
-            true
-        };
-        match d.phase {
-            0 => {
-                d.phase = 1;
-                d.t0 = t;
-                d.q0 = st.q;
-                false
+        // Joint mode: a centred stick shuts the valve (no servo holding the joint).
+        if self.mode != Mode::Joint {
+            self.mode = Mode::Joint;
+            out.settings = Some((Some(Mode::Joint), None));
+        }
+        match self.diagnosis.tick(sim, arm, &mut out.axes[arm.index()]) {
+            Some(answer) => {
+                out.answer = Some(answer);
+                self.answered = true;
+                true
             }
-            1 => {
-                if st
-                    .q
-                    .iter()
-                    .zip(d.q0)
-                    .any(|(q, q0)| (q - q0).abs() > 2f64.to_radians())
-                {
-                    return answer(
-                        out,
-                        DrillFault::StuckValve {
-                            joint: 0,
-                            spool: 0.0,
-                        }
-                        .answer(),
-                    );
-                }
-                if t - d.t0 > 1.5 {
-                    d.phase = 2;
-                    d.t0 = t;
-                }
-                false
-            }
-            2 => {
-                out.axes[arm.index()][1] = 1.0;
-                d.peak_p = d.peak_p.max(st.p_in[1].max(st.p_out[1]));
-                if t - d.t0 > 1.0 {
-                    if d.peak_p < 0.75 * supply {
-                        return answer(out, DrillFault::SupplyDrop { drop_pa: 0.0 }.answer());
-                    }
-                    d.phase = 3;
-                    d.t0 = t;
-                    d.dp0 = (st.p_in[1] - st.p_out[1]).abs();
-                }
-                false
-            }
-            _ => {
-                if t - d.t0 > 1.5 {
-                    let dp = (st.p_in[1] - st.p_out[1]).abs();
-                    let a = if dp < 0.5 * d.dp0 {
-                        DrillFault::Leak {
-                            joint: 0,
-                            coefficient_m3_s_pa: 0.0,
-                        }
-                        .answer()
-                    } else {
-                        DrillFault::Air {
-                            bulk_modulus_scale: 1.0,
-                        }
-                        .answer()
-                    };
-                    return answer(out, a);
-                }
-                false
-            }
+            None => false,
         }
     }
-
     /// The stick mode the autopilot believes is set.
     pub fn mode(&self) -> Mode {
         self.mode
@@ -475,5 +694,111 @@ impl Autopilot {
     /// Whether it has sent its diagnosis.
     pub fn answered(&self) -> bool {
         self.answered
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::hydraulics::Faults;
+    use crate::model::{Model, ModelSpec};
+    use crate::sim::{Input, SimParams};
+
+    fn magnum() -> Model {
+        let text = crate::robots::builtin_text("magnum").unwrap_or_else(|| panic!("magnum"));
+        let spec: ModelSpec = serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}"));
+        Model::from_spec(&spec).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    /// Lim's case-study set-up, settled for 0.5 s, then `fault` on the left arm and 3 s for
+    /// its symptom to develop (a stuck valve drives its joint to the stop); then the
+    /// procedure, stepped in 20 ms slots with joint-mode sticks (stick = valve command).
+    fn diagnose_with(fault: impl Fn(&mut Faults)) -> (&'static str, Diagnosis) {
+        let m = magnum();
+        let p = SimParams::case_study(&m, &m).unwrap_or_else(|e| panic!("{e}"));
+        let mut sim = Simulation::new(m.clone(), m, p).unwrap_or_else(|e| panic!("{e}"));
+        let mut input = Input::default();
+        for k in 0..3500 {
+            if k == 500 {
+                fault(sim.faults_mut(Arm::Left));
+            }
+            sim.step(&input);
+        }
+        let mut d = Diagnosis::default();
+        for _ in 0..2000 {
+            let mut axes = [0.0; 6];
+            if let Some(answer) = d.tick(&sim, Arm::Left, &mut axes) {
+                return (answer, d);
+            }
+            input.arms[0].valves = axes;
+            for _ in 0..20 {
+                sim.step(&input);
+            }
+        }
+        panic!("no answer in 40 s");
+    }
+
+    /// A healthy arm crosses no threshold, each by a wide margin: the supply read from the
+    /// spinning rotate motor is the nameplate (P_I + P_O = P_s for an equal-area motor in steady
+    /// motion, eq. 3.48 with equal orifice flows in and out), the motor is at speed within one
+    /// slot, and a shut valve holds the line pressures.
+    #[test]
+    fn healthy_arm_crosses_no_threshold() {
+        let (_, d) = diagnose_with(|_| {});
+        assert_eq!(d.phase, Phase::LeakWatch, "went the whole way");
+        assert!((d.supply_ratio - 1.0).abs() < 0.02, "{}", d.supply_ratio);
+        assert!(d.lag_ratio > 0.9, "{}", d.lag_ratio);
+        assert!(
+            d.leak_drift_pa < 0.25 * LEAK_DRIFT_PA,
+            "{}",
+            d.leak_drift_pa
+        );
+    }
+
+    /// The supply read matches the dropped supply (the same closed form as above, with
+    /// P_s − drop), and each fault kind is named, on joints and sizes other than the
+    /// exercise file's.
+    #[test]
+    fn each_fault_is_named() {
+        let (a, d) = diagnose_with(|f| f.supply_drop_pa = 2.0e6);
+        assert_eq!(a, SUPPLY_DROP);
+        let expected = (6.89e6 - 2.0e6) / 6.89e6;
+        assert!(
+            (d.supply_ratio - expected).abs() < 0.02,
+            "{} vs {expected}",
+            d.supply_ratio
+        );
+        // At its stop (wrist pitch at 21°/s reaches −57.5° from −20° within the 3 s) …
+        let (a, d) = diagnose_with(|f| f.stuck_valve[3] = Some(-0.7));
+        assert_eq!(a, STUCK_VALVE);
+        assert!(
+            d.tested == [false; 6]
+                && matches!(
+                    d.phase,
+                    Phase::Jog {
+                        joint: 3,
+                        at_limit: true,
+                        ..
+                    }
+                )
+        );
+        // … and still running (swing at 4°/s is 12° from 0 after 3 s, 25° is its stop).
+        let (a, d) = diagnose_with(|f| f.stuck_valve[0] = Some(-0.2));
+        assert_eq!(a, STUCK_VALVE);
+        assert!(
+            matches!(
+                d.phase,
+                Phase::Jog {
+                    joint: 0,
+                    at_limit: false,
+                    ..
+                }
+            ),
+            "{d:?}"
+        );
+        let (a, _) = diagnose_with(|f| f.leak_m3_s_pa[1] = 5e-11);
+        assert_eq!(a, LEAK);
+        let (a, d) = diagnose_with(|f| f.bulk_modulus_scale = 0.025);
+        assert_eq!(a, AIR, "{d:?}");
     }
 }

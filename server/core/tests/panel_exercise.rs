@@ -5,13 +5,15 @@
 
 mod common;
 
+use common::panel_util::{insert_pose, run_toward, stab_in_hand};
+
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use seaarms_core::exercise::{Action, Autopilot, Condition, ExerciseRun, ExerciseSpec, Mode};
 use seaarms_core::ik::magnum_ik;
 use seaarms_core::panel::PanelParams;
-use seaarms_core::sim::{Arm, Input, Simulation};
+use seaarms_core::sim::{Arm, Input, Simulation, StabPhase};
 
 const VALVE_TURN: &str = include_str!("../../../exercises/valve-turn.json");
 const HOT_STAB: &str = include_str!("../../../exercises/hot-stab.json");
@@ -129,4 +131,59 @@ fn move_with_an_attitude_steers_the_angular_sticks() {
     let out = pilot.tick(&sim, &run.facts());
     assert_eq!(out.axes[1], [0.0; 6]);
     assert!(pilot.finished());
+}
+
+#[test]
+fn assessment_counts_side_load_faults_and_fails_the_hot_stab_on_one() {
+    let arm = Arm::Right;
+    let (mut sim, panel) = stab_in_hand(arm);
+    let mut run = ExerciseRun::new(Arc::new(spec(HOT_STAB)), &sim, 1);
+    let sp = panel.stab;
+    // Drive in 10 ms slices (the assessment's sample interval) towards each pose.
+    let go = |sim: &mut Simulation, run: &mut ExerciseRun, target, slices: usize| {
+        for _ in 0..slices {
+            run_toward(sim, arm, &target, 10);
+            run.sample(sim, false);
+        }
+    };
+    // In stages, as tests/panel.rs does, letting the tool settle on the axis at each; then
+    // push (towards 12 mm past full depth, 600 N on the latch) only until it latches.
+    for (depth, slices) in [(-0.01, 400), (0.025, 300)] {
+        go(
+            &mut sim,
+            &mut run,
+            insert_pose(&panel, depth, Vector3::zeros(), 0.0),
+            slices,
+        );
+    }
+    let push = insert_pose(&panel, sp.insertion_depth_m + 0.012, Vector3::zeros(), 0.0);
+    for _ in 0..300 {
+        go(&mut sim, &mut run, push, 1);
+        if sim.panel().expect("panel").stab_phase == StabPhase::Seated {
+            break;
+        }
+    }
+    assert_eq!(sim.panel().expect("panel").stab_phase, StabPhase::Seated);
+    let seated = insert_pose(&panel, sp.insertion_depth_m, Vector3::zeros(), 0.0);
+    go(&mut sim, &mut run, seated, 150);
+    assert_eq!(run.assessment().metrics.side_load_faults, 0.0);
+    // 30 mm sideways on the seated stab: 2·10⁴ N/m across the axis asks 600 N > 400 N.
+    let sideways = insert_pose(
+        &panel,
+        sp.insertion_depth_m,
+        Vector3::new(0.0, 0.03, 0.0),
+        0.0,
+    );
+    go(&mut sim, &mut run, sideways, 300);
+    go(&mut sim, &mut run, seated, 200);
+    let a = run.assessment();
+    assert_eq!(a.metrics.side_load_faults, 1.0);
+    assert!(a.metrics.peak_side_load_n > sp.side_load_limit_n);
+    let limit = a
+        .limits
+        .iter()
+        .find(|l| l.metric == "side_load_faults")
+        .expect("limit");
+    assert!(!limit.met);
+    assert!(!a.passed);
 }

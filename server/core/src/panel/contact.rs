@@ -78,40 +78,34 @@ fn point_velocity(twist: &Vector6<f64>, r: &Vector3<f64>) -> Vector3<f64> {
 }
 
 /// The 6-D coupling spring–damper pulling the tool (pose `tool`, twist `twist`) to `desired`
-/// moving with the twist `desired_twist` (both world, at the tool point).
+/// moving with the twist `desired_twist` (both world, at the tool point), with translational
+/// stiffness and damping matrices `kt`, `ct` (world) and the rotational ones of
+/// [`super::CouplingParams`].
 fn coupling(
     p: &PanelParams,
     tool: &Isometry3<f64>,
     twist: &Vector6<f64>,
     desired: &Isometry3<f64>,
     desired_twist: &Vector6<f64>,
+    (kt, ct): (Matrix3<f64>, Matrix3<f64>),
 ) -> ToolLoad {
     let c = &p.coupling;
     let ep = tool.translation.vector - desired.translation.vector;
     let er = rotation_error(&tool.rotation, &desired.rotation);
     let ev = twist - desired_twist;
-    let f = -ep * c.stiffness_n_m - Vector3::new(ev[0], ev[1], ev[2]) * c.damping_n_s_m;
+    let f = -(kt * ep) - ct * Vector3::new(ev[0], ev[1], ev[2]);
     let m = -er * c.stiffness_nm_rad - Vector3::new(ev[3], ev[4], ev[5]) * c.damping_nm_s_rad;
     let mut load = ToolLoad::zero(0.0);
     load.wrench = Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z);
-    let diag = Vector6::new(
-        c.stiffness_n_m,
-        c.stiffness_n_m,
-        c.stiffness_n_m,
-        c.stiffness_nm_rad,
-        c.stiffness_nm_rad,
-        c.stiffness_nm_rad,
-    );
-    let damp = Vector6::new(
-        c.damping_n_s_m,
-        c.damping_n_s_m,
-        c.damping_n_s_m,
-        c.damping_nm_s_rad,
-        c.damping_nm_s_rad,
-        c.damping_nm_s_rad,
-    );
-    load.stiffness = Matrix6::from_diagonal(&diag);
-    load.damping = Matrix6::from_diagonal(&damp);
+    load.stiffness.fixed_view_mut::<3, 3>(0, 0).copy_from(&kt);
+    load.damping.fixed_view_mut::<3, 3>(0, 0).copy_from(&ct);
+    let rot = Matrix3::identity();
+    load.stiffness
+        .fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&(rot * c.stiffness_nm_rad));
+    load.damping
+        .fixed_view_mut::<3, 3>(3, 3)
+        .copy_from(&(rot * c.damping_nm_s_rad));
     load
 }
 
@@ -135,14 +129,25 @@ pub(crate) fn tool_load(
             let w = u * s.valve_rate_rad_s;
             let vd = w.cross(&(desired.translation.vector - frame.translation.vector));
             let dt = Vector6::new(vd.x, vd.y, vd.z, w.x, w.y, w.z);
-            Some(coupling(p, tool, twist, &desired, &dt))
+            let c = &p.coupling;
+            let i = Matrix3::identity();
+            let kc = (i * c.stiffness_n_m, i * c.damping_n_s_m);
+            Some(coupling(p, tool, twist, &desired, &dt, kc))
         }
         Graspable::BoxHandle(_) => None,
         Graspable::Stab => Some(match s.stab_phase {
             StabPhase::Seated => {
-                let desired = p.seated_stab() * s.stab_grasp.inverse();
-                let mut load = coupling(p, tool, twist, &desired, &Vector6::zeros());
+                let desired = s.stab_pose * s.stab_grasp.inverse();
+                // Along the axis the latch and the grip's coupling; across it the bore's and
+                // grip's bearing compliance, as while inserting.
                 let n = p.normal();
+                let (along, across) = (n * n.transpose(), Matrix3::identity() - n * n.transpose());
+                let (c, sp) = (&p.coupling, &p.stab);
+                let kc = (
+                    along * c.stiffness_n_m + across * sp.bearing_stiffness_n_m,
+                    along * c.damping_n_s_m + across * sp.bearing_damping_n_s_m,
+                );
+                let mut load = coupling(p, tool, twist, &desired, &Vector6::zeros(), kc);
                 let f = Vector3::new(load.wrench[0], load.wrench[1], load.wrench[2]);
                 // The receptacle takes what the jaw pushes: −f on the stab.
                 load.side_load_n = (f - n * f.dot(&n)).norm();

@@ -239,9 +239,12 @@ impl Simulation {
                 s.side_load_n = load.side_load_n;
                 s.stop_force_n = load.stop_push_n;
                 if load.stop_push_n >= p.stab.seating_force_n {
+                    // Latched where it is, its tip moved back to full depth: no jump in the
+                    // lateral or angular coupling, and the axial push carries on into the
+                    // coupling (the latch force it had).
                     s.stab_phase = StabPhase::Seated;
                     s.seatings += 1;
-                    s.stab_pose = p.seated_stab();
+                    s.stab_pose.translation.vector -= n * (depth - p.stab.insertion_depth_m);
                     s.stab_depth_m = p.stab.insertion_depth_m;
                 }
             }

@@ -18,7 +18,7 @@
 //!   friction; at full depth a latch spring, and pushing it with the seating force latches
 //!   the stab (seated). A seated stab stays when released; pulling it out with more
 //!   than the seating force unlatches it.
-//! * **Coupling to the jaw** ([`contact`]): the held item's reaction is a wrench at the tool
+//! * **Coupling to the jaw** (`contact.rs`): the held item's reaction is a wrench at the tool
 //!   point, added to the arm's joint torques as Jᵀ·F (Lim eq. 3.38's external-force term
 //!   JᵀF, as the grasp constraint's contact wrenches enter it). The jaw is coupled to a held
 //!   valve or seated stab by a stiff 6-D spring–damper, and a held free stab is rigid in the

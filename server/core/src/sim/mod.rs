@@ -37,7 +37,9 @@
 //! * The jaw is a flow-limited actuator (opening rate ∝ command, Table 1-1 speed) with a clamp
 //!   force, not a chamber model; the grasp is rigid whatever the clamp force (no slip).
 //! * Contact is jaw–handle only (capture radius) and box–seabed (corner penalty springs with
-//!   friction); links do not collide with the object, the seabed or each other.
+//!   friction); links do not collide with the object, the seabed or each other. With a panel
+//!   ([`SimParams::panel`]) the jaws also take its valve T-bar and hot stab, whose loads act
+//!   on the arms as JᵀF (see [`crate::panel`]); links do not collide with the panel either.
 //! * Valves are ideal critically lapped spools with instantaneous response (Lim eq. 3.51);
 //!   no valve leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
 //! * Buoyancy (optional) uses the mean link density; drag is an optional quadratic joint term.

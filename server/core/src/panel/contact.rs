@@ -160,8 +160,9 @@ pub(crate) fn tool_load(
 }
 
 /// A stab rigid in the jaw: its weight, and its contact with the receptacle (inside: bearing
-/// springs at the tip and the mouth beyond the chamfer's play, seal friction, full-depth stop) or the panel face
-/// (outside, tip past the face plane and not in the holster bore: a penalty spring on the tip).
+/// springs at the tip and the mouth beyond the chamfer's play, seal friction, the latch at
+/// full depth) or the panel face (outside, tip past the face plane and not in the holster
+/// bore: a penalty spring on the tip).
 fn held_stab(
     p: &PanelParams,
     s: &PanelState,

@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::panel_util::{insert_pose, jaw, run_toward, sim_at, stab_in_hand, toward, tool_at};
+use common::panel_util::{insert_pose, jaw, run_toward, sim_at, stab_in_hand, tool_at, toward};
 use nalgebra::Vector3;
 use seaarms_core::panel::PanelParams;
 use seaarms_core::sim::Arm;
@@ -34,8 +34,14 @@ fn panel_steps_do_not_allocate() {
             stab.step(&input);
         }
     });
-    assert!(stab.panel().expect("panel").face_force_n > 0.0, "pressing on the face");
-    assert_eq!(pressing.count_total, 0, "the stab pressing on the panel face");
+    assert!(
+        stab.panel().expect("panel").face_force_n > 0.0,
+        "pressing on the face"
+    );
+    assert_eq!(
+        pressing.count_total, 0,
+        "the stab pressing on the panel face"
+    );
     // The counter works: a Vec does allocate.
     let control = allocation_counter::measure(|| {
         std::hint::black_box(vec![1u8; 16]);

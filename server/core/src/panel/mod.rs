@@ -13,11 +13,13 @@
 //!   panel. Held, it moves with the jaw; at the receptacle mouth it enters only when its tip
 //!   is within the position tolerance of the receptacle axis and its axis within the angle
 //!   tolerance, otherwise the panel face blocks it (a stiff penalty spring on the tip). Inside,
-//!   two lateral bearing springs (tip and mouth) keep it on the receptacle axis; the larger of
-//!   the two bearing forces is the side load. Axial motion meets the insertion (seal)
-//!   friction; at full depth a latch spring, and pushing it with the seating force latches
-//!   the stab (seated). A seated stab stays when released; pulling it out with more
-//!   than the seating force unlatches it.
+//!   two lateral bearing springs (tip and mouth) keep it on the receptacle axis, with a play
+//!   that the entry chamfer narrows to zero over its length; the larger of the two bearing
+//!   forces is the side load. Axial motion meets the insertion (seal) friction; at full depth
+//!   a latch spring, and pushing it with the seating force latches the stab (seated) where it
+//!   is, its tip at full depth. A seated stab stays when released; held, its side load is the
+//!   jaw's force across the axis (bearing compliance), and pulling it out with more than the
+//!   seating force unlatches it. A side load rising above the limit counts one fault.
 //! * **Coupling to the jaw** (`contact.rs`): the held item's reaction is a wrench at the tool
 //!   point, added to the arm's joint torques as Jᵀ·F (Lim eq. 3.38's external-force term
 //!   JᵀF, as the grasp constraint's contact wrenches enter it). The jaw is coupled to a held
@@ -33,8 +35,8 @@
 //! * The held stab's mass is a point mass at the tool point (its rotational inertia and the
 //!   centripetal term m·J̇q̇ are neglected: 3 kg at arm speeds below 0.2 m/s).
 //! * Taking the stab out of the holster meets no resistance (a loose parking sleeve); a stab
-//!   released within capture range of its holstered pose and aligned goes back into the
-//!   holster; released anywhere else outside the receptacle it drops to the seabed
+//!   whose tip enters the holster mouth aligned (same tolerances) is back in its sleeve and,
+//!   released there, holstered; released anywhere else outside the receptacle it drops to the seabed
 //!   ([`StabPhase::Dropped`]) where it can be picked up again.
 //! * Links and jaws do not collide with the panel (as with the box: only jaw–item contact).
 //!

@@ -36,8 +36,8 @@
 //!   centripetal term m·J̇q̇ are neglected: 3 kg at arm speeds below 0.2 m/s).
 //! * Taking the stab out of the holster meets no resistance (a loose parking sleeve); a stab
 //!   whose tip enters the holster mouth aligned (same tolerances) is back in its sleeve and,
-//!   released there, holstered; released anywhere else outside the receptacle it drops to the seabed
-//!   ([`StabPhase::Dropped`]) where it can be picked up again.
+//!   released there, holstered; released anywhere else outside the receptacle it drops to
+//!   the seabed ([`StabPhase::Dropped`]) where it can be picked up again.
 //! * Links and jaws do not collide with the panel (as with the box: only jaw–item contact).
 //!
 //! # Sources

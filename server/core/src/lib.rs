@@ -16,6 +16,8 @@
 //! * [`grasp`]: the object, seabed contact, grasp matrices W, W⁺, V, grasp state (Lim eqs 3.39–3.47).
 //! * [`control`]: open loop, joint-velocity servo, closed-loop cooperative control.
 //! * [`sim`]: the whole-system [`sim::Simulation`] stepped at 1 ms, and scripted scenarios.
+//! * [`panel`]: the intervention panel: T-bar valve (stick–slip, end stops) and hot stab
+//!   (holster, aligned insertion, seating, side load).
 //! * [`optimize`]: TOMM/JLM objective and gradients; optimal posture by multi-start SLSQP (Jun §3).
 //! * [`redundancy`]: task-oriented redundancy resolution, task priority, damping, velocity
 //!   limits, feedback form (Jun eqs 19–24, Kilic eqs 0.2–0.10); allocation-free steps.
@@ -39,6 +41,7 @@ pub mod linalg;
 pub mod manipulability;
 pub mod model;
 pub mod optimize;
+pub mod panel;
 pub mod redundancy;
 pub mod robots;
 pub mod studies;

@@ -70,6 +70,10 @@ pub struct Metrics {
     pub idle_s: f64,
     /// Instructor interventions (pause, reset, release, faults, scenario changes).
     pub interventions: f64,
+    /// Times the hot stab's side load rose above its limit (panel scenes; 0 without).
+    pub side_load_faults: f64,
+    /// Highest side load on the hot-stab receptacle (N).
+    pub peak_side_load_n: f64,
 }
 
 impl Metrics {
@@ -93,6 +97,8 @@ impl Metrics {
             "near_limit_s" => self.near_limit_s,
             "idle_s" => self.idle_s,
             "interventions" => self.interventions,
+            "side_load_faults" => self.side_load_faults,
+            "peak_side_load_n" => self.peak_side_load_n,
             _ => return None,
         })
     }
@@ -210,6 +216,7 @@ pub struct Assessor {
     at_limit: [[bool; 6]; 2],
     was_holding: bool,
     relief_at_start: u64,
+    side_faults_at_start: u64,
     jerk: [JerkMeter; 2],
     samples: u64,
     posture_samples: f64,
@@ -237,6 +244,7 @@ impl Assessor {
             at_limit: [[false; 6]; 2],
             was_holding: false,
             relief_at_start: sim.relief_events(),
+            side_faults_at_start: sim.panel().map_or(0, |p| p.side_load_faults),
             jerk: Default::default(),
             samples: 0,
             posture_samples: 0.0,
@@ -348,6 +356,18 @@ impl Assessor {
             });
         }
         m.relief_events = relief;
+        if let Some(p) = sim.panel() {
+            let faults = p.side_load_faults.saturating_sub(self.side_faults_at_start) as f64;
+            if faults > m.side_load_faults {
+                events.push(Event {
+                    kind: "overload",
+                    t,
+                    text: "Side load on the hot stab over its limit".into(),
+                });
+            }
+            m.side_load_faults = faults;
+            m.peak_side_load_n = m.peak_side_load_n.max(p.side_load_n);
+        }
         let (mut near_s, mut near_l) = (false, false);
         let every = (JERK_INTERVAL_S / dt).round().max(1.0) as u64;
         let jerk_sample = self.samples % every == 0;

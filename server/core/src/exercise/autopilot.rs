@@ -7,11 +7,12 @@
 //! Each action runs until it is done or its `timeout_s` runs out (then the script goes on;
 //! the assessment decides whether the attempt passed).
 
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::condition::{Condition, Facts};
 use super::spec::{ArmName, DrillFault, Method, Mode, Scene};
+use crate::control::rotation_error;
 use crate::sim::{Arm, Simulation};
 
 /// Interval between autopilot commands (s): 0.02, the page's 50 Hz send rate.
@@ -84,6 +85,11 @@ pub enum Action {
         /// Done within this distance (m).
         #[serde(default = "default_tolerance_m")]
         tolerance_m: f64,
+        /// Also steer the tool's orientation to this rotation vector (rad, world; proportional
+        /// control on the angular sticks) and finish only within [`ATTITUDE_TOLERANCE_RAD`]
+        /// of it; without it the angular sticks stay at zero.
+        #[serde(default)]
+        attitude_rotvec: Option<[f64; 3]>,
         /// Give up after (s).
         #[serde(default = "default_timeout")]
         timeout_s: f64,
@@ -103,7 +109,8 @@ pub enum Action {
         #[serde(default = "default_timeout")]
         timeout_s: f64,
     },
-    /// Close (or open) `arm`'s jaw: closing ends when the jaw holds the box or after
+    /// Close (or open) `arm`'s jaw: closing ends when the jaw holds the box or a panel item, or
+    /// after
     /// `timeout_s`; opening runs for `timeout_s`.
     Grip {
         /// Arm.
@@ -216,6 +223,11 @@ fn level_sticks(sim: &Simulation) -> Vector3<f64> {
     w
 }
 
+/// Proportional gain of `move`'s attitude (stick fraction per radian of error): full stick
+/// beyond 0.2 rad.
+const ATTITUDE_GAIN_PER_RAD: f64 = 5.0;
+/// `move` with an attitude finishes within this orientation error (rad): 0.02 (1.1°).
+pub const ATTITUDE_TOLERANCE_RAD: f64 = 0.02;
 /// Proportional gain of `joint` (stick fraction per degree of error): full stick beyond 10°.
 const JOINT_GAIN_PER_DEG: f64 = 0.1;
 
@@ -593,15 +605,22 @@ impl Autopilot {
                 to,
                 offset_m,
                 tolerance_m,
+                attitude_rotvec,
                 timeout_s,
             } => {
                 let goal = Self::point(sim, facts.scene, to) + Vector3::from(*offset_m);
+                let tool = sim.end_effector(Arm::BOTH[arm.index()]);
                 let now = match steer {
-                    Steer::Tool => sim.end_effector(Arm::BOTH[arm.index()]).translation.vector,
+                    Steer::Tool => tool.translation.vector,
                     Steer::Object => sim.object().pose.translation.vector,
                 };
                 let err = goal - now;
-                if err.norm() <= *tolerance_m || elapsed > *timeout_s {
+                let att = attitude_rotvec.map_or(Vector3::zeros(), |r| {
+                    let want = UnitQuaternion::from_scaled_axis(Vector3::from(r));
+                    rotation_error(&want, &tool.rotation)
+                });
+                let there = err.norm() <= *tolerance_m && att.norm() <= ATTITUDE_TOLERANCE_RAD;
+                if there || elapsed > *timeout_s {
                     true
                 } else {
                     let mut v = err * MOVE_GAIN_PER_M;
@@ -611,6 +630,12 @@ impl Autopilot {
                     out.axes[arm.index()][..3].copy_from_slice(v.as_slice());
                     if *level {
                         out.axes[arm.index()][3..].copy_from_slice(level_sticks(sim).as_slice());
+                    } else {
+                        let mut w = att * ATTITUDE_GAIN_PER_RAD;
+                        if w.norm() > 1.0 {
+                            w /= w.norm();
+                        }
+                        out.axes[arm.index()][3..].copy_from_slice(w.as_slice());
                     }
                     false
                 }
@@ -637,7 +662,10 @@ impl Autopilot {
                 timeout_s,
             } => {
                 out.grips[arm.index()] = if *close { -1.0 } else { 1.0 };
-                elapsed > *timeout_s || (*close && sim.arm(Arm::BOTH[arm.index()]).holding)
+                let a = Arm::BOTH[arm.index()];
+                let holds =
+                    sim.arm(a).holding || sim.panel().is_some_and(|p| p.held_by(a).is_some());
+                elapsed > *timeout_s || (*close && holds)
             }
             Action::Object {
                 velocity,

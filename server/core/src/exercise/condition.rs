@@ -7,7 +7,7 @@ use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
 use super::spec::{ArmName, ArmSel, Scene};
-use crate::sim::{Arm, Simulation};
+use crate::sim::{Arm, Graspable, Simulation, StabPhase};
 
 /// What can be held.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -15,6 +15,10 @@ use crate::sim::{Arm, Simulation};
 pub enum Item {
     /// The 50 kg box (by its handles).
     Box,
+    /// The panel valve's T-bar (scene `panel`).
+    Valve,
+    /// The hot stab (scene `panel`).
+    Stab,
 }
 
 /// A step's completion condition (`"kind"` names the variant in the file).
@@ -61,6 +65,15 @@ pub enum Condition {
         /// Largest tilt of its vertical axis (degrees).
         max_tilt_deg: f64,
     },
+    /// The panel valve within `tolerance_deg` of `angle_deg` (0 closed, 90 open).
+    ValveAngle {
+        /// Target angle (degrees).
+        angle_deg: f64,
+        /// Tolerance (degrees).
+        tolerance_deg: f64,
+    },
+    /// The hot stab latched in its receptacle.
+    StabSeated,
     /// No jaw holds anything.
     Released,
     /// The box rests on the seabed (the seabed carries at least half its weight).
@@ -189,6 +202,8 @@ impl Condition {
             Condition::Holding { arm, item } => {
                 let holds = |i: usize| match item {
                     Item::Box => sim.arm(arm_of(i)).holding,
+                    Item::Valve => panel_holds(sim, i, Graspable::Valve),
+                    Item::Stab => panel_holds(sim, i, Graspable::Stab),
                 };
                 let n = arm.indices().iter().filter(|&&i| holds(i)).count();
                 match arm {
@@ -229,7 +244,42 @@ impl Condition {
                     },
                 }
             }
-            Condition::Released => yes(Arm::BOTH.iter().all(|&a| !sim.arm(a).holding)),
+            Condition::ValveAngle {
+                angle_deg,
+                tolerance_deg,
+            } => {
+                let Some(p) = sim.panel() else {
+                    return yes(false);
+                };
+                let e = (p.valve_angle_rad.to_degrees() - angle_deg).abs();
+                Verdict {
+                    met: e <= *tolerance_deg,
+                    fraction: fraction_towards(e, *tolerance_deg, 90.0),
+                }
+            }
+            Condition::StabSeated => {
+                let Some(p) = sim.panel() else {
+                    return yes(false);
+                };
+                let met = p.stab_phase == StabPhase::Seated;
+                let full = sim
+                    .params()
+                    .panel
+                    .map_or(1.0, |pp| pp.stab.insertion_depth_m);
+                Verdict {
+                    met,
+                    fraction: if met {
+                        1.0
+                    } else {
+                        (p.stab_depth_m / full).clamp(0.0, 0.9)
+                    },
+                }
+            }
+            Condition::Released => yes(Arm::BOTH.iter().all(|&a| {
+                !sim.arm(a).holding
+                    && !panel_holds(sim, a.index(), Graspable::Valve)
+                    && !panel_holds(sim, a.index(), Graspable::Stab)
+            })),
             Condition::ObjectResting => yes(object_resting(sim)),
             Condition::InternalForceBelow { force_n } => {
                 let w = sim.internal_wrench();
@@ -329,6 +379,32 @@ impl Condition {
                     unit: "N",
                 });
             }
+            Condition::ValveAngle { angle_deg, .. } => {
+                if let Some(p) = sim.panel() {
+                    out.push(Readout {
+                        label: "Valve angle".into(),
+                        value: p.valve_angle_rad.to_degrees(),
+                        target: *angle_deg,
+                        unit: "°",
+                    });
+                }
+            }
+            Condition::StabSeated => {
+                if let (Some(p), Some(pp)) = (sim.panel(), sim.params().panel) {
+                    out.push(Readout {
+                        label: "Stab depth".into(),
+                        value: p.stab_depth_m * 1000.0,
+                        target: pp.stab.insertion_depth_m * 1000.0,
+                        unit: "mm",
+                    });
+                    out.push(Readout {
+                        label: "Side load".into(),
+                        value: p.side_load_n,
+                        target: pp.stab.side_load_limit_n,
+                        unit: "N",
+                    });
+                }
+            }
             Condition::All { of } => {
                 for c in of {
                     c.readouts(sim, facts, out);
@@ -392,8 +468,28 @@ impl Condition {
             Condition::ArmsStill {
                 max_joint_speed_rad_s,
             } => finite(*max_joint_speed_rad_s, "max_joint_speed_rad_s"),
+            Condition::ValveAngle {
+                angle_deg,
+                tolerance_deg,
+            } => {
+                finite(*angle_deg, "angle_deg")?;
+                finite(*tolerance_deg, "tolerance_deg")?;
+                if scene.panel {
+                    Ok(())
+                } else {
+                    Err("valve_angle needs the scene's panel".into())
+                }
+            }
+            Condition::StabSeated if !scene.panel => {
+                Err("stab_seated needs the scene's panel".into())
+            }
+            Condition::Holding {
+                item: Item::Valve | Item::Stab,
+                ..
+            } if !scene.panel => Err("holding the valve or stab needs the scene's panel".into()),
             Condition::All { of } => of.iter().try_for_each(|c| c.check(scene)),
-            Condition::Holding { .. }
+            Condition::StabSeated
+            | Condition::Holding { .. }
             | Condition::Released
             | Condition::ObjectResting
             | Condition::ClosedLoop
@@ -401,4 +497,10 @@ impl Condition {
             | Condition::Diagnosed => Ok(()),
         }
     }
+}
+
+/// Arm `i` holds the panel item `item` (false without a panel).
+fn panel_holds(sim: &Simulation, i: usize, item: Graspable) -> bool {
+    sim.panel()
+        .is_some_and(|p| p.held_by(arm_of(i)) == Some(item))
 }

@@ -149,6 +149,9 @@ pub struct Scene {
     /// Boxes the arms must not strike.
     #[serde(default)]
     pub obstacles: Vec<Obstacle>,
+    /// The intervention panel (valve, hot stab; [`crate::panel::PanelParams::standard`]).
+    #[serde(default)]
+    pub panel: bool,
 }
 
 /// A floating marker.
@@ -434,6 +437,9 @@ impl ExerciseSpec {
         if let Some([x, y]) = self.scene.object_xy_m {
             let z = p.object.seabed_z_m;
             p.object = crate::grasp::ObjectParams::case_study_box(x, y, z);
+        }
+        if self.scene.panel {
+            p = p.with_panel(crate::panel::PanelParams::standard());
         }
         Ok(p)
     }

@@ -12,9 +12,12 @@ use crate::grasp::ObjectParams;
 use crate::hydraulics::{self, HydraulicParams, JawParams, N_ACT};
 use crate::linalg::Ldlt;
 use crate::model::Model;
+use crate::panel::ToolLoad;
 
 /// Overtravel beyond a joint limit at which q is clamped (rad): 0.1.
 const HARD_STOP_RAD: f64 = 0.1;
+/// How far past the grip width a jaw opens before it lets go (m): 0.002.
+pub(super) const RELEASE_GAP_M: f64 = 0.002;
 
 /// One arm's terms computed once per step and held over its sub-steps.
 #[derive(Debug, Clone, Copy)]
@@ -45,6 +48,9 @@ pub(super) struct ArmTerms {
     pub(super) bulk_modulus_pa: f64,
     /// Fault-adjusted cross-piston leakage per actuator (m³/s per Pa).
     pub(super) leak: [f64; N_ACT],
+    /// Joint torques of a held panel item's load, Jᵀ·(F − h·K·J·q̇) (the linearly implicit
+    /// form; its h·JᵀCJ + h²·JᵀKJ and lumped mass are in H̃); `None` without one.
+    pub(super) ext: Option<Vector6<f64>>,
 }
 
 /// Stage 1 (per arm): the jaw opens or closes at its rated speed (`cmd` ∈ [−1, 1], already
@@ -71,20 +77,28 @@ pub(super) fn update_jaw(
     a.jaw_opening_m = (a.jaw_opening_m + cmd * jaw.speed_m_s * dt).clamp(stop, jaw.max_opening_m);
     let closed_on_handle =
         contact && was_open_enough && a.jaw_opening_m <= op.handle_width_m + 1e-9;
-    if closed_on_handle && cmd < 0.0 {
-        a.clamp_force_n =
-            jaw.clamp_force_n * (-cmd).min(1.0).max(a.clamp_force_n / jaw.clamp_force_n);
-    } else if !closed_on_handle || cmd > 0.0 {
-        a.clamp_force_n = 0.0;
-    }
+    a.clamp_force_n = clamp_force(a.clamp_force_n, jaw, closed_on_handle, cmd);
     if !a.holding && closed_on_handle && cmd < 0.0 {
         a.holding = true;
         a.grasp_rel = object.inverse() * tool;
-    } else if a.holding && a.jaw_opening_m > op.handle_width_m + 0.002 {
+    } else if a.holding && a.jaw_opening_m > op.handle_width_m + RELEASE_GAP_M {
         a.holding = false;
         a.contact_wrench = [0.0; 6];
     }
     a.contact = contact || a.holding;
+}
+
+/// The jaw's clamp force (N) after a step with command `cmd`, from `current`: while closed on
+/// a grip and closing, the rated clamp force (Lim Table 1-1) times the command, never
+/// decreasing while the command holds; 0 when not closed on a grip or opening.
+pub(super) fn clamp_force(current: f64, jaw: &JawParams, closed_on: bool, cmd: f64) -> f64 {
+    if closed_on && cmd < 0.0 {
+        jaw.clamp_force_n * (-cmd).min(1.0).max(current / jaw.clamp_force_n)
+    } else if !closed_on || cmd > 0.0 {
+        0.0
+    } else {
+        current
+    }
 }
 
 /// Stage 2 outside cooperative control (per arm): the operator's valve commands (open loop),
@@ -118,9 +132,11 @@ pub(super) fn operator_spools(
     }
 }
 
-/// Stage 3 (per arm): H, C q̇ + G and J̇q̇ in one pass over the links (eq. 3.38, world frame,
+/// Stage 4 (per arm): H, C q̇ + G and J̇q̇ in one pass over the links (eq. 3.38, world frame,
 /// [`dynamics::step_terms`]), the actuator linkages, and the factor of H̃ with the implicit
-/// damping and end stops. `work` holds the kinematics of the state's q; `h` is the sub-step.
+/// damping and end stops. `work` holds the kinematics of the state's q; `h` is the sub-step;
+/// `load`: a held panel item's load on the jaw, linearly implicit (h·JᵀCJ + h²·JᵀKJ and the
+/// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side).
 pub(super) fn arm_terms(
     model: &Model,
     ap: &ArmParams,
@@ -128,6 +144,7 @@ pub(super) fn arm_terms(
     work: &ArmWork,
     a: &ArmState,
     h: f64,
+    load: Option<&ToolLoad>,
 ) -> ArmTerms {
     let rho = if sp.buoyancy {
         sp.water_density_kgm3
@@ -149,6 +166,7 @@ pub(super) fn arm_terms(
         supply_pa: ap.faults.supply_pa(hp),
         bulk_modulus_pa: ap.faults.bulk_modulus_pa(hp),
         leak: core::array::from_fn(|j| ap.faults.leak_m3_s_pa(j)),
+        ext: None,
     };
     // H̃ = H + h·(damping, end stops) on the diagonal.
     let mut m = terms.mass_matrix;
@@ -167,6 +185,14 @@ pub(super) fn arm_terms(
         // Quadratic drag −c·q̇|q̇|, linearized: its implicit part −2c|q̇|·q̇ is in D.
         out.bias[r] =
             terms.bias[r] + drag * a.qd[r] * a.qd[r].abs() - 2.0 * drag * a.qd[r].abs() * a.qd[r];
+    }
+    if let Some(l) = load {
+        let j = &work.jw;
+        let jv = j.fixed_rows::<3>(0);
+        m += j.transpose() * (l.damping * h + l.stiffness * (h * h)) * j
+            + jv.transpose() * jv * l.mass_kg;
+        let qd = Vector6::from(a.qd);
+        out.ext = Some(j.transpose() * (l.wrench - l.stiffness * (j * qd) * h));
     }
     out.factor = Ldlt::factor(&m);
     if let (Some(f), true) = (&out.factor, a.holding) {
@@ -236,6 +262,9 @@ pub(super) fn free_acceleration(
         if pen != 0.0 {
             rhs[j] -= sp.stop_stiffness * pen + sp.stop_damping * a.qd[j];
         }
+    }
+    if let Some(e) = &t.ext {
+        rhs += e;
     }
     match &t.factor {
         Some(f) => f.solve(&rhs),

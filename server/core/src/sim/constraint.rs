@@ -41,7 +41,7 @@ pub(super) struct Constraint {
 }
 
 impl Constraint {
-    /// Stage 5: the constraint matrix — diagonal blocks Wⁱᵀ·M̃⁻¹·Wⁱ + ZᵢᵀZᵢ + εI and the
+    /// Stage 6: the constraint matrix — diagonal blocks Wⁱᵀ·M̃⁻¹·Wⁱ + ZᵢᵀZᵢ + εI and the
     /// coupling W¹ᵀ·M̃⁻¹·W⁰ — factored, and the Baumgarte terms of each holding arm
     /// (`tools`: world tool poses; `r`: grasp points from the COM).
     pub(super) fn new(

@@ -37,7 +37,9 @@
 //! * The jaw is a flow-limited actuator (opening rate ∝ command, Table 1-1 speed) with a clamp
 //!   force, not a chamber model; the grasp is rigid whatever the clamp force (no slip).
 //! * Contact is jaw–handle only (capture radius) and box–seabed (corner penalty springs with
-//!   friction); links do not collide with the object, the seabed or each other.
+//!   friction); links do not collide with the object, the seabed or each other. With a panel
+//!   ([`SimParams::panel`]) the jaws also take its valve T-bar and hot stab, whose loads act
+//!   on the arms as JᵀF (see [`crate::panel`]); links do not collide with the panel either.
 //! * Valves are ideal critically lapped spools with instantaneous response (Lim eq. 3.51);
 //!   no valve leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
 //! * Buoyancy (optional) uses the mean link density; drag is an optional quadratic joint term.
@@ -47,6 +49,8 @@
 //! * `pipeline.rs`: the step as a list of named stages ([`Simulation::step`]);
 //! * `arm.rs`, `object.rs`, `constraint.rs`: the stages' per-arm, object and grasp-constraint
 //!   parts;
+//! * `panel.rs`: the intervention panel's stages (grasp, loads on the jaws, item update) and
+//!   its read accessors ([`crate::panel`] holds its parameters and physics);
 //! * `setup.rs`: parameter checks ([`SimParams::check`]) and the case-study setup
 //!   ([`SimParams::case_study`] and its constants);
 //! * `scenario.rs`, `sci.rs`: scripted scenarios and their CSV output.
@@ -54,10 +58,12 @@
 mod arm;
 mod constraint;
 mod object;
+mod panel;
 mod pipeline;
 pub mod scenario;
 mod setup;
 
+pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
 
 use nalgebra::{Isometry3, Matrix6, Vector3};
@@ -169,6 +175,9 @@ pub struct SimParams {
     pub step: StepParams,
     /// Controllers.
     pub control: ControlParams,
+    /// The intervention panel (valve, hot stab): `None` (the default) leaves the simulation
+    /// exactly as without it.
+    pub panel: Option<PanelParams>,
 }
 
 /// Control method (Lim §4.1 "control mode").
@@ -280,6 +289,8 @@ struct State {
     coop_active: bool,
     coop_ref: Isometry3<f64>,
     internal: [f64; 6],
+    /// The panel's state (when the parameters have a panel).
+    panel: Option<PanelState>,
 }
 
 /// Per-arm workspace (Data): preallocated kinematics/dynamics results.
@@ -357,6 +368,7 @@ impl Simulation {
             coop_active: false,
             coop_ref: Isometry3::identity(),
             internal: [0.0; 6],
+            panel: None,
         };
         // Bases composed into the models: kinematics and dynamics come out in the world frame.
         let models = [
@@ -444,6 +456,7 @@ impl Simulation {
         self.state.coop_active = false;
         self.state.coop_ref = pose;
         self.state.internal = [0.0; 6];
+        self.state.panel = self.params.panel.as_ref().map(PanelState::initial);
         self.numerical_faults = 0;
         self.update_kinematics();
         for i in 0..2 {
@@ -576,6 +589,6 @@ impl Simulation {
             + z(o.velocity.as_slice())
             + z(o.angular_velocity.as_slice())
             + z(&s.internal);
-        !probe.is_nan()
+        !probe.is_nan() && s.panel.as_ref().is_none_or(PanelState::is_finite)
     }
 }

@@ -29,7 +29,7 @@ pub(super) struct ObjectTerms {
 }
 
 impl ObjectTerms {
-    /// Stage 4: the object's inertia (world), weight and seabed contact at the start of the
+    /// Stage 5: the object's inertia (world), weight and seabed contact at the start of the
     /// step. The seabed dashpots (normal damping and the regularized friction) are stiff for a
     /// box touching on one corner or edge — there the effective mass is a few kg, and explicit
     /// damping of 2·10⁴ N·s/m at h = 1 ms injects energy — so they are treated implicitly

@@ -1,19 +1,24 @@
 //! The 1 ms step as a pipeline of named stages (the scheme is in the [`super`] module docs).
 //! [`Simulation::step_inner`] is the list:
 //!
-//! 1. jaws and grasp transitions, per arm ([`arm::update_jaw`]);
+//! 1. jaws and grasp transitions, per arm ([`arm::update_jaw`]), then the panel items'
+//!    grasp and release ([`Simulation::panel_jaw`]; only with a panel);
 //! 2. spool commands: cooperative control, or each arm's open loop or joint servo, then
 //!    stuck valves ([`Simulation::spool_commands`]);
-//! 3. arm terms, per arm: H, C q̇ + G, J̇q̇, linkage levers and the factor of H̃
-//!    ([`arm::arm_terms`]);
-//! 4. object terms: inertia, weight, implicit seabed damping ([`ObjectTerms::new`]);
-//! 5. the grasp constraint system ([`Constraint::new`]);
-//! 6. the sub-steps ([`Simulation::substep`]): chamber pressures, free accelerations,
+//! 3. panel loads: the held valve's or stab's wrench on each jaw with its stiffness,
+//!    damping and lumped mass ([`Simulation::panel_loads`]; only with a panel);
+//! 4. arm terms, per arm: H, C q̇ + G, J̇q̇, linkage levers and the factor of H̃, with the
+//!    panel load linearly implicit ([`arm::arm_terms`]);
+//! 5. object terms: inertia, weight, implicit seabed damping ([`ObjectTerms::new`]);
+//! 6. the grasp constraint system ([`Constraint::new`]);
+//! 7. the sub-steps ([`Simulation::substep`]): chamber pressures, free accelerations,
 //!    contact wrenches, integration;
-//! 7. outputs: relief events, contact and internal wrenches, time, kinematics
-//!    ([`Simulation::finish_step`]).
+//! 8. outputs: relief events, contact and internal wrenches, time, kinematics
+//!    ([`Simulation::finish_step`]);
+//! 9. panel items: the valve's 1-DOF step, the stab's pose, phase, depth and side load
+//!    ([`Simulation::panel_update`]; only with a panel).
 //!
-//! Stages 3–5 fill a [`StepScratch`] that the sub-steps read.
+//! Stages 3–6 fill a [`StepScratch`] that the sub-steps read.
 
 use nalgebra::{Point3, Vector3, Vector6};
 
@@ -25,6 +30,7 @@ use crate::control::{self, ControlParams, CoopInputs};
 use crate::finite_or;
 use crate::hydraulics::N_ACT;
 use crate::kinematics;
+use crate::panel::ToolLoad;
 
 /// Everything computed once per step and held over its sub-steps (configuration-dependent
 /// terms change by < 0.3 % in 1 ms at the arms' speeds). Fixed-size, on the stack.
@@ -32,11 +38,11 @@ use crate::kinematics;
 pub(super) struct StepScratch {
     /// Sub-step length h (s).
     h: f64,
-    /// Per arm: stage 3.
+    /// Per arm: stage 4.
     arms: [ArmTerms; 2],
-    /// Stage 4.
-    object: ObjectTerms,
     /// Stage 5.
+    object: ObjectTerms,
+    /// Stage 6.
     constraint: Constraint,
 }
 
@@ -55,8 +61,9 @@ impl Simulation {
     pub(super) fn step_inner(&mut self, input: &Input) {
         let speed = finite_or(input.speed_scale, 0.0).clamp(0.0, 1.0);
         for i in 0..2 {
-            let contact = self.in_contact(i);
+            let contact = self.in_contact(i) && !self.panel_holds(i);
             let cmd = finite_or(input.arms[i].jaw, 0.0).clamp(-1.0, 1.0) * speed;
+            let before = self.state.arms[i].jaw_opening_m;
             arm::update_jaw(
                 &mut self.state.arms[i],
                 &self.params.arms[i].hydraulics.jaw,
@@ -67,15 +74,18 @@ impl Simulation {
                 &self.state.object.pose,
                 self.params.step.dt_s,
             );
+            self.panel_jaw(i, cmd, before);
         }
         let r = self.grasp_radii();
         self.spool_commands(input, speed, &r);
-        let scratch = self.step_scratch(&r);
+        let loads = self.panel_loads();
+        let scratch = self.step_scratch(&r, &loads);
         let mut out = SubstepOutput::default();
         for k in 0..self.params.step.substeps {
             out = self.substep(&scratch, k == 0);
         }
         self.finish_step(&scratch, &out);
+        self.panel_update();
     }
 
     /// Stage 2: the valve spool of every actuator. Cooperative control while the method is
@@ -121,8 +131,8 @@ impl Simulation {
         }
     }
 
-    /// Stages 3–5: the terms held over the step's sub-steps.
-    fn step_scratch(&self, r: &[Vector3<f64>; 2]) -> StepScratch {
+    /// Stages 4–6: the terms held over the step's sub-steps (`loads`: stage 3's).
+    fn step_scratch(&self, r: &[Vector3<f64>; 2], loads: &[Option<ToolLoad>; 2]) -> StepScratch {
         let sp = &self.params.step;
         let h = sp.dt_s / sp.substeps as f64;
         let st = &self.state;
@@ -134,6 +144,7 @@ impl Simulation {
                 &self.work[i],
                 &st.arms[i],
                 h,
+                loads[i].as_ref(),
             )
         });
         let held = st.arms.iter().any(|a| a.holding);
@@ -153,7 +164,7 @@ impl Simulation {
         }
     }
 
-    /// Stage 6, one sub-step of length h: chamber pressures (backward Euler), the arms' and
+    /// Stage 7, one sub-step of length h: chamber pressures (backward Euler), the arms' and
     /// the object's free accelerations, the contact wrenches of the closed chain, then
     /// semi-implicit Euler for arms and object. `first`: the step's first sub-step.
     fn substep(&mut self, s: &StepScratch, first: bool) -> SubstepOutput {
@@ -185,7 +196,7 @@ impl Simulation {
         out
     }
 
-    /// Stage 7: relief events (rising edges), contact and internal wrenches, time, and the
+    /// Stage 8: relief events (rising edges), contact and internal wrenches, time, and the
     /// kinematics and contact flags for the new q.
     fn finish_step(&mut self, s: &StepScratch, out: &SubstepOutput) {
         for (i, a) in self.state.arms.iter_mut().enumerate() {

@@ -11,6 +11,7 @@ use crate::dynamics::Inertials;
 use crate::grasp::ObjectParams;
 use crate::hydraulics::{Faults, HydraulicParams, N_ACT};
 use crate::model::Model;
+use crate::panel::PanelParams;
 
 /// Right arm base at the world origin, left arm base 1.0 m to its left (+y), both facing +x
 /// (Lim §4.3.2: "the Y coordinate of the right arm was 0.0 m and the left arm was 1.0 m").
@@ -28,7 +29,8 @@ const DEG: f64 = std::f64::consts::PI / 180.0;
 impl SimParams {
     /// What [`super::Simulation::new`] requires of `left`, `right` and these parameters:
     /// 6-joint arms with 6 links of finite positive mass, finite initial angles, a step in
-    /// (0, 10 ms] with 1..=1000 sub-steps, a positive object mass.
+    /// (0, 10 ms] with 1..=1000 sub-steps, a positive object mass, and a panel (if any) that
+    /// passes [`PanelParams::check`] with grips the jaws can open around.
     pub fn check(&self, left: &Model, right: &Model) -> Result<(), Error> {
         for m in [&left, &right] {
             if m.dof() != N_ACT {
@@ -78,6 +80,14 @@ impl SimParams {
                 reason: "mass must be > 0".into(),
             });
         }
+        if let Some(p) = &self.panel {
+            let jaw = self.arms[0]
+                .hydraulics
+                .jaw
+                .max_opening_m
+                .min(self.arms[1].hydraulics.jaw.max_opening_m);
+            p.check(jaw)?;
+        }
         Ok(())
     }
 
@@ -101,7 +111,15 @@ impl SimParams {
             object: ObjectParams::case_study_box(OBJECT_XY_M[0], OBJECT_XY_M[1], SEABED_Z_M),
             step: StepParams::default(),
             control: ControlParams::default(),
+            panel: None,
         })
+    }
+
+    /// These parameters with the intervention panel `panel` (e.g. [`PanelParams::standard`],
+    /// placed for the case-study arms and box).
+    pub fn with_panel(mut self, panel: PanelParams) -> SimParams {
+        self.panel = Some(panel);
+        self
     }
 }
 

@@ -15,5 +15,6 @@ pub(crate) fn all_builtin() -> Vec<Model> {
     robots::BUILTIN.iter().map(|(n, _)| builtin(n)).collect()
 }
 
+pub(crate) mod panel_util;
 pub(crate) mod rng;
 pub(crate) mod scenario_util;

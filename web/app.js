@@ -159,8 +159,9 @@ $('chk-plots').addEventListener('change', (e) => {
   plots.visible = e.target.checked;
   view.viewports.dirty = true;
 });
-// keep keyboard focus on the page after using a menu, so keys drive the arms again
-for (const el of document.querySelectorAll('#toolbar select')) el.addEventListener('change', () => el.blur());
+// keep keyboard focus on the page after using a menu or a checkbox (web/input.js also
+// ignores focus on anything but text fields)
+for (const el of document.querySelectorAll('#toolbar select, #toolbar input[type=checkbox]')) el.addEventListener('change', () => el.blur());
 setInterval(() => { $('btn-pause').textContent = view.drawn?.paused ? 'Resume' : 'Pause'; }, 250);
 
 function renderHelp() {

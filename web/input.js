@@ -16,6 +16,8 @@ const OTHER_MESSAGES_HZ = 1;
 export const KEY_AXES = [
   ['KeyQ', 'KeyA'], ['KeyW', 'KeyS'], ['KeyE', 'KeyD'], ['KeyR', 'KeyF'], ['KeyT', 'KeyG'], ['KeyU', 'KeyJ'],
 ];
+/** Keys with an action in `onPress` (besides the axes and the grip). */
+const ACTION_KEYS = new Set(['Digit1', 'Digit2', 'KeyM', 'KeyL', 'Minus', 'Equal', 'KeyB', 'KeyI', 'KeyP', 'KeyV', 'KeyH']);
 export const JOINT_NAMES = ['swing', 'shoulder', 'elbow', 'pitch', 'yaw', 'rotate'];
 export const CART_NAMES = ['vx', 'vy', 'vz', 'wx', 'wy', 'wz'];
 
@@ -53,6 +55,17 @@ export const MAPPING = [
 
 function btn(p, i) { const b = p.buttons[i]; return b ? (typeof b === 'object' ? b.value : b) : 0; }
 function pressed(p, i) { const b = p.buttons[i]; return !!b && (typeof b === 'object' ? b.pressed || b.value > 0.5 : b > 0.5); }
+
+/** Input types that take typed text (keys there are the user's text, not arm commands). A
+ * focused checkbox, button or closed menu leaves the keys to the arms. */
+const TEXT_INPUT_TYPES = new Set(['text', 'search', 'email', 'password', 'number', 'url', 'tel']);
+
+/** Whether a key event's target is a text field (or an editable element). */
+export function isTextEntry(t) {
+  if (!t || !t.tagName) return false;
+  if (t.isContentEditable || t.tagName === 'TEXTAREA') return true;
+  return t.tagName === 'INPUT' && TEXT_INPUT_TYPES.has((t.type || 'text').toLowerCase());
+}
 
 /** Scaled radial dead zone on a value in [−1, 1]. */
 export function deadZone(v) {
@@ -96,8 +109,7 @@ export class Input {
   }
 
   onKey(e, down) {
-    const t = e.target;
-    if (t && (t.tagName === 'INPUT' || t.tagName === 'SELECT' || t.tagName === 'TEXTAREA')) return;
+    if (isTextEntry(e.target)) return;
     if (e.ctrlKey || e.metaKey || e.altKey) return;
     if (down) {
       if (!this.keys.has(e.code)) this.onPress(e);
@@ -105,7 +117,10 @@ export class Input {
     } else {
       this.keys.delete(e.code);
     }
-    if (KEY_AXES.flat().includes(e.code) || e.code === 'KeyZ' || e.code === 'KeyX') e.preventDefault();
+    // the page's keys never reach a focused control (a menu would jump to the option
+    // starting with the letter)
+    if (KEY_AXES.flat().includes(e.code) || e.code === 'KeyZ' || e.code === 'KeyX' ||
+        (e.target?.tagName === 'SELECT' && ACTION_KEYS.has(e.code))) e.preventDefault();
   }
 
   onPress(e) {

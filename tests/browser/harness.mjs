@@ -4,7 +4,7 @@
 
 import { chromium } from 'playwright-core';
 import { spawn } from 'node:child_process';
-import { mkdtempSync, mkdirSync, rmSync, existsSync } from 'node:fs';
+import { mkdtempSync, mkdirSync, rmSync, existsSync, readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
 import { join, dirname } from 'node:path';
 import { fileURLToPath } from 'node:url';
@@ -20,6 +20,18 @@ mkdirSync(ARTIFACTS, { recursive: true });
 export const CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
   '--disable-background-networking', '--disable-component-update', '--disable-sync',
   '--use-angle=swiftshader', '--enable-unsafe-swiftshader'];
+
+/** SEAARMS_WEB_FROM_DISK=1: the page's own files (web/) come from the working tree, with the
+ * server's headers (CSP included), so front-end work needs no release rebuild (the binary
+ * embeds web/). The tests themselves run without it, against the embedded files. */
+const WEB_FROM_DISK = !!process.env.SEAARMS_WEB_FROM_DISK;
+function webFile(pathname) {
+  const rel = pathname === '/' ? 'index.html' : pathname === '/instructor' ? 'instructor.html'
+    : pathname.startsWith('/web/') ? decodeURIComponent(pathname.slice(5)) : null;
+  if (rel === null || rel.includes('..')) return null;
+  const f = join(ROOT, 'web', rel);
+  return existsSync(f) ? f : null;
+}
 
 async function freePort() {
   return new Promise((resolve, reject) => {
@@ -72,13 +84,18 @@ export async function openBrowser({ viewport = { width: 1280, height: 800 }, ini
   const context = await chromium.launchPersistentContext(profile, {
     executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
     headless: true,
-    args: CHROMIUM_ARGS,
+    // a fulfilled document loses its loopback address space; its WebSocket would be refused
+    args: WEB_FROM_DISK ? [...CHROMIUM_ARGS, '--disable-features=LocalNetworkAccessChecks'] : CHROMIUM_ARGS,
     viewport,
   });
   const offsite = [];
   const errors = [];
-  await context.route('**/*', (route) => {
+  await context.route('**/*', async (route) => {
     const u = new URL(route.request().url());
+    if (WEB_FROM_DISK && u.hostname === '127.0.0.1') {
+      const file = webFile(u.pathname);
+      if (file) return route.fulfill({ response: await route.fetch(), body: readFileSync(file) });
+    }
     if (u.protocol === 'data:' || u.hostname === '127.0.0.1' || u.hostname === 'localhost') return route.continue();
     offsite.push(route.request().url());
     return route.abort();

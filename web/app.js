@@ -8,6 +8,8 @@ import { Plots } from './plots.js';
 
 const $ = (id) => document.getElementById(id);
 const SPEEDS = [0.25, 0.5, 0.75, 1];
+/** Screens this narrow stack the page (style.css has the same width). */
+const NARROW_SCREEN = '(max-width: 700px)';
 
 const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
 const status = new StatusBar($('status'));
@@ -147,6 +149,11 @@ $('btn-pause').addEventListener('click', actions.pause);
 $('btn-release').addEventListener('click', actions.release);
 $('btn-layout').addEventListener('click', actions.layout);
 $('btn-help').addEventListener('click', () => actions.help());
+// the overlay closes by its button or a tap outside it (touch screens have no ? key)
+$('help').addEventListener('click', (e) => { if (e.target.closest('[data-close]')) actions.help(false); });
+document.addEventListener('pointerdown', (e) => {
+  if (!$('help').hidden && !e.target.closest('#help, #btn-help')) actions.help(false);
+});
 $('btn-new').addEventListener('click', () => {
   const sc = $('sel-scenario').value;
   conn.restart(sc ? { scenario: sc } : {});
@@ -165,7 +172,7 @@ for (const el of document.querySelectorAll('#toolbar select, #toolbar input[type
 setInterval(() => { $('btn-pause').textContent = view.drawn?.paused ? 'Resume' : 'Pause'; }, 250);
 
 function renderHelp() {
-  $('help').innerHTML = `<h3>Keyboard and gamepad</h3>
+  $('help').innerHTML = `<button type="button" class="help-close" data-close aria-label="Close help">✕ Close</button><h3>Keyboard and gamepad</h3>
 <p>The selected arm (toolbar, <kbd>1</kbd>/<kbd>2</kbd>, LB/RB) follows the sticks. Joint mode: axis i drives
 joint i's valve. Cartesian mode: the axes are the end-effector velocity [vx vy vz wx wy wz] (world frame).
 Closed loop: the axes move the object; both jaws grip together. Dead zone ${Math.round(DEAD_ZONE * 100)} % on sticks and triggers;
@@ -190,6 +197,12 @@ function setScenarios(list, current) {
 
 renderHelp();
 syncControls();
+// a phone: one large view, plots off (both can be switched back in the toolbar)
+if (matchMedia(NARROW_SCREEN).matches) {
+  actions.layout();
+  $('chk-plots').checked = false;
+  $('chk-plots').dispatchEvent(new Event('change'));
+}
 conn.start(params.get('scenario') ? { scenario: params.get('scenario') } : {});
 
 window.__seaarms = view.debugHooks({

@@ -79,7 +79,7 @@ export async function server() {
  * the loopback server is aborted and recorded in `offsite`; console errors and page errors are
  * recorded in `errors`.
  */
-export async function openBrowser({ viewport = { width: 1280, height: 800 }, initScript } = {}) {
+export async function openBrowser({ viewport = { width: 1280, height: 800 }, initScript, hasTouch = false, isMobile = false } = {}) {
   const profile = mkdtempSync(join(tmpdir(), 'seaarms-chromium-'));
   const context = await chromium.launchPersistentContext(profile, {
     executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
@@ -87,6 +87,8 @@ export async function openBrowser({ viewport = { width: 1280, height: 800 }, ini
     // a fulfilled document loses its loopback address space; its WebSocket would be refused
     args: WEB_FROM_DISK ? [...CHROMIUM_ARGS, '--disable-features=LocalNetworkAccessChecks'] : CHROMIUM_ARGS,
     viewport,
+    hasTouch,
+    isMobile,
   });
   const offsite = [];
   const errors = [];

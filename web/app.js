@@ -5,6 +5,7 @@ import { Connection } from './connection.js';
 import { Input, MAPPING, DEAD_ZONE } from './input.js';
 import { StatusBar } from './status.js';
 import { Plots } from './plots.js';
+import { TouchPad, touchDevice } from './touch.js';
 
 const $ = (id) => document.getElementById(id);
 const SPEEDS = [0.25, 0.5, 0.75, 1];
@@ -108,6 +109,7 @@ function setArm(side) {
   selectedArm = side;
   localStorage.setItem('seaarms.arm', side);
   syncControls();
+  touch.showArm(side);
 }
 
 let paused = false;
@@ -139,6 +141,14 @@ const input = new Input(conn, {
   actions,
   onPad: (id) => status.pad(id),
 });
+
+// on-screen sticks: shown on touch screens (?touch=1 / ?touch=0 override), a toolbar toggle
+const touch = new TouchPad($('view'));
+input.addVirtualPad(touch.pad);
+touch.visible = params.has('touch') ? params.get('touch') === '1' : touchDevice();
+touch.showArm(selectedArm);
+$('chk-touch').checked = touch.visible;
+$('chk-touch').addEventListener('change', (e) => { touch.visible = e.target.checked; });
 
 $('sel-arm').addEventListener('change', (e) => setArm(e.target.value));
 $('sel-mode').addEventListener('change', (e) => sendSettings({ control_mode: e.target.value }));

@@ -1,5 +1,6 @@
 // Operator input: the Gamepad API (standard mapping) with a keyboard fallback covering the
-// same functions. Sampled and sent at a steady SEND_HZ (below the server's
+// same functions, and on touch screens the on-screen sticks (web/touch.js, a virtual pad in
+// the same mapping, sampled here like a real one). Sampled and sent at a steady SEND_HZ (below the server's
 // `hello.max_messages_per_second`, see setServerLimit) with increasing sequence numbers:
 // {"type":"input","seq":n,"arms":{"left":{"axes":[6],"grip":g},"right":{...}},"object":[6]?}.
 // Joint mode: axis i drives joint i of the selected arm. Cartesian mode: the same axes are
@@ -87,7 +88,8 @@ export class Input {
     this.seq = 0;
     this.keys = new Set();
     this.padIndex = null;
-    this.prevButtons = [];
+    this.prevButtons = new Map(); // per pad index: its buttons at the last sample (edges)
+    this.virtualPads = []; // standard-mapping pads drawn on the page (web/touch.js)
     this.last = null; // last message sent, for tests and the status bar
     this.enabled = true;
     window.addEventListener('keydown', (e) => this.onKey(e, true));
@@ -150,6 +152,16 @@ export class Input {
     return p && p.connected !== false ? p : null;
   }
 
+  /** Adds a pad the page draws itself (touch sticks; a negative `index` of its own); it is
+   * sampled like the Gamepad API's. */
+  addVirtualPad(p) { this.virtualPads.push(p); }
+
+  /** The connected gamepad and every virtual pad. */
+  pads() {
+    const p = this.pad();
+    return p ? [p, ...this.virtualPads] : this.virtualPads;
+  }
+
   /** Current [axes(6), grip] from the keyboard and the gamepad. */
   sample() {
     const axes = [0, 0, 0, 0, 0, 0];
@@ -159,8 +171,7 @@ export class Input {
     if (this.keys.has('KeyZ')) grip -= 1;
     if (this.keys.has('KeyX')) grip += 1;
     let slow = slowKey;
-    const p = this.pad();
-    if (p) {
+    for (const p of this.pads()) {
       PAD_AXES.forEach((m, i) => { axes[i] += deadZone(m.get(p)); });
       grip += deadZone(btn(p, 6)) - deadZone(btn(p, 7)); // LT opens, RT closes
       if (pressed(p, 0)) slow = true;
@@ -175,7 +186,8 @@ export class Input {
   padButtons(p) {
     const a = this.ui.actions;
     const now = p.buttons.map((_, i) => pressed(p, i));
-    const edge = (i) => now[i] && !this.prevButtons[i];
+    const prev = this.prevButtons.get(p.index) || []; // (getGamepads may return new objects)
+    const edge = (i) => now[i] && !prev[i];
     if (edge(4)) this.ui.setArm('left');
     if (edge(5)) this.ui.setArm('right');
     if (edge(3)) a.toggleMode();
@@ -183,7 +195,7 @@ export class Input {
     if (edge(1)) a.release();
     if (edge(8)) a.reset();
     if (edge(9)) a.pause();
-    this.prevButtons = now;
+    this.prevButtons.set(p.index, now);
   }
 
   tick() {

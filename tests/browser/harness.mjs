@@ -6,7 +6,7 @@ import { chromium } from 'playwright-core';
 import { spawn } from 'node:child_process';
 import { mkdtempSync, mkdirSync, rmSync, existsSync, readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { join, dirname } from 'node:path';
+import { join, dirname, extname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import net from 'node:net';
 import { DEAD_ZONE } from '../../web/input.js'; // the page's own constant (no browser globals at load)
@@ -96,7 +96,12 @@ export async function openBrowser({ viewport = { width: 1280, height: 800 }, ini
     const u = new URL(route.request().url());
     if (WEB_FROM_DISK && u.hostname === '127.0.0.1') {
       const file = webFile(u.pathname);
-      if (file) return route.fulfill({ response: await route.fetch(), body: readFileSync(file) });
+      if (file) {
+        const response = await route.fetch(); // the server's headers (a file new since the build: 404)
+        const type = { '.js': 'text/javascript', '.css': 'text/css', '.html': 'text/html' }[extname(file)];
+        const headers = { ...response.headers(), ...(type ? { 'content-type': type } : {}) };
+        return route.fulfill({ status: 200, headers, body: readFileSync(file) });
+      }
     }
     if (u.protocol === 'data:' || u.hostname === '127.0.0.1' || u.hostname === 'localhost') return route.continue();
     offsite.push(route.request().url());

@@ -6,6 +6,7 @@ import { Input, MAPPING, DEAD_ZONE } from './input.js';
 import { StatusBar } from './status.js';
 import { Plots } from './plots.js';
 import { TouchPad, touchDevice } from './touch.js';
+import { TabGuard } from './tabs.js';
 
 const $ = (id) => document.getElementById(id);
 const SPEEDS = [0.25, 0.5, 0.75, 1];
@@ -58,6 +59,7 @@ const conn = new Connection({
   onJoinCode: askJoinCode,
   onEnded(e) { lastEnded = e; },
   onHello(h) {
+    setRole(h.role, h.session);
     view.setHello(h);
     settings = { ...h.settings };
     syncControls();
@@ -205,6 +207,42 @@ function setScenarios(list, current) {
   sel.value = current;
 }
 
+/** Controls that change the session: off while this tab only watches. */
+const DRIVING_CONTROLS = ['sel-mode', 'sel-method', 'sel-speed', 'btn-reset', 'btn-pause', 'btn-release'];
+
+/** Trainee (drives, sends input) or observer (this browser's other tab drives). */
+function setRole(role, session) {
+  const driving = role === 'trainee';
+  tabs.driving(driving ? session : null);
+  input.enabled = driving;
+  touch.visible = driving && $('chk-touch').checked;
+  for (const id of DRIVING_CONTROLS) $(id).disabled = !driving;
+  document.body.classList.toggle('observing', !driving);
+  if (!driving) watchUntilTaken('Watching: another tab drives this session.');
+  else tabs.hide();
+}
+
+async function watchUntilTaken(text) {
+  await tabs.watching(text);
+  tabs.take(conn.session.id);
+  conn.setObserving(false);
+}
+
+const tabs = new TabGuard($('tabs'), {
+  // another tab took control: watch from here (setRole shows how to take it back)
+  onTakenOver: () => conn.setObserving(true),
+});
+
+/** Starts or resumes this browser's session; asks first if another tab drives it. */
+async function start() {
+  const stored = Connection.stored();
+  if (stored && await tabs.anotherDriving(stored.id)) {
+    if (await tabs.choose() === 'take') tabs.take(stored.id);
+    else conn.observing = true;
+  }
+  conn.start(params.get('scenario') ? { scenario: params.get('scenario') } : {});
+}
+
 renderHelp();
 syncControls();
 // a phone: one large view, plots off (both can be switched back in the toolbar)
@@ -213,7 +251,7 @@ if (matchMedia(NARROW_SCREEN).matches) {
   $('chk-plots').checked = false;
   $('chk-plots').dispatchEvent(new Event('change'));
 }
-conn.start(params.get('scenario') ? { scenario: params.get('scenario') } : {});
+start();
 
 window.__seaarms = view.debugHooks({
   get connection() { return { session: conn.session?.id, framesReceived: conn.framesReceived, latencyMs: conn.latencyMs, open: !!conn.ws && conn.gotHello }; },

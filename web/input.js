@@ -19,6 +19,8 @@ export const KEY_AXES = [
 ];
 /** Keys with an action in `onPress` (besides the axes and the grip). */
 const ACTION_KEYS = new Set(['Digit1', 'Digit2', 'KeyM', 'KeyL', 'Minus', 'Equal', 'KeyB', 'KeyI', 'KeyP', 'KeyV', 'KeyH']);
+/** Keys that change only this page's view. */
+const VIEW_KEYS = new Set(['KeyV', 'KeyH']);
 export const JOINT_NAMES = ['swing', 'shoulder', 'elbow', 'pitch', 'yaw', 'rotate'];
 export const CART_NAMES = ['vx', 'vy', 'vz', 'wx', 'wy', 'wz'];
 
@@ -127,6 +129,8 @@ export class Input {
 
   onPress(e) {
     const a = this.ui.actions;
+    // a tab that only watches keeps the view keys (layout, help), not the session's
+    if (!this.enabled && !VIEW_KEYS.has(e.code) && e.key !== '?' && e.key !== 'Escape') return;
     switch (e.code) {
       case 'Digit1': this.ui.setArm('left'); break;
       case 'Digit2': this.ui.setArm('right'); break;

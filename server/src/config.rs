@@ -31,6 +31,22 @@ pub enum Command {
         #[arg(long)]
         out: Option<PathBuf>,
     },
+    /// Run a training exercise headless (`exercises/<id>.json`) and print its assessment JSON:
+    /// `--autopilot` drives it with the exercise's scripted controller through the trainee's
+    /// controls, `--idle` gives no input at all.
+    Exercise {
+        /// Exercise id (see `GET /api/exercises`).
+        id: String,
+        /// Drive with the exercise's autopilot script.
+        #[arg(long, conflicts_with = "idle")]
+        autopilot: bool,
+        /// Give no input (the default).
+        #[arg(long)]
+        idle: bool,
+        /// Seed of the attempt's random draws (the fault drill's fault and time).
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+    },
     /// Load-test a running server: N trainee sessions with random sticks plus M observers.
     Load(crate::load::LoadArgs),
     /// Optimal deploy posture (Jun §3): prints {q, tomm, jlm, objective, …} as JSON.

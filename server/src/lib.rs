@@ -26,6 +26,7 @@ pub mod compute;
 pub mod config;
 pub mod csv_out;
 pub mod error;
+pub mod exercises;
 pub mod json;
 pub mod limits;
 pub mod load;

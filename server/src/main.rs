@@ -24,6 +24,39 @@ async fn main() -> anyhow::Result<()> {
             println!("{}", serde_json::to_string_pretty(&summary)?);
             Ok(())
         }
+        Some(Command::Exercise {
+            id,
+            autopilot,
+            idle: _,
+            seed,
+        }) => {
+            let spec = seaarms::exercises::EXERCISES.get(&id).ok_or_else(|| {
+                anyhow::anyhow!(
+                    "unknown exercise `{id}` (known: {})",
+                    seaarms::exercises::EXERCISES
+                        .all()
+                        .iter()
+                        .map(|s| s.id.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )
+            })?;
+            let robots = seaarms::robots::Robots::load()?;
+            let magnum = robots
+                .get("magnum")
+                .ok_or_else(|| anyhow::anyhow!("no magnum model"))?;
+            let driver = if autopilot {
+                seaarms::exercises::Driver::Autopilot
+            } else {
+                seaarms::exercises::Driver::Idle
+            };
+            let assessment = tokio::task::spawn_blocking(move || {
+                seaarms::exercises::run_headless(spec, &[magnum.clone(), magnum], driver, seed)
+            })
+            .await??;
+            println!("{}", serde_json::to_string_pretty(&assessment)?);
+            Ok(())
+        }
         Some(Command::OptimalPosture {
             robot,
             target,

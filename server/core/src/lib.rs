@@ -19,11 +19,13 @@
 //! * [`optimize`]: TOMM/JLM objective and gradients; optimal posture by multi-start SLSQP (Jun §3).
 //! * [`redundancy`]: task-oriented redundancy resolution, task priority, damping, velocity
 //!   limits, feedback form (Jun eqs 19–24, Kilic eqs 0.2–0.10); allocation-free steps.
+//! * [`exercise`]: training exercises: steps, conditions, assessment and score, the autopilot.
 //! * [`studies`]: Lim §4.3 manipulability case studies (single and dual arm) as rows, and a
 //!   workspace map of translational measures.
 
 pub mod analysis;
 pub mod error;
+pub mod exercise;
 pub mod ik;
 
 pub mod control;

@@ -10,7 +10,7 @@ use std::sync::atomic::Ordering;
 use serde_json::json;
 
 use super::record::RecordMsg;
-use super::{LIVE_SCENARIOS, Session, SessionManager};
+use super::{Live, Scenario, Session, SessionManager};
 use crate::protocol::{ControlMethod, ControlMode, EndReason, ServerMessage};
 
 /// Largest instructor message to a trainee (characters).
@@ -201,7 +201,7 @@ pub struct SettingsChange {
 }
 
 /// Everything that can be done to a live session, from either edge.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone)]
 pub enum Command {
     /// New stick input.
     Input(StickInput),
@@ -215,8 +215,10 @@ pub enum Command {
     Resume,
     /// Open both jaws for [`RELEASE_DURATION_S`].
     Release,
-    /// Switch scenario (resets the session); the name is a known live scenario.
-    Scenario(String),
+    /// Switch scenario (a fresh simulation): free play, a case-study set-up or an exercise.
+    Scenario(Scenario),
+    /// Name the fault of a diagnosis drill (one of the drill's answers).
+    Diagnose(String),
     /// Inject a fault.
     InjectFault(ActiveFault),
     /// Remove every fault.
@@ -281,13 +283,11 @@ impl Command {
         }))
     }
 
-    /// Builds a scenario switch, checking the name against [`LIVE_SCENARIOS`].
+    /// Builds a scenario switch: a name of [`LIVE_SCENARIOS`] or an exercise id.
     pub fn scenario(name: &str) -> Result<Command, CommandError> {
-        if LIVE_SCENARIOS.iter().any(|(n, _)| *n == name) {
-            Ok(Command::Scenario(name.to_string()))
-        } else {
-            Err(CommandError::Invalid(format!("unknown scenario `{name}`")))
-        }
+        Scenario::resolve(name)
+            .map(Command::Scenario)
+            .ok_or_else(|| CommandError::Invalid(format!("unknown scenario or exercise `{name}`")))
     }
 
     /// Builds an instructor message, checking its length.
@@ -310,6 +310,7 @@ impl Command {
             Command::Resume => "resume",
             Command::Release => "release",
             Command::Scenario(_) => "scenario",
+            Command::Diagnose(_) => "diagnose",
             Command::InjectFault(_) => "fault",
             Command::ClearFaults => "clear_faults",
             Command::Message(_) => "message",
@@ -329,6 +330,7 @@ impl Command {
                     | Command::Pause
                     | Command::Resume
                     | Command::Release
+                    | Command::Diagnose(_)
                     | Command::End
             ),
             Actor::Observer => false,
@@ -358,7 +360,7 @@ pub fn apply(
     if actor == Actor::Trainee {
         session.touch();
     }
-    if command == Command::End {
+    if matches!(command, Command::End) {
         record(manager, session, actor, &command, json!({}));
         // `permitted` lets only instructors and trainees end a session.
         let reason = match actor {
@@ -368,57 +370,30 @@ pub fn apply(
         manager.end(&session.id, reason);
         return Ok(());
     }
-    let detail = {
-        let mut live = session.live();
-        match &command {
-            Command::Input(input) => {
-                live.apply_input(input);
-                return Ok(());
+    let detail = match &command {
+        Command::Message(text) => {
+            let msg = ServerMessage::Message {
+                from: actor.as_str().into(),
+                text: text.clone(),
+            };
+            let _ = session
+                .notices
+                .send(serde_json::to_string(&msg).unwrap_or_default().into());
+            json!({"text": text})
+        }
+        _ => {
+            let mut live = session.live();
+            if actor == Actor::Instructor {
+                live.note_intervention(&command);
             }
-            Command::Settings(change) => {
-                live.apply_settings(change);
-                json!({"settings": live.settings()})
+            let detail = live.apply(&command)?;
+            if let Command::Scenario(s) = &command {
+                session.set_scenario(s.name());
             }
-            Command::Reset => {
-                live.reset();
-                json!({})
+            match command {
+                Command::Input(_) => return Ok(()),
+                _ => detail,
             }
-            Command::Pause => {
-                live.set_paused(true);
-                json!({})
-            }
-            Command::Resume => {
-                live.set_paused(false);
-                json!({})
-            }
-            Command::Release => {
-                live.release(RELEASE_DURATION_S);
-                json!({})
-            }
-            Command::Scenario(name) => {
-                session.set_scenario(name);
-                live.reset();
-                json!({"scenario": name})
-            }
-            Command::InjectFault(f) => {
-                live.inject_fault(*f);
-                json!({"fault": f})
-            }
-            Command::ClearFaults => {
-                live.clear_faults();
-                json!({})
-            }
-            Command::Message(text) => {
-                let msg = ServerMessage::Message {
-                    from: actor.as_str().into(),
-                    text: text.clone(),
-                };
-                let _ = session
-                    .notices
-                    .send(serde_json::to_string(&msg).unwrap_or_default().into());
-                json!({"text": text})
-            }
-            Command::End => json!({}),
         }
     };
     record(manager, session, actor, &command, detail);
@@ -440,6 +415,75 @@ fn record(
         id: session.id.clone(),
         json: event.to_string(),
     });
+}
+
+impl Live {
+    /// Applies a command to the live state (the part of [`apply`] that both sessions and
+    /// headless attempts share); returns the record's detail. `End` and `Message` are the
+    /// session's business and do nothing here.
+    pub fn apply(&mut self, command: &Command) -> Result<serde_json::Value, CommandError> {
+        Ok(match command {
+            Command::Input(input) => {
+                self.apply_input(input);
+                json!({})
+            }
+            Command::Settings(change) => {
+                self.apply_settings(change);
+                json!({"settings": self.settings()})
+            }
+            Command::Reset => {
+                self.reset();
+                json!({})
+            }
+            Command::Pause => {
+                self.set_paused(true);
+                json!({})
+            }
+            Command::Resume => {
+                self.set_paused(false);
+                json!({})
+            }
+            Command::Release => {
+                self.release(RELEASE_DURATION_S);
+                json!({})
+            }
+            Command::Scenario(scenario) => {
+                self.set_scenario(scenario.clone())
+                    .map_err(|e| CommandError::Invalid(format!("scenario: {e}")))?;
+                json!({"scenario": scenario.name()})
+            }
+            Command::Diagnose(answer) => {
+                let run = self
+                    .exercise
+                    .as_mut()
+                    .ok_or_else(|| CommandError::Invalid("no exercise is running".to_string()))?;
+                run.diagnose(answer).map_err(CommandError::Invalid)?;
+                json!({"answer": answer})
+            }
+            Command::InjectFault(f) => {
+                self.inject_fault(*f);
+                json!({"fault": f})
+            }
+            Command::ClearFaults => {
+                self.clear_faults();
+                json!({})
+            }
+            Command::Message(_) | Command::End => json!({}),
+        })
+    }
+
+    /// Counts an instructor's command as an intervention in the running attempt (stick
+    /// input and messages do not count).
+    fn note_intervention(&mut self, command: &Command) {
+        if !matches!(
+            command,
+            Command::Input(_) | Command::Message(_) | Command::End
+        ) {
+            if let Some(run) = self.exercise.as_mut() {
+                run.intervention();
+            }
+        }
+    }
 }
 
 #[cfg(test)]

@@ -25,6 +25,7 @@ use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
 
 use axum::extract::ws::Utf8Bytes;
 use seaarms_core::Model;
+use seaarms_core::exercise::{ExerciseRun, ExerciseSpec};
 use seaarms_core::grasp::GraspState;
 use seaarms_core::kinematics::KinData;
 use seaarms_core::redundancy::{Redundancy, RedundancyParams};
@@ -167,9 +168,168 @@ pub struct Live {
     release_until_s: f64,
     /// Redundancy resolvers for Cartesian mode, one per arm (preallocated).
     redundancy: [Redundancy; 2],
+    /// The arm models (left, right).
+    models: [Arc<Model>; 2],
+    /// What the session runs: free play, a case-study set-up, or an exercise.
+    scenario: Scenario,
+    /// The current attempt, when the scenario is an exercise.
+    exercise: Option<ExerciseRun>,
+    /// Seed of the next attempt's random draws (each attempt takes one and adds one).
+    next_seed: u64,
+}
+
+/// What a session runs.
+#[derive(Debug, Clone)]
+pub enum Scenario {
+    /// Free play or a case-study set-up ([`LIVE_SCENARIOS`]), by name.
+    Free(String),
+    /// An exercise (`exercises/<id>.json`).
+    Exercise(Arc<ExerciseSpec>),
+}
+
+impl Scenario {
+    /// Resolves a name: a live scenario or an exercise id.
+    pub fn resolve(name: &str) -> Option<Scenario> {
+        if LIVE_SCENARIOS.iter().any(|(n, _)| *n == name) {
+            Some(Scenario::Free(name.to_string()))
+        } else {
+            crate::exercises::EXERCISES
+                .get(name)
+                .map(Scenario::Exercise)
+        }
+    }
+
+    /// Its name (an exercise's id).
+    pub fn name(&self) -> &str {
+        match self {
+            Scenario::Free(n) => n,
+            Scenario::Exercise(e) => &e.id,
+        }
+    }
+
+    /// The exercise, if it is one.
+    pub fn exercise(&self) -> Option<&Arc<ExerciseSpec>> {
+        match self {
+            Scenario::Free(_) => None,
+            Scenario::Exercise(e) => Some(e),
+        }
+    }
+
+    /// A fresh simulation for it.
+    fn build_sim(&self, models: &[Arc<Model>; 2]) -> Result<Simulation, seaarms_core::Error> {
+        let params = match self {
+            Scenario::Free(_) => SimParams::case_study(&models[0], &models[1])?,
+            Scenario::Exercise(e) => e.sim_params(&models[0], &models[1])?,
+        };
+        Simulation::new((*models[0]).clone(), (*models[1]).clone(), params)
+    }
 }
 
 impl Live {
+    /// A session's live state at its start: the scenario's simulation at its reset state, the
+    /// settings (an exercise's own unless `mode`/`method` override them), and for an
+    /// exercise its first attempt, seeded with `seed`.
+    pub fn new(
+        models: &[Arc<Model>; 2],
+        scenario: &Scenario,
+        mode: Option<ControlMode>,
+        method: Option<ControlMethod>,
+        seed: u64,
+    ) -> Result<Live, seaarms_core::Error> {
+        let sim = scenario.build_sim(models)?;
+        let control = scenario.exercise().map(|e| e.control);
+        let settings = Settings {
+            control_mode: mode
+                .or(control.map(|c| crate::exercises::wire_mode(c.mode)))
+                .unwrap_or_default(),
+            control_method: method
+                .or(control.map(|c| crate::exercises::wire_method(c.method)))
+                .unwrap_or_default(),
+            arm_speed: 1.0,
+        };
+        let now = Instant::now();
+        let mut live = Live {
+            input: Input::default(),
+            sim,
+            settings,
+            paused: false,
+            input_seq: 0,
+            cartesian: [[0.0; 6]; 2],
+            faults: Vec::new(),
+            steps_since_origin: 0,
+            origin: now,
+            frame_seq: 0,
+            next_frame: now,
+            kin: [KinData::new(&models[0]), KinData::new(&models[1])],
+            relief_recorded: 0,
+            last_grasp: GraspState::Free,
+            release_until_s: 0.0,
+            redundancy: [
+                Redundancy::new(&models[0], RedundancyParams::default()),
+                Redundancy::new(&models[1], RedundancyParams::default()),
+            ],
+            models: models.clone(),
+            scenario: scenario.clone(),
+            exercise: None,
+            next_seed: seed,
+        };
+        live.start_attempt();
+        Ok(live)
+    }
+
+    /// Starts a new attempt when the scenario is an exercise (the simulation is at its reset
+    /// state).
+    fn start_attempt(&mut self) {
+        self.exercise = self.scenario.exercise().map(|spec| {
+            let seed = self.next_seed;
+            self.next_seed = self.next_seed.wrapping_add(1);
+            ExerciseRun::new(spec.clone(), &self.sim, seed)
+        });
+    }
+
+    /// The current attempt, when the scenario is an exercise.
+    pub fn exercise(&self) -> Option<&ExerciseRun> {
+        self.exercise.as_ref()
+    }
+
+    /// What the session runs.
+    pub fn scenario(&self) -> &Scenario {
+        &self.scenario
+    }
+
+    /// Switches to `scenario`: a fresh simulation (an exercise has its own scene), faults
+    /// cleared, inputs cleared, an exercise's settings, a new attempt.
+    pub fn set_scenario(&mut self, scenario: Scenario) -> Result<(), seaarms_core::Error> {
+        self.sim = scenario.build_sim(&self.models)?;
+        self.faults.clear();
+        self.scenario = scenario;
+        if let Some(c) = self.scenario.exercise().map(|e| e.control) {
+            self.apply_settings(&SettingsChange {
+                control_mode: Some(crate::exercises::wire_mode(c.mode)),
+                control_method: Some(crate::exercises::wire_method(c.method)),
+                arm_speed: None,
+            });
+        }
+        self.reset();
+        Ok(())
+    }
+
+    /// No stick, grip or object input above the exercise's idle threshold (the page's
+    /// dead zone by default).
+    pub fn idle(&self) -> bool {
+        let th = self
+            .scenario
+            .exercise()
+            .map_or(0.05, |e| e.thresholds.idle_input);
+        let small = |v: &f64| v.abs() < th;
+        self.input
+            .arms
+            .iter()
+            .all(|a| a.valves.iter().all(small) && small(&a.jaw))
+            && self.cartesian.iter().flatten().all(small)
+            && self.input.object_velocity.iter().all(|v| v.abs() < 1e-12)
+    }
+
     /// The simulation (read-only).
     pub fn sim(&self) -> &Simulation {
         &self.sim
@@ -247,6 +407,8 @@ impl Live {
         self.input.object_velocity = [0.0; 6];
         self.cartesian = [[0.0; 6]; 2];
         self.relief_recorded = 0;
+        self.release_until_s = 0.0;
+        self.start_attempt();
     }
 
     /// Pauses or resumes the clock.
@@ -347,14 +509,9 @@ impl Session {
     }
 }
 
-/// Builds the simulation of a scenario.
-pub fn build_sim(models: &[Arc<Model>; 2]) -> anyhow::Result<Simulation> {
-    let params = SimParams::case_study(&models[0], &models[1])?;
-    Ok(Simulation::new(
-        (*models[0]).clone(),
-        (*models[1]).clone(),
-        params,
-    )?)
+/// A random seed for a session's attempts.
+pub fn random_seed() -> u64 {
+    u64::from_str_radix(&random_hex(8), 16).unwrap_or(0)
 }
 
 /// Why a session could not be created.
@@ -426,49 +583,20 @@ impl SessionManager {
         method: Option<ControlMethod>,
         label: Option<String>,
     ) -> Result<Arc<Session>, CreateError> {
-        let scenario = scenario.unwrap_or_else(|| "training".to_string());
-        if !LIVE_SCENARIOS.iter().any(|(n, _)| *n == scenario) {
-            return Err(CreateError::UnknownScenario(scenario));
-        }
+        let name = scenario.unwrap_or_else(|| "training".to_string());
+        let scenario = Scenario::resolve(&name).ok_or(CreateError::UnknownScenario(name))?;
         self.check_caps(&self.map(), client)?;
         self.recorder.admit().map_err(CreateError::Recording)?;
         let models = [self.magnum.clone(), self.magnum.clone()];
-        let sim = build_sim(&models).map_err(|e| CreateError::Sim(e.to_string()))?;
-        let settings = Settings {
-            control_mode: mode.unwrap_or_default(),
-            control_method: method.unwrap_or_default(),
-            arm_speed: 1.0,
-        };
-        let kin = [KinData::new(&models[0]), KinData::new(&models[1])];
-        let now = Instant::now();
-        let live = Live {
-            input: Input::default(),
-            sim,
-            settings,
-            paused: false,
-            input_seq: 0,
-            cartesian: [[0.0; 6]; 2],
-            faults: Vec::new(),
-            steps_since_origin: 0,
-            origin: now,
-            frame_seq: 0,
-            next_frame: now,
-            kin,
-            relief_recorded: 0,
-            last_grasp: GraspState::Free,
-            release_until_s: 0.0,
-            redundancy: [
-                Redundancy::new(&models[0], RedundancyParams::default()),
-                Redundancy::new(&models[1], RedundancyParams::default()),
-            ],
-        };
+        let live = Live::new(&models, &scenario, mode, method, random_seed())
+            .map_err(|e| CreateError::Sim(e.to_string()))?;
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);
         let label = label.unwrap_or_default().chars().take(64).collect();
         let session = Arc::new(Session {
             id: random_hex(8),
             label,
-            scenario: Mutex::new(scenario.clone()),
+            scenario: Mutex::new(scenario.name().to_string()),
             control_token: random_hex(16),
             created_unix: unix_now(),
             live: Mutex::new(live),
@@ -491,7 +619,7 @@ impl SessionManager {
         self.recorder.send(RecordMsg::Created {
             id: session.id.clone(),
             label: session.label.clone(),
-            scenario,
+            scenario: session.scenario(),
             created_unix: session.created_unix,
         });
         let w = self.next_worker.fetch_add(1, Ordering::Relaxed) as usize % self.workers.len();

@@ -136,11 +136,10 @@ pub fn step_session(
             todo = MAX_CATCH_UP_STEPS;
         }
         for _ in 0..todo {
-            apply_control(live, &session.models);
-            live.sim.step(&live.input);
+            let row_due = live.advance();
             live.steps_since_origin += 1;
             metrics.steps.fetch_add(1, Ordering::Relaxed);
-            if live.sim.steps() % RECORD_EVERY_STEPS == 0 {
+            if row_due {
                 record_row(session, live, recorder);
             }
         }
@@ -170,32 +169,52 @@ pub fn step_session(
     }
 }
 
-/// Turns the latest commands into the simulation's input for the next step: Cartesian
-/// sticks become joint-velocity references by redundancy resolution; the settings set the
-/// method and speed scale.
-fn apply_control(live: &mut Live, models: &[Arc<seaarms_core::Model>; 2]) {
-    live.input.speed_scale = live.settings.arm_speed;
-    live.input.method = match live.settings.control_method {
-        ControlMethod::Open => seaarms_core::sim::ControlMethod::OpenLoop,
-        ControlMethod::Closed => seaarms_core::sim::ControlMethod::ClosedLoop,
-    };
-    let releasing = live.sim.time_s() < live.release_until_s;
-    for arm in Arm::BOTH {
-        let i = arm.index();
-        if releasing {
-            live.input.arms[i].jaw = 1.0;
+impl Live {
+    /// One 1 ms step of the session: the latest commands become the simulation's input
+    /// ([`Live::apply_control`]), the simulation steps, and every
+    /// [`RECORD_EVERY_STEPS`] steps the exercise attempt takes an assessment sample.
+    /// Returns whether a record row is due (the same cadence). The real-time worker and
+    /// headless attempts both step through here.
+    pub fn advance(&mut self) -> bool {
+        self.apply_control();
+        self.sim.step(&self.input);
+        let due = self.sim.steps() % RECORD_EVERY_STEPS == 0;
+        if due {
+            let idle = self.idle();
+            if let Some(run) = self.exercise.as_mut() {
+                run.sample(&mut self.sim, idle);
+            }
         }
-        live.input.arms[i].joint_velocity_ref = match live.settings.control_mode {
-            ControlMode::Joint => None,
-            ControlMode::Cartesian => Some(cartesian_to_joint_velocity(
-                &mut live.redundancy[i],
-                &models[i],
-                &live.sim.params().arms[i].base.rotation,
-                &live.sim.arm(arm).q,
-                &live.cartesian[i],
-                1e-3,
-            )),
+        due
+    }
+
+    /// Turns the latest commands into the simulation's input for the next step: Cartesian
+    /// sticks become joint-velocity references by redundancy resolution; the settings set
+    /// the method and speed scale.
+    fn apply_control(&mut self) {
+        self.input.speed_scale = self.settings.arm_speed;
+        self.input.method = match self.settings.control_method {
+            ControlMethod::Open => seaarms_core::sim::ControlMethod::OpenLoop,
+            ControlMethod::Closed => seaarms_core::sim::ControlMethod::ClosedLoop,
         };
+        let releasing = self.sim.time_s() < self.release_until_s;
+        for arm in Arm::BOTH {
+            let i = arm.index();
+            if releasing {
+                self.input.arms[i].jaw = 1.0;
+            }
+            self.input.arms[i].joint_velocity_ref = match self.settings.control_mode {
+                ControlMode::Joint => None,
+                ControlMode::Cartesian => Some(cartesian_to_joint_velocity(
+                    &mut self.redundancy[i],
+                    &self.models[i],
+                    &self.sim.params().arms[i].base.rotation,
+                    &self.sim.arm(arm).q,
+                    &self.cartesian[i],
+                    1e-3,
+                )),
+            };
+        }
     }
 }
 
@@ -215,6 +234,15 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
         });
     }
     live.relief_recorded = relief;
+    if let Some(run) = live.exercise.as_mut() {
+        for e in run.take_events() {
+            recorder.send(RecordMsg::Event {
+                id: session.id.clone(),
+                json: serde_json::json!({"t": e.t, "event": "exercise", "kind": e.kind, "text": e.text})
+                    .to_string(),
+            });
+        }
+    }
     recorder.send(RecordMsg::Row {
         id: session.id.clone(),
         row,

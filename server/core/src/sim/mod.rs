@@ -479,6 +479,11 @@ impl Simulation {
     pub fn end_effector(&self, arm: Arm) -> Isometry3<f64> {
         self.work[arm.index()].tool
     }
+    /// The model of arm `arm`, its base composed in ([`Model::based_at`]): its forward
+    /// kinematics come out in the world frame.
+    pub fn model(&self, arm: Arm) -> &Model {
+        &self.models[arm.index()]
+    }
     /// World-frame 6×6 Jacobian of arm `arm`'s tool point.
     pub fn jacobian_world(&self, arm: Arm) -> &Matrix6<f64> {
         &self.work[arm.index()].jw

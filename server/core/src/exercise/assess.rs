@@ -1,0 +1,468 @@
+//! The assessment of an attempt, computed from the simulation itself at 100 Hz: counted events
+//! (strikes, drops, overloads, relief, joint-limit hits), peaks (contact and internal force),
+//! smoothness (RMS tool jerk), posture (mean Yoshikawa measure and JLM of the working arms,
+//! time near a singularity or a joint limit) and idle time; then the score.
+//!
+//! # Score
+//! Each scoring term maps one metric linearly from its `bad` value (0) to its `good` value (1),
+//! clamped to [0, 1]; the score is
+//!
+//! > score = 100 × (steps completed / steps) × Σ wₖ·sₖ / Σ wₖ
+//!
+//! (100 × the completed fraction when there are no terms). An attempt **passes** when every
+//! step is completed within the time limit, the score is at least `pass.min_score`, every
+//! `pass.limits` entry holds, and, in a fault drill, the named fault is the injected one.
+
+use nalgebra::{DMatrix, Matrix6, Vector3};
+use serde::Serialize;
+
+use super::spec::{ExerciseSpec, Obstacle, Thresholds};
+use crate::kinematics::{KinData, forward_kinematics};
+use crate::manipulability::{Measures, jlm, measures};
+use crate::model::Model;
+use crate::sim::{Arm, Simulation};
+
+/// Interval between assessment samples (s): 0.01 (100 Hz, the record rate).
+pub const SAMPLE_INTERVAL_S: f64 = 0.01;
+/// Interval of the tool positions the jerk is computed from (s): 0.05. The third difference
+/// over 50 ms passes the operator's motion (well under 5 Hz) and suppresses the hydraulic
+/// resonances (≳ 20 Hz) that no operator causes or can feel through the sticks; over 10 ms
+/// they dominate the figure.
+pub const JERK_INTERVAL_S: f64 = 0.05;
+
+/// Every metric of an attempt. All numbers are finite.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize)]
+pub struct Metrics {
+    /// Simulated time from start to completion, or to now / the time limit (s).
+    pub time_s: f64,
+    /// Steps completed.
+    pub steps_completed: f64,
+    /// Times an arm entered the seabed (any joint origin, link midpoint or the tool point
+    /// below the seabed surface).
+    pub seabed_strikes: f64,
+    /// Times an arm entered an obstacle box.
+    pub obstacle_strikes: f64,
+    /// Times the box lost its last jaw while off the seabed.
+    pub drops: f64,
+    /// Highest jaw contact force (N).
+    pub peak_contact_force_n: f64,
+    /// Highest internal force magnitude (N).
+    pub peak_internal_force_n: f64,
+    /// Times a jaw's contact force rose above the overload threshold.
+    pub overloads: f64,
+    /// Relief-valve openings (Lim's overload events).
+    pub relief_events: f64,
+    /// Times a joint came within the hit distance of its limit.
+    pub joint_limit_hits: f64,
+    /// RMS jerk of the working arms' tool points (m/s³).
+    pub jerk_rms_m_s3: f64,
+    /// Mean translational Yoshikawa measure of the working arms (m³/s-like, per unit joint rate).
+    pub mean_yoshikawa: f64,
+    /// Mean joint-limit measure (JLM, Jun eq. 16) of the working arms.
+    pub mean_jlm: f64,
+    /// Time a working arm spent near a singularity (s).
+    pub near_singularity_s: f64,
+    /// Time a working arm spent with a joint near its limit (s).
+    pub near_limit_s: f64,
+    /// Time with no stick or grip input (s).
+    pub idle_s: f64,
+    /// Instructor interventions (pause, reset, release, faults, scenario changes).
+    pub interventions: f64,
+}
+
+impl Metrics {
+    /// A metric by its field name.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        Some(match name {
+            "time_s" => self.time_s,
+            "steps_completed" => self.steps_completed,
+            "seabed_strikes" => self.seabed_strikes,
+            "obstacle_strikes" => self.obstacle_strikes,
+            "drops" => self.drops,
+            "peak_contact_force_n" => self.peak_contact_force_n,
+            "peak_internal_force_n" => self.peak_internal_force_n,
+            "overloads" => self.overloads,
+            "relief_events" => self.relief_events,
+            "joint_limit_hits" => self.joint_limit_hits,
+            "jerk_rms_m_s3" => self.jerk_rms_m_s3,
+            "mean_yoshikawa" => self.mean_yoshikawa,
+            "mean_jlm" => self.mean_jlm,
+            "near_singularity_s" => self.near_singularity_s,
+            "near_limit_s" => self.near_limit_s,
+            "idle_s" => self.idle_s,
+            "interventions" => self.interventions,
+            _ => return None,
+        })
+    }
+}
+
+/// RMS jerk of a point sampled at a fixed interval, from the third backward difference of
+/// position, j ≈ (x₃ − 3x₂ + 3x₁ − x₀)/Δt³ (exact for cubic motion).
+#[derive(Debug, Clone, Default)]
+pub struct JerkMeter {
+    last: Vec<Vector3<f64>>,
+    sum_sq: f64,
+    count: u64,
+}
+
+impl JerkMeter {
+    /// Adds a position sample taken `dt_s` after the previous one.
+    pub fn add(&mut self, p: Vector3<f64>, dt_s: f64) {
+        self.last.push(p);
+        if self.last.len() > 4 {
+            self.last.remove(0);
+        }
+        if self.last.len() == 4 {
+            let [x0, x1, x2, x3] = [self.last[0], self.last[1], self.last[2], self.last[3]];
+            let j = (x3 - 3.0 * x2 + 3.0 * x1 - x0) / dt_s.powi(3);
+            if j.iter().all(|v| v.is_finite()) {
+                self.sum_sq += j.norm_squared();
+                self.count += 1;
+            }
+        }
+    }
+
+    /// Sum of squared jerk magnitudes and the number of jerk values so far.
+    pub fn totals(&self) -> (f64, u64) {
+        (self.sum_sq, self.count)
+    }
+
+    /// RMS jerk magnitude (m/s³), 0 before four samples.
+    pub fn rms(&self) -> f64 {
+        if self.count == 0 {
+            0.0
+        } else {
+            (self.sum_sq / self.count as f64).sqrt()
+        }
+    }
+}
+
+/// Translational manipulability measures of a world-frame 6×6 Jacobian's first three rows
+/// (zeros when they cannot be computed): what the state frame shows and the assessment averages.
+pub fn translational_measures(jw: &Matrix6<f64>) -> Measures {
+    let jt = DMatrix::from_fn(3, 6, |r, c| jw[(r, c)]);
+    measures(&jt)
+        .unwrap_or_else(|_| Measures::from_spectrum(&[0.0; 3], &DMatrix::identity(3, 3), 0.0))
+}
+
+/// Per joint: whether `q` lies within `fraction` of the joint's range from a limit.
+pub fn near_limits(model: &Model, q: &[f64; 6], fraction: f64) -> [bool; 6] {
+    let mut out = [false; 6];
+    for ((o, q), joint) in out.iter_mut().zip(q).zip(&model.joints) {
+        if joint.is_limited() {
+            let margin = fraction * (joint.limits[1] - joint.limits[0]);
+            *o = q - joint.limits[0] < margin || joint.limits[1] - q < margin;
+        }
+    }
+    out
+}
+
+/// Points along an arm for strike tests: the origins of every joint frame, the midpoints
+/// between consecutive ones, and the tool point (world frame).
+pub fn arm_points(sim: &Simulation, arm: Arm, kin: &mut KinData, out: &mut Vec<Vector3<f64>>) {
+    out.clear();
+    let model = sim.model(arm);
+    forward_kinematics(model, kin, &sim.arm(arm).q);
+    let mut prev: Option<Vector3<f64>> = None;
+    for f in &kin.joint_frames {
+        let p = f.translation.vector;
+        if let Some(a) = prev {
+            out.push(0.5 * (a + p));
+        }
+        out.push(p);
+        prev = Some(p);
+    }
+    let tool = sim.end_effector(arm).translation.vector;
+    if let Some(a) = prev {
+        out.push(0.5 * (a + tool));
+    }
+    out.push(tool);
+}
+
+fn inside(o: &Obstacle, p: &Vector3<f64>) -> bool {
+    (0..3).all(|k| (p[k] - o.center_m[k]).abs() <= o.half_size_m[k])
+}
+
+/// A counted event, for banners and the record.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Event {
+    /// `strike`, `obstacle`, `drop`, `overload`, `relief`, `limit`, `fault` or `step`.
+    pub kind: &'static str,
+    /// Simulated time (s).
+    pub t: f64,
+    /// What happened, for the trainee.
+    pub text: String,
+}
+
+/// Accumulates the metrics of one attempt.
+#[derive(Debug, Clone)]
+pub struct Assessor {
+    thresholds: Thresholds,
+    working: Vec<usize>,
+    obstacles: Vec<Obstacle>,
+    kin: [KinData; 2],
+    points: Vec<Vector3<f64>>,
+    in_seabed: [bool; 2],
+    in_obstacle: [bool; 2],
+    overloaded: [bool; 2],
+    at_limit: [[bool; 6]; 2],
+    was_holding: bool,
+    relief_at_start: u64,
+    jerk: [JerkMeter; 2],
+    samples: u64,
+    posture_samples: f64,
+    yoshikawa_sum: f64,
+    jlm_sum: f64,
+    /// The metrics so far.
+    pub metrics: Metrics,
+}
+
+impl Assessor {
+    /// Starts assessing `sim` as it is now for `spec`.
+    pub fn new(spec: &ExerciseSpec, sim: &Simulation) -> Assessor {
+        Assessor {
+            thresholds: spec.thresholds,
+            working: spec.control.arm.indices().to_vec(),
+            obstacles: spec.scene.obstacles.clone(),
+            kin: [
+                KinData::new(sim.model(Arm::Left)),
+                KinData::new(sim.model(Arm::Right)),
+            ],
+            points: Vec::with_capacity(32),
+            in_seabed: [false; 2],
+            in_obstacle: [false; 2],
+            overloaded: [false; 2],
+            at_limit: [[false; 6]; 2],
+            was_holding: false,
+            relief_at_start: sim.relief_events(),
+            jerk: Default::default(),
+            samples: 0,
+            posture_samples: 0.0,
+            yoshikawa_sum: 0.0,
+            jlm_sum: 0.0,
+            metrics: Metrics::default(),
+        }
+    }
+
+    /// Takes one sample, [`SAMPLE_INTERVAL_S`] after the last; `idle` says the trainee gave no
+    /// input. Pushes the events counted in this sample to `events`.
+    pub fn sample(&mut self, sim: &Simulation, idle: bool, events: &mut Vec<Event>) {
+        let dt = SAMPLE_INTERVAL_S;
+        let t = sim.time_s();
+        let th = self.thresholds;
+        let m = &mut self.metrics;
+        let seabed = sim.params().object.seabed_z_m;
+        for arm in Arm::BOTH {
+            let i = arm.index();
+            arm_points(sim, arm, &mut self.kin[i], &mut self.points);
+            let below = self.points.iter().any(|p| p.z < seabed);
+            if below && !self.in_seabed[i] {
+                m.seabed_strikes += 1.0;
+                events.push(Event {
+                    kind: "strike",
+                    t,
+                    text: format!("{} arm struck the seabed", side(arm)),
+                });
+            }
+            self.in_seabed[i] = below;
+            let hit = self
+                .points
+                .iter()
+                .any(|p| self.obstacles.iter().any(|o| inside(o, p)));
+            if hit && !self.in_obstacle[i] {
+                m.obstacle_strikes += 1.0;
+                events.push(Event {
+                    kind: "obstacle",
+                    t,
+                    text: format!("{} arm struck an obstacle", side(arm)),
+                });
+            }
+            self.in_obstacle[i] = hit;
+            let st = sim.arm(arm);
+            let f = Vector3::new(
+                st.contact_wrench[0],
+                st.contact_wrench[1],
+                st.contact_wrench[2],
+            )
+            .norm();
+            m.peak_contact_force_n = m.peak_contact_force_n.max(f);
+            let over = f > th.overload_force_n;
+            if over && !self.overloaded[i] {
+                m.overloads += 1.0;
+                events.push(Event {
+                    kind: "overload",
+                    t,
+                    text: format!("{} jaw overloaded: {:.0} N", side(arm), f),
+                });
+            }
+            self.overloaded[i] = over;
+            let model = sim.model(arm);
+            for (k, joint) in model.joints.iter().enumerate().take(6) {
+                let hit_now = joint.is_limited() && {
+                    let d = th.limit_hit_deg.to_radians();
+                    st.q[k] - joint.limits[0] < d || joint.limits[1] - st.q[k] < d
+                };
+                if hit_now && !self.at_limit[i][k] {
+                    m.joint_limit_hits += 1.0;
+                    events.push(Event {
+                        kind: "limit",
+                        t,
+                        text: format!("{} joint {} at its limit", side(arm), k + 1),
+                    });
+                }
+                self.at_limit[i][k] = hit_now;
+            }
+        }
+        let w = sim.internal_wrench();
+        m.peak_internal_force_n = m
+            .peak_internal_force_n
+            .max(Vector3::new(w[0], w[1], w[2]).norm());
+        let holding = Arm::BOTH.iter().any(|&a| sim.arm(a).holding);
+        let rest_z = sim.params().object.initial_pose.translation.z;
+        if self.was_holding
+            && !holding
+            && !super::condition::object_resting(sim)
+            && sim.object().pose.translation.z > rest_z + 0.02
+        {
+            m.drops += 1.0;
+            events.push(Event {
+                kind: "drop",
+                t,
+                text: "The box was dropped".into(),
+            });
+        }
+        self.was_holding = holding;
+        let relief = sim.relief_events().saturating_sub(self.relief_at_start) as f64;
+        if relief > m.relief_events {
+            events.push(Event {
+                kind: "relief",
+                t,
+                text: "Relief valve opened: the arm is overloaded".into(),
+            });
+        }
+        m.relief_events = relief;
+        let (mut near_s, mut near_l) = (false, false);
+        let every = (JERK_INTERVAL_S / dt).round().max(1.0) as u64;
+        let jerk_sample = self.samples % every == 0;
+        self.samples += 1;
+        for &i in &self.working {
+            let arm = Arm::BOTH[i];
+            if jerk_sample {
+                self.jerk[i].add(sim.end_effector(arm).translation.vector, JERK_INTERVAL_S);
+            }
+            let me = translational_measures(sim.jacobian_world(arm));
+            let q = sim.arm(arm).q;
+            self.yoshikawa_sum += me.yoshikawa;
+            self.jlm_sum += jlm(sim.model(arm), &q);
+            self.posture_samples += 1.0;
+            near_s |= me.isotropy < th.singular_isotropy;
+            near_l |= near_limits(sim.model(arm), &q, th.near_limit_fraction)
+                .iter()
+                .any(|b| *b);
+        }
+        if near_s {
+            m.near_singularity_s += dt;
+        }
+        if near_l {
+            m.near_limit_s += dt;
+        }
+        if idle {
+            m.idle_s += dt;
+        }
+        let (s, n) = self
+            .jerk
+            .iter()
+            .map(JerkMeter::totals)
+            .fold((0.0, 0), |(a, b), (c, d)| (a + c, b + d));
+        m.jerk_rms_m_s3 = if n == 0 { 0.0 } else { (s / n as f64).sqrt() };
+        if self.posture_samples > 0.0 {
+            m.mean_yoshikawa = self.yoshikawa_sum / self.posture_samples;
+            m.mean_jlm = self.jlm_sum / self.posture_samples;
+        }
+    }
+}
+
+fn side(arm: Arm) -> &'static str {
+    match arm {
+        Arm::Left => "Left",
+        Arm::Right => "Right",
+    }
+}
+
+/// One scoring term as applied.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TermScore {
+    /// Metric.
+    pub metric: String,
+    /// Its value.
+    pub value: f64,
+    /// Value scoring 1.
+    pub good: f64,
+    /// Value scoring 0.
+    pub bad: f64,
+    /// Weight.
+    pub weight: f64,
+    /// Sub-score in [0, 1].
+    pub score: f64,
+}
+
+/// One pass limit as checked.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LimitCheck {
+    /// Metric.
+    pub metric: String,
+    /// Its value.
+    pub value: f64,
+    /// Most allowed.
+    pub max: Option<f64>,
+    /// Least allowed.
+    pub min: Option<f64>,
+    /// Met.
+    pub met: bool,
+}
+
+/// The score (0–100) and its terms, per the module docs.
+pub fn score(spec: &ExerciseSpec, metrics: &Metrics) -> (f64, Vec<TermScore>) {
+    let terms: Vec<TermScore> = spec
+        .scoring
+        .iter()
+        .map(|t| {
+            let value = metrics.get(&t.metric).unwrap_or(0.0);
+            let s = ((value - t.bad) / (t.good - t.bad)).clamp(0.0, 1.0);
+            TermScore {
+                metric: t.metric.clone(),
+                value,
+                good: t.good,
+                bad: t.bad,
+                weight: t.weight,
+                score: if s.is_finite() { s } else { 0.0 },
+            }
+        })
+        .collect();
+    let total_w: f64 = terms.iter().map(|t| t.weight).sum();
+    let weighted = if total_w > 0.0 {
+        terms.iter().map(|t| t.weight * t.score).sum::<f64>() / total_w
+    } else {
+        1.0
+    };
+    let completed = metrics.steps_completed / spec.steps.len().max(1) as f64;
+    (100.0 * completed.clamp(0.0, 1.0) * weighted, terms)
+}
+
+/// The pass limits of `spec` checked against `metrics`.
+pub fn limits(spec: &ExerciseSpec, metrics: &Metrics) -> Vec<LimitCheck> {
+    spec.pass
+        .limits
+        .iter()
+        .map(|l| {
+            let value = metrics.get(&l.metric).unwrap_or(0.0);
+            LimitCheck {
+                metric: l.metric.clone(),
+                value,
+                max: l.max,
+                min: l.min,
+                met: l.max.is_none_or(|m| value <= m) && l.min.is_none_or(|m| value >= m),
+            }
+        })
+        .collect()
+}

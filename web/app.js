@@ -7,6 +7,8 @@ import { StatusBar } from './status.js';
 import { Plots } from './plots.js';
 import { TouchPad, touchDevice } from './touch.js';
 import { TabGuard } from './tabs.js';
+import { StartScreen } from './start.js';
+import { TaskPanel } from './task.js';
 
 const $ = (id) => document.getElementById(id);
 const SPEEDS = [0.25, 0.5, 0.75, 1];
@@ -61,6 +63,7 @@ const conn = new Connection({
   onHello(h) {
     setRole(h.role, h.session);
     view.setHello(h);
+    setExercise(h);
     settings = { ...h.settings };
     syncControls();
     plots.setSession(h.session, conn.session?.control_token);
@@ -71,6 +74,7 @@ const conn = new Connection({
   },
   onState(s) {
     view.setState(s);
+    followScenario(s);
     plots.add(s, selectedArm);
     if (s.settings.control_mode !== settings.control_mode || s.settings.control_method !== settings.control_method ||
         s.settings.arm_speed !== settings.arm_speed) {
@@ -91,7 +95,58 @@ const conn = new Connection({
 });
 
 // status bar refresh at 10 Hz from the newest drawn state (text only changes when values do)
-setInterval(() => { if (view.drawn) status.update(view.drawn, { arm: selectedArm }); }, 100);
+setInterval(() => {
+  if (!view.drawn) return;
+  status.update(view.drawn, { arm: selectedArm });
+  task.update(view.drawn.exercise);
+}, 100);
+
+const startScreen = new StartScreen($('start'));
+const task = new TaskPanel($('task'), $('card'), {
+  banner: showBanner,
+  tryAgain: () => conn.send({ type: 'restart' }),
+  nextTitle: () => startScreen.next(task.spec?.id)?.title,
+  next: () => { const n = startScreen.next(task.spec?.id); if (n) newSession({ exercise: n.id }); },
+  choose: () => chooseAndStart(),
+});
+/** What the page was set up for by the last hello: {scenario, exercise id or null}. */
+let setUpFor = null;
+
+/** A hello's exercise: the task panel, the exercise's arm, plots off while training. */
+function setExercise(h) {
+  const ex = h.exercise || null;
+  setUpFor = { scenario: h.scenario, exercise: ex?.id ?? null };
+  const was = task.active;
+  task.setExercise(ex, conn.session);
+  if (ex && (ex.control?.arm === 'left' || ex.control?.arm === 'right')) setArm(ex.control.arm);
+  if (!!ex !== was) {
+    $('chk-plots').checked = !ex && !matchMedia(NARROW_SCREEN).matches;
+    $('chk-plots').dispatchEvent(new Event('change'));
+  }
+  view.viewports.dirty = true;
+}
+
+/** The instructor may switch the session's scenario or exercise: the frames say so, and a
+ * fresh hello (reconnecting to the same session) sets the page up for it. */
+function followScenario(s) {
+  if (!setUpFor || s.scenario === undefined) return;
+  const exercise = s.exercise?.id ?? null;
+  if (s.scenario === setUpFor.scenario && exercise === setUpFor.exercise) return;
+  setUpFor = { scenario: s.scenario, exercise };
+  showBanner('info', `The instructor switched this session to ${exercise || s.scenario}.`, 5000);
+  conn.reconnect();
+}
+
+/** A new session (keeps the trainee's name). */
+function newSession(opts) {
+  const trainee = conn.createOpts?.trainee;
+  conn.restart(trainee ? { ...opts, trainee } : opts);
+}
+
+async function chooseAndStart() {
+  const choice = await startScreen.choose(task.spec?.id);
+  conn.restart(choice);
+}
 
 function syncControls() {
   $('sel-mode').value = settings.control_mode;
@@ -112,6 +167,7 @@ function setArm(side) {
   localStorage.setItem('seaarms.arm', side);
   syncControls();
   touch.showArm(side);
+  view.setSelectedArm(input.enabled ? side : null);
 }
 
 let paused = false;
@@ -168,8 +224,9 @@ document.addEventListener('pointerdown', (e) => {
 });
 $('btn-new').addEventListener('click', () => {
   const sc = $('sel-scenario').value;
-  conn.restart(sc ? { scenario: sc } : {});
+  newSession(sc ? { scenario: sc } : {});
 });
+$('btn-exercises').addEventListener('click', () => chooseAndStart());
 $('chk-ell').addEventListener('change', (e) => view.setEllipsoidsVisible(e.target.checked));
 $('chk-poly').addEventListener('change', (e) => view.setPolytopesVisible(e.target.checked));
 $('sel-ell-scale').addEventListener('change', (e) => view.setEllipsoidScale(+e.target.value));
@@ -215,6 +272,7 @@ function setRole(role, session) {
   const driving = role === 'trainee';
   tabs.driving(driving ? session : null);
   input.enabled = driving;
+  view.setSelectedArm(driving ? selectedArm : null);
   touch.visible = driving && $('chk-touch').checked;
   for (const id of DRIVING_CONTROLS) $(id).disabled = !driving;
   document.body.classList.toggle('observing', !driving);
@@ -236,11 +294,19 @@ const tabs = new TabGuard($('tabs'), {
 /** Starts or resumes this browser's session; asks first if another tab drives it. */
 async function start() {
   const stored = Connection.stored();
-  if (stored && await tabs.anotherDriving(stored.id)) {
-    if (await tabs.choose() === 'take') tabs.take(stored.id);
-    else conn.observing = true;
+  const named = params.get('exercise') ? { exercise: params.get('exercise') }
+    : params.get('scenario') ? { scenario: params.get('scenario') } : null;
+  if (stored && await conn.stillLive(stored)) {
+    // resume this browser's session (unless another tab drives it and the trainee watches)
+    if (await tabs.anotherDriving(stored.id)) {
+      if (await tabs.choose() === 'take') tabs.take(stored.id);
+      else conn.observing = true;
+    }
+    conn.start(named || {});
+    return;
   }
-  conn.start(params.get('scenario') ? { scenario: params.get('scenario') } : {});
+  // a new trainee: the start screen, unless the URL names a scenario or an exercise
+  conn.start(named || await startScreen.choose());
 }
 
 renderHelp();

@@ -56,6 +56,10 @@ export class Connection {
     try { return JSON.parse(localStorage.getItem(STORE_KEY) || 'null'); } catch { return null; }
   }
 
+  /** Reconnects to the same session (a fresh hello, e.g. after the instructor changed its
+   * scenario). */
+  reconnect() { this.setObserving(this.observing); }
+
   /** Reconnects to the same session read-only (`true`) or as its trainee (`false`). */
   setObserving(v) {
     this.observing = v;
@@ -139,11 +143,12 @@ export class Connection {
     return true;
   }
 
-  /** Ends the current session link and starts a new session (e.g. another scenario). */
-  async restart(extra) {
+  /** Ends the current session link and starts a new session created with `opts` (the body
+   * of POST /api/sessions, e.g. another scenario or exercise). */
+  async restart(opts) {
     this.close();
     this.closedByUs = false;
-    this.createOpts = { ...this.createOpts, ...extra };
+    this.createOpts = { ...opts };
     localStorage.removeItem(STORE_KEY);
     this.session = null;
     this.hello = null;

@@ -11,7 +11,7 @@ test('a gamepad stick moves a joint: streamed q changes and the drawn arm moves'
   const url = await server();
   const b = await openBrowser({ initScript: FAKE_GAMEPAD });
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     await b.page.evaluate(() => window.__connectPad());
     await until(b.page, () => window.__seaarms.statusText().includes('Fake pad'));
@@ -61,7 +61,7 @@ test('keyboard fallback: arm select, joint keys and grip', { timeout: 60000 }, a
   const url = await server();
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     await b.page.keyboard.press('Digit2');
     assert.equal(await b.page.evaluate(() => window.__seaarms.selectedArm), 'right');
@@ -91,7 +91,7 @@ test('the keyboard keeps driving after clicking a checkbox or a menu (trial find
   const url = await server();
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     const held = async (what) => {
       await b.page.keyboard.down('KeyE');

@@ -58,7 +58,7 @@ test('scripted grasp: object turns black, light blue, yellow as drawn', { timeou
     return Math.hypot(...err);
   };
   try {
-    await page.goto(`${url}/`);
+    await page.goto(`${url}/?scenario=training`);
     await until(page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     await page.uncheck('#chk-ell'); // sample the object's own colour, not through an ellipsoid
     await page.evaluate(() => window.__connectPad());

@@ -213,7 +213,7 @@ export async function sampleMemory(page, cdp) {
 export async function soak(url, seconds, { log = () => {}, every = 30 } = {}) {
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     const cdp = await b.context.newCDPSession(b.page);
     await cdp.send('Performance.enable');

@@ -14,7 +14,7 @@ test('phone 390×844: a 3D view with non-zero size and a non-blank picture; help
   const url = await server();
   const b = await openBrowser(PHONE);
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.framesRendered > 2);
     const views = await b.page.evaluate(() => window.__seaarms.viewports().filter((v) => v.visible));
     assert.ok(views.length >= 1, 'a view is shown');
@@ -61,7 +61,7 @@ test('tablet 1024×768 with touch: the on-screen sticks and buttons drive the se
   const url = await server();
   const b = await openBrowser(TABLET);
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     assert.equal(await b.page.isVisible('#touch .stick[data-stick="left"]'), true, 'sticks shown on a touch screen');
     // right arm by its on-screen button (RB, through the pad's button edges)

@@ -24,7 +24,7 @@ test('a second tab asks, watches without sending, and can take control', { timeo
   const b = await openBrowser();
   try {
     const one = b.page;
-    await one.goto(`${url}/`);
+    await one.goto(`${url}/?scenario=training`);
     await until(one, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     assert.equal(await one.evaluate(() => window.__seaarms.hello.role), 'trainee');
     const session = await one.evaluate(() => window.__seaarms.connection.session);

@@ -214,6 +214,12 @@ pub fn app(state: AppState) -> Router {
         )
         .route("/api/sessions/{id}/actions", post(sessions::rest::act))
         .route("/api/sessions/{id}/log.csv", get(sessions::rest::log_csv))
+        .route(
+            "/api/sessions/{id}/assessment",
+            get(sessions::rest::assessment),
+        )
+        .route("/api/exercises", get(crate::exercises::list))
+        .route("/api/exercises/{id}", get(crate::exercises::get))
         .route("/ws/sessions/{id}", get(sessions::ws::upgrade))
         .fallback(|uri: axum::http::Uri| async move {
             ApiError::not_found(format!("no route for {}", uri.path()))

@@ -8,6 +8,9 @@
 //! session ends, one [`ServerMessage::Ended`] (with its [`EndReason`]) right before the close
 //! frame (code 1000, reason `session ended`).
 
+use std::sync::Arc;
+
+use seaarms_core::exercise::ExerciseSpec;
 use seaarms_core::grasp::GraspState;
 use serde::{Deserialize, Serialize, Serializer};
 
@@ -172,6 +175,11 @@ pub enum ClientMessage {
     Resume,
     /// Open both jaws (drop the object).
     Release,
+    /// Fault-diagnosis drill: name the fault (`supply_drop`, `stuck_valve`, `leak`, `air`).
+    Diagnose {
+        /// The answer.
+        answer: String,
+    },
     /// Latency probe: answered by a `pong` with the same `t`.
     Ping {
         /// Client timestamp (any unit; echoed).
@@ -252,6 +260,44 @@ pub struct Hello {
     pub max_messages_per_second: u32,
     /// Scenarios a new session can start from (the page's scenario menu).
     pub scenarios: Vec<ScenarioOut>,
+    /// The exercise file when the session runs an exercise, else `null`.
+    pub exercise: Option<Arc<ExerciseSpec>>,
+    /// What to draw besides the arms and the box.
+    pub scene: SceneOut,
+}
+
+/// What the page draws besides the arms and the box: the box's handles, the exercise's
+/// targets, zones, ghosts and obstacles.
+#[derive(Debug, Clone, Serialize)]
+pub struct SceneOut {
+    /// Handle grasp points in the box's frame (m): index 0 the left arm's, 1 the right's.
+    pub handles_m: [[f64; 3]; 2],
+    /// Radius around a handle within which a closing jaw grasps it (m).
+    pub capture_radius_m: f64,
+    /// Floating markers.
+    pub targets: Vec<seaarms_core::exercise::spec::Target>,
+    /// Zones on the seabed.
+    pub zones: Vec<seaarms_core::exercise::spec::Zone>,
+    /// Ghost postures.
+    pub ghosts: Vec<seaarms_core::exercise::spec::Ghost>,
+    /// Obstacle boxes.
+    pub obstacles: Vec<seaarms_core::exercise::spec::Obstacle>,
+}
+
+impl SceneOut {
+    /// The scene of a simulation running `exercise` (or free play).
+    pub fn new(params: &seaarms_core::sim::SimParams, exercise: Option<&ExerciseSpec>) -> SceneOut {
+        let h = params.object.handles_m;
+        let scene = exercise.map(|e| e.scene.clone()).unwrap_or_default();
+        SceneOut {
+            handles_m: [[h[0].x, h[0].y, h[0].z], [h[1].x, h[1].y, h[1].z]],
+            capture_radius_m: params.object.capture_radius_m,
+            targets: scene.targets,
+            zones: scene.zones,
+            ghosts: scene.ghosts,
+            obstacles: scene.obstacles,
+        }
+    }
 }
 
 /// Why a session ended (the `ended` message; its [`EndReason::text`] is the session
@@ -340,6 +386,9 @@ pub struct ArmFrame {
     pub contact_torque_nm: [f64; 3],
     /// Relief valve open, per actuator.
     pub relief_open: [bool; 6],
+    /// What this jaw would grasp if it closed now (`handle-0`, `handle-1`), or `null`: the
+    /// page's capture cue.
+    pub capture: Option<&'static str>,
 }
 
 /// The dual-arm ellipsoid (Lim eq. 3.68), present while both jaws hold the object.
@@ -390,8 +439,13 @@ pub struct StateFrame {
     pub relief_events: u64,
     /// Active warnings: `near_singularity:left`, `near_joint_limit:right:3`, `relief:left:2`, …
     pub warnings: Vec<String>,
-    /// Active faults, as instructors set them (labels, see [`fault_label`]).
+    /// Active faults, as instructors set them (labels, see [`fault_label`]); a fault drill's
+    /// hidden fault is not listed.
     pub faults: Vec<ActiveFault>,
+    /// The scenario or exercise id the session runs.
+    pub scenario: String,
+    /// The exercise attempt's progress (`null` in free play).
+    pub exercise: Option<seaarms_core::exercise::Status>,
 }
 
 /// Left and right arm frames.
@@ -422,6 +476,18 @@ pub enum ServerMessage {
         from: String,
         /// Text.
         text: String,
+    },
+    /// The session switched scenario or exercise (e.g. set by the instructor): what to draw
+    /// and the new settings; state frames of the new scenario follow.
+    Scenario {
+        /// Scenario or exercise id.
+        scenario: String,
+        /// The exercise file, or `null`.
+        exercise: Option<Arc<ExerciseSpec>>,
+        /// What to draw.
+        scene: SceneOut,
+        /// Settings now in force.
+        settings: Settings,
     },
     /// Answer to a ping.
     Pong {

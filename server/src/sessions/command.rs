@@ -389,6 +389,19 @@ pub fn apply(
             let detail = live.apply(&command)?;
             if let Command::Scenario(s) = &command {
                 session.set_scenario(s.name());
+                // Every page redraws the scene and follows the new settings.
+                let msg = ServerMessage::Scenario {
+                    scenario: s.name().to_string(),
+                    exercise: s.exercise().cloned(),
+                    scene: crate::protocol::SceneOut::new(
+                        live.sim().params(),
+                        s.exercise().map(|e| &**e),
+                    ),
+                    settings: live.settings(),
+                };
+                let _ = session
+                    .notices
+                    .send(serde_json::to_string(&msg).unwrap_or_default().into());
             }
             match command {
                 Command::Input(_) => return Ok(()),

@@ -509,9 +509,10 @@ impl Session {
     }
 }
 
-/// A random seed for a session's attempts.
+/// A random seed for a session's attempts, below 2⁵³ so the page's JavaScript numbers hold
+/// it exactly.
 pub fn random_seed() -> u64 {
-    u64::from_str_radix(&random_hex(8), 16).unwrap_or(0)
+    u64::from_str_radix(&random_hex(8), 16).unwrap_or(0) >> 11
 }
 
 /// Why a session could not be created.

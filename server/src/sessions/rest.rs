@@ -96,6 +96,12 @@ pub struct CreateRequest {
     /// Trainee label shown to instructors.
     #[serde(default)]
     pub label: Option<String>,
+    /// An exercise id (see `GET /api/exercises`) to start on, instead of a `scenario`.
+    #[serde(default)]
+    pub exercise: Option<String>,
+    /// The trainee's display name (same as `label`).
+    #[serde(default)]
+    pub trainee: Option<String>,
     /// The class join code, when the server requires one (or send `X-Join-Code`).
     #[serde(default)]
     pub join_code: Option<String>,
@@ -156,16 +162,26 @@ pub async fn create(
             ));
         }
     }
+    if req.exercise.is_some() && req.scenario.is_some() {
+        return Err(ApiError::bad_request(
+            "give `exercise` or `scenario`, not both",
+        ));
+    }
+    if req.trainee.is_some() && req.label.is_some() {
+        return Err(ApiError::bad_request("give `trainee` or `label`, not both"));
+    }
+    let scenario = req.exercise.or(req.scenario);
+    let label = req.trainee.or(req.label);
     let base = ws_base(&state.policy, &headers, peer.as_ref())
         .ok_or_else(|| ApiError::bad_request("missing or malformed Host header"))?;
     let sessions = state.sessions.clone();
     let session = tokio::task::spawn_blocking(move || {
         sessions.create(
             client,
-            req.scenario,
+            scenario,
             req.control_mode,
             req.control_method,
-            req.label,
+            label,
         )
     })
     .await
@@ -174,7 +190,11 @@ pub async fn create(
         CreateError::Full(_) | CreateError::Recording(_) => ApiError::new(StatusCode::SERVICE_UNAVAILABLE, e.to_string()),
         CreateError::ClientFull(_) => ApiError::new(StatusCode::TOO_MANY_REQUESTS, e.to_string()),
         CreateError::UnknownScenario(_) => ApiError::bad_request(e.to_string()).with_detail(
-            serde_json::json!({"known": LIVE_SCENARIOS.iter().map(|(n, _)| *n).collect::<Vec<_>>()}),
+            serde_json::json!({
+                "known": LIVE_SCENARIOS.iter().map(|(n, _)| (*n).to_string())
+                    .chain(crate::exercises::EXERCISES.all().iter().map(|e| e.id.clone()))
+                    .collect::<Vec<_>>()
+            }),
         ),
         CreateError::Sim(_) => ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
     })?;
@@ -488,6 +508,29 @@ pub async fn act(
 pub struct TokenQuery {
     /// Token, for plain download links.
     pub token: Option<String>,
+}
+
+/// `GET /api/sessions/{id}/assessment` (the session's trainee or the instructor): the
+/// assessment of the live session's current exercise attempt (final once it is done);
+/// 404 for an unknown or ended session, 409 when it runs no exercise.
+pub async fn assessment(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    Path(id): Path<String>,
+    Query(q): Query<TokenQuery>,
+) -> Result<Json<seaarms_core::exercise::Assessment>, ApiError> {
+    let session = state
+        .sessions
+        .get(&id)
+        .ok_or_else(|| ApiError::not_found(format!("no live session `{id}`")))?;
+    caller(&state, bearer(&headers).or(q.token.as_deref()), Some(&session))?;
+    let live = session.live();
+    live.exercise().map(|r| Json(r.assessment())).ok_or_else(|| {
+        ApiError::new(
+            StatusCode::CONFLICT,
+            format!("session `{id}` runs `{}`, not an exercise", live.scenario().name()),
+        )
+    })
 }
 
 /// `GET /api/sessions/{id}/log.csv`: the session's record (flushed first).

@@ -2,9 +2,10 @@
 //! joint frames, end-effector poses, translational manipulability ellipsoids and measures
 //! per arm and dual (Lim eqs 3.62, 3.68; Hong eq. 4.1), JLM (Jun eq. 16), forces, warnings.
 
-use nalgebra::{DMatrix, Isometry3, Matrix6};
+use nalgebra::{DMatrix, Isometry3};
+use seaarms_core::exercise::assess::{near_limits, translational_measures};
 use seaarms_core::kinematics::forward_kinematics;
-use seaarms_core::manipulability::{Measures, dual_measures, jlm, measures};
+use seaarms_core::manipulability::{Measures, dual_measures, jlm};
 use seaarms_core::sim::Arm;
 
 use super::{Live, Session};
@@ -46,10 +47,6 @@ fn measures_frame(m: &Measures, jlm: Option<f64>) -> MeasuresFrame {
     }
 }
 
-fn translational(j: &Matrix6<f64>) -> DMatrix<f64> {
-    DMatrix::from_fn(3, 6, |r, c| j[(r, c)])
-}
-
 /// One arm's frame and its translational Jacobian (world), with its warnings.
 fn arm_frame(
     session: &Session,
@@ -61,20 +58,18 @@ fn arm_frame(
     let sim = &live.sim;
     let model = &session.models[arm.index()];
     let state = sim.arm(arm);
-    let jt = translational(sim.jacobian_world(arm));
-    let m = measures(&jt)
-        .unwrap_or_else(|_| Measures::from_spectrum(&[0.0; 3], &DMatrix::identity(3, 3), 0.0));
+    let jw = sim.jacobian_world(arm);
+    let jt = DMatrix::from_fn(3, 6, |r, c| jw[(r, c)]);
+    let m = translational_measures(jw);
     if m.isotropy < NEAR_SINGULAR_ISOTROPY {
         warnings.push(format!("near_singularity:{name}"));
     }
-    for (i, (q, joint)) in state.q.iter().zip(&model.joints).enumerate() {
-        if joint.is_limited() {
-            let span = joint.limits[1] - joint.limits[0];
-            if q - joint.limits[0] < NEAR_LIMIT_FRACTION * span
-                || joint.limits[1] - q < NEAR_LIMIT_FRACTION * span
-            {
-                warnings.push(format!("near_joint_limit:{name}:{i}"));
-            }
+    for (i, near) in near_limits(model, &state.q, NEAR_LIMIT_FRACTION)
+        .iter()
+        .enumerate()
+    {
+        if *near {
+            warnings.push(format!("near_joint_limit:{name}:{i}"));
         }
     }
     for (i, open) in state.relief_open.iter().enumerate() {
@@ -106,6 +101,11 @@ fn arm_frame(
         contact_force_n: [w[0], w[1], w[2]],
         contact_torque_nm: [w[3], w[4], w[5]],
         relief_open: state.relief_open,
+        capture: match (state.contact && !state.holding, arm) {
+            (false, _) => None,
+            (true, Arm::Left) => Some("handle-0"),
+            (true, Arm::Right) => Some("handle-1"),
+        },
     };
     (frame, jt)
 }
@@ -145,5 +145,7 @@ pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
         relief_events: sim.relief_events(),
         warnings,
         faults: live.faults.clone(),
+        scenario: live.scenario.name().to_string(),
+        exercise: live.exercise.as_ref().map(|run| run.status(sim)),
     }
 }

@@ -34,7 +34,7 @@ use crate::error::ApiError;
 use crate::metrics::Metrics;
 use crate::protocol::{
     ArmAxes, ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, MAX_INPUT_SEQ,
-    ObjectModelOut, ScenarioOut, ServerMessage, arm_name,
+    ObjectModelOut, SceneOut, ScenarioOut, ServerMessage, arm_name,
 };
 
 /// Largest message (and frame) the WebSocket transport reads (bytes): 4 × the documented
@@ -136,6 +136,8 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
             .iter()
             .map(|&(name, description)| ScenarioOut { name, description })
             .collect(),
+        exercise: live.scenario().exercise().cloned(),
+        scene: SceneOut::new(params, live.scenario().exercise().map(|e| &**e)),
     }));
     serde_json::to_string(&msg).unwrap_or_default().into()
 }
@@ -491,6 +493,7 @@ fn parse(msg: ClientMessage, notes: &mut Vec<String>) -> Result<Command, String>
         ClientMessage::Pause => Command::Pause,
         ClientMessage::Resume => Command::Resume,
         ClientMessage::Release => Command::Release,
+        ClientMessage::Diagnose { answer } => Command::Diagnose(answer),
         ClientMessage::Ping { .. } => return Err("ping is not a command".into()),
     })
 }

@@ -7,7 +7,7 @@ import { StatusBar } from './status.js';
 import { Plots } from './plots.js';
 import { TouchPad, touchDevice } from './touch.js';
 import { TabGuard } from './tabs.js';
-import { StartScreen } from './start.js';
+import { StartScreen, fetchExercises } from './start.js';
 import { TaskPanel } from './task.js';
 
 const $ = (id) => document.getElementById(id);
@@ -104,7 +104,7 @@ setInterval(() => {
 const startScreen = new StartScreen($('start'));
 const task = new TaskPanel($('task'), $('card'), {
   banner: showBanner,
-  tryAgain: () => conn.send({ type: 'restart' }),
+  tryAgain: () => conn.send({ type: 'reset' }), // a new attempt (docs/exercises.md)
   nextTitle: () => startScreen.next(task.spec?.id)?.title,
   next: () => { const n = startScreen.next(task.spec?.id); if (n) newSession({ exercise: n.id }); },
   choose: () => chooseAndStart(),
@@ -118,6 +118,8 @@ function setExercise(h) {
   setUpFor = { scenario: h.scenario, exercise: ex?.id ?? null };
   const was = task.active;
   task.setExercise(ex, conn.session);
+  // the list behind "next exercise" (the start screen fills it when it was shown)
+  if (ex && !startScreen.exercises.length) fetchExercises().then((l) => { startScreen.exercises = l; });
   if (ex && (ex.control?.arm === 'left' || ex.control?.arm === 'right')) setArm(ex.control.arm);
   if (!!ex !== was) {
     $('chk-plots').checked = !ex && !matchMedia(NARROW_SCREEN).matches;
@@ -261,6 +263,13 @@ function setScenarios(list, current) {
     o.title = description;
     return o;
   }));
+  // an exercise (or any scenario the menu does not list) is shown as the current one
+  if (!list.some((x) => x.name === current)) {
+    const o = document.createElement('option');
+    o.value = current;
+    o.textContent = current;
+    sel.append(o);
+  }
   sel.value = current;
 }
 

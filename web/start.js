@@ -30,7 +30,8 @@ export class StartScreen {
   /** The exercise after `id` in the server's list (wrapping), for "next exercise". */
   next(id) {
     const i = this.exercises.findIndex((e) => e.id === id);
-    return this.exercises.length ? this.exercises[(i + 1) % this.exercises.length] : null;
+    const n = this.exercises.length ? this.exercises[(i + 1) % this.exercises.length] : null;
+    return n && n.id !== id ? n : null;
   }
 
   /** Shows the screen; resolves with the trainee's choice. `selected`: exercise id to preselect. */

@@ -2,13 +2,11 @@
 // docs/exercises.md) and free play. Resolves with the body of POST /api/sessions:
 // {exercise, trainee} or {scenario: 'training', trainee}.
 
+import { esc } from './status.js';
+
 const NAME_KEY = 'seaarms.trainee';
 /** Longest display name sent (the server keeps its own limit). */
 const MAX_NAME_CHARS = 40;
-
-function esc(s) {
-  return String(s).replace(/[&<>"']/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;', "'": '&#39;' }[c]));
-}
 
 /** GET /api/exercises → the list (empty when the server has none or cannot say). */
 export async function fetchExercises() {

@@ -4,15 +4,11 @@
 // (`last_event`); and the completion card with the score and each metric against its
 // threshold (GET /api/sessions/{id}/assessment). Every number is the server's.
 
-import { fmt } from './status.js';
+import { fmt, esc } from './status.js';
 
 /** Event kinds shown as a warning banner (the rest, e.g. `step`, as information). */
 const BAD_EVENTS = new Set(['strike', 'obstacle', 'drop', 'overload', 'relief', 'limit', 'fault']);
 const COUNTERS = [['strikes', 'strikes'], ['drops', 'drops'], ['overloads', 'overloads'], ['relief', 'relief'], ['limit_hits', 'limit hits']];
-
-function esc(s) {
-  return String(s).replace(/[&<>"']/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;', "'": '&#39;' }[c]));
-}
 
 /** "metric_name_unit" → "metric name (unit)" for the card. */
 export function metricLabel(m) {

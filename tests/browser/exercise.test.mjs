@@ -49,12 +49,18 @@ test('dual-lift: start screen, task panel, handles, scripted gamepad through the
     const steps = [];
     const { setSticks, selectArm, grab } = padDriver(page, (st) => { if (st.exercise && !steps.includes(st.exercise.step)) steps.push(st.exercise.step); });
     await page.evaluate(() => window.__connectPad());
+    // the drawn capture cue (a handle's sphere lit while a jaw is within grasp range), sampled in the page
+    await page.evaluate(() => {
+      window.__cues = new Set();
+      setInterval(() => window.__seaarms.drawnScene().handles.forEach((h, i) => { if (h.capture) window.__cues.add(`${i}:${h.capture}`); }), 20);
+    });
     await selectArm('left');
     await grab('left');
-    // the capture cue lit while the left jaw sat on its handle: now it holds (no cue)
     await selectArm('right');
     await grab('right');
     await until(page, () => window.__seaarms.lastState.exercise.step >= 2, undefined, 20000);
+    const cues = await page.evaluate(() => [...window.__cues].sort());
+    assert.deepEqual(cues, ['0:left', '1:right'], 'each handle lit for its jaw before the grasp');
     // closed loop (gamepad X): the sticks move the box, RT (still held) grips with both jaws
     await page.evaluate(() => window.__setButton(2, 1));
     await until(page, () => window.__seaarms.lastState.settings.control_method === 'closed');

@@ -5,9 +5,15 @@ import { Connection } from './connection.js';
 import { Input, MAPPING, DEAD_ZONE } from './input.js';
 import { StatusBar } from './status.js';
 import { Plots } from './plots.js';
+import { TouchPad, touchDevice } from './touch.js';
+import { TabGuard } from './tabs.js';
+import { StartScreen, fetchExercises } from './start.js';
+import { TaskPanel } from './task.js';
 
 const $ = (id) => document.getElementById(id);
 const SPEEDS = [0.25, 0.5, 0.75, 1];
+/** Screens this narrow stack the page (style.css has the same width). */
+const NARROW_SCREEN = '(max-width: 700px)';
 
 const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
 const status = new StatusBar($('status'));
@@ -55,7 +61,9 @@ const conn = new Connection({
   onJoinCode: askJoinCode,
   onEnded(e) { lastEnded = e; },
   onHello(h) {
+    setRole(h.role, h.session);
     view.setHello(h);
+    setExercise(h);
     settings = { ...h.settings };
     syncControls();
     plots.setSession(h.session, conn.session?.control_token);
@@ -66,6 +74,7 @@ const conn = new Connection({
   },
   onState(s) {
     view.setState(s);
+    followScenario(s);
     plots.add(s, selectedArm);
     if (s.settings.control_mode !== settings.control_mode || s.settings.control_method !== settings.control_method ||
         s.settings.arm_speed !== settings.arm_speed) {
@@ -86,7 +95,60 @@ const conn = new Connection({
 });
 
 // status bar refresh at 10 Hz from the newest drawn state (text only changes when values do)
-setInterval(() => { if (view.drawn) status.update(view.drawn, { arm: selectedArm }); }, 100);
+setInterval(() => {
+  if (!view.drawn) return;
+  status.update(view.drawn, { arm: selectedArm });
+  task.update(view.drawn.exercise);
+}, 100);
+
+const startScreen = new StartScreen($('start'));
+const task = new TaskPanel($('task'), $('card'), {
+  banner: showBanner,
+  tryAgain: () => conn.send({ type: 'reset' }), // a new attempt (docs/exercises.md)
+  nextTitle: () => startScreen.next(task.spec?.id)?.title,
+  next: () => { const n = startScreen.next(task.spec?.id); if (n) newSession({ exercise: n.id }); },
+  choose: () => chooseAndStart(),
+});
+/** What the page was set up for by the last hello: {scenario, exercise id or null}. */
+let setUpFor = null;
+
+/** A hello's exercise: the task panel, the exercise's arm, plots off while training. */
+function setExercise(h) {
+  const ex = h.exercise || null;
+  setUpFor = { scenario: h.scenario, exercise: ex?.id ?? null };
+  const was = task.active;
+  task.setExercise(ex, conn.session);
+  // the list behind "next exercise" (the start screen fills it when it was shown)
+  if (ex && !startScreen.exercises.length) fetchExercises().then((l) => { startScreen.exercises = l; });
+  if (ex && (ex.control?.arm === 'left' || ex.control?.arm === 'right')) setArm(ex.control.arm);
+  if (!!ex !== was) {
+    $('chk-plots').checked = !ex && !matchMedia(NARROW_SCREEN).matches;
+    $('chk-plots').dispatchEvent(new Event('change'));
+  }
+  view.viewports.dirty = true;
+}
+
+/** The instructor may switch the session's scenario or exercise: the frames say so, and a
+ * fresh hello (reconnecting to the same session) sets the page up for it. */
+function followScenario(s) {
+  if (!setUpFor || s.scenario === undefined) return;
+  const exercise = s.exercise?.id ?? null;
+  if (s.scenario === setUpFor.scenario && exercise === setUpFor.exercise) return;
+  setUpFor = { scenario: s.scenario, exercise };
+  showBanner('info', `The instructor switched this session to ${exercise || s.scenario}.`, 5000);
+  conn.reconnect();
+}
+
+/** A new session (keeps the trainee's name). */
+function newSession(opts) {
+  const trainee = conn.createOpts?.trainee;
+  conn.restart(trainee ? { ...opts, trainee } : opts);
+}
+
+async function chooseAndStart() {
+  const choice = await startScreen.choose(task.spec?.id);
+  conn.restart(choice);
+}
 
 function syncControls() {
   $('sel-mode').value = settings.control_mode;
@@ -106,6 +168,8 @@ function setArm(side) {
   selectedArm = side;
   localStorage.setItem('seaarms.arm', side);
   syncControls();
+  touch.showArm(side);
+  view.setSelectedArm(input.enabled ? side : null);
 }
 
 let paused = false;
@@ -138,6 +202,14 @@ const input = new Input(conn, {
   onPad: (id) => status.pad(id),
 });
 
+// on-screen sticks: shown on touch screens (?touch=1 / ?touch=0 override), a toolbar toggle
+const touch = new TouchPad($('view'));
+input.addVirtualPad(touch.pad);
+touch.visible = params.has('touch') ? params.get('touch') === '1' : touchDevice();
+touch.showArm(selectedArm);
+$('chk-touch').checked = touch.visible;
+$('chk-touch').addEventListener('change', (e) => { touch.visible = e.target.checked; });
+
 $('sel-arm').addEventListener('change', (e) => setArm(e.target.value));
 $('sel-mode').addEventListener('change', (e) => sendSettings({ control_mode: e.target.value }));
 $('sel-method').addEventListener('change', (e) => sendSettings({ control_method: e.target.value }));
@@ -147,10 +219,16 @@ $('btn-pause').addEventListener('click', actions.pause);
 $('btn-release').addEventListener('click', actions.release);
 $('btn-layout').addEventListener('click', actions.layout);
 $('btn-help').addEventListener('click', () => actions.help());
+// the overlay closes by its button or a tap outside it (touch screens have no ? key)
+$('help').addEventListener('click', (e) => { if (e.target.closest('[data-close]')) actions.help(false); });
+document.addEventListener('pointerdown', (e) => {
+  if (!$('help').hidden && !e.target.closest('#help, #btn-help')) actions.help(false);
+});
 $('btn-new').addEventListener('click', () => {
   const sc = $('sel-scenario').value;
-  conn.restart(sc ? { scenario: sc } : {});
+  newSession(sc ? { scenario: sc } : {});
 });
+$('btn-exercises').addEventListener('click', () => chooseAndStart());
 $('chk-ell').addEventListener('change', (e) => view.setEllipsoidsVisible(e.target.checked));
 $('chk-poly').addEventListener('change', (e) => view.setPolytopesVisible(e.target.checked));
 $('sel-ell-scale').addEventListener('change', (e) => view.setEllipsoidScale(+e.target.value));
@@ -159,12 +237,13 @@ $('chk-plots').addEventListener('change', (e) => {
   plots.visible = e.target.checked;
   view.viewports.dirty = true;
 });
-// keep keyboard focus on the page after using a menu, so keys drive the arms again
-for (const el of document.querySelectorAll('#toolbar select')) el.addEventListener('change', () => el.blur());
+// keep keyboard focus on the page after using a menu or a checkbox (web/input.js also
+// ignores focus on anything but text fields)
+for (const el of document.querySelectorAll('#toolbar select, #toolbar input[type=checkbox]')) el.addEventListener('change', () => el.blur());
 setInterval(() => { $('btn-pause').textContent = view.drawn?.paused ? 'Resume' : 'Pause'; }, 250);
 
 function renderHelp() {
-  $('help').innerHTML = `<h3>Keyboard and gamepad</h3>
+  $('help').innerHTML = `<button type="button" class="help-close" data-close aria-label="Close help">✕ Close</button><h3>Keyboard and gamepad</h3>
 <p>The selected arm (toolbar, <kbd>1</kbd>/<kbd>2</kbd>, LB/RB) follows the sticks. Joint mode: axis i drives
 joint i's valve. Cartesian mode: the axes are the end-effector velocity [vx vy vz wx wy wz] (world frame).
 Closed loop: the axes move the object; both jaws grip together. Dead zone ${Math.round(DEAD_ZONE * 100)} % on sticks and triggers;
@@ -184,12 +263,70 @@ function setScenarios(list, current) {
     o.title = description;
     return o;
   }));
+  // an exercise (or any scenario the menu does not list) is shown as the current one
+  if (!list.some((x) => x.name === current)) {
+    const o = document.createElement('option');
+    o.value = current;
+    o.textContent = current;
+    sel.append(o);
+  }
   sel.value = current;
+}
+
+/** Controls that change the session: off while this tab only watches. */
+const DRIVING_CONTROLS = ['sel-mode', 'sel-method', 'sel-speed', 'btn-reset', 'btn-pause', 'btn-release'];
+
+/** Trainee (drives, sends input) or observer (this browser's other tab drives). */
+function setRole(role, session) {
+  const driving = role === 'trainee';
+  tabs.driving(driving ? session : null);
+  input.enabled = driving;
+  view.setSelectedArm(driving ? selectedArm : null);
+  touch.visible = driving && $('chk-touch').checked;
+  for (const id of DRIVING_CONTROLS) $(id).disabled = !driving;
+  document.body.classList.toggle('observing', !driving);
+  if (!driving) watchUntilTaken('Watching: another tab drives this session.');
+  else tabs.hide();
+}
+
+async function watchUntilTaken(text) {
+  await tabs.watching(text);
+  tabs.take(conn.session.id);
+  conn.setObserving(false);
+}
+
+const tabs = new TabGuard($('tabs'), {
+  // another tab took control: watch from here (setRole shows how to take it back)
+  onTakenOver: () => conn.setObserving(true),
+});
+
+/** Starts or resumes this browser's session; asks first if another tab drives it. */
+async function start() {
+  const stored = Connection.stored();
+  const named = params.get('exercise') ? { exercise: params.get('exercise') }
+    : params.get('scenario') ? { scenario: params.get('scenario') } : null;
+  if (stored && await conn.stillLive(stored)) {
+    // resume this browser's session (unless another tab drives it and the trainee watches)
+    if (await tabs.anotherDriving(stored.id)) {
+      if (await tabs.choose() === 'take') tabs.take(stored.id);
+      else conn.observing = true;
+    }
+    conn.start(named || {});
+    return;
+  }
+  // a new trainee: the start screen, unless the URL names a scenario or an exercise
+  conn.start(named || await startScreen.choose());
 }
 
 renderHelp();
 syncControls();
-conn.start(params.get('scenario') ? { scenario: params.get('scenario') } : {});
+// a phone: one large view, plots off (both can be switched back in the toolbar)
+if (matchMedia(NARROW_SCREEN).matches) {
+  actions.layout();
+  $('chk-plots').checked = false;
+  $('chk-plots').dispatchEvent(new Event('change'));
+}
+start();
 
 window.__seaarms = view.debugHooks({
   get connection() { return { session: conn.session?.id, framesReceived: conn.framesReceived, latencyMs: conn.latencyMs, open: !!conn.ws && conn.gotHello }; },

@@ -36,8 +36,13 @@ function tube(mesh, a, b, r) {
   mesh.matrixWorldNeedsUpdate = true;
 }
 
-function part(geom, colour, parent) {
-  const m = new THREE.Mesh(geom, new THREE.MeshLambertMaterial({ color: colour }));
+/** The see-through material of a ghost arm (a posture to reach). */
+const GHOST_MATERIAL = new THREE.MeshBasicMaterial({ color: 0xbfefff, transparent: true, opacity: 0.28, depthWrite: false });
+/** Glow of the selected arm's links (added to their lit colour). */
+const SELECTED_EMISSIVE = 0x5a2a00;
+
+function partOf(geom, colour, parent, material = null) {
+  const m = new THREE.Mesh(geom, material || new THREE.MeshLambertMaterial({ color: colour }));
   m.matrixAutoUpdate = false;
   parent.add(m);
   return m;
@@ -55,11 +60,16 @@ function planeDir(v, fallback) {
 }
 
 export class Arm {
-  /** @param spec hello.arms[i]: {model, base} */
-  constructor(spec, parent, name) {
+  /**
+   * @param spec hello.arms[i]: {model, base}
+   * @param ghost true: drawn see-through (a posture to reach), not lit
+   */
+  constructor(spec, parent, name, ghost = false) {
     this.name = name;
+    this.ghost = ghost;
     this.group = new THREE.Group();
     parent.add(this.group);
+    const part = (geom, colour, group) => partOf(geom, colour, group, ghost ? GHOST_MATERIAL : null);
     this.n = spec.model.joints.length;
     this.q = new Array(this.n).fill(0);
     this.pedestal = part(UNIT_CYL, 0x3b4652, this.group);
@@ -78,12 +88,24 @@ export class Arm {
       }
     }
     this.rotMark = part(UNIT_BOX, 0xffffff, this.group);
+    // the selection mark: a ring round the pedestal (placed in update)
+    this.ring = ghost ? null : partOf(new THREE.TorusGeometry(0.16, 0.018, 8, 32), 0, this.group,
+      new THREE.MeshBasicMaterial({ color: 0xffd700 }));
+    if (this.ring) this.ring.visible = false;
     this.wrist = part(UNIT_CYL, JAW_COLOUR, this.group);
     this.fingers = [part(UNIT_BOX, JAW_COLOUR, this.group), part(UNIT_BOX, JAW_COLOUR, this.group)];
     this.frames = [];
     for (let i = 0; i < this.n; i++) this.frames.push(new THREE.Matrix4());
     this.tool = new THREE.Matrix4();
     this.origins = Array.from({ length: this.n + 1 }, () => new THREE.Vector3());
+  }
+
+  /** Marks the arm the sticks drive: its links glow and a ring circles its pedestal. */
+  setSelected(on) {
+    if (this.ghost) return;
+    this.selected = on;
+    for (const l of this.links) l.material.emissive.setHex(on ? SELECTED_EMISSIVE : 0);
+    this.ring.visible = on;
   }
 
   computeAnchors() {
@@ -115,6 +137,10 @@ export class Arm {
     // pedestal from the seabed side up to the first joint
     _a.copy(o[0]); _a.z -= 0.35;
     tube(this.pedestal, _a, _b.copy(o[0]).setZ(o[0].z - 0.05), 0.09);
+    if (this.ring) {
+      this.ring.matrix.makeTranslation(o[0].x, o[0].y, o[0].z - 0.2);
+      this.ring.matrixWorldNeedsUpdate = true;
+    }
     const radii = [0.06, 0.045, 0.04, 0.035, 0.032, 0.03];
     for (let i = 0; i < n; i++) {
       const end = i < n - 1 ? o[i + 1] : _d.set(0, 0, -0.05).applyMatrix4(this.tool);
@@ -170,7 +196,8 @@ export class Arm {
   }
 
   dispose() {
-    this.group.traverse((o) => { if (o.material) o.material.dispose(); });
+    this.group.traverse((o) => { if (o.material && o.material !== GHOST_MATERIAL) o.material.dispose(); });
+    this.ring?.geometry.dispose();
     this.group.parent?.remove(this.group);
   }
 }

@@ -48,6 +48,24 @@ export class Connection {
     this.retryTimer = null;
     this.joinCode = opts.joinCode || null;
     this.ended = null; // the `ended` message of the current session, once received
+    this.observing = false; // a trainee's tab watching its session read-only (web/tabs.js)
+  }
+
+  /** The trainee session stored by this browser ({id, control_token, ws_url}), if any. */
+  static stored() {
+    try { return JSON.parse(localStorage.getItem(STORE_KEY) || 'null'); } catch { return null; }
+  }
+
+  /** Reconnects to the same session (a fresh hello, e.g. after the instructor changed its
+   * scenario). */
+  reconnect() { this.setObserving(this.observing); }
+
+  /** Reconnects to the same session read-only (`true`) or as its trainee (`false`). */
+  setObserving(v) {
+    this.observing = v;
+    if (!this.session) return;
+    this.close();
+    this.open();
   }
 
   status(kind, text) { this.opts.onStatus?.(kind, text); }
@@ -56,8 +74,7 @@ export class Connection {
   async start(createOpts = {}) {
     this.createOpts = createOpts;
     if (this.role === 'trainee') {
-      let stored = null;
-      try { stored = JSON.parse(localStorage.getItem(STORE_KEY) || 'null'); } catch { stored = null; }
+      const stored = Connection.stored();
       if (stored && stored.id && stored.control_token && await this.stillLive(stored)) {
         this.session = stored;
         this.resuming = true;
@@ -121,15 +138,17 @@ export class Connection {
     const s = await resp.json();
     this.session = { id: s.id, control_token: s.control_token, ws_url: s.ws_url };
     this.resuming = false;
+    this.observing = false; // a new session is this tab's to drive
     localStorage.setItem(STORE_KEY, JSON.stringify(this.session));
     return true;
   }
 
-  /** Ends the current session link and starts a new session (e.g. another scenario). */
-  async restart(extra) {
+  /** Ends the current session link and starts a new session created with `opts` (the body
+   * of POST /api/sessions, e.g. another scenario or exercise). */
+  async restart(opts) {
     this.close();
     this.closedByUs = false;
-    this.createOpts = { ...this.createOpts, ...extra };
+    this.createOpts = { ...opts };
     localStorage.removeItem(STORE_KEY);
     this.session = null;
     this.hello = null;
@@ -139,7 +158,9 @@ export class Connection {
   url() {
     const s = this.session;
     const path = s.ws_url || `/ws/sessions/${encodeURIComponent(s.id)}?token=${encodeURIComponent(s.control_token)}`;
-    return wsUrl(path);
+    const u = new URL(wsUrl(path));
+    if (this.observing) u.searchParams.set('role', 'observer');
+    return u.href;
   }
 
   open() {
@@ -261,7 +282,12 @@ export class Connection {
     this.closedByUs = true;
     clearTimeout(this.retryTimer);
     clearInterval(this.pingTimer);
-    if (this.ws) this.ws.close(1000, 'bye');
+    if (this.ws) {
+      // a socket closed here says nothing more (a reopened one must not hear its close)
+      this.ws.onmessage = null;
+      this.ws.onclose = null;
+      this.ws.close(1000, 'bye');
+    }
     this.ws = null;
   }
 }

@@ -1,5 +1,6 @@
 // Operator input: the Gamepad API (standard mapping) with a keyboard fallback covering the
-// same functions. Sampled and sent at a steady SEND_HZ (below the server's
+// same functions, and on touch screens the on-screen sticks (web/touch.js, a virtual pad in
+// the same mapping, sampled here like a real one). Sampled and sent at a steady SEND_HZ (below the server's
 // `hello.max_messages_per_second`, see setServerLimit) with increasing sequence numbers:
 // {"type":"input","seq":n,"arms":{"left":{"axes":[6],"grip":g},"right":{...}},"object":[6]?}.
 // Joint mode: axis i drives joint i of the selected arm. Cartesian mode: the same axes are
@@ -16,6 +17,10 @@ const OTHER_MESSAGES_HZ = 1;
 export const KEY_AXES = [
   ['KeyQ', 'KeyA'], ['KeyW', 'KeyS'], ['KeyE', 'KeyD'], ['KeyR', 'KeyF'], ['KeyT', 'KeyG'], ['KeyU', 'KeyJ'],
 ];
+/** Keys with an action in `onPress` (besides the axes and the grip). */
+const ACTION_KEYS = new Set(['Digit1', 'Digit2', 'KeyM', 'KeyL', 'Minus', 'Equal', 'KeyB', 'KeyI', 'KeyP', 'KeyV', 'KeyH']);
+/** Keys that change only this page's view. */
+const VIEW_KEYS = new Set(['KeyV', 'KeyH']);
 export const JOINT_NAMES = ['swing', 'shoulder', 'elbow', 'pitch', 'yaw', 'rotate'];
 export const CART_NAMES = ['vx', 'vy', 'vz', 'wx', 'wy', 'wz'];
 
@@ -54,6 +59,17 @@ export const MAPPING = [
 function btn(p, i) { const b = p.buttons[i]; return b ? (typeof b === 'object' ? b.value : b) : 0; }
 function pressed(p, i) { const b = p.buttons[i]; return !!b && (typeof b === 'object' ? b.pressed || b.value > 0.5 : b > 0.5); }
 
+/** Input types that take typed text (keys there are the user's text, not arm commands). A
+ * focused checkbox, button or closed menu leaves the keys to the arms. */
+const TEXT_INPUT_TYPES = new Set(['text', 'search', 'email', 'password', 'number', 'url', 'tel']);
+
+/** Whether a key event's target is a text field (or an editable element). */
+export function isTextEntry(t) {
+  if (!t || !t.tagName) return false;
+  if (t.isContentEditable || t.tagName === 'TEXTAREA') return true;
+  return t.tagName === 'INPUT' && TEXT_INPUT_TYPES.has((t.type || 'text').toLowerCase());
+}
+
 /** Scaled radial dead zone on a value in [−1, 1]. */
 export function deadZone(v) {
   const a = Math.abs(v);
@@ -74,7 +90,8 @@ export class Input {
     this.seq = 0;
     this.keys = new Set();
     this.padIndex = null;
-    this.prevButtons = [];
+    this.prevButtons = new Map(); // per pad index: its buttons at the last sample (edges)
+    this.virtualPads = []; // standard-mapping pads drawn on the page (web/touch.js)
     this.last = null; // last message sent, for tests and the status bar
     this.enabled = true;
     window.addEventListener('keydown', (e) => this.onKey(e, true));
@@ -96,8 +113,7 @@ export class Input {
   }
 
   onKey(e, down) {
-    const t = e.target;
-    if (t && (t.tagName === 'INPUT' || t.tagName === 'SELECT' || t.tagName === 'TEXTAREA')) return;
+    if (isTextEntry(e.target)) return;
     if (e.ctrlKey || e.metaKey || e.altKey) return;
     if (down) {
       if (!this.keys.has(e.code)) this.onPress(e);
@@ -105,11 +121,16 @@ export class Input {
     } else {
       this.keys.delete(e.code);
     }
-    if (KEY_AXES.flat().includes(e.code) || e.code === 'KeyZ' || e.code === 'KeyX') e.preventDefault();
+    // the page's keys never reach a focused control (a menu would jump to the option
+    // starting with the letter)
+    if (KEY_AXES.flat().includes(e.code) || e.code === 'KeyZ' || e.code === 'KeyX' ||
+        (e.target?.tagName === 'SELECT' && ACTION_KEYS.has(e.code))) e.preventDefault();
   }
 
   onPress(e) {
     const a = this.ui.actions;
+    // a tab that only watches keeps the view keys (layout, help), not the session's
+    if (!this.enabled && !VIEW_KEYS.has(e.code) && e.key !== '?' && e.key !== 'Escape') return;
     switch (e.code) {
       case 'Digit1': this.ui.setArm('left'); break;
       case 'Digit2': this.ui.setArm('right'); break;
@@ -135,6 +156,16 @@ export class Input {
     return p && p.connected !== false ? p : null;
   }
 
+  /** Adds a pad the page draws itself (touch sticks; a negative `index` of its own); it is
+   * sampled like the Gamepad API's. */
+  addVirtualPad(p) { this.virtualPads.push(p); }
+
+  /** The connected gamepad and every virtual pad. */
+  pads() {
+    const p = this.pad();
+    return p ? [p, ...this.virtualPads] : this.virtualPads;
+  }
+
   /** Current [axes(6), grip] from the keyboard and the gamepad. */
   sample() {
     const axes = [0, 0, 0, 0, 0, 0];
@@ -144,8 +175,7 @@ export class Input {
     if (this.keys.has('KeyZ')) grip -= 1;
     if (this.keys.has('KeyX')) grip += 1;
     let slow = slowKey;
-    const p = this.pad();
-    if (p) {
+    for (const p of this.pads()) {
       PAD_AXES.forEach((m, i) => { axes[i] += deadZone(m.get(p)); });
       grip += deadZone(btn(p, 6)) - deadZone(btn(p, 7)); // LT opens, RT closes
       if (pressed(p, 0)) slow = true;
@@ -160,7 +190,8 @@ export class Input {
   padButtons(p) {
     const a = this.ui.actions;
     const now = p.buttons.map((_, i) => pressed(p, i));
-    const edge = (i) => now[i] && !this.prevButtons[i];
+    const prev = this.prevButtons.get(p.index) || []; // (getGamepads may return new objects)
+    const edge = (i) => now[i] && !prev[i];
     if (edge(4)) this.ui.setArm('left');
     if (edge(5)) this.ui.setArm('right');
     if (edge(3)) a.toggleMode();
@@ -168,7 +199,7 @@ export class Input {
     if (edge(1)) a.release();
     if (edge(8)) a.reset();
     if (edge(9)) a.pause();
-    this.prevButtons = now;
+    this.prevButtons.set(p.index, now);
   }
 
   tick() {

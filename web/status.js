@@ -4,6 +4,11 @@
 
 import { GRASP_COLOURS } from './scene.js';
 
+/** Text made safe for innerHTML. */
+export function esc(s) {
+  return String(s).replace(/[&<>"']/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;', "'": '&#39;' }[c]));
+}
+
 export function fmt(v, digits = 4) {
   if (v === null || v === undefined) return '∞';
   if (!Number.isFinite(v)) return '—';

@@ -6,6 +6,7 @@ import { World, GRASP_COLOURS } from './scene.js';
 import { Arm, ARM_COLOUR } from './arms.js';
 import { Ellipsoids, ELLIPSOID_COLOURS } from './ellipsoids.js';
 import { Viewports } from './viewports.js';
+import { Markers } from './markers.js';
 
 const SIDES = ['left', 'right'];
 const POLYTOPE_PERIOD_MS = 1000;
@@ -15,6 +16,8 @@ export class View {
     this.world = new World(canvas);
     this.viewports = new Viewports(this.world, viewportsEl);
     this.ellipsoids = new Ellipsoids(this.world.root);
+    this.markers = new Markers(this.world, () => { this.viewports.dirty = true; });
+    this.selectedArm = null;
     this.arms = null;
     this.hello = null;
     this.pending = null; // newest undrawn state
@@ -51,12 +54,21 @@ export class View {
     if (this.arms) for (const a of this.arms) a.dispose();
     this.world.setup(hello);
     this.arms = hello.arms.map((spec, i) => new Arm(spec, this.world.root, SIDES[i]));
+    this.markers.setup(hello);
+    if (this.selectedArm) this.setSelectedArm(this.selectedArm);
     this.viewports.setCentre(World.workCentre(hello));
     this.pending = null;
     for (const s of SIDES) this.ellipsoids.setPolytope(s, null);
   }
 
   setState(state) { this.pending = state; }
+
+  /** Highlights the arm the sticks drive ('left' or 'right'; null: none, e.g. an observer). */
+  setSelectedArm(side) {
+    this.selectedArm = side;
+    if (this.arms) this.arms.forEach((a, i) => a.setSelected(SIDES[i] === side));
+    this.viewports.dirty = true;
+  }
 
   setEllipsoidScale(s) {
     this.ellipsoids.scale = s;
@@ -112,6 +124,7 @@ export class View {
       this.arms[1].update(s.arms.right);
       this.world.update(s);
       this.ellipsoids.update(s);
+      this.markers.update(s);
       this.drawn = s;
       this.statesDrawn++;
       this.viewports.dirty = true;
@@ -141,6 +154,15 @@ export class View {
       project(view, p) { return v.viewports.project(view, p); },
       viewports() { return v.viewports.views.map((x) => ({ name: x.name, rect: x.el.getBoundingClientRect().toJSON(), visible: !v.viewports.single || v.viewports.single === x.name })); },
       colours: { arm: ARM_COLOUR, grasp: GRASP_COLOURS },
+      /** What the exercise scene draws: handles (world centres and capture cue), counts. */
+      drawnScene() {
+        const m = v.markers;
+        return {
+          handles: m.handles.map((h, i) => ({ at: h.group.getWorldPosition(new h.group.position.constructor()).toArray(), capture: m.capture[i] })),
+          objects: m.group.children.length, ghosts: m.ghosts.length,
+        };
+      },
+      selectedArmDrawn() { return v.arms ? SIDES.filter((s, i) => v.arms[i].selected) : null; },
     };
     // keep the extra getters live (a spread would read them once)
     return Object.freeze(Object.defineProperties(hooks, Object.getOwnPropertyDescriptors(extra)));

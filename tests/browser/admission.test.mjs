@@ -21,12 +21,12 @@ test('join code: ?join=CODE creates a session; without it the prompt asks and th
     const bare = await fetch(`${srv.url}/api/sessions`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: '{}' });
     assert.equal(bare.status, 403);
 
-    await a.page.goto(`${srv.url}/?join=${encodeURIComponent(CODE)}`);
+    await a.page.goto(`${srv.url}/?scenario=training&join=${encodeURIComponent(CODE)}`);
     await until(a.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     assert.equal(await a.page.isHidden('#join'), true, 'no prompt when the URL carries the code');
     assert.deepEqual(a.errors, []);
 
-    await b.page.goto(`${srv.url}/`);
+    await b.page.goto(`${srv.url}/?scenario=training`);
     await b.page.waitForSelector('#join', { state: 'visible', timeout: 10000 });
     assert.equal(await b.page.isHidden('#join-error'), true, 'no "wrong code" line before a code was tried');
     assert.equal(await b.page.evaluate(() => window.__seaarms.connection.session), undefined, 'no session yet');
@@ -61,7 +61,7 @@ test('too many new sessions from one client: 429 gives a clear message with the 
   const b = await openBrowser();
   try {
     await createSession(srv.url, { label: 'uses the burst' });
-    await b.page.goto(`${srv.url}/`);
+    await b.page.goto(`${srv.url}/?scenario=training`);
     await b.page.waitForFunction(() => /too many new sessions/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
     const text = await b.page.textContent('#banner');
     const secs = Number(/retrying in (\d+) s/i.exec(text)?.[1]);

@@ -11,7 +11,7 @@ test('a gamepad stick moves a joint: streamed q changes and the drawn arm moves'
   const url = await server();
   const b = await openBrowser({ initScript: FAKE_GAMEPAD });
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     await b.page.evaluate(() => window.__connectPad());
     await until(b.page, () => window.__seaarms.statusText().includes('Fake pad'));
@@ -61,7 +61,7 @@ test('keyboard fallback: arm select, joint keys and grip', { timeout: 60000 }, a
   const url = await server();
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     await b.page.keyboard.press('Digit2');
     assert.equal(await b.page.evaluate(() => window.__seaarms.selectedArm), 'right');
@@ -81,6 +81,38 @@ test('keyboard fallback: arm select, joint keys and grip', { timeout: 60000 }, a
     await b.page.keyboard.press('KeyH');
     assert.equal(await b.page.isVisible('#help'), false);
     await b.page.keyboard.press('Digit1');
+    assert.deepEqual(b.errors, []);
+  } finally {
+    await b.close();
+  }
+});
+
+test('the keyboard keeps driving after clicking a checkbox or a menu (trial finding, issue 15)', { timeout: 60000 }, async () => {
+  const url = await server();
+  const b = await openBrowser();
+  try {
+    await b.page.goto(`${url}/?scenario=training`);
+    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    const held = async (what) => {
+      await b.page.keyboard.down('KeyE');
+      try {
+        await until(b.page, () => window.__seaarms.lastInput?.arms.left.axes[2] === 1, undefined, 3000);
+      } catch { assert.fail(`after ${what}, holding E did not send elbow + (focus on ${await b.page.evaluate(() => document.activeElement?.id)})`); }
+      await b.page.keyboard.up('KeyE');
+      await until(b.page, () => window.__seaarms.lastInput.arms.left.axes[2] === 0);
+    };
+    await b.page.click('#chk-poly');
+    await b.page.click('#chk-poly');
+    await held('clicking the polytopes checkbox');
+    // focus left on a checkbox and a button (e.g. reached with Tab) does not take the keys
+    await b.page.focus('#chk-ell');
+    await held('focusing the ellipsoids checkbox');
+    await b.page.focus('#btn-layout');
+    await held('focusing a button');
+    // a focused menu does not take the letter either (no type-ahead to "cartesian" on C/E…)
+    await b.page.focus('#sel-mode');
+    await held('focusing the control-mode menu');
+    assert.equal(await b.page.inputValue('#sel-mode'), 'joint');
     assert.deepEqual(b.errors, []);
   } finally {
     await b.close();

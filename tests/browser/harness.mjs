@@ -4,9 +4,9 @@
 
 import { chromium } from 'playwright-core';
 import { spawn } from 'node:child_process';
-import { mkdtempSync, mkdirSync, rmSync, existsSync } from 'node:fs';
+import { mkdtempSync, mkdirSync, rmSync, existsSync, readFileSync } from 'node:fs';
 import { tmpdir } from 'node:os';
-import { join, dirname } from 'node:path';
+import { join, dirname, extname } from 'node:path';
 import { fileURLToPath } from 'node:url';
 import net from 'node:net';
 import { DEAD_ZONE } from '../../web/input.js'; // the page's own constant (no browser globals at load)
@@ -20,6 +20,18 @@ mkdirSync(ARTIFACTS, { recursive: true });
 export const CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
   '--disable-background-networking', '--disable-component-update', '--disable-sync',
   '--use-angle=swiftshader', '--enable-unsafe-swiftshader'];
+
+/** SEAARMS_WEB_FROM_DISK=1: the page's own files (web/) come from the working tree, with the
+ * server's headers (CSP included), so front-end work needs no release rebuild (the binary
+ * embeds web/). The tests themselves run without it, against the embedded files. */
+const WEB_FROM_DISK = !!process.env.SEAARMS_WEB_FROM_DISK;
+function webFile(pathname) {
+  const rel = pathname === '/' ? 'index.html' : pathname === '/instructor' ? 'instructor.html'
+    : pathname.startsWith('/web/') ? decodeURIComponent(pathname.slice(5)) : null;
+  if (rel === null || rel.includes('..')) return null;
+  const f = join(ROOT, 'web', rel);
+  return existsSync(f) ? f : null;
+}
 
 async function freePort() {
   return new Promise((resolve, reject) => {
@@ -67,18 +79,30 @@ export async function server() {
  * the loopback server is aborted and recorded in `offsite`; console errors and page errors are
  * recorded in `errors`.
  */
-export async function openBrowser({ viewport = { width: 1280, height: 800 }, initScript } = {}) {
+export async function openBrowser({ viewport = { width: 1280, height: 800 }, initScript, hasTouch = false, isMobile = false } = {}) {
   const profile = mkdtempSync(join(tmpdir(), 'seaarms-chromium-'));
   const context = await chromium.launchPersistentContext(profile, {
     executablePath: process.env.CHROMIUM || '/usr/bin/chromium',
     headless: true,
-    args: CHROMIUM_ARGS,
+    // a fulfilled document loses its loopback address space; its WebSocket would be refused
+    args: WEB_FROM_DISK ? [...CHROMIUM_ARGS, '--disable-features=LocalNetworkAccessChecks'] : CHROMIUM_ARGS,
     viewport,
+    hasTouch,
+    isMobile,
   });
   const offsite = [];
   const errors = [];
-  await context.route('**/*', (route) => {
+  await context.route('**/*', async (route) => {
     const u = new URL(route.request().url());
+    if (WEB_FROM_DISK && u.hostname === '127.0.0.1') {
+      const file = webFile(u.pathname);
+      if (file) {
+        const response = await route.fetch(); // the server's headers (a file new since the build: 404)
+        const type = { '.js': 'text/javascript', '.css': 'text/css', '.html': 'text/html' }[extname(file)];
+        const headers = { ...response.headers(), ...(type ? { 'content-type': type } : {}) };
+        return route.fulfill({ status: 200, headers, body: readFileSync(file) });
+      }
+    }
     if (u.protocol === 'data:' || u.hostname === '127.0.0.1' || u.hostname === 'localhost') return route.continue();
     offsite.push(route.request().url());
     return route.abort();
@@ -189,7 +213,7 @@ export async function sampleMemory(page, cdp) {
 export async function soak(url, seconds, { log = () => {}, every = 30 } = {}) {
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     const cdp = await b.context.newCDPSession(b.page);
     await cdp.send('Performance.enable');
@@ -214,4 +238,67 @@ export async function soak(url, seconds, { log = () => {}, every = 30 } = {}) {
   } finally {
     await b.close();
   }
+}
+
+/** World position of handle `i` (0: the left arm's, 1: the right's) from the hello's scene
+ * (`handles_m`, box frame; docs/exercises.md) and a state frame's box pose. */
+export function handleWorld(state, hello, i) {
+  const { position: p, rotation: r } = state.object.pose;
+  const h = hello.scene.handles_m[i];
+  return [0, 1, 2].map((k) => p[k] + r[k][0] * h[0] + r[k][1] * h[1] + r[k][2] * h[2]);
+}
+
+/**
+ * Drives the page's own input path with the fake gamepad (FAKE_GAMEPAD) in Cartesian mode:
+ * a proportional controller in the test reads the streamed state and sets the sticks.
+ * `onState(state)` sees every state the controller reads.
+ */
+export function padDriver(page, onState = () => {}) {
+  const setSticks = (v) => page.evaluate(([a0, a1, a3]) => { const p = window.__pad; p.axes[0] = a0; p.axes[1] = a1; p.axes[3] = a3; }, [stick(v[0]), -stick(v[1]), -stick(v[2])]);
+  /** Cartesian P control of one arm's tool point to `target(state, hello)` (world, m). */
+  const driveTo = async (side, target, tol = 0.02, timeoutMs = 90000) => {
+    const t0 = Date.now();
+    let err = [1, 1, 1];
+    while (Date.now() - t0 < timeoutMs) {
+      const { st, hello } = await page.evaluate(() => ({ st: window.__seaarms.lastState, hello: window.__seaarms.hello }));
+      onState(st);
+      const tgt = target(st, hello);
+      const ee = st.arms[side].pose.position;
+      err = tgt.map((v, i) => v - ee[i]);
+      if (Math.hypot(...err) < tol) break;
+      // full speed (0.2 m/s) beyond 8 cm, proportional inside, at least 15 % near the goal
+      const v = err.map((e) => { const f = Math.max(-1, Math.min(1, e / 0.08)); return Math.abs(f) < 0.15 ? Math.sign(f) * Math.max(Math.abs(f), Math.abs(e) > tol / 2 ? 0.15 : 0) : f; });
+      await setSticks(v);
+      await page.waitForTimeout(40);
+    }
+    await setSticks([0, 0, 0]);
+    return Math.hypot(...err);
+  };
+  const above = (side, dz) => (st, hello) => { const h = handleWorld(st, hello, side === 'left' ? 0 : 1); h[2] += dz; return h; };
+  const selectArm = async (side) => {
+    const btn = side === 'left' ? 4 : 5; // LB / RB
+    await page.evaluate((i) => window.__setButton(i, 1), btn);
+    await until(page, (s) => window.__seaarms.selectedArm === s, side);
+    await page.evaluate((i) => window.__setButton(i, 0), btn);
+  };
+  /** Opens the jaw, brings the tool point onto its handle, closes (RT kept pressed); retries if it slips. */
+  const grab = async (side) => {
+    for (let attempt = 1; attempt <= 3; attempt++) {
+      await page.evaluate(() => { window.__setButton(7, 0); window.__setButton(6, 1); }); // LT: open
+      await page.waitForTimeout(900);
+      await page.evaluate(() => { window.__setButton(6, 0); });
+      await driveTo(side, above(side, 0.1), 0.03);
+      const e = await driveTo(side, above(side, 0), 0.015);
+      await page.waitForTimeout(400); // let the hydraulics settle
+      const still = await page.evaluate((s) => window.__seaarms.lastState.arms[s].contact, side);
+      if (e > 0.03 || !still) continue;
+      await page.evaluate(() => { window.__setButton(7, 1); }); // RT: close (kept pressed)
+      try {
+        await until(page, (s) => window.__seaarms.lastState.arms[s].holding, side, 4000);
+        return attempt;
+      } catch { /* slipped out of the capture radius: open and try again */ }
+    }
+    throw new Error(`${side} jaw could not grab its handle`);
+  };
+  return { setSticks, driveTo, selectArm, grab };
 }

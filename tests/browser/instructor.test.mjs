@@ -16,7 +16,7 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
   const trainee = await openBrowser();
   const instr = await openBrowser();
   try {
-    await trainee.page.goto(`${url}/`);
+    await trainee.page.goto(`${url}/?scenario=training`);
     const id = await until(trainee.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
 
     // a wrong token is refused with a clear message
@@ -78,7 +78,7 @@ test('a session ended by the instructor: the trainee page shows the typed reason
   const url = await server();
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
     const r = await fetch(`${url}/api/sessions/${id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
     assert.ok(r.ok, `DELETE: ${r.status}`);
@@ -100,7 +100,7 @@ test('the server is full: POST /api/sessions 503 gives a clear message', { timeo
   const b = await openBrowser();
   try {
     await createSession(full.url, { label: 'the only seat' });
-    await b.page.goto(`${full.url}/`);
+    await b.page.goto(`${full.url}/?scenario=training`);
     await b.page.waitForFunction(() => /server is full/i.test(document.querySelector('#banner').textContent), undefined, { timeout: 10000 });
     assert.deepEqual(b.offsite, []);
   } finally {

@@ -13,7 +13,7 @@ test('page loads offline, renders the arms and the object; reports the first-fra
   const url = await server();
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 3 && window.__seaarms.framesRendered > 3);
     const t = await b.page.evaluate(() => {
       const nav = performance.getEntriesByType('navigation')[0];
@@ -61,7 +61,7 @@ test('four viewports, switchable to one large view', COMMON, async () => {
   const url = await server();
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 1);
     const four = await b.page.evaluate(() => window.__seaarms.viewports());
     assert.deepEqual(four.map((v) => v.name), ['top', 'front', 'side', 'persp']);
@@ -89,7 +89,7 @@ test('status bar shows the latest state frame\'s measures', COMMON, async () => 
   const url = await server();
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/`);
+    await b.page.goto(`${url}/?scenario=training`);
     await until(b.page, () => window.__seaarms?.statesDrawn > 1);
     await b.page.click('#btn-pause');
     await until(b.page, () => window.__seaarms.lastState.paused === true);

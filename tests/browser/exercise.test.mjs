@@ -1,0 +1,134 @@
+//! A new trainee picks `dual-lift` on the start screen, sees the goal and the handles, drives
+//! the fake gamepad through the page's own input path (the steps of exercises/dual-lift.json,
+//! in the order of its autopilot script: left handle, right handle, closed loop, lift 0.2 m,
+//! hold) and sees the completion card with the server's score (issue 15 item 5).
+
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { join } from 'node:path';
+import { server, openBrowser, until, FAKE_GAMEPAD, padDriver, ROOT, INSTRUCTOR_TOKEN } from './harness.mjs';
+
+const SHOTS = process.env.SEAARMS_SHOTS || join(ROOT, 'tests', 'browser', 'artifacts');
+
+test('dual-lift: start screen, task panel, handles, scripted gamepad through the steps, completion card', { timeout: 600000 }, async () => {
+  const url = await server();
+  const b = await openBrowser({ initScript: FAKE_GAMEPAD });
+  const page = b.page;
+  try {
+    await page.goto(`${url}/`);
+    // the start screen: name, the server's exercises with their goals, free play
+    await page.waitForSelector('#start .ex[data-id="dual-lift"]', { timeout: 15000 });
+    const list = await (await fetch(`${url}/api/exercises`)).json();
+    const spec = list.exercises.find((e) => e.id === 'dual-lift');
+    assert.ok((await page.innerText('#start')).includes(spec.goal), 'the goal is on the start screen');
+    assert.equal(await page.isDisabled('#start-exercise'), true, 'nothing picked yet');
+    await page.fill('#start-name', 'Ada');
+    await page.click('#start .ex[data-id="dual-lift"]');
+    await page.screenshot({ path: join(SHOTS, 'start-screen.png') });
+    await page.click('#start-exercise');
+    await until(page, () => window.__seaarms?.hello?.exercise?.id === 'dual-lift' && window.__seaarms.statesDrawn > 2 && window.__seaarms.connection.open);
+    // the session carries the trainee's name (what the instructor sees)
+    const sid = await page.evaluate(() => window.__seaarms.connection.session);
+    const summary = await (await fetch(`${url}/api/sessions/${sid}`, { headers: { authorization: 'Bearer test-token' } })).json().catch(() => null);
+    if (summary && summary.label !== undefined) assert.equal(summary.label, 'Ada');
+    // the task panel: goal and steps; the handles drawn on the box
+    assert.equal(await page.isVisible('#task'), true);
+    const panel = await page.innerText('#task');
+    assert.ok(panel.includes(spec.goal), 'goal in the task panel');
+    for (const s of spec.steps) assert.ok(panel.includes(s.text), `step "${s.text}" listed`);
+    const scene = await page.evaluate(() => window.__seaarms.drawnScene());
+    assert.equal(scene.handles.length, 2, 'both handles drawn');
+    const expected = await page.evaluate(() => {
+      const st = window.__seaarms.lastState, h = window.__seaarms.hello.scene.handles_m;
+      const { position: p, rotation: r } = st.object.pose;
+      return h.map((v) => [0, 1, 2].map((k) => p[k] + r[k][0] * v[0] + r[k][1] * v[1] + r[k][2] * v[2]));
+    });
+    scene.handles.forEach((h, i) => assert.ok(Math.hypot(...h.at.map((v, k) => v - expected[i][k])) < 1e-6, `handle ${i} drawn at ${h.at}`));
+    assert.equal(await page.evaluate(() => window.__seaarms.lastState.settings.control_mode), 'cartesian', 'the exercise set Cartesian mode');
+
+    const steps = [];
+    const { setSticks, selectArm, grab } = padDriver(page, (st) => { if (st.exercise && !steps.includes(st.exercise.step)) steps.push(st.exercise.step); });
+    await page.evaluate(() => window.__connectPad());
+    // the drawn capture cue (a handle's sphere lit while a jaw is within grasp range), sampled in the page
+    await page.evaluate(() => {
+      window.__cues = new Set();
+      setInterval(() => window.__seaarms.drawnScene().handles.forEach((h, i) => { if (h.capture) window.__cues.add(`${i}:${h.capture}`); }), 20);
+    });
+    await selectArm('left');
+    await grab('left');
+    await selectArm('right');
+    await grab('right');
+    await until(page, () => window.__seaarms.lastState.exercise.step >= 2, undefined, 20000);
+    const cues = await page.evaluate(() => [...window.__cues].sort());
+    assert.deepEqual(cues, ['0:left', '1:right'], 'each handle lit for its jaw before the grasp');
+    // closed loop (gamepad X): the sticks move the box, RT (still held) grips with both jaws
+    await page.evaluate(() => window.__setButton(2, 1));
+    await until(page, () => window.__seaarms.lastState.settings.control_method === 'closed');
+    await page.evaluate(() => window.__setButton(2, 0));
+    await until(page, () => window.__seaarms.lastState.exercise.step >= 3, undefined, 20000);
+    // lift to 0.2 m and hold it there: proportional control of the height readout (right stick Y = vz)
+    const t0 = Date.now();
+    let shot = false;
+    while (Date.now() - t0 < 150000) {
+      const ex = await page.evaluate(() => window.__seaarms.lastState.exercise);
+      if (!steps.includes(ex.step)) steps.push(ex.step);
+      if (ex.done) break;
+      // the lift readout (its unit is the server's: m or cm)
+      const h = ex.readouts.find((r) => /lift|height/i.test(r.label));
+      if (h) {
+        const e = (h.target - h.value) * ({ cm: 0.01, mm: 0.001 }[h.unit] ?? 1); // m
+        await setSticks([0, 0, Math.abs(e) < 0.004 ? 0 : Math.max(-0.5, Math.min(0.5, e / 0.06))]);
+      }
+      if (!shot && ex.step === 4 && ex.readouts.some((r) => r.label === 'Hold' && r.value > 1.5)) {
+        await page.screenshot({ path: join(SHOTS, 'task-panel.png') });
+        shot = true;
+      }
+      await page.waitForTimeout(50);
+    }
+    await setSticks([0, 0, 0]);
+    await page.waitForSelector('#card:not([hidden]) [data-score]', { timeout: 20000 });
+    await page.waitForTimeout(300);
+    await page.screenshot({ path: join(SHOTS, 'completion-card.png') });
+    const token = await page.evaluate(() => JSON.parse(localStorage.getItem('seaarms.session')).control_token);
+    const a = await (await fetch(`${url}/api/sessions/${sid}/assessment`, { headers: { authorization: `Bearer ${token}` } })).json();
+    console.log(`dual-lift by gamepad: steps seen ${steps.join(',')}, score ${a.score.toFixed(1)}, passed ${a.passed}, time ${a.time_s.toFixed(1)} s`);
+    assert.ok(a.done && a.completed, `the attempt completed: ${JSON.stringify(a.failed_because)}`);
+    const card = await page.innerText('#card');
+    assert.equal(await page.getAttribute('#card [data-score]', 'data-score'), String(Math.round(a.score)), 'the card shows the server\'s score');
+    assert.match(card, a.passed ? /Passed/ : /Not passed/);
+    for (const t of a.terms) assert.ok(card.includes(t.metric.split('_')[0]), `metric ${t.metric} on the card`);
+    assert.deepEqual(b.errors, []);
+  } finally {
+    await b.close();
+  }
+});
+
+test('an instructor\'s scenario or exercise switch takes effect on the trainee\'s page (issue 15 item 6)', { timeout: 90000 }, async () => {
+  const url = await server();
+  const b = await openBrowser();
+  const page = b.page;
+  const act = async (id, body) => {
+    const r = await fetch(`${url}/api/sessions/${id}/actions`, { method: 'POST',
+      headers: { 'content-type': 'application/json', authorization: `Bearer ${INSTRUCTOR_TOKEN}` }, body: JSON.stringify(body) });
+    assert.ok(r.ok, `action ${JSON.stringify(body)}: ${r.status} ${await r.text()}`);
+  };
+  try {
+    await page.goto(`${url}/?scenario=training`);
+    await until(page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    const id = await page.evaluate(() => window.__seaarms.connection.session);
+    const other = await page.evaluate(() => window.__seaarms.hello.scenarios.map((s) => s.name).find((n) => n !== 'training'));
+    await act(id, { type: 'scenario', scenario: other });
+    await until(page, (n) => window.__seaarms.hello.scenario === n && window.__seaarms.lastState.scenario === n, other);
+    assert.equal(await page.inputValue('#sel-scenario'), other, 'the scenario menu shows the instructor\'s choice');
+    assert.equal(await page.isVisible('#task'), false, 'no task panel outside exercises');
+    await act(id, { type: 'scenario', scenario: 'dual-lift' });
+    await until(page, () => window.__seaarms.hello.exercise?.id === 'dual-lift');
+    await page.waitForSelector('#task:not([hidden])');
+    assert.match(await page.innerText('#task'), /Cooperative lift|dual/i);
+    assert.equal((await page.evaluate(() => window.__seaarms.drawnScene())).handles.length, 2);
+    assert.equal(await page.evaluate(() => window.__seaarms.connection.session), id, 'the same session');
+    assert.deepEqual(b.errors, []);
+  } finally {
+    await b.close();
+  }
+});

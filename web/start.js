@@ -1,0 +1,79 @@
+// The start screen: the trainee's name, the exercises with their goals (GET /api/exercises,
+// docs/exercises.md) and free play. Resolves with the body of POST /api/sessions:
+// {exercise, trainee} or {scenario: 'training', trainee}.
+
+import { esc } from './status.js';
+
+const NAME_KEY = 'seaarms.trainee';
+/** Longest display name sent (the server keeps its own limit). */
+const MAX_NAME_CHARS = 40;
+
+/** GET /api/exercises → the list (empty when the server has none or cannot say). */
+export async function fetchExercises() {
+  try {
+    const r = await fetch('/api/exercises', { cache: 'no-store' });
+    if (!r.ok) return [];
+    return (await r.json()).exercises || [];
+  } catch {
+    return [];
+  }
+}
+
+export class StartScreen {
+  constructor(el) {
+    this.el = el;
+    this.exercises = [];
+  }
+
+  /** The exercise after `id` in the server's list (wrapping), for "next exercise". */
+  next(id) {
+    const i = this.exercises.findIndex((e) => e.id === id);
+    const n = this.exercises.length ? this.exercises[(i + 1) % this.exercises.length] : null;
+    return n && n.id !== id ? n : null;
+  }
+
+  /** Shows the screen; resolves with the trainee's choice. `selected`: exercise id to preselect. */
+  async choose(selected) {
+    this.exercises = await fetchExercises();
+    const name = localStorage.getItem(NAME_KEY) || '';
+    const el = this.el;
+    el.innerHTML = `<form class="start-card">
+      <h2>seaarms training</h2>
+      <label class="start-name">Your name <input id="start-name" name="trainee" maxlength="${MAX_NAME_CHARS}"
+        autocomplete="nickname" spellcheck="false" value="${esc(name)}" placeholder="shown to your instructor"></label>
+      <h3>Choose an exercise</h3>
+      <ul class="ex-list">${this.exercises.map((e) => `
+        <li><label class="ex" data-id="${esc(e.id)}"><input type="radio" name="exercise" value="${esc(e.id)}"${e.id === selected ? ' checked' : ''}>
+          <span class="ex-title">${esc(e.title)}</span>
+          <span class="ex-meta">${e.steps.length} steps · ${Math.round(e.time_limit_s)} s limit · ${esc(e.control.mode)}${e.control.method === 'closed' ? ', closed loop' : ''}</span>
+          <span class="ex-goal">${esc(e.goal)}</span>
+          <span class="ex-skills">${e.skills.map((s) => `<span>${esc(s)}</span>`).join('')}</span></label></li>`).join('')}
+      </ul>
+      ${this.exercises.length ? '' : '<p class="ex-none">No exercises on this server: free play only.</p>'}
+      <div class="start-actions">
+        <button type="submit" id="start-exercise" ${this.exercises.length ? '' : 'disabled'}>Start exercise</button>
+        <button type="button" id="start-free">Free play</button>
+      </div>
+    </form>`;
+    el.hidden = false;
+    const form = el.querySelector('form');
+    const start = el.querySelector('#start-exercise');
+    const picked = () => form.querySelector('input[name=exercise]:checked')?.value;
+    start.disabled = !picked();
+    form.addEventListener('change', () => { start.disabled = !picked(); });
+    return new Promise((resolve) => {
+      const done = (choice) => {
+        const trainee = el.querySelector('#start-name').value.trim().slice(0, MAX_NAME_CHARS);
+        localStorage.setItem(NAME_KEY, trainee);
+        el.hidden = true;
+        el.replaceChildren();
+        resolve(trainee ? { ...choice, trainee } : choice);
+      };
+      form.addEventListener('submit', (e) => {
+        e.preventDefault();
+        if (picked()) done({ exercise: picked() });
+      });
+      el.querySelector('#start-free').addEventListener('click', () => done({ scenario: 'training' }));
+    });
+  }
+}

@@ -163,6 +163,9 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("delete", "/api/sessions/{id}"),
     ("post", "/api/sessions/{id}/actions"),
     ("get", "/api/sessions/{id}/log.csv"),
+    ("get", "/api/sessions/{id}/assessment"),
+    ("get", "/api/exercises"),
+    ("get", "/api/exercises/{id}"),
     ("get", "/ws/sessions/{id}"),
 ];
 

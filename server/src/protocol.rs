@@ -282,6 +282,38 @@ pub struct SceneOut {
     pub ghosts: Vec<seaarms_core::exercise::spec::Ghost>,
     /// Obstacle boxes.
     pub obstacles: Vec<seaarms_core::exercise::spec::Obstacle>,
+    /// The intervention panel, when the scene has one.
+    pub panel: Option<PanelSceneOut>,
+}
+
+/// The panel as the page draws it (world frame, m).
+#[derive(Debug, Clone, Serialize)]
+pub struct PanelSceneOut {
+    /// Pose of the panel frame (centre of the face; x into the panel).
+    pub pose: PoseOut,
+    /// Plate size: thickness, width, height.
+    pub size_m: [f64; 3],
+    /// Valve T-bar grip point at 0°.
+    pub valve_grip_m: [f64; 3],
+    /// Hot-stab receptacle mouth.
+    pub receptacle_m: [f64; 3],
+    /// Holster mouth.
+    pub holster_m: [f64; 3],
+}
+
+/// The panel's moving parts in a state frame.
+#[derive(Debug, Clone, Serialize)]
+pub struct PanelFrame {
+    /// Valve angle (degrees, 0 closed, 90 open).
+    pub valve_angle_deg: f64,
+    /// `holstered`, `held`, `inserting`, `seated` or `dropped`.
+    pub stab_phase: &'static str,
+    /// Pose of the hot stab.
+    pub stab_pose: PoseOut,
+    /// Insertion depth (m).
+    pub stab_depth_m: f64,
+    /// Side load on the stab (N).
+    pub side_load_n: f64,
 }
 
 impl SceneOut {
@@ -296,6 +328,16 @@ impl SceneOut {
             zones: scene.zones,
             ghosts: scene.ghosts,
             obstacles: scene.obstacles,
+            panel: params.panel.as_ref().map(|p| {
+                let v = |x: nalgebra::Vector3<f64>| [x.x, x.y, x.z];
+                PanelSceneOut {
+                    pose: PoseOut::from(&p.pose),
+                    size_m: v(p.size_m),
+                    valve_grip_m: v(p.valve_grip_m()),
+                    receptacle_m: v(p.receptacle_mouth_m()),
+                    holster_m: v(p.holster_mouth_m()),
+                }
+            }),
         }
     }
 }
@@ -386,8 +428,8 @@ pub struct ArmFrame {
     pub contact_torque_nm: [f64; 3],
     /// Relief valve open, per actuator.
     pub relief_open: [bool; 6],
-    /// What this jaw would grasp if it closed now (`handle-0`, `handle-1`), or `null`: the
-    /// page's capture cue.
+    /// What this jaw would grasp if it closed now (`handle-0`, `handle-1`, `valve`, `stab`),
+    /// or `null`: the page's capture cue.
     pub capture: Option<&'static str>,
 }
 
@@ -446,6 +488,8 @@ pub struct StateFrame {
     pub scenario: String,
     /// The exercise attempt's progress (`null` in free play).
     pub exercise: Option<seaarms_core::exercise::Status>,
+    /// The panel's moving parts (`null` without a panel).
+    pub panel: Option<PanelFrame>,
 }
 
 /// Left and right arm frames.

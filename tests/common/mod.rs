@@ -400,8 +400,16 @@ pub async fn send(
 }
 
 /// JSON paths (object keys) whose value may be `null` in a state frame: no dual ellipsoid
-/// unless both jaws hold, and no condition number at a singularity (protocol.rs).
-const NULLABLE_STATE_KEYS: &[&str] = &["dual", "condition_number"];
+/// unless both jaws hold, no condition number at a singularity, no capture cue, exercise,
+/// event or panel when there is none (protocol.rs).
+const NULLABLE_STATE_KEYS: &[&str] = &[
+    "dual",
+    "condition_number",
+    "capture",
+    "exercise",
+    "last_event",
+    "panel",
+];
 
 /// Checks a state frame: every number finite (serde_json writes NaN and ±∞ as `null`, so a
 /// `null` outside [`NULLABLE_STATE_KEYS`] is a non-finite value).
@@ -468,7 +476,7 @@ pub async fn keeps_streaming(ws: &mut Ws, last_seq: &mut u64, frames: usize) -> 
                 seen += 1;
             }
             Some("error") if v["message"].is_string() => {}
-            Some("pong" | "message" | "hello") => {}
+            Some("pong" | "message" | "hello" | "scenario") => {}
             _ => return Err(format!("unexpected message: {text}")),
         }
     }

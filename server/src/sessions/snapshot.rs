@@ -101,10 +101,10 @@ fn arm_frame(
         contact_force_n: [w[0], w[1], w[2]],
         contact_torque_nm: [w[3], w[4], w[5]],
         relief_open: state.relief_open,
-        capture: match (state.contact && !state.holding, arm) {
-            (false, _) => None,
-            (true, Arm::Left) => Some("handle-0"),
-            (true, Arm::Right) => Some("handle-1"),
+        capture: if state.holding {
+            None
+        } else {
+            sim.in_capture_range(arm).map(|g| g.as_str())
         },
     };
     (frame, jt)
@@ -147,5 +147,12 @@ pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
         faults: live.faults.clone(),
         scenario: live.scenario.name().to_string(),
         exercise: live.exercise.as_ref().map(|run| run.status(sim)),
+        panel: sim.panel().map(|p| crate::protocol::PanelFrame {
+            valve_angle_deg: p.valve_angle_rad.to_degrees(),
+            stab_phase: p.stab_phase.as_str(),
+            stab_pose: (&p.stab_pose).into(),
+            stab_depth_m: p.stab_depth_m,
+            side_load_n: p.side_load_n,
+        }),
     }
 }

@@ -493,3 +493,81 @@ pub fn limits(spec: &ExerciseSpec, metrics: &Metrics) -> Vec<LimitCheck> {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod metric_tests {
+    use super::*;
+
+    /// Known jerk profile: x(t) = c·t³/6 has jerk c everywhere, and the third difference is
+    /// exact for cubics; a constant-velocity motion has zero jerk.
+    #[test]
+    fn jerk_of_a_cubic_is_its_constant() {
+        let c = 7.5;
+        let mut m = JerkMeter::default();
+        let mut still = JerkMeter::default();
+        for k in 0..40 {
+            let t = k as f64 * JERK_INTERVAL_S;
+            m.add(Vector3::new(c * t.powi(3) / 6.0, 0.0, 0.0), JERK_INTERVAL_S);
+            still.add(Vector3::new(0.3 * t, -0.1 * t, 0.0), JERK_INTERVAL_S);
+        }
+        assert!((m.rms() - c).abs() < 1e-6 * c, "{}", m.rms());
+        assert_eq!(m.totals().1, 37);
+        assert!(still.rms() < 1e-9);
+    }
+
+    /// A square-wave jerk ±j (alternating each interval) has RMS exactly j: the positions are
+    /// built by integrating the piecewise-constant jerk three times with the same sampling.
+    #[test]
+    fn jerk_rms_of_a_square_wave() {
+        let (j, h) = (3.0, JERK_INTERVAL_S);
+        let mut m = JerkMeter::default();
+        let (mut x, mut v, mut a) = (0.0f64, 0.0f64, 0.0f64);
+        m.add(Vector3::new(x, 0.0, 0.0), h);
+        for k in 0..60 {
+            let jk = if (k / 5) % 2 == 0 { j } else { -j };
+            // Exact integration over one interval with constant jerk.
+            x += v * h + a * h * h / 2.0 + jk * h.powi(3) / 6.0;
+            v += a * h + jk * h * h / 2.0;
+            a += jk * h;
+            m.add(Vector3::new(x, 0.0, 0.0), h);
+        }
+        // The third difference of exact samples mixes neighbouring intervals at each sign
+        // change, so the RMS lies a little under j; within the interior it is exactly j.
+        assert!(m.rms() <= j + 1e-9 && m.rms() > 0.8 * j, "{}", m.rms());
+    }
+
+    /// The score formula of the module docs on hand-computed values.
+    #[test]
+    fn score_is_the_weighted_linear_map_times_completion() {
+        let spec: ExerciseSpec = serde_json::from_str(
+            r#"{"id":"t","version":1,"title":"t","goal":"g","skills":[],
+            "control":{"mode":"joint","arm":"left"},
+            "steps":[{"id":"a","text":"a","done_when":{"kind":"released"}},
+                     {"id":"b","text":"b","done_when":{"kind":"released"}}],
+            "time_limit_s":100,"pass":{"min_score":50,"limits":[{"metric":"drops","max":0}]},
+            "scoring":[{"metric":"time_s","good":20,"bad":100,"weight":3},
+                       {"metric":"mean_jlm","good":0.8,"bad":0.4,"weight":1}],
+            "autopilot":[]}"#,
+        )
+        .expect("spec");
+        spec.check().expect("valid");
+        let m = Metrics {
+            time_s: 40.0,
+            mean_jlm: 0.9,
+            steps_completed: 2.0,
+            drops: 1.0,
+            ..Metrics::default()
+        };
+        let (s, terms) = score(&spec, &m);
+        // time: (100 − 40)/(100 − 20) = 0.75; JLM clamped to 1; (3·0.75 + 1)/4 = 0.8125.
+        assert!((terms[0].score - 0.75).abs() < 1e-12 && terms[1].score == 1.0);
+        assert!((s - 81.25).abs() < 1e-9, "{s}");
+        let half = Metrics {
+            steps_completed: 1.0,
+            ..m
+        };
+        assert!((score(&spec, &half).0 - 40.625).abs() < 1e-9);
+        let l = limits(&spec, &m);
+        assert!(!l[0].met && l[0].value == 1.0);
+    }
+}

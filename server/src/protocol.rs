@@ -529,7 +529,7 @@ pub enum ServerMessage {
         /// The exercise file, or `null`.
         exercise: Option<Arc<ExerciseSpec>>,
         /// What to draw.
-        scene: SceneOut,
+        scene: Box<SceneOut>,
         /// Settings now in force.
         settings: Settings,
     },

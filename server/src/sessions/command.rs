@@ -393,10 +393,10 @@ pub fn apply(
                 let msg = ServerMessage::Scenario {
                     scenario: s.name().to_string(),
                     exercise: s.exercise().cloned(),
-                    scene: crate::protocol::SceneOut::new(
+                    scene: Box::new(crate::protocol::SceneOut::new(
                         live.sim().params(),
                         s.exercise().map(|e| &**e),
-                    ),
+                    )),
                     settings: live.settings(),
                 };
                 let _ = session

@@ -105,6 +105,7 @@ const startScreen = new StartScreen($('start'));
 const task = new TaskPanel($('task'), $('card'), {
   banner: showBanner,
   tryAgain: () => conn.send({ type: 'reset' }), // a new attempt (docs/exercises.md)
+  diagnose: (answer) => conn.send({ type: 'diagnose', answer }), // fault drill
   nextTitle: () => startScreen.next(task.spec?.id)?.title,
   next: () => { const n = startScreen.next(task.spec?.id); if (n) newSession({ exercise: n.id }); },
   choose: () => chooseAndStart(),

@@ -49,6 +49,7 @@ export class Markers {
     for (const g of this.ghosts) g.dispose();
     this.handles = [];
     this.ghosts = [];
+    this.panel = null;
   }
 
   /** (Re)builds from a hello (after `World.setup`, which made the box these attach to). */
@@ -100,6 +101,49 @@ export class Markers {
       this.group.add(m);
     }
     for (const g of sc.ghosts || []) this.addGhost(hello, g, id);
+    if (sc.panel) this.addPanel(sc.panel, sc.capture_radius_m);
+  }
+
+  /** The intervention panel: plate, quarter-turn T-bar valve, receptacle and holster rings,
+   * and the hot stab (moved by each frame's `panel`). World frame; the items' axes are +x. */
+  addPanel(p, captureRadius) {
+    const plate = new THREE.Mesh(new THREE.BoxGeometry(...p.size_m), new THREE.MeshLambertMaterial({ color: 0xe8c547 }));
+    plate.matrixAutoUpdate = false;
+    plate.matrix.copy(poseToMatrix(p.pose));
+    plate.matrix.multiply(new THREE.Matrix4().makeTranslation(p.size_m[0] / 2, 0, 0)); // face at the frame origin
+    this.group.add(plate);
+    const face = p.pose.position[0];
+    const steel = new THREE.MeshLambertMaterial({ color: 0xb0b8c0 });
+    // Valve: a stem from the face to the grip point and the T-bar, turned by the valve angle.
+    const valve = new THREE.Group();
+    valve.position.set(...p.valve_grip_m);
+    const stemLength = face - p.valve_grip_m[0];
+    const stem = new THREE.Mesh(new THREE.CylinderGeometry(0.012, 0.012, stemLength, 10), steel);
+    stem.rotation.z = Math.PI / 2;
+    stem.position.x = stemLength / 2;
+    valve.add(stem);
+    const bar = new THREE.Group();
+    bar.add(new THREE.Mesh(new THREE.CylinderGeometry(0.015, 0.015, 0.16, 10), new THREE.MeshLambertMaterial({ color: HANDLE_COLOUR })));
+    valve.add(bar);
+    const valveCue = translucent(HANDLE_COLOUR, 0.12);
+    valve.add(new THREE.Mesh(new THREE.SphereGeometry(captureRadius, 20, 14), valveCue));
+    this.group.add(valve);
+    for (const mouth of [p.receptacle_m, p.holster_m]) {
+      const ring = new THREE.Mesh(new THREE.TorusGeometry(0.03, 0.006, 8, 24), steel);
+      ring.rotation.y = Math.PI / 2;
+      ring.position.set(mouth[0] - 0.002, mouth[1], mouth[2]);
+      this.group.add(ring);
+    }
+    // Hot stab: a cylinder along its pose's x axis with a cue sphere at its handle end.
+    const stab = new THREE.Group();
+    stab.matrixAutoUpdate = false;
+    const body = new THREE.Mesh(new THREE.CylinderGeometry(0.02, 0.02, 0.14, 12), new THREE.MeshLambertMaterial({ color: 0xff8c1a }));
+    body.rotation.z = Math.PI / 2;
+    stab.add(body);
+    const stabCue = translucent(HANDLE_COLOUR, 0.12);
+    stab.add(new THREE.Mesh(new THREE.SphereGeometry(captureRadius, 20, 14), stabCue));
+    this.group.add(stab);
+    this.panel = { bar, stab, cues: { valve: valveCue, stab: stabCue } };
   }
 
   /** A see-through arm at the ghost's joint angles (frames from POST /api/analysis). */
@@ -126,6 +170,15 @@ export class Markers {
 
   /** Capture cue from a state frame: a handle's sphere lights when a jaw can grasp it. */
   update(state) {
+    if (this.panel && state.panel) {
+      this.panel.bar.rotation.x = state.panel.valve_angle_deg * Math.PI / 180;
+      this.panel.stab.matrix.copy(poseToMatrix(state.panel.stab_pose));
+      for (const [item, m] of Object.entries(this.panel.cues)) {
+        const lit = SIDES.some((s) => state.arms[s].capture === item);
+        m.color.setHex(lit ? CAPTURE_COLOUR : HANDLE_COLOUR);
+        m.opacity = lit ? 0.45 : 0.12;
+      }
+    }
     this.handles.forEach((h, i) => {
       const by = SIDES.find((s) => state.arms[s].capture === `handle-${i}`) || null;
       if (by === this.capture[i]) return;

@@ -26,6 +26,10 @@ function num(v) {
   return Number.isInteger(v) ? String(v) : Number(v.toPrecision(3)).toString();
 }
 
+/** The fault drill's answers (DrillFault::ANSWERS) and their labels. */
+const DIAGNOSES = [['supply_drop', 'Supply pressure drop'], ['stuck_valve', 'Stuck valve'],
+  ['leak', 'Internal leak'], ['air', 'Air in the oil']];
+
 export class TaskPanel {
   /**
    * @param panel element of the panel (#task); card: element of the completion card
@@ -60,7 +64,16 @@ export class TaskPanel {
         <span class="k">score</span> <b data-t="score">—</b></div>
       <ol class="task-steps">${spec.steps.map((s, i) => `<li data-step="${i}">${esc(s.text)}</li>`).join('')}</ol>
       <div class="task-readouts"></div>
-      <div class="task-counters">${COUNTERS.map(([k, label]) => `<span data-c="${k}">${label} <b>0</b></span>`).join('')}</div>`;
+      <div class="task-counters">${COUNTERS.map(([k, label]) => `<span data-c="${k}">${label} <b>0</b></span>`).join('')}</div>
+      ${spec.fault_drill ? `<div class="task-diagnose"><p>Name the fault:</p>${DIAGNOSES.map(([a, label]) =>
+        `<button type="button" data-answer="${a}">${label}</button>`).join(' ')}</div>` : ''}`;
+    for (const b of this.panel.querySelectorAll('[data-answer]')) {
+      b.addEventListener('click', () => {
+        this.ui.diagnose?.(b.dataset.answer);
+        for (const o of this.panel.querySelectorAll('[data-answer]')) o.disabled = true;
+        b.classList.add('chosen');
+      });
+    }
     this.fill = this.panel.querySelector('.task-fill');
     this.readouts = this.panel.querySelector('.task-readouts');
     this.items = [...this.panel.querySelectorAll('[data-step]')];

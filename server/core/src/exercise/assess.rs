@@ -187,6 +187,16 @@ pub fn arm_points(sim: &Simulation, arm: Arm, kin: &mut KinData, out: &mut Vec<V
     out.push(tool);
 }
 
+/// Per joint: within `hit_deg` of a limit.
+fn at_limits(model: &Model, q: &[f64; 6], hit_deg: f64) -> [bool; 6] {
+    let d = hit_deg.to_radians();
+    let mut out = [false; 6];
+    for ((o, q), joint) in out.iter_mut().zip(q).zip(&model.joints) {
+        *o = joint.is_limited() && (q - joint.limits[0] < d || joint.limits[1] - q < d);
+    }
+    out
+}
+
 fn inside(o: &Obstacle, p: &Vector3<f64>) -> bool {
     (0..3).all(|k| (p[k] - o.center_m[k]).abs() <= o.half_size_m[k])
 }
@@ -241,7 +251,9 @@ impl Assessor {
             in_seabed: [false; 2],
             in_obstacle: [false; 2],
             overloaded: [false; 2],
-            at_limit: [[false; 6]; 2],
+            // A joint that starts at a limit (the scene's posture) has not hit it.
+            at_limit: Arm::BOTH
+                .map(|a| at_limits(sim.model(a), &sim.arm(a).q, spec.thresholds.limit_hit_deg)),
             was_holding: false,
             relief_at_start: sim.relief_events(),
             side_faults_at_start: sim.panel().map_or(0, |p| p.side_load_faults),
@@ -307,11 +319,8 @@ impl Assessor {
             }
             self.overloaded[i] = over;
             let model = sim.model(arm);
-            for (k, joint) in model.joints.iter().enumerate().take(6) {
-                let hit_now = joint.is_limited() && {
-                    let d = th.limit_hit_deg.to_radians();
-                    st.q[k] - joint.limits[0] < d || joint.limits[1] - st.q[k] < d
-                };
+            let at = at_limits(model, &st.q, th.limit_hit_deg);
+            for (k, &hit_now) in at.iter().enumerate() {
                 if hit_now && !self.at_limit[i][k] {
                     m.joint_limit_hits += 1.0;
                     events.push(Event {

@@ -132,3 +132,29 @@ test('an instructor\'s scenario or exercise switch takes effect on the trainee\'
     await b.close();
   }
 });
+
+test('fault drill: the page offers the four answers and the server records the one clicked', { timeout: 90000 }, async () => {
+  const url = await server();
+  const b = await openBrowser();
+  const page = b.page;
+  try {
+    await page.goto(`${url}/?exercise=fault-diagnosis`);
+    await until(page, () => window.__seaarms?.hello?.exercise?.id === 'fault-diagnosis' && window.__seaarms.statesDrawn > 2);
+    const buttons = await page.$$eval('#task [data-answer]', (bs) => bs.map((b) => b.dataset.answer));
+    assert.deepEqual(buttons, ['supply_drop', 'stuck_valve', 'leak', 'air']);
+    await page.click('#task [data-answer="leak"]');
+    const sid = await page.evaluate(() => window.__seaarms.connection.session);
+    let a = null;
+    for (let i = 0; i < 50 && a?.diagnosis?.answer !== 'leak'; i++) {
+      await page.waitForTimeout(100);
+      a = await (await fetch(`${url}/api/sessions/${sid}/assessment`, { headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } })).json();
+    }
+    assert.equal(a.diagnosis.answer, 'leak', JSON.stringify(a));
+    assert.equal(await page.isDisabled('#task [data-answer="air"]'), true, 'one answer only');
+    // The hidden fault is never listed in the trainee's frames.
+    const faults = await page.evaluate(() => window.__seaarms.lastState.faults);
+    assert.deepEqual(faults, []);
+  } finally {
+    await b.close();
+  }
+});

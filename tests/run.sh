@@ -30,6 +30,9 @@ args=(--bind "127.0.0.1:$port")
 help=$("$bin" --help)
 grep -q -- '--data-dir' <<<"$help" && args+=(--data-dir "$data_dir")
 grep -q -- '--instructor-token' <<<"$help" && args+=(--instructor-token test-token)
+# Every browser test file shares this server from one loopback client: lift the per-client
+# creation limits (admission.test.mjs checks them on servers of its own).
+grep -q -- '--session-burst' <<<"$help" && args+=(--session-burst 1000 --sessions-per-minute 1000 --max-sessions-per-client 1000)
 SEAARMS_INSTRUCTOR_TOKEN=test-token RUST_LOG=warn "$bin" "${args[@]}" &
 server_pid=$!
 trap 'kill "$server_pid" 2>/dev/null || true; wait "$server_pid" 2>/dev/null || true; rm -rf "$data_dir"' EXIT

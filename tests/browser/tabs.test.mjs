@@ -25,9 +25,7 @@ test('a second tab asks, watches without sending, and can take control', { timeo
   try {
     const one = b.page;
     await one.goto(`${url}/?scenario=training`);
-    // The first page of a fresh browser profile: WebGL start-up under a loaded CI machine
-    // once took longer than the default 15 s here (it takes < 1 s on a quiet one).
-    await until(one, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open, undefined, 45000);
+    await until(one, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     assert.equal(await one.evaluate(() => window.__seaarms.hello.role), 'trainee');
     const session = await one.evaluate(() => window.__seaarms.connection.session);
 

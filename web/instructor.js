@@ -176,9 +176,12 @@ for (const b of document.querySelectorAll('#instr-actions button[data-act]')) {
     const body = await r.json();
     const list = Array.isArray(body) ? body : body.scenarios || [];
     if (!list.some((s) => (typeof s === 'string' ? s : s.name) === 'training')) list.unshift({ name: 'training' });
+    // Exercises are scenarios too (the trainee's page follows a switch to one).
+    const ex = await fetch('/api/exercises').then((e) => (e.ok ? e.json() : { exercises: [] })).catch(() => ({ exercises: [] }));
+    for (const e of ex.exercises || []) list.push({ name: e.id, title: `exercise: ${e.title}` });
     $('act-scenario').innerHTML = list.map((s) => {
       const name = typeof s === 'string' ? s : s.name || s.id;
-      return `<option value="${esc(name)}">${esc(name)}</option>`;
+      return `<option value="${esc(name)}">${esc(s.title || name)}</option>`;
     }).join('');
   } catch { /* no scenarios endpoint */ }
 })();

@@ -175,7 +175,14 @@ pub fn run_headless(
     driver: Driver,
     seed: u64,
 ) -> anyhow::Result<Assessment> {
-    let mut live = Live::new(models, &Scenario::Exercise(spec.clone()), None, None, seed)?;
+    let mut live = Live::new(
+        "headless",
+        models,
+        &Scenario::Exercise(spec.clone()),
+        None,
+        None,
+        seed,
+    )?;
     let mut pilot = Autopilot::new(spec.autopilot.clone(), spec.control.mode);
     let steps_per_tick = (PILOT_INTERVAL_S * 1000.0).round() as u64;
     let max_steps = ((spec.time_limit_s + 1.0) * 1000.0) as u64;

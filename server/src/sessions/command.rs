@@ -420,14 +420,9 @@ fn record(
     command: &Command,
     detail: serde_json::Value,
 ) {
-    let mut event = detail;
-    event["t"] = json!(session.live().sim().time_s());
-    event["event"] = json!(command.name());
-    event["by"] = json!(actor.as_str());
-    manager.recorder.send(RecordMsg::Event {
-        id: session.id.clone(),
-        json: event.to_string(),
-    });
+    let mut event = session.live().event(command.name(), detail);
+    event.actor = Some(actor.as_str());
+    manager.recorder.send(RecordMsg::Event(event));
 }
 
 impl Live {

@@ -113,6 +113,15 @@ pub fn token_eq(a: &str, b: &str) -> bool {
     std::hint::black_box(diff) == 0
 }
 
+/// The SHA-256 of `text`, as lowercase hex.
+pub fn sha256_hex(text: &str) -> String {
+    use sha2::{Digest, Sha256};
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
 /// Seconds since the Unix epoch.
 pub fn unix_now() -> f64 {
     SystemTime::now()
@@ -176,6 +185,10 @@ pub struct Live {
     exercise: Option<ExerciseRun>,
     /// Seed of the next attempt's random draws (each attempt takes one and adds one).
     next_seed: u64,
+    /// The session's id (records).
+    session_id: String,
+    /// The current attempt's id (records; a new one at every start).
+    attempt_id: String,
 }
 
 /// What a session runs.
@@ -230,6 +243,7 @@ impl Live {
     /// settings (an exercise's own unless `mode`/`method` override them), and for an
     /// exercise its first attempt, seeded with `seed`.
     pub fn new(
+        session_id: &str,
         models: &[Arc<Model>; 2],
         scenario: &Scenario,
         mode: Option<ControlMode>,
@@ -272,6 +286,8 @@ impl Live {
             scenario: scenario.clone(),
             exercise: None,
             next_seed: seed,
+            session_id: session_id.to_string(),
+            attempt_id: String::new(),
         };
         live.start_attempt();
         Ok(live)
@@ -280,11 +296,29 @@ impl Live {
     /// Starts a new attempt when the scenario is an exercise (the simulation is at its reset
     /// state).
     fn start_attempt(&mut self) {
+        self.attempt_id = random_hex(8);
         self.exercise = self.scenario.exercise().map(|spec| {
             let seed = self.next_seed;
             self.next_seed = self.next_seed.wrapping_add(1);
             ExerciseRun::new(spec.clone(), &self.sim, seed)
         });
+    }
+
+    /// An event of the current attempt at the current simulated time.
+    pub fn event(&self, kind: &str, detail: serde_json::Value) -> Box<record::EventRecord> {
+        Box::new(record::EventRecord {
+            session: self.session_id.clone(),
+            attempt: Some(self.attempt_id.clone()),
+            t: self.sim.time_s(),
+            kind: kind.to_string(),
+            actor: None,
+            detail,
+        })
+    }
+
+    /// The current attempt's id.
+    pub fn attempt_id(&self) -> &str {
+        &self.attempt_id
     }
 
     /// The current attempt, when the scenario is an exercise.
@@ -589,13 +623,14 @@ impl SessionManager {
         self.check_caps(&self.map(), client)?;
         self.recorder.admit().map_err(CreateError::Recording)?;
         let models = [self.magnum.clone(), self.magnum.clone()];
-        let live = Live::new(&models, &scenario, mode, method, random_seed())
+        let id = random_hex(8);
+        let live = Live::new(&id, &models, &scenario, mode, method, random_seed())
             .map_err(|e| CreateError::Sim(e.to_string()))?;
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);
         let label = label.unwrap_or_default().chars().take(64).collect();
         let session = Arc::new(Session {
-            id: random_hex(8),
+            id,
             label,
             scenario: Mutex::new(scenario.name().to_string()),
             control_token: random_hex(16),
@@ -620,8 +655,10 @@ impl SessionManager {
         self.recorder.send(RecordMsg::Created {
             id: session.id.clone(),
             label: session.label.clone(),
+            group: String::new(),
             scenario: session.scenario(),
             created_unix: session.created_unix,
+            token_sha256: sha256_hex(&session.control_token),
         });
         let w = self.next_worker.fetch_add(1, Ordering::Relaxed) as usize % self.workers.len();
         self.workers[w].add(session.clone());

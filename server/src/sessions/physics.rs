@@ -16,7 +16,7 @@ use std::time::{Duration, Instant};
 use seaarms_core::control::teleop::cartesian_to_joint_velocity;
 use seaarms_core::sim::Arm;
 
-use super::record::{RecordMsg, RecordSender, SessionRow};
+use super::record::{EventRecord, RecordMsg, RecordSender, SessionRow};
 use super::snapshot::build_frame;
 use super::{Frame, Live, Session};
 use crate::metrics::Metrics;
@@ -227,20 +227,21 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
         session
             .overloads
             .fetch_add(relief - live.relief_recorded, Ordering::Relaxed);
-        recorder.send(RecordMsg::Event {
-            id: session.id.clone(),
-            json: serde_json::json!({"t": sim.time_s(), "event": "relief", "count": relief})
-                .to_string(),
-        });
+        recorder.send(RecordMsg::Event(
+            live.event("relief", serde_json::json!({"count": relief})),
+        ));
     }
     live.relief_recorded = relief;
     if let Some(run) = live.exercise.as_mut() {
         for e in run.take_events() {
-            recorder.send(RecordMsg::Event {
-                id: session.id.clone(),
-                json: serde_json::json!({"t": e.t, "event": "exercise", "kind": e.kind, "text": e.text})
-                    .to_string(),
-            });
+            recorder.send(RecordMsg::Event(Box::new(EventRecord {
+                session: live.session_id.clone(),
+                attempt: Some(live.attempt_id.clone()),
+                t: e.t,
+                kind: "exercise".into(),
+                actor: None,
+                detail: serde_json::json!({"kind": e.kind, "text": e.text}),
+            })));
         }
     }
     recorder.send(RecordMsg::Row {
@@ -249,12 +250,9 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
         overloads: session.overloads.load(Ordering::Relaxed),
     });
     if grasp != live.last_grasp {
-        recorder.send(RecordMsg::Event {
-            id: session.id.clone(),
-            json:
-                serde_json::json!({"t": sim.time_s(), "event": "grasp", "state": grasp_name(grasp)})
-                    .to_string(),
-        });
+        recorder.send(RecordMsg::Event(
+            live.event("grasp", serde_json::json!({"state": grasp_name(grasp)})),
+        ));
         live.last_grasp = grasp;
     }
 }

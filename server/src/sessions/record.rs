@@ -24,10 +24,12 @@
 //!   retention age, then the oldest ended records beyond the size cap, are deleted — never
 //!   a live session's.
 
+mod attempt;
 mod index;
 mod retention;
 mod row;
 
+pub use attempt::{AttemptEnd, AttemptStart, EventRecord};
 use index::IndexLine;
 pub use index::{SessionRecord, read_index};
 pub use retention::Retention;
@@ -73,12 +75,17 @@ pub enum RecordMsg {
     Created {
         /// Id.
         id: String,
-        /// Trainee label.
+        /// Trainee label (display name).
         label: String,
+        /// The trainee's class or group (may be empty).
+        group: String,
         /// Scenario.
         scenario: String,
         /// Unix seconds.
         created_unix: f64,
+        /// SHA-256 (hex) of the session's control token: the trainee who holds it may open
+        /// the session's records after it ends.
+        token_sha256: String,
     },
     /// One time-series row.
     Row {
@@ -89,13 +96,20 @@ pub enum RecordMsg {
         /// Relief events of the session since creation, all resets included.
         overloads: u64,
     },
-    /// One JSON event line (without newline).
-    Event {
-        /// Session id.
+    /// One typed event.
+    Event(Box<EventRecord>),
+    /// An attempt started.
+    AttemptStarted(Box<AttemptStart>),
+    /// The next piece of an attempt's compressed input stream ([`crate::replay::log`]):
+    /// appended in order; the pieces so far always decode.
+    AttemptInputs {
+        /// Attempt id.
         id: String,
-        /// The JSON text.
-        json: String,
+        /// Bytes to append.
+        bytes: Vec<u8>,
     },
+    /// An attempt ended.
+    AttemptEnded(Box<AttemptEnd>),
     /// A session ended.
     Ended {
         /// Id.
@@ -586,6 +600,7 @@ impl RecorderState {
                 label,
                 scenario,
                 created_unix,
+                ..
             } => {
                 let (live, err) = Live::open(&self.dir, &id);
                 if let Some(e) = &err {
@@ -626,7 +641,18 @@ impl RecorderState {
                 live.pending_rows += 1;
                 live.pending_figures = Some((row.t_s, overloads));
             }
-            RecordMsg::Event { id, json } => {
+            RecordMsg::Event(event) => {
+                let id = event.session.clone();
+                let mut json = event.detail.clone();
+                if !json.is_object() {
+                    json = serde_json::json!({"detail": json});
+                }
+                json["t"] = serde_json::json!(event.t);
+                json["event"] = serde_json::json!(event.kind);
+                if let Some(by) = event.actor {
+                    json["by"] = serde_json::json!(by);
+                }
+                let json = json.to_string();
                 let Some(live) = self.live.get_mut(&id) else {
                     return;
                 };
@@ -660,6 +686,9 @@ impl RecorderState {
                 self.flush_all();
                 let _ = done.send(());
             }
+            RecordMsg::AttemptStarted(_)
+            | RecordMsg::AttemptInputs { .. }
+            | RecordMsg::AttemptEnded(_) => {}
             RecordMsg::Shutdown(_) => {}
         }
     }

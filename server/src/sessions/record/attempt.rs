@@ -1,0 +1,68 @@
+//! What the recorder is told about attempts and events (the typed records of the database;
+//! [`crate::db`] stores them).
+//!
+//! An *attempt* is one stretch of a session from a start (session creation, reset, scenario
+//! switch) to the next start or the session's end, for every scenario (an exercise's
+//! attempt carries its assessment). It is recorded as its initial conditions
+//! ([`AttemptStart::init`]) and the compressed stream of applied inputs
+//! ([`crate::replay::log`]), from which [`crate::replay`] re-simulates it exactly.
+
+use serde::Serialize;
+
+/// An attempt started.
+#[derive(Debug, Clone, Serialize)]
+pub struct AttemptStart {
+    /// Attempt id (16 hex digits).
+    pub id: String,
+    /// Session id.
+    pub session: String,
+    /// Scenario name (an exercise's id for an exercise).
+    pub scenario: String,
+    /// Exercise id, when the scenario is an exercise.
+    pub exercise: Option<String>,
+    /// Version stamp of the exercise file (its `version` and content hash).
+    pub exercise_version: Option<String>,
+    /// Version stamp of the simulator that recorded it ([`crate::replay::SIM_VERSION`]).
+    pub sim_version: String,
+    /// Unix seconds.
+    pub started_unix: f64,
+    /// Initial conditions for replay ([`crate::replay::Init`] as JSON).
+    pub init: serde_json::Value,
+}
+
+/// An attempt ended (a new start, or its session ended).
+#[derive(Debug, Clone, Serialize)]
+pub struct AttemptEnd {
+    /// Attempt id.
+    pub id: String,
+    /// Unix seconds.
+    pub ended_unix: f64,
+    /// Simulated seconds the attempt ran.
+    pub sim_seconds: f64,
+    /// `passed`, `failed` (exercise), `abandoned` (reset or switch before the end),
+    /// `ended` (free play), or `interrupted` (server stopped).
+    pub outcome: String,
+    /// Score 0–100 (exercises).
+    pub score: Option<f64>,
+    /// The exercise's assessment (the `GET /api/sessions/{id}/assessment` JSON).
+    pub assessment: Option<serde_json::Value>,
+}
+
+/// One typed event of a session (grasp change, strike, overload, relief, fault, instructor
+/// action, reset, …).
+#[derive(Debug, Clone, Serialize)]
+pub struct EventRecord {
+    /// Session id.
+    pub session: String,
+    /// Attempt it happened in.
+    pub attempt: Option<String>,
+    /// Simulated seconds since the attempt started.
+    pub t: f64,
+    /// Kind: `grasp`, `relief`, `exercise` (strike, overload, drop, step, …), or a command
+    /// name (`reset`, `pause`, `fault`, `settings`, …).
+    pub kind: String,
+    /// Who gave it, for commands (`trainee`, `instructor`).
+    pub actor: Option<&'static str>,
+    /// Details (JSON object).
+    pub detail: serde_json::Value,
+}

@@ -142,6 +142,7 @@ impl AppState {
 pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/"),
     ("get", "/instructor"),
+    ("get", "/replay/{attempt}"),
     ("get", "/web/{path}"),
     ("get", "/static/{path}"),
     ("get", "/healthz"),
@@ -192,6 +193,7 @@ pub fn app(state: AppState) -> Router {
     Router::new()
         .route("/", get(assets::index))
         .route("/instructor", get(assets::instructor))
+        .route("/replay/{attempt}", get(assets::replay))
         .route("/web/{*path}", get(assets::web))
         .route("/static/{*path}", get(assets::vendored))
         .route("/healthz", get(|| async { "ok" }))

@@ -47,6 +47,11 @@ pub async fn instructor() -> Response {
     serve::<Web>("instructor.html", "no-cache")
 }
 
+/// `GET /replay/{attempt}`: the debrief page (it reads the attempt id from its URL).
+pub async fn replay(Path(_attempt): Path<String>) -> Response {
+    serve::<Web>("replay.html", "no-cache")
+}
+
 /// `GET /web/{*path}`: our own modules; revalidated on every load so a new build is seen at once.
 pub async fn web(Path(path): Path<String>) -> Response {
     serve::<Web>(&path, "no-cache")

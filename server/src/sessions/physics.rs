@@ -146,7 +146,7 @@ pub fn step_session(
     }
     if now >= live.next_frame {
         live.frame_seq += 1;
-        let frame = build_frame(session, live);
+        let frame = build_frame(live);
         // Sized for a typical frame (≈ 5 KiB) so serialization does not keep reallocating.
         let mut buf = Vec::with_capacity(8 * 1024);
         match serde_json::to_writer(&mut buf, &ServerMessage::State(Box::new(frame)))

@@ -48,11 +48,7 @@ fn measures_frame(m: &Measures, jlm: Option<f64>) -> MeasuresFrame {
 }
 
 /// One arm's frame and its translational Jacobian (world), with its warnings.
-fn arm_frame(
-    live: &mut Live,
-    arm: Arm,
-    warnings: &mut Vec<String>,
-) -> (ArmFrame, DMatrix<f64>) {
+fn arm_frame(live: &mut Live, arm: Arm, warnings: &mut Vec<String>) -> (ArmFrame, DMatrix<f64>) {
     let name = arm_name(arm);
     let sim = &live.sim;
     let model = &*live.models[arm.index()];

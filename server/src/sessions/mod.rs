@@ -513,6 +513,11 @@ impl Live {
             && self.input.object_velocity.iter().all(|v| v.abs() < 1e-12)
     }
 
+    /// The arm models (left, right).
+    pub fn models(&self) -> &[Arc<Model>; 2] {
+        &self.models
+    }
+
     /// The simulation (read-only).
     pub fn sim(&self) -> &Simulation {
         &self.sim
@@ -753,6 +758,11 @@ impl SessionManager {
             metrics,
             magnum,
         })
+    }
+
+    /// The arm model sessions use (both arms).
+    pub fn magnum(&self) -> Arc<Model> {
+        self.magnum.clone()
     }
 
     fn map(&self) -> MutexGuard<'_, HashMap<String, Arc<Session>>> {

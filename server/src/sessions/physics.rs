@@ -227,7 +227,7 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
         recorder.send(msg);
     }
     let sim = &live.sim;
-    let row = Box::new(SessionRow::from_sim(sim));
+    let row = Box::new(SessionRow::from_sim(sim, &live.attempt_id));
     let grasp = sim.grasp_state();
     let relief = sim.relief_events();
     if relief > live.relief_recorded {

@@ -105,7 +105,14 @@ async fn a_named_trainees_session_is_recorded_and_listed_after_a_restart() {
         assert_eq!(ended["end_reason"], "ended by trainee");
         assert_eq!(ended["trainee"], "Ada Lovelace");
         assert_eq!(ended["group"], "ROV-2");
-        assert!(ended["attempts"].is_array(), "{ended}");
+        // Two attempts: the first ended by the reset, the second by the end (free play).
+        let listed: Vec<&str> = ended["attempts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a.as_str().unwrap())
+            .collect();
+        assert_eq!(listed.len(), 2, "{ended}");
 
         let db_url = url_of(&dir, &url);
         let trainees = rows(
@@ -125,6 +132,35 @@ async fn a_named_trainees_session_is_recorded_and_listed_after_a_restart() {
             db.session_token_sha256(&id).await.unwrap(),
             Some(expected_hash)
         );
+        let attempts = db
+            .attempts(&AttemptFilter {
+                session: Some(id.clone()),
+                ..Default::default()
+            })
+            .await
+            .unwrap();
+        assert_eq!(
+            attempts.iter().map(|a| a.id.as_str()).collect::<Vec<_>>(),
+            listed,
+            "the summary lists the stored attempts, newest first"
+        );
+        for a in &attempts {
+            assert_eq!(
+                (a.trainee.as_str(), a.group.as_str()),
+                ("Ada Lovelace", "ROV-2")
+            );
+            assert_eq!(a.outcome.as_deref(), Some("ended"));
+            assert_eq!(a.scenario, "case4-dual-closed-loop");
+            assert!(a.ended_unix.unwrap() >= a.started_unix);
+            assert_eq!(a.init["scenario"], "case4-dual-closed-loop");
+            let bytes = db.attempt_inputs(&a.id).await.unwrap();
+            assert_eq!(bytes.len() as i64, a.inputs_bytes);
+            seaarms::replay::log::decode(&bytes).unwrap();
+        }
+        // The driven first attempt logged the stick inputs.
+        let first =
+            seaarms::replay::log::decode(&db.attempt_inputs(listed[1]).await.unwrap()).unwrap();
+        assert!(!first.is_empty(), "no inputs logged for the driven attempt");
         let events = rows(
             &db_url,
             "SELECT seq, kind, actor, detail, t, attempt_id FROM events WHERE session_id = $1 \
@@ -567,11 +603,24 @@ async fn kill_9_leaves_whole_records_and_interrupted_sessions() {
             )
             .await;
             let mut expected = std::collections::HashMap::<String, i64>::new();
+            let mut logs = std::collections::HashMap::<String, Vec<u8>>::new();
             for r in &pieces {
-                let n = expected.entry(r.get("attempt_id")).or_insert(0);
+                let attempt: String = r.get("attempt_id");
+                let n = expected.entry(attempt.clone()).or_insert(0);
                 assert_eq!(r.get::<i64, _>("seq"), *n);
                 *n += 1;
-                assert!(!r.get::<Vec<u8>, _>("data").is_empty());
+                let data: Vec<u8> = r.get("data");
+                assert!(!data.is_empty());
+                logs.entry(attempt).or_default().extend(data);
+            }
+            assert!(
+                !logs.is_empty(),
+                "{id}: no input pieces stored in 4 s of driving"
+            );
+            for (attempt, log) in &logs {
+                let entries = seaarms::replay::log::decode(log)
+                    .unwrap_or_else(|e| panic!("{attempt}: stored input log: {e}"));
+                assert!(!entries.is_empty(), "{attempt}: empty input log");
             }
             figures.push((id.to_string(), t_db, overloads_db, csv_path));
         }

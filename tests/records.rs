@@ -105,6 +105,24 @@ async fn a_named_trainees_session_is_recorded_and_listed_after_a_restart() {
         assert_eq!(ended["end_reason"], "ended by trainee");
         assert_eq!(ended["trainee"], "Ada Lovelace");
         assert_eq!(ended["group"], "ROV-2");
+        // The trainee who held the control token still sees its record; another token not.
+        for (tok, status) in [
+            (token.as_str(), 200),
+            ("0123456789abcdef0123456789abcdef", 403),
+        ] {
+            for path in [
+                format!("/api/sessions/{id}"),
+                format!("/api/sessions/{id}/log.csv"),
+            ] {
+                let r = reqwest::Client::new()
+                    .get(format!("{}{path}", s.base))
+                    .bearer_auth(tok)
+                    .send()
+                    .await
+                    .unwrap();
+                assert_eq!(r.status().as_u16(), status, "{path} with {tok}");
+            }
+        }
         // Two attempts: the first ended by the reset, the second by the end (free play).
         let listed: Vec<&str> = ended["attempts"]
             .as_array()
@@ -732,4 +750,34 @@ async fn retention_deletes_the_database_rows_of_the_records_it_removes() {
         s.stop();
         let _ = std::fs::remove_dir_all(&dir);
     }
+}
+
+/// A database URL the server cannot use stops it at start-up with a message naming the
+/// problem (the password hidden), instead of serving without records.
+#[test]
+fn a_bad_database_url_is_a_start_up_error() {
+    let dir = temp_dir("badurl");
+    for (url, expected) in [
+        (
+            "mysql://me:secret@db/x",
+            "unsupported database URL `mysql://me:***@db/x`",
+        ),
+        (
+            "sqlite:///proc/no-such/dir/x.db",
+            "cannot create /proc/no-such/dir",
+        ),
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_seaarms"))
+            .args(["serve", "--bind", "127.0.0.1:0", "--database-url", url])
+            .arg("--data-dir")
+            .arg(&dir)
+            .env("RUST_LOG", "error")
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{url}: served anyway");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expected), "{url}: {err}");
+        assert!(!err.contains("secret"), "{url}: password printed: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -781,3 +781,25 @@ fn a_bad_database_url_is_a_start_up_error() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// An SQLite URL without `mode=rwc` still creates its file and folder.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_sqlite_url_creates_its_file_and_folder() {
+    let dir = temp_dir("sqliteurl");
+    let file = dir.join("elsewhere").join("records.db");
+    let url = format!("sqlite://{}", file.display());
+    let s = Binary::start(&dir, &["--database-url", &url]);
+    let (st, c) = create_at(&s.base, json!({"trainee": "Lin"})).await;
+    assert_eq!(st, 201, "{c}");
+    s.stop();
+    assert!(file.is_file(), "{} not created", file.display());
+    assert!(
+        !dir.join("seaarms.db").exists(),
+        "the default database was used instead"
+    );
+    let db = Db::open(&url).unwrap();
+    let stored = db.sessions().await.unwrap();
+    assert_eq!(stored.len(), 1);
+    assert_eq!(stored[0].trainee, "Lin");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -803,3 +803,60 @@ async fn an_sqlite_url_creates_its_file_and_folder() {
     assert_eq!(stored[0].trainee, "Lin");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// A database that refuses writes for a while (SQLite locked by another writer beyond the
+/// 5 s busy timeout) loses nothing: the failed batch is counted in /metrics, kept, and
+/// written whole with the next commit once the lock is gone — every event once, in order.
+/// (SQLite only: PostgreSQL makes a blocked writer wait instead of failing.)
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_failed_batch_is_retried_whole() {
+    use sqlx::{Connection, Executor, Row};
+    let dir = temp_dir("retry");
+    let s = Binary::start(&dir, &[]);
+    let (st, c) = create_at(&s.base, json!({"trainee": "Lock"})).await;
+    assert_eq!(st, 201, "{c}");
+    let id = c["id"].as_str().unwrap().to_string();
+    act(&s.base, &id, TEACHER, json!({"type": "pause"})).await;
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    let url = seaarms::db::default_url(&dir);
+    sqlx::any::install_default_drivers();
+    let mut lock = sqlx::AnyConnection::connect(&url).await.unwrap();
+    lock.execute("BEGIN EXCLUSIVE").await.unwrap();
+    act(&s.base, &id, TEACHER, json!({"type": "resume"})).await;
+    act(&s.base, &id, TEACHER, json!({"type": "pause"})).await;
+    let errors = records_common::eventually(Duration::from_secs(15), || async {
+        let n = records_common::metric(&s.base, "seaarms_record_write_errors_total").await;
+        (n > 0).then_some(n)
+    })
+    .await;
+    assert!(errors.is_some(), "the locked database never failed a batch");
+    lock.execute("COMMIT").await.unwrap();
+    lock.close().await.unwrap();
+    let kinds = records_common::eventually(Duration::from_secs(15), || async {
+        let events = rows(
+            &url,
+            "SELECT seq, kind FROM events WHERE session_id = $1 ORDER BY seq",
+            &id,
+        )
+        .await;
+        let kinds: Vec<(i64, String)> = events
+            .iter()
+            .map(|r| (r.get("seq"), r.get("kind")))
+            .collect();
+        (kinds.len() >= 3).then_some(kinds)
+    })
+    .await
+    .expect("the kept batch was never written");
+    let expected: Vec<(i64, String)> = ["pause", "resume", "pause"]
+        .iter()
+        .enumerate()
+        .map(|(i, k)| (i as i64, k.to_string()))
+        .collect();
+    assert_eq!(kinds, expected, "every event once, in order");
+    eprintln!(
+        "locked database: {} failed commits, then the batch was written whole",
+        errors.unwrap_or(0)
+    );
+    s.stop();
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -178,6 +178,11 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/exercises"),
     ("get", "/api/exercises/{id}"),
     ("get", "/ws/sessions/{id}"),
+    ("get", "/api/attempts"),
+    ("get", "/api/attempts/{id}"),
+    ("get", "/api/attempts/{id}/inputs"),
+    ("get", "/api/attempts/{id}/replay"),
+    ("get", "/ws/replay/{id}"),
 ];
 
 async fn count_requests(State(metrics): State<Arc<Metrics>>, req: Request, next: Next) -> Response {
@@ -237,6 +242,11 @@ pub fn app(state: AppState) -> Router {
         .route("/api/exercises", get(crate::exercises::list))
         .route("/api/exercises/{id}", get(crate::exercises::get))
         .route("/ws/sessions/{id}", get(sessions::ws::upgrade))
+        .route("/api/attempts", get(api::attempts::list))
+        .route("/api/attempts/{id}", get(api::attempts::get))
+        .route("/api/attempts/{id}/inputs", get(api::attempts::inputs))
+        .route("/api/attempts/{id}/replay", get(api::attempts::replay_at))
+        .route("/ws/replay/{id}", get(api::attempts::replay_ws))
         .fallback(|uri: axum::http::Uri| async move {
             ApiError::not_found(format!("no route for {}", uri.path()))
         })

@@ -179,6 +179,11 @@ impl Replay {
         self.live.sim().time_s()
     }
 
+    /// At the attempt's end.
+    pub fn at_end(&self) -> bool {
+        self.live.sim().steps() >= self.duration_steps
+    }
+
     /// The state now.
     pub fn live(&self) -> &Live {
         &self.live

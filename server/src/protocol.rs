@@ -481,8 +481,8 @@ pub struct StateFrame {
     pub relief_events: u64,
     /// Active warnings: `near_singularity:left`, `near_joint_limit:right:3`, `relief:left:2`, …
     pub warnings: Vec<String>,
-    /// Active faults, as instructors set them (labels, see [`fault_label`]); a fault drill's
-    /// hidden fault is not listed.
+    /// Active faults, as instructors set them (labels, see [`fault_label`]); neither a fault
+    /// drill's hidden fault nor a silent fault (`"silent": true` on injection) is listed.
     pub faults: Vec<ActiveFault>,
     /// The scenario or exercise id the session runs.
     pub scenario: String,
@@ -585,6 +585,7 @@ mod tests {
             fault_label(&ActiveFault {
                 arm,
                 fault: Fault::new(kind, joint, value).unwrap(),
+                silent: false,
             })
         };
         assert_eq!(
@@ -606,6 +607,7 @@ mod tests {
         let f = ActiveFault {
             arm: Arm::Left,
             fault: Fault::new(FaultKind::Air, None, 0.3).unwrap(),
+            silent: true,
         };
         assert_eq!(serde_json::to_value(f).unwrap(), "air:left:0.3");
         for kind in FaultKind::ALL {

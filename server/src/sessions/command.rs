@@ -157,6 +157,10 @@ pub struct ActiveFault {
     pub arm: Arm,
     /// What and how much.
     pub fault: Fault,
+    /// Injected without telling the trainee (a diagnosis drill): it acts on the simulation
+    /// like any fault but is left out of the state frames and of the trainee's summary; only
+    /// the instructor's session summary lists it.
+    pub silent: bool,
 }
 
 impl ActiveFault {
@@ -470,7 +474,7 @@ impl Live {
             }
             Command::InjectFault(f) => {
                 self.inject_fault(*f);
-                json!({"fault": f})
+                json!({"fault": f, "silent": f.silent})
             }
             Command::ClearFaults => {
                 self.clear_faults();
@@ -520,6 +524,7 @@ mod tests {
         let a = |arm, joint, v| ActiveFault {
             arm,
             fault: Fault::new(FaultKind::StuckValve, Some(joint), v).unwrap(),
+            silent: false,
         };
         assert!(a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Left, 2, -0.5)));
         assert!(!a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Left, 3, 0.5)));

@@ -20,7 +20,8 @@ use crate::app::AppState;
 use crate::error::ApiError;
 use crate::json::ApiJson;
 use crate::protocol::{
-    ControlMethod, ControlMode, fault_kind_name, grasp_name, parse_arm, parse_fault_kind,
+    ControlMethod, ControlMode, fault_kind_name, fault_label, grasp_name, parse_arm,
+    parse_fault_kind,
 };
 use crate::security::ws_base;
 
@@ -271,14 +272,25 @@ pub struct SessionSummary {
     pub measures: Option<[ArmSummary; 2]>,
     /// Relief-valve events (overloads).
     pub overload_count: u64,
-    /// Active faults (live only; labels of [`crate::protocol::fault_label`]).
+    /// Active faults (live only). The session's own trainee is not shown silent ones.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub faults: Option<Vec<ActiveFault>>,
+    pub faults: Option<Vec<FaultSummary>>,
     /// `ok`, or `failed` when part of the session's record could not be written.
     pub recording: &'static str,
 }
 
-fn live_summary(s: &Session, recording: &'static str) -> SessionSummary {
+/// An active fault in a session summary.
+#[derive(Debug, Serialize)]
+pub struct FaultSummary {
+    /// Its label ([`crate::protocol::fault_label`], as state frames list faults).
+    pub label: String,
+    /// Injected without telling the trainee (absent from the state frames).
+    pub silent: bool,
+}
+
+/// The live summary of `s` as `viewer` may see it (the session's trainee is not shown
+/// silent faults).
+fn live_summary(s: &Session, recording: &'static str, viewer: Caller) -> SessionSummary {
     let live = s.live();
     let sim = live.sim();
     let arm = |arm: Arm| {
@@ -306,7 +318,16 @@ fn live_summary(s: &Session, recording: &'static str) -> SessionSummary {
         trainees: Some(s.trainees.load(std::sync::atomic::Ordering::Relaxed)),
         measures: Some(Arm::BOTH.map(arm)),
         overload_count: s.overloads.load(std::sync::atomic::Ordering::Relaxed),
-        faults: Some(live.faults().to_vec()),
+        faults: Some(
+            live.faults()
+                .iter()
+                .filter(|f| viewer == Caller::Instructor || !f.silent)
+                .map(|f| FaultSummary {
+                    label: fault_label(f),
+                    silent: f.silent,
+                })
+                .collect(),
+        ),
         recording,
     }
 }
@@ -352,7 +373,7 @@ pub async fn list(
     let recorder = &state.sessions.recorder;
     let mut out: Vec<SessionSummary> = live
         .iter()
-        .map(|s| live_summary(s, recorder.recording(&s.id)))
+        .map(|s| live_summary(s, recorder.recording(&s.id), Caller::Instructor))
         .collect();
     out.extend(
         recorder_index
@@ -370,10 +391,11 @@ pub async fn get_one(
     Path(id): Path<String>,
 ) -> Result<Json<SessionSummary>, ApiError> {
     if let Some(s) = state.sessions.get(&id) {
-        caller(&state, bearer(&headers), Some(&s))?;
+        let viewer = caller(&state, bearer(&headers), Some(&s))?;
         return Ok(Json(live_summary(
             &s,
             state.sessions.recorder.recording(&s.id),
+            viewer,
         )));
     }
     require_instructor(&state, &headers)?;
@@ -446,6 +468,10 @@ pub enum Action {
         joint: Option<usize>,
         /// Size of the fault (see `fault`).
         value: f64,
+        /// Injected without telling the trainee: left out of the state frames and the
+        /// trainee's view; the instructor's session summary lists it with `"silent": true`.
+        #[serde(default)]
+        silent: bool,
     },
     /// Remove every fault.
     ClearFaults,
@@ -472,6 +498,7 @@ impl TryFrom<Action> for Command {
                 arm,
                 joint,
                 value,
+                silent,
             } => {
                 let arm = parse_arm(&arm).ok_or_else(|| {
                     CommandError::Invalid(format!("arm must be `left` or `right`, got `{arm}`"))
@@ -483,7 +510,7 @@ impl TryFrom<Action> for Command {
                     ))
                 })?;
                 let fault = Fault::new(kind, joint, value).map_err(CommandError::Invalid)?;
-                Command::InjectFault(ActiveFault { arm, fault })
+                Command::InjectFault(ActiveFault { arm, fault, silent })
             }
             Action::ClearFaults => Command::ClearFaults,
             Action::Message { text } => Command::message(&text)?,

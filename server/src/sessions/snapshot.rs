@@ -144,7 +144,8 @@ pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
         internal_torque_nm: [internal[3], internal[4], internal[5]],
         relief_events: sim.relief_events(),
         warnings,
-        faults: live.faults.clone(),
+        // Frames go to every client: a silent fault must not be in them at all.
+        faults: live.faults.iter().filter(|f| !f.silent).copied().collect(),
         scenario: live.scenario.name().to_string(),
         exercise: live.exercise.as_ref().map(|run| run.status(sim)),
         panel: sim.panel().map(|p| crate::protocol::PanelFrame {

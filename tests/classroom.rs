@@ -1,0 +1,156 @@
+//! Classroom behaviours over real sockets: a silent fault acts on the arm but appears in no
+//! frame or notice the trainee receives (only in the instructor's summary); an instructor's
+//! pause cannot be lifted by the trainee; a session whose trainee left ends as abandoned
+//! after the grace period unless the trainee comes back; the live summary carries the
+//! roster fields (who paused, the exercise's step, progress and score, the frame's
+//! warnings, the running attempt).
+
+#![allow(clippy::unwrap_used)]
+
+use std::time::{Duration, Instant};
+
+use futures_util::{SinkExt, StreamExt};
+use serde_json::{Value, json};
+use tokio_tungstenite::tungstenite::Message;
+
+mod common;
+use common::*;
+
+async fn send(ws: &mut Ws, v: Value) {
+    ws.send(Message::Text(v.to_string().into())).await.unwrap();
+}
+
+/// `POST /api/sessions/{id}/actions` with `token`; the status and the body text.
+async fn act(s: &Server, id: &str, token: &str, body: Value) -> (u16, String) {
+    let r = reqwest::Client::new()
+        .post(format!("{}/api/sessions/{id}/actions", s.base))
+        .bearer_auth(token)
+        .json(&body)
+        .send()
+        .await
+        .unwrap();
+    (r.status().as_u16(), r.text().await.unwrap())
+}
+
+/// `GET /api/sessions/{id}` with `token`, as JSON.
+async fn summary(s: &Server, id: &str, token: &str) -> Value {
+    reqwest::Client::new()
+        .get(format!("{}/api/sessions/{id}", s.base))
+        .bearer_auth(token)
+        .send()
+        .await
+        .unwrap()
+        .json()
+        .await
+        .unwrap()
+}
+
+/// The next text message (within 5 s), raw and parsed.
+async fn next_text(ws: &mut Ws) -> (String, Value) {
+    loop {
+        let msg = tokio::time::timeout(Duration::from_secs(5), ws.next())
+            .await
+            .expect("no message within 5 s");
+        match msg {
+            Some(Ok(Message::Text(t))) => {
+                let v = serde_json::from_str(&t).unwrap();
+                return (t.to_string(), v);
+            }
+            Some(Ok(Message::Ping(_) | Message::Pong(_))) => {}
+            other => panic!("socket ended or sent {other:?}"),
+        }
+    }
+}
+
+fn q(state: &Value, arm: &str, j: usize) -> f64 {
+    state["arms"][arm]["q"][j].as_f64().unwrap()
+}
+
+/// A silent stuck valve (left swing, spool 0.8) moves the joint with zero stick input, as an
+/// unfaulted session's does not; yet no message the trainee receives names it, while a
+/// visible fault injected at the same time is in every frame. The instructor's summary lists
+/// the silent fault with `"silent": true`; the trainee's own summary does not list it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_silent_fault_acts_but_is_shown_to_the_instructor_only() {
+    let s = start().await;
+    let (id, token) = new_session(&s).await;
+    let (plain_id, plain_token) = new_session(&s).await;
+    let mut ws = trainee(&s, &id, &token).await;
+    let mut plain = trainee(&s, &plain_id, &plain_token).await;
+
+    let silent = json!({"type": "fault", "fault": "stuck_valve", "arm": "left", "joint": 0,
+        "value": 0.8, "silent": true});
+    assert_eq!(act(&s, &id, TEACHER, silent).await.0, 204);
+    let visible = json!({"type": "fault", "fault": "air", "arm": "right", "value": 0.5});
+    assert_eq!(act(&s, &id, TEACHER, visible).await.0, 204);
+    let (silent_label, visible_label) = ("stuck_valve:left:0:0.8", "air:right:0.5");
+
+    // Frames published after the injection: skip until the visible fault is listed.
+    let first = loop {
+        let (text, v) = next_text(&mut ws).await;
+        if v["type"] == "state" && text.contains(visible_label) {
+            break v;
+        }
+    };
+    let plain_first = state_after(&mut plain, 0.0).await;
+    let t0 = first["t"].as_f64().unwrap();
+    let mut frames = 0;
+    let mut last = first.clone();
+    while frames < 20 || last["t"].as_f64().unwrap() < t0 + 1.0 {
+        let (text, v) = next_text(&mut ws).await;
+        assert_eq!(v["type"], "state", "no notice announces the fault: {text}");
+        assert!(
+            !text.contains("stuck_valve"),
+            "silent fault in a frame: {text}"
+        );
+        assert_eq!(v["faults"], json!([visible_label]));
+        last = v;
+        frames += 1;
+    }
+    let plain_last = state_after(&mut plain, plain_first["t"].as_f64().unwrap() + 1.0).await;
+    // The stuck spool drives the swing actuator (Lim Table 1-1: 20 °/s at full flow), the
+    // unfaulted arm with the same zero input stays where it is.
+    let moved = (q(&last, "left", 0) - q(&first, "left", 0)).abs();
+    let still = (q(&plain_last, "left", 0) - q(&plain_first, "left", 0)).abs();
+    assert!(
+        moved > 0.05,
+        "silently stuck valve moved the swing only {moved} rad"
+    );
+    assert!(still < 0.005, "unfaulted swing moved {still} rad");
+
+    let mine = summary(&s, &id, TEACHER).await;
+    assert_eq!(
+        mine["faults"],
+        json!([{"label": silent_label, "silent": true}, {"label": visible_label, "silent": false}]),
+        "{mine}"
+    );
+    let theirs = summary(&s, &id, &token).await;
+    assert_eq!(
+        theirs["faults"],
+        json!([{"label": visible_label, "silent": false}]),
+        "the trainee's own summary: {theirs}"
+    );
+    let listed = get_json(&format!("{}/api/sessions", s.base)).await;
+    let entry = listed
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["id"] == id.as_str())
+        .unwrap();
+    assert_eq!(entry["faults"][0]["silent"], true, "{entry}");
+
+    // A trainee cannot inject faults, silent or not.
+    let again =
+        json!({"type": "fault", "fault": "air", "arm": "left", "value": 0.5, "silent": true});
+    assert_eq!(act(&s, &id, &token, again).await.0, 403);
+    // Clearing removes silent faults too.
+    assert_eq!(
+        act(&s, &id, TEACHER, json!({"type": "clear_faults"}))
+            .await
+            .0,
+        204
+    );
+    assert_eq!(summary(&s, &id, TEACHER).await["faults"], json!([]));
+    drop(plain);
+    s.stop().await;
+}

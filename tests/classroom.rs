@@ -154,3 +154,88 @@ async fn a_silent_fault_acts_but_is_shown_to_the_instructor_only() {
     drop(plain);
     s.stop().await;
 }
+
+/// The first state frame (within 5 s) for which `pred` holds.
+async fn frame_where(ws: &mut Ws, what: &str, pred: impl Fn(&Value) -> bool) -> Value {
+    let deadline = Instant::now() + Duration::from_secs(5);
+    loop {
+        assert!(Instant::now() < deadline, "no frame with {what} within 5 s");
+        let v = next_of(ws, "state", Duration::from_secs(5)).await;
+        if pred(&v) {
+            return v;
+        }
+    }
+}
+
+/// The contract's refusal of a trainee's resume while the instructor paused.
+const PAUSED_BY_INSTRUCTOR: &str = "paused by the instructor; only the instructor can resume";
+
+/// Frames say who paused. The trainee pauses and resumes its own pause; an instructor's pause
+/// takes over a trainee's, is not lifted by the trainee's `resume` (WS error message, REST
+/// 403) nor taken back by the trainee's `pause`, and the clock stands still meanwhile; the
+/// instructor's resume lifts it and the clock runs again.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_trainee_cannot_lift_the_instructors_pause() {
+    let s = start().await;
+    let (id, token) = new_session(&s).await;
+    let mut ws = trainee(&s, &id, &token).await;
+    let running = frame_where(&mut ws, "a running clock", |v| v["paused"] == false).await;
+    assert_eq!(running["paused_by"], Value::Null);
+
+    send(&mut ws, json!({"type": "pause"})).await;
+    frame_where(&mut ws, "paused_by trainee", |v| {
+        v["paused"] == true && v["paused_by"] == "trainee"
+    })
+    .await;
+    assert_eq!(summary(&s, &id, TEACHER).await["paused_by"], "trainee");
+    send(&mut ws, json!({"type": "resume"})).await;
+    frame_where(&mut ws, "the trainee's resume", |v| {
+        v["paused"] == false && v["paused_by"].is_null()
+    })
+    .await;
+
+    // The trainee pauses, then the instructor: the pause becomes the instructor's.
+    send(&mut ws, json!({"type": "pause"})).await;
+    frame_where(&mut ws, "paused_by trainee", |v| {
+        v["paused_by"] == "trainee"
+    })
+    .await;
+    assert_eq!(act(&s, &id, TEACHER, json!({"type": "pause"})).await.0, 204);
+    let held = frame_where(&mut ws, "paused_by instructor", |v| {
+        v["paused"] == true && v["paused_by"] == "instructor"
+    })
+    .await;
+    assert_eq!(summary(&s, &id, TEACHER).await["paused_by"], "instructor");
+
+    // The trainee's resume is refused over both edges; its pause changes nothing.
+    send(&mut ws, json!({"type": "resume"})).await;
+    let err = next_of(&mut ws, "error", Duration::from_secs(5)).await;
+    assert_eq!(err["message"], PAUSED_BY_INSTRUCTOR);
+    let (status, body) = act(&s, &id, &token, json!({"type": "resume"})).await;
+    assert_eq!(status, 403, "{body}");
+    let body: Value = serde_json::from_str(&body).unwrap();
+    assert_eq!(body["error"], PAUSED_BY_INSTRUCTOR);
+    send(&mut ws, json!({"type": "pause"})).await;
+    assert_eq!(act(&s, &id, &token, json!({"type": "pause"})).await.0, 204);
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    let still = state_after(&mut ws, 0.0).await;
+    let still = frame_where(&mut ws, "a frame after the trainee's pause", |v| {
+        v["seq"].as_u64() > still["seq"].as_u64()
+    })
+    .await;
+    assert_eq!(still["paused_by"], "instructor", "{}", still["paused_by"]);
+    assert_eq!(still["t"], held["t"], "the clock stood still while paused");
+    assert_eq!(summary(&s, &id, &token).await["paused_by"], "instructor");
+
+    // The instructor's resume lifts it.
+    assert_eq!(
+        act(&s, &id, TEACHER, json!({"type": "resume"})).await.0,
+        204
+    );
+    let resumed = frame_where(&mut ws, "the instructor's resume", |v| {
+        v["paused"] == false && v["paused_by"].is_null()
+    })
+    .await;
+    state_after(&mut ws, resumed["t"].as_f64().unwrap() + 0.2).await;
+    s.stop().await;
+}

@@ -11,8 +11,10 @@ use serde_json::json;
 
 use super::record::RecordMsg;
 use super::{Live, Scenario, Session, SessionManager};
-use crate::protocol::{ControlMethod, ControlMode, EndReason, ServerMessage};
+use crate::protocol::{ControlMethod, ControlMode, EndReason, PausedBy, ServerMessage};
 
+/// What a trainee's `resume` gets while the instructor has paused the session.
+pub const PAUSED_BY_INSTRUCTOR: &str = "paused by the instructor; only the instructor can resume";
 /// Largest instructor message to a trainee (characters).
 pub const MAX_MESSAGE_CHARS: usize = 500;
 /// How long `release` drives both jaws open (s): 7.5 cm at 10.2 cm/s takes 0.74 s (Lim
@@ -245,6 +247,15 @@ pub enum Actor {
 }
 
 impl Actor {
+    /// Whose pause a `pause` from this actor is (observers cannot pause).
+    pub fn pauser(self) -> Option<PausedBy> {
+        match self {
+            Actor::Instructor => Some(PausedBy::Instructor),
+            Actor::Trainee => Some(PausedBy::Trainee),
+            Actor::Observer => None,
+        }
+    }
+
     /// Name in records and messages.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -390,7 +401,11 @@ pub fn apply(
             if actor == Actor::Instructor {
                 live.note_intervention(&command);
             }
-            let detail = live.apply(&command)?;
+            let detail = match (&command, actor.pauser()) {
+                (Command::Pause, Some(by)) => live.pause_as(by, true)?,
+                (Command::Resume, Some(by)) => live.pause_as(by, false)?,
+                _ => live.apply(&command)?,
+            };
             if let Command::Scenario(s) = &command {
                 session.set_scenario(s.name());
                 // Every page redraws the scene and follows the new settings.
@@ -447,14 +462,9 @@ impl Live {
                 self.reset();
                 json!({})
             }
-            Command::Pause => {
-                self.set_paused(true);
-                json!({})
-            }
-            Command::Resume => {
-                self.set_paused(false);
-                json!({})
-            }
+            // Without an actor (headless attempts), pause and resume act as the trainee's.
+            Command::Pause => self.pause_as(PausedBy::Trainee, true)?,
+            Command::Resume => self.pause_as(PausedBy::Trainee, false)?,
             Command::Release => {
                 self.release(RELEASE_DURATION_S);
                 json!({})
@@ -482,6 +492,28 @@ impl Live {
             }
             Command::Message(_) | Command::End => json!({}),
         })
+    }
+
+    /// Pauses (`pause`) or resumes the clock on behalf of `by`. An instructor's pause is
+    /// lifted only by the instructor: the trainee's `resume` is refused
+    /// ([`PAUSED_BY_INSTRUCTOR`]) and the trainee's `pause` leaves it the instructor's. The
+    /// instructor's pause takes over a trainee's; the instructor's resume lifts any pause.
+    /// Returns the record's detail (who holds the pause now).
+    pub fn pause_as(
+        &mut self,
+        by: PausedBy,
+        pause: bool,
+    ) -> Result<serde_json::Value, CommandError> {
+        let instructors = self.paused_by() == Some(PausedBy::Instructor);
+        match (pause, by) {
+            (false, PausedBy::Trainee) if instructors => {
+                return Err(CommandError::Forbidden(PAUSED_BY_INSTRUCTOR.to_string()));
+            }
+            (true, PausedBy::Trainee) if instructors => {}
+            (true, _) => self.set_paused(Some(by)),
+            (false, _) => self.set_paused(None),
+        }
+        Ok(json!({"paused_by": self.paused_by()}))
     }
 
     /// Counts an instructor's command as an intervention in the running attempt (stick

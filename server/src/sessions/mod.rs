@@ -33,7 +33,7 @@ use seaarms_core::sim::{Input, SimParams, Simulation};
 use tokio::sync::watch;
 
 use crate::metrics::Metrics;
-use crate::protocol::{ControlMethod, ControlMode, EndReason, Settings};
+use crate::protocol::{ControlMethod, ControlMode, EndReason, PausedBy, Settings};
 use admission::ClientKey;
 use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
@@ -150,8 +150,8 @@ pub struct Live {
     input: Input,
     /// Current settings.
     settings: Settings,
-    /// Clock paused.
-    paused: bool,
+    /// Who paused the clock; `None` while it runs.
+    paused: Option<PausedBy>,
     /// Last input sequence number applied.
     input_seq: u64,
     /// Cartesian-mode stick commands per arm (fractions of the maximum speeds), turned into
@@ -266,7 +266,7 @@ impl Live {
             input: Input::default(),
             sim,
             settings,
-            paused: false,
+            paused: None,
             input_seq: 0,
             cartesian: [[0.0; 6]; 2],
             faults: Vec::new(),
@@ -376,6 +376,11 @@ impl Live {
 
     /// Whether the clock is paused.
     pub fn paused(&self) -> bool {
+        self.paused.is_some()
+    }
+
+    /// Who paused the clock, while it is paused.
+    pub fn paused_by(&self) -> Option<PausedBy> {
         self.paused
     }
 
@@ -445,9 +450,10 @@ impl Live {
         self.start_attempt();
     }
 
-    /// Pauses or resumes the clock.
-    pub fn set_paused(&mut self, paused: bool) {
-        self.paused = paused;
+    /// Pauses the clock on behalf of `by`, or resumes it (`None`); who may lift whose pause
+    /// is [`Live::pause_as`]'s rule.
+    pub fn set_paused(&mut self, by: Option<PausedBy>) {
+        self.paused = by;
     }
 
     /// Drives both jaws open for `duration_s` of simulated time, whatever the sticks say.

@@ -20,7 +20,7 @@ use crate::app::AppState;
 use crate::error::ApiError;
 use crate::json::ApiJson;
 use crate::protocol::{
-    ControlMethod, ControlMode, fault_kind_name, fault_label, grasp_name, parse_arm,
+    ControlMethod, ControlMode, PausedBy, fault_kind_name, fault_label, grasp_name, parse_arm,
     parse_fault_kind,
 };
 use crate::security::ws_base;
@@ -277,6 +277,16 @@ pub struct SessionSummary {
     pub faults: Option<Vec<FaultSummary>>,
     /// `ok`, or `failed` when part of the session's record could not be written.
     pub recording: &'static str,
+    /// What the instructor's roster shows of a live session (absent for ended ones).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub roster: Option<Roster>,
+}
+
+/// The roster fields of a live session's summary.
+#[derive(Debug, Serialize)]
+pub struct Roster {
+    /// Who paused the clock (`instructor`, `trainee`), `null` while it runs.
+    pub paused_by: Option<PausedBy>,
 }
 
 /// An active fault in a session summary.
@@ -329,6 +339,9 @@ fn live_summary(s: &Session, recording: &'static str, viewer: Caller) -> Session
                 .collect(),
         ),
         recording,
+        roster: Some(Roster {
+            paused_by: live.paused_by(),
+        }),
     }
 }
 
@@ -352,6 +365,7 @@ fn ended_summary(r: SessionRecord) -> SessionSummary {
         overload_count: r.overloads.unwrap_or(0),
         faults: None,
         recording: if r.recording_failed { "failed" } else { "ok" },
+        roster: None,
     }
 }
 

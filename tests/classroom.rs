@@ -239,3 +239,94 @@ async fn the_trainee_cannot_lift_the_instructors_pause() {
     state_after(&mut ws, resumed["t"].as_f64().unwrap() + 0.2).await;
     s.stop().await;
 }
+
+/// Polls the instructor's summary of `id` (every 100 ms, up to `within`) until `pred` holds.
+async fn summary_until(
+    s: &Server,
+    id: &str,
+    within: Duration,
+    pred: impl Fn(&Value) -> bool,
+) -> Value {
+    let deadline = Instant::now() + within;
+    loop {
+        let v = summary(s, id, TEACHER).await;
+        if pred(&v) {
+            return v;
+        }
+        assert!(
+            Instant::now() < deadline,
+            "not reached within {within:?}: {v}"
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+}
+
+/// Closes a client socket and waits until the server counts no trainee on `id`.
+async fn leave(s: &Server, id: &str, mut ws: Ws) {
+    ws.close(None).await.unwrap();
+    drop(ws);
+    summary_until(s, id, Duration::from_secs(10), |v| v["trainees"] == 0).await;
+}
+
+/// With a 1 s abandon grace: a session whose trainee left ends `abandoned` (the observer
+/// gets the `ended` message, the record says why); one whose trainee comes back within the
+/// grace stays live past it, and ends the same way once the trainee leaves for good.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_session_the_trainee_left_ends_after_the_grace() {
+    let s = start_with(temp_dir(), |c| c.abandon_grace_seconds = 1).await;
+    let (id, token) = new_session(&s).await;
+    let ws = trainee(&s, &id, &token).await;
+    let mut obs = connect(&s, &id, &format!("token={TEACHER}&role=observer"))
+        .await
+        .unwrap();
+    next_of(&mut obs, "hello", Duration::from_secs(5)).await;
+    leave(&s, &id, ws).await;
+    let ended = next_of(&mut obs, "ended", Duration::from_secs(10)).await;
+    assert_eq!(ended["reason"], "abandoned", "{ended}");
+    let text = "the trainee left: no connection for 1 s";
+    assert_eq!(ended["text"], text);
+    let record = summary_until(&s, &id, Duration::from_secs(10), |v| v["status"] == "ended").await;
+    assert_eq!(record["end_reason"], text, "{record}");
+
+    // Back within the grace: still live well after it.
+    let (id, token) = new_session(&s).await;
+    let ws = trainee(&s, &id, &token).await;
+    leave(&s, &id, ws).await;
+    let back = trainee(&s, &id, &token).await;
+    tokio::time::sleep(Duration::from_millis(2500)).await;
+    let v = summary(&s, &id, TEACHER).await;
+    assert_eq!(v["status"], "live", "{v}");
+    assert_eq!(v["trainees"], 1, "{v}");
+    leave(&s, &id, back).await;
+    let record = summary_until(&s, &id, Duration::from_secs(10), |v| v["status"] == "ended").await;
+    assert_eq!(record["end_reason"], text, "{record}");
+    s.stop().await;
+}
+
+/// The idle timeout (1 s here) ends a session whose connected trainee sends nothing; one
+/// whose trainee keeps sending input stays live past it.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_connected_but_inactive_trainee_times_out() {
+    let s = start_with(temp_dir(), |c| c.idle_timeout_secs = 1).await;
+    let (quiet_id, quiet_token) = new_session(&s).await;
+    let (busy_id, busy_token) = new_session(&s).await;
+    let mut quiet = trainee(&s, &quiet_id, &quiet_token).await;
+    let mut busy = trainee(&s, &busy_id, &busy_token).await;
+    // The busy trainee sends input every 200 ms for 3 s (three idle timeouts).
+    let sender = tokio::spawn(async move {
+        let started = Instant::now();
+        let mut seq = 0;
+        while started.elapsed() < Duration::from_secs(3) {
+            seq += 1;
+            send(&mut busy, json!({"type": "input", "seq": seq})).await;
+            tokio::time::sleep(Duration::from_millis(200)).await;
+        }
+        busy
+    });
+    let ended = next_of(&mut quiet, "ended", Duration::from_secs(10)).await;
+    assert_eq!(ended["reason"], "idle_timeout", "{ended}");
+    let mut busy = sender.await.unwrap();
+    assert_eq!(summary(&s, &busy_id, TEACHER).await["status"], "live");
+    state_after(&mut busy, 0.0).await;
+    s.stop().await;
+}

@@ -353,33 +353,58 @@ impl SceneOut {
     }
 }
 
-/// Why a session ended (the `ended` message; its [`EndReason::text`] is the session
-/// record's `end_reason`).
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+/// Why a session ended (the `ended` message's `reason` is its [`EndReason::code`]; its
+/// [`EndReason::text`] is the session record's `end_reason`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EndReason {
     /// An instructor ended it (`DELETE /api/sessions/{id}` or the `end` action).
     Instructor,
     /// The trainee ended it.
     Trainee,
-    /// No trainee connected and no input for the idle timeout.
+    /// No input for the idle timeout (a trainee connected but inactive, or none connected).
     IdleTimeout,
     /// No trainee joined within the grace period after creation.
     NoTraineeJoined,
+    /// The trainee left: its last connection closed and none came back within the grace.
+    Abandoned {
+        /// The grace period (s, `--abandon-grace-seconds`).
+        grace_s: u64,
+    },
     /// The server is shutting down.
     ServerShutdown,
 }
 
 impl EndReason {
-    /// Human text, as session records and summaries give it (`end_reason`).
-    pub fn text(self) -> &'static str {
+    /// Wire code (the `ended` message's `reason`).
+    pub fn code(self) -> &'static str {
         match self {
-            EndReason::Instructor => "ended by instructor",
-            EndReason::Trainee => "ended by trainee",
-            EndReason::IdleTimeout => "idle timeout",
-            EndReason::NoTraineeJoined => "no trainee joined",
-            EndReason::ServerShutdown => "server shutdown",
+            EndReason::Instructor => "instructor",
+            EndReason::Trainee => "trainee",
+            EndReason::IdleTimeout => "idle_timeout",
+            EndReason::NoTraineeJoined => "no_trainee_joined",
+            EndReason::Abandoned { .. } => "abandoned",
+            EndReason::ServerShutdown => "server_shutdown",
         }
+    }
+
+    /// Human text, as session records and summaries give it (`end_reason`).
+    pub fn text(self) -> String {
+        match self {
+            EndReason::Instructor => "ended by instructor".into(),
+            EndReason::Trainee => "ended by trainee".into(),
+            EndReason::IdleTimeout => "idle timeout".into(),
+            EndReason::NoTraineeJoined => "no trainee joined".into(),
+            EndReason::Abandoned { grace_s } => {
+                format!("the trainee left: no connection for {grace_s} s")
+            }
+            EndReason::ServerShutdown => "server shutdown".into(),
+        }
+    }
+}
+
+impl Serialize for EndReason {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.code())
     }
 }
 
@@ -556,7 +581,7 @@ pub enum ServerMessage {
         /// Why, as a code.
         reason: EndReason,
         /// Why, as text (the record's `end_reason`).
-        text: &'static str,
+        text: String,
     },
 }
 
@@ -588,6 +613,13 @@ mod tests {
         assert_eq!(v["reason"], "no_trainee_joined");
         assert_eq!(v["text"], "no trainee joined");
         assert_eq!(EndReason::ServerShutdown.text(), "server shutdown");
+        let v = serde_json::to_value(ServerMessage::ended(EndReason::Abandoned { grace_s: 30 }))
+            .unwrap();
+        assert_eq!(
+            v,
+            serde_json::json!({"type": "ended", "reason": "abandoned",
+                "text": "the trainee left: no connection for 30 s"})
+        );
     }
 
     /// The wire strings the page and the instructor dashboard rely on (README "Protocol",

@@ -330,3 +330,87 @@ async fn a_connected_but_inactive_trainee_times_out() {
     state_after(&mut busy, 0.0).await;
     s.stop().await;
 }
+
+/// The roster fields of a live summary against the trainee's own frames of the same state:
+/// the trainee drives the left swing through the first familiarisation step to its limit,
+/// the instructor pauses, and the summary then gives the paused frame's warnings (the
+/// near-limit one included), its exercise step, step count, progress and score, the
+/// exercise's title, `paused_by`, and the running attempt (a new one after a reset). A
+/// free-play session has no exercise.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_roster_fields_match_the_frames() {
+    let s = start().await;
+    let (st, c) = create(&s, json!({"exercise": "familiarisation", "trainee": "ada"})).await;
+    assert_eq!(st, 201, "{c}");
+    let (id, token) = (
+        c["id"].as_str().unwrap().to_string(),
+        c["control_token"].as_str().unwrap().to_string(),
+    );
+    let mut ws = trainee(&s, &id, &token).await;
+    let first = next_of(&mut ws, "state", Duration::from_secs(5)).await;
+    let v = summary(&s, &id, TEACHER).await;
+    assert_eq!(v["exercise"]["status"], "running", "{v}");
+    assert_eq!(v["exercise"]["step"], 0, "{v}");
+    let attempt = v["attempt"].as_str().unwrap().to_string();
+    assert!(!attempt.is_empty(), "{v}");
+    assert_eq!(v["paused_by"], Value::Null);
+
+    // Full stick on the left swing (20 °/s, Lim Table 1-1) for 2 s: through +15° (step 1)
+    // to the +25° limit (magnum.json), where the frames warn.
+    let t0 = first["t"].as_f64().unwrap();
+    for seq in 1..=50u64 {
+        send(
+            &mut ws,
+            json!({"type": "input", "seq": seq, "arms": {"left": {"axes": [1, 0, 0, 0, 0, 0]}}}),
+        )
+        .await;
+        tokio::time::sleep(Duration::from_millis(40)).await;
+    }
+    send(&mut ws, json!({"type": "input", "seq": 51})).await;
+    state_after(&mut ws, t0 + 2.0).await;
+    assert_eq!(act(&s, &id, TEACHER, json!({"type": "pause"})).await.0, 204);
+    let frame = frame_where(&mut ws, "the instructor's pause", |v| {
+        v["paused_by"] == "instructor"
+    })
+    .await;
+    let v = summary(&s, &id, TEACHER).await;
+    assert_eq!(v["paused_by"], "instructor");
+    assert!(
+        frame["warnings"]
+            .as_array()
+            .unwrap()
+            .contains(&json!("near_joint_limit:left:0")),
+        "{}",
+        frame["warnings"]
+    );
+    assert_eq!(v["warnings"], frame["warnings"]);
+    let (ex, fx) = (&v["exercise"], &frame["exercise"]);
+    assert_eq!(ex["id"], "familiarisation");
+    let spec = get_json(&format!("{}/api/exercises/familiarisation", s.base)).await;
+    assert_eq!(ex["title"], spec["title"]);
+    assert_eq!(ex["steps_total"], fx["steps"]);
+    assert_eq!(ex["steps_total"], spec["steps"].as_array().unwrap().len());
+    assert_eq!(ex["step"], fx["step"]);
+    assert!(
+        ex["step"].as_u64().unwrap() >= 1,
+        "step 1 (swing to +15°) done: {ex}"
+    );
+    assert_eq!(ex["progress"], fx["progress"]);
+    assert_eq!(ex["score"], fx["score"]);
+    assert_eq!(ex["status"], "running");
+    assert_eq!(v["attempt"], attempt.as_str());
+
+    // A reset starts a new attempt.
+    send(&mut ws, json!({"type": "reset"})).await;
+    let v = summary_until(&s, &id, Duration::from_secs(5), |v| {
+        v["attempt"] != attempt.as_str()
+    })
+    .await;
+    assert_eq!(v["exercise"]["step"], 0, "{v}");
+
+    let (free, _) = new_session(&s).await;
+    let v = summary(&s, &free, TEACHER).await;
+    assert_eq!(v["exercise"], Value::Null, "{v}");
+    assert!(v["warnings"].is_array() && v["attempt"].is_string(), "{v}");
+    s.stop().await;
+}

@@ -401,9 +401,10 @@ pub async fn send(
 
 /// JSON paths (object keys) whose value may be `null` in a state frame: no dual ellipsoid
 /// unless both jaws hold, no condition number at a singularity, no capture cue, exercise,
-/// event or panel when there is none (protocol.rs).
+/// event or panel when there is none, no `paused_by` while the clock runs (protocol.rs).
 const NULLABLE_STATE_KEYS: &[&str] = &[
     "dual",
+    "paused_by",
     "condition_number",
     "capture",
     "exercise",

@@ -8,8 +8,9 @@ use axum::Json;
 use axum::extract::{Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
+use seaarms_core::exercise::ExerciseRun;
 use seaarms_core::manipulability::{jlm, measures};
-use seaarms_core::sim::Arm;
+use seaarms_core::sim::{Arm, Simulation};
 use serde::{Deserialize, Serialize};
 
 use super::admission::{ClientKey, Peer, client_ip};
@@ -287,6 +288,51 @@ pub struct SessionSummary {
 pub struct Roster {
     /// Who paused the clock (`instructor`, `trainee`), `null` while it runs.
     pub paused_by: Option<PausedBy>,
+    /// The running exercise attempt, `null` in free play.
+    pub exercise: Option<ExerciseSummary>,
+    /// The warnings of the session's current state frame.
+    pub warnings: Vec<String>,
+    /// The running attempt's id.
+    pub attempt: String,
+}
+
+/// A running exercise attempt in the roster.
+#[derive(Debug, Serialize)]
+pub struct ExerciseSummary {
+    /// Exercise id.
+    pub id: String,
+    /// Its title.
+    pub title: String,
+    /// Steps done (the current step's 0-based index; `steps_total` once all are done).
+    pub step: usize,
+    /// Number of steps.
+    pub steps_total: usize,
+    /// Overall progress in [0, 1].
+    pub progress: f64,
+    /// Score so far, 0–100 (final once done).
+    pub score: f64,
+    /// `running`, `passed` or `failed`.
+    pub status: &'static str,
+}
+
+impl ExerciseSummary {
+    /// The summary of the attempt `run` on `sim`.
+    fn new(run: &ExerciseRun, sim: &Simulation) -> ExerciseSummary {
+        let st = run.status(sim);
+        ExerciseSummary {
+            id: st.id,
+            title: run.spec().title.clone(),
+            step: st.step,
+            steps_total: st.steps,
+            progress: st.progress,
+            score: st.score,
+            status: match (st.done, st.passed) {
+                (false, _) => "running",
+                (true, true) => "passed",
+                (true, false) => "failed",
+            },
+        }
+    }
 }
 
 /// An active fault in a session summary.
@@ -341,6 +387,9 @@ fn live_summary(s: &Session, recording: &'static str, viewer: Caller) -> Session
         recording,
         roster: Some(Roster {
             paused_by: live.paused_by(),
+            exercise: live.exercise().map(|run| ExerciseSummary::new(run, sim)),
+            warnings: super::snapshot::warnings(&live),
+            attempt: live.attempt_id().to_string(),
         }),
     }
 }

@@ -152,6 +152,35 @@ async fn a_silent_fault_acts_but_is_shown_to_the_instructor_only() {
     );
     assert_eq!(summary(&s, &id, TEACHER).await["faults"], json!([]));
     drop(plain);
+
+    // In an exercise, a silent fault is no intervention (the trainee's assessment would
+    // show the count); a visible one is.
+    let (st, c) = create(&s, json!({"exercise": "pick-and-place"})).await;
+    assert_eq!(st, 201, "{c}");
+    let (id, token) = (
+        c["id"].as_str().unwrap(),
+        c["control_token"].as_str().unwrap(),
+    );
+    let interventions = || async {
+        let url = format!("{}/api/sessions/{id}/assessment", s.base);
+        let a: Value = reqwest::Client::new()
+            .get(url)
+            .bearer_auth(token)
+            .send()
+            .await
+            .unwrap()
+            .json()
+            .await
+            .unwrap();
+        a["interventions"].as_f64().unwrap()
+    };
+    let leak = json!({"type": "fault", "fault": "leak", "arm": "left", "joint": 1,
+        "value": 5e-10, "silent": true});
+    assert_eq!(act(&s, id, TEACHER, leak).await.0, 204);
+    assert_eq!(interventions().await, 0.0);
+    let leak = json!({"type": "fault", "fault": "leak", "arm": "left", "joint": 1, "value": 5e-10});
+    assert_eq!(act(&s, id, TEACHER, leak).await.0, 204);
+    assert_eq!(interventions().await, 1.0);
     s.stop().await;
 }
 

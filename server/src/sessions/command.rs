@@ -517,12 +517,16 @@ impl Live {
     }
 
     /// Counts an instructor's command as an intervention in the running attempt (stick
-    /// input and messages do not count).
+    /// input and messages do not count, nor silent faults: they set up a diagnosis drill,
+    /// and a count the trainee's assessment shows would give them away).
     fn note_intervention(&mut self, command: &Command) {
-        if !matches!(
-            command,
-            Command::Input(_) | Command::Message(_) | Command::End
-        ) {
+        let silent = matches!(command, Command::InjectFault(f) if f.silent);
+        if !silent
+            && !matches!(
+                command,
+                Command::Input(_) | Command::Message(_) | Command::End
+            )
+        {
             if let Some(run) = self.exercise.as_mut() {
                 run.intervention();
             }

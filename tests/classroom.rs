@@ -32,10 +32,10 @@ async fn act(s: &Server, id: &str, token: &str, body: Value) -> (u16, String) {
     (r.status().as_u16(), r.text().await.unwrap())
 }
 
-/// `GET /api/sessions/{id}` with `token`, as JSON.
-async fn summary(s: &Server, id: &str, token: &str) -> Value {
+/// GET `url` with `token`, as JSON.
+async fn get_as(url: String, token: &str) -> Value {
     reqwest::Client::new()
-        .get(format!("{}/api/sessions/{id}", s.base))
+        .get(url)
         .bearer_auth(token)
         .send()
         .await
@@ -43,6 +43,11 @@ async fn summary(s: &Server, id: &str, token: &str) -> Value {
         .json()
         .await
         .unwrap()
+}
+
+/// `GET /api/sessions/{id}` with `token`, as JSON.
+async fn summary(s: &Server, id: &str, token: &str) -> Value {
+    get_as(format!("{}/api/sessions/{id}", s.base), token).await
 }
 
 /// The next text message (within 5 s), raw and parsed.
@@ -162,16 +167,7 @@ async fn a_silent_fault_acts_but_is_shown_to_the_instructor_only() {
         c["control_token"].as_str().unwrap(),
     );
     let interventions = || async {
-        let url = format!("{}/api/sessions/{id}/assessment", s.base);
-        let a: Value = reqwest::Client::new()
-            .get(url)
-            .bearer_auth(token)
-            .send()
-            .await
-            .unwrap()
-            .json()
-            .await
-            .unwrap();
+        let a = get_as(format!("{}/api/sessions/{id}/assessment", s.base), token).await;
         a["interventions"].as_f64().unwrap()
     };
     let leak = json!({"type": "fault", "fault": "leak", "arm": "left", "joint": 1,
@@ -387,14 +383,13 @@ async fn the_roster_fields_match_the_frames() {
     // Full stick on the left swing (20 °/s, Lim Table 1-1) for 2 s: through +15° (step 1)
     // to the +25° limit (magnum.json), where the frames warn.
     let t0 = first["t"].as_f64().unwrap();
-    for seq in 1..=50u64 {
-        send(
-            &mut ws,
-            json!({"type": "input", "seq": seq, "arms": {"left": {"axes": [1, 0, 0, 0, 0, 0]}}}),
-        )
-        .await;
-        tokio::time::sleep(Duration::from_millis(40)).await;
-    }
+    hold_sticks(
+        &mut ws,
+        1,
+        50,
+        json!({"left": {"axes": [1, 0, 0, 0, 0, 0]}}),
+    )
+    .await;
     send(&mut ws, json!({"type": "input", "seq": 51})).await;
     state_after(&mut ws, t0 + 2.0).await;
     assert_eq!(act(&s, &id, TEACHER, json!({"type": "pause"})).await.0, 204);

@@ -18,6 +18,7 @@
 //! * [`replay`]: attempts' input logs and their exact re-simulation.
 //! * [`metrics`]: Prometheus counters; [`load`]: the `seaarms load` client.
 //! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
+//! * [`db`]: the training records database (SQLite or PostgreSQL).
 //! * [`csv_out`]: the one CSV writer (one number format) for every CSV the server writes.
 
 pub mod api;
@@ -26,6 +27,7 @@ pub mod assets;
 pub mod compute;
 pub mod config;
 pub mod csv_out;
+pub mod db;
 pub mod error;
 pub mod exercises;
 pub mod json;

@@ -640,6 +640,8 @@ pub struct Session {
     pub id: String,
     /// Trainee label.
     pub label: String,
+    /// The trainee's class or group ("" when none).
+    pub group: String,
     /// Scenario name.
     pub scenario: Mutex<String>,
     /// Token that lets a trainee control this session.
@@ -798,6 +800,7 @@ impl SessionManager {
         mode: Option<ControlMode>,
         method: Option<ControlMethod>,
         label: Option<String>,
+        group: Option<String>,
     ) -> Result<Arc<Session>, CreateError> {
         let name = scenario.unwrap_or_else(|| "training".to_string());
         let scenario = Scenario::resolve(&name).ok_or(CreateError::UnknownScenario(name))?;
@@ -810,9 +813,11 @@ impl SessionManager {
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);
         let label = label.unwrap_or_default().chars().take(64).collect();
+        let group = group.unwrap_or_default().chars().take(64).collect();
         let session = Arc::new(Session {
             id,
             label,
+            group,
             scenario: Mutex::new(scenario.name().to_string()),
             control_token: random_hex(16),
             created_unix: unix_now(),
@@ -837,7 +842,7 @@ impl SessionManager {
         self.recorder.send(RecordMsg::Created {
             id: session.id.clone(),
             label: session.label.clone(),
-            group: String::new(),
+            group: session.group.clone(),
             scenario: session.scenario(),
             created_unix: session.created_unix,
             token_sha256: sha256_hex(&session.control_token),

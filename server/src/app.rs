@@ -90,6 +90,7 @@ impl AppState {
                 max_messages_per_second: config.max_messages_per_second,
                 physics_threads: threads,
                 unjoined_grace: Duration::from_secs(config.unjoined_grace_secs),
+                abandon_grace: Duration::from_secs(config.abandon_grace_seconds),
                 max_sessions_per_client: config.max_sessions_per_client,
             },
             recorder,

@@ -105,6 +105,8 @@ pub fn active_fault(e: &FaultEntry) -> Result<ActiveFault, String> {
     Ok(ActiveFault {
         arm,
         fault: Fault::new(kind, e.joint, e.value)?,
+        // A debrief shows every fault, silent ones too.
+        silent: false,
     })
 }
 

@@ -17,6 +17,15 @@ use seaarms::sessions::record::{AttemptEnd, AttemptStart};
 use serde_json::{Value, json};
 use sha2::Digest;
 
+/// Sends `method url` with `token` as the bearer (none when `None`); the answer.
+async fn request(method: reqwest::Method, url: &str, token: Option<&str>) -> reqwest::Response {
+    let mut req = reqwest::Client::new().request(method, url);
+    if let Some(t) = token {
+        req = req.bearer_auth(t);
+    }
+    req.send().await.unwrap()
+}
+
 async fn act(base: &str, id: &str, token: &str, action: Value) {
     let r = reqwest::Client::new()
         .post(format!("{base}/api/sessions/{id}/actions"))
@@ -93,12 +102,8 @@ async fn a_named_trainees_session_is_recorded_and_listed_after_a_restart() {
         act(&s.base, &id, TEACHER, json!({"type": "resume"})).await;
         act(&s.base, &id, &token, json!({"type": "reset"})).await;
         tokio::time::sleep(Duration::from_millis(300)).await;
-        let r = reqwest::Client::new()
-            .delete(format!("{}/api/sessions/{id}", s.base))
-            .bearer_auth(&token)
-            .send()
-            .await
-            .unwrap();
+        let target = format!("{}/api/sessions/{id}", s.base);
+        let r = request(reqwest::Method::DELETE, &target, Some(&token)).await;
         assert_eq!(r.status().as_u16(), 204);
         let ended = get_json(&format!("{}/api/sessions/{id}", s.base)).await;
         assert_eq!(ended["status"], "ended", "{ended}");
@@ -114,12 +119,8 @@ async fn a_named_trainees_session_is_recorded_and_listed_after_a_restart() {
                 format!("/api/sessions/{id}"),
                 format!("/api/sessions/{id}/log.csv"),
             ] {
-                let r = reqwest::Client::new()
-                    .get(format!("{}{path}", s.base))
-                    .bearer_auth(tok)
-                    .send()
-                    .await
-                    .unwrap();
+                let target = format!("{}{path}", s.base);
+                let r = request(reqwest::Method::GET, &target, Some(tok)).await;
                 assert_eq!(r.status().as_u16(), status, "{path} with {tok}");
             }
         }
@@ -441,16 +442,10 @@ async fn the_class_results_export_is_a_csv_of_finished_attempts() {
         let args = extra_args(&url);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let s = Binary::start(&dir, &args);
-        let denied = reqwest::get(format!("{}/api/results.csv?group=ROV-2", s.base))
-            .await
-            .unwrap();
+        let target = format!("{}/api/results.csv?group=ROV-2", s.base);
+        let denied = request(reqwest::Method::GET, &target, None).await;
         assert_eq!(denied.status().as_u16(), 403, "instructor only");
-        let r = reqwest::Client::new()
-            .get(format!("{}/api/results.csv?group=ROV-2", s.base))
-            .bearer_auth(TEACHER)
-            .send()
-            .await
-            .unwrap();
+        let r = request(reqwest::Method::GET, &target, Some(TEACHER)).await;
         assert_eq!(r.status().as_u16(), 200);
         let disposition = r.headers()["content-disposition"]
             .to_str()
@@ -695,12 +690,8 @@ async fn retention_deletes_the_database_rows_of_the_records_it_removes() {
         let old = c["id"].as_str().unwrap().to_string();
         act(&s.base, &old, TEACHER, json!({"type": "pause"})).await;
         tokio::time::sleep(Duration::from_millis(1200)).await;
-        let r = reqwest::Client::new()
-            .delete(format!("{}/api/sessions/{old}", s.base))
-            .bearer_auth(TEACHER)
-            .send()
-            .await
-            .unwrap();
+        let target = format!("{}/api/sessions/{old}", s.base);
+        let r = request(reqwest::Method::DELETE, &target, Some(TEACHER)).await;
         assert_eq!(r.status().as_u16(), 204);
         s.stop();
         let db_url = url_of(&dir, &url);

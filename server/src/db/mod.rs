@@ -236,6 +236,16 @@ pub struct SessionRecord {
     pub recording_failed: bool,
 }
 
+/// The answer to a request whose database query failed: 503, the error logged (its text may
+/// name the server, so the client gets none of it).
+pub fn unavailable(e: anyhow::Error) -> crate::error::ApiError {
+    tracing::error!("records database: {e:#}");
+    crate::error::ApiError::new(
+        axum::http::StatusCode::SERVICE_UNAVAILABLE,
+        "the records database is not answering; try again",
+    )
+}
+
 /// The end reason given to sessions cut off by a crash or kill.
 pub const INTERRUPTED: &str = "interrupted (server stopped)";
 

@@ -18,6 +18,7 @@ use super::command::{self, ActiveFault, Actor, Command, CommandError, Fault};
 use super::record::valid_id;
 use super::{CreateError, LIVE_SCENARIOS, Session, token_eq};
 use crate::app::AppState;
+use crate::db::unavailable as db_error;
 use crate::error::ApiError;
 use crate::json::ApiJson;
 use crate::protocol::{
@@ -446,14 +447,6 @@ fn ended_summary(
         },
         roster: None,
     }
-}
-
-fn db_error(e: anyhow::Error) -> ApiError {
-    tracing::error!("records database: {e:#}");
-    ApiError::new(
-        StatusCode::INTERNAL_SERVER_ERROR,
-        format!("the records database failed: {e}"),
-    )
 }
 
 /// The caller of a request about a session that is not live: the instructor, or the trainee

@@ -2,11 +2,13 @@
 //! token, and replayed: the state the replay gives at a recorded time equals the recorded
 //! CSV row exactly (the CSV's numbers are shortest round-trip decimals, so they parse back
 //! to the very bits the simulation had), for an attempt that began after a reset; and the
-//! replay WebSocket plays, seeks and changes speed.
+//! replay WebSocket plays, seeks and changes speed. Runs on SQLite and, when
+//! `SEAARMS_TEST_DATABASE_URL` is set (tests/run.sh), on PostgreSQL.
 
 #![allow(clippy::unwrap_used)]
 
 mod common;
+mod records_common;
 
 use std::time::Duration;
 
@@ -57,7 +59,14 @@ fn columns(header: &str) -> Vec<String> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn attempts_are_recorded_listed_and_replay_the_recorded_rows_exactly() {
-    let s = start().await;
+    for url in records_common::database_urls().await {
+        eprintln!("database: {}", url.as_deref().unwrap_or("SQLite (default)"));
+        recorded_listed_replayed(url).await;
+    }
+}
+
+async fn recorded_listed_replayed(database_url: Option<String>) {
+    let s = start_with(temp_dir(), |c| c.database_url = database_url).await;
     let (st, c) = create(
         &s,
         json!({"trainee": "Ada Lovelace", "group": "Class A", "scenario": "training"}),

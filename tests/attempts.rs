@@ -256,3 +256,62 @@ async fn recorded_listed_replayed(database_url: Option<String>) {
     next_of(&mut rs, "error", Duration::from_secs(10)).await;
     s.stop().await;
 }
+
+/// An attempt recorded by another build is listed with its assessment but not re-simulated:
+/// `replayable` is false, `replay_note` names both versions, and the replay answers 409.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_attempt_of_another_simulator_version_says_it_cannot_be_replayed() {
+    use seaarms::db::{Db, Write};
+    use seaarms::sessions::record::{AttemptEnd, AttemptStart};
+    let dir = temp_dir();
+    let db = Db::open(&seaarms::db::default_url(&dir)).unwrap();
+    let (session, attempt) = ("00000000000000aa", "00000000000000bb");
+    let old = "0.0.1+0123456789abcdef";
+    db.block_on(db.write_batch(&[
+        Write::Session {
+            id: session.into(),
+            trainee: "Grace".into(),
+            group: "B".into(),
+            scenario: "training".into(),
+            created_unix: 1.0,
+            token_sha256: seaarms::sessions::sha256_hex("old-token"),
+        },
+        Write::AttemptStart(Box::new(AttemptStart {
+            id: attempt.into(),
+            session: session.into(),
+            scenario: "training".into(),
+            exercise: None,
+            exercise_version: None,
+            sim_version: old.into(),
+            started_unix: 1.0,
+            init: json!({}),
+        })),
+        Write::AttemptEnd(Box::new(AttemptEnd {
+            id: attempt.into(),
+            ended_unix: 2.0,
+            sim_seconds: 1.0,
+            outcome: "ended".into(),
+            score: None,
+            assessment: None,
+        })),
+    ]))
+    .unwrap();
+    drop(db);
+    let s = start_with(dir, |_| {}).await;
+    let (st, a) = get_with(&format!("{}/api/attempts/{attempt}", s.base), "old-token").await;
+    assert_eq!(st, 200, "{a}");
+    assert_eq!(a["replayable"], false);
+    let note = a["replay_note"].as_str().unwrap();
+    assert!(
+        note.contains(old) && note.contains(seaarms::replay::SIM_VERSION),
+        "{note}"
+    );
+    let (st, e) = get_with(
+        &format!("{}/api/attempts/{attempt}/replay?t=0.5", s.base),
+        "old-token",
+    )
+    .await;
+    assert_eq!(st, 409, "{e}");
+    assert!(e.to_string().contains(old), "{e}");
+    s.stop().await;
+}

@@ -26,7 +26,7 @@ function num(v) {
   return Number.isInteger(v) ? String(v) : Number(v.toPrecision(3)).toString();
 }
 
-/** The fault drill's answers (DrillFault::ANSWERS) and their labels. */
+/** The fault drill's answers (FaultKind::NAMES in the core) and their labels. */
 const DIAGNOSES = [['supply_drop', 'Supply pressure drop'], ['stuck_valve', 'Stuck valve'],
   ['leak', 'Internal leak'], ['air', 'Air in the oil']];
 

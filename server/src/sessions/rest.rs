@@ -21,10 +21,7 @@ use crate::app::AppState;
 use crate::db::unavailable as db_error;
 use crate::error::ApiError;
 use crate::json::ApiJson;
-use crate::protocol::{
-    ControlMethod, ControlMode, PausedBy, fault_kind_name, fault_label, grasp_name, parse_arm,
-    parse_fault_kind,
-};
+use crate::protocol::{ControlMethod, ControlMode, PausedBy, fault_label, grasp_name, parse_arm};
 use crate::security::ws_base;
 
 fn forbidden(msg: &str) -> ApiError {
@@ -636,10 +633,10 @@ impl TryFrom<Action> for Command {
                 let arm = parse_arm(&arm).ok_or_else(|| {
                     CommandError::Invalid(format!("arm must be `left` or `right`, got `{arm}`"))
                 })?;
-                let kind = parse_fault_kind(&fault).ok_or_else(|| {
+                let kind = command::FaultKind::parse(&fault).ok_or_else(|| {
                     CommandError::Invalid(format!(
                         "unknown fault `{fault}` ({})",
-                        command::FaultKind::ALL.map(fault_kind_name).join(", ")
+                        command::FaultKind::NAMES.join(", ")
                     ))
                 })?;
                 let fault = Fault::new(kind, joint, value).map_err(CommandError::Invalid)?;

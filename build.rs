@@ -21,6 +21,8 @@ fn main() {
     println!("cargo:rerun-if-changed=web");
     println!("cargo:rerun-if-changed=static");
     println!("cargo:rerun-if-changed=exercises");
+    // `sqlx::migrate!()` embeds `migrations/` at compile time.
+    println!("cargo:rerun-if-changed=migrations");
     let mut files = Vec::new();
     for s in SIM_SOURCES {
         println!("cargo:rerun-if-changed={s}");

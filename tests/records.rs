@@ -17,6 +17,15 @@ use seaarms::sessions::record::{AttemptEnd, AttemptStart};
 use serde_json::{Value, json};
 use sha2::Digest;
 
+/// Sends `method url` with `token` as the bearer (none when `None`); the answer.
+async fn request(method: reqwest::Method, url: &str, token: Option<&str>) -> reqwest::Response {
+    let mut req = reqwest::Client::new().request(method, url);
+    if let Some(t) = token {
+        req = req.bearer_auth(t);
+    }
+    req.send().await.unwrap()
+}
+
 async fn act(base: &str, id: &str, token: &str, action: Value) {
     let r = reqwest::Client::new()
         .post(format!("{base}/api/sessions/{id}/actions"))
@@ -93,19 +102,36 @@ async fn a_named_trainees_session_is_recorded_and_listed_after_a_restart() {
         act(&s.base, &id, TEACHER, json!({"type": "resume"})).await;
         act(&s.base, &id, &token, json!({"type": "reset"})).await;
         tokio::time::sleep(Duration::from_millis(300)).await;
-        let r = reqwest::Client::new()
-            .delete(format!("{}/api/sessions/{id}", s.base))
-            .bearer_auth(&token)
-            .send()
-            .await
-            .unwrap();
+        let target = format!("{}/api/sessions/{id}", s.base);
+        let r = request(reqwest::Method::DELETE, &target, Some(&token)).await;
         assert_eq!(r.status().as_u16(), 204);
         let ended = get_json(&format!("{}/api/sessions/{id}", s.base)).await;
         assert_eq!(ended["status"], "ended", "{ended}");
         assert_eq!(ended["end_reason"], "ended by trainee");
         assert_eq!(ended["trainee"], "Ada Lovelace");
         assert_eq!(ended["group"], "ROV-2");
-        assert!(ended["attempts"].is_array(), "{ended}");
+        // The trainee who held the control token still sees its record; another token not.
+        for (tok, status) in [
+            (token.as_str(), 200),
+            ("0123456789abcdef0123456789abcdef", 403),
+        ] {
+            for path in [
+                format!("/api/sessions/{id}"),
+                format!("/api/sessions/{id}/log.csv"),
+            ] {
+                let target = format!("{}{path}", s.base);
+                let r = request(reqwest::Method::GET, &target, Some(tok)).await;
+                assert_eq!(r.status().as_u16(), status, "{path} with {tok}");
+            }
+        }
+        // Two attempts: the first ended by the reset, the second by the end (free play).
+        let listed: Vec<&str> = ended["attempts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| a.as_str().unwrap())
+            .collect();
+        assert_eq!(listed.len(), 2, "{ended}");
 
         let db_url = url_of(&dir, &url);
         let trainees = rows(
@@ -125,6 +151,35 @@ async fn a_named_trainees_session_is_recorded_and_listed_after_a_restart() {
             db.session_token_sha256(&id).await.unwrap(),
             Some(expected_hash)
         );
+        let attempts = db
+            .attempts(&AttemptFilter {
+                session: Some(id.clone()),
+                ..Default::default()
+            })
+            .await
+            .unwrap();
+        assert_eq!(
+            attempts.iter().map(|a| a.id.as_str()).collect::<Vec<_>>(),
+            listed,
+            "the summary lists the stored attempts, newest first"
+        );
+        for a in &attempts {
+            assert_eq!(
+                (a.trainee.as_str(), a.group.as_str()),
+                ("Ada Lovelace", "ROV-2")
+            );
+            assert_eq!(a.outcome.as_deref(), Some("ended"));
+            assert_eq!(a.scenario, "case4-dual-closed-loop");
+            assert!(a.ended_unix.unwrap() >= a.started_unix);
+            assert_eq!(a.init["scenario"], "case4-dual-closed-loop");
+            let bytes = db.attempt_inputs(&a.id).await.unwrap();
+            assert_eq!(bytes.len() as i64, a.inputs_bytes);
+            seaarms::replay::log::decode(&bytes).unwrap();
+        }
+        // The driven first attempt logged the stick inputs.
+        let first =
+            seaarms::replay::log::decode(&db.attempt_inputs(listed[1]).await.unwrap()).unwrap();
+        assert!(!first.is_empty(), "no inputs logged for the driven attempt");
         let events = rows(
             &db_url,
             "SELECT seq, kind, actor, detail, t, attempt_id FROM events WHERE session_id = $1 \
@@ -387,16 +442,10 @@ async fn the_class_results_export_is_a_csv_of_finished_attempts() {
         let args = extra_args(&url);
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         let s = Binary::start(&dir, &args);
-        let denied = reqwest::get(format!("{}/api/results.csv?group=ROV-2", s.base))
-            .await
-            .unwrap();
+        let target = format!("{}/api/results.csv?group=ROV-2", s.base);
+        let denied = request(reqwest::Method::GET, &target, None).await;
         assert_eq!(denied.status().as_u16(), 403, "instructor only");
-        let r = reqwest::Client::new()
-            .get(format!("{}/api/results.csv?group=ROV-2", s.base))
-            .bearer_auth(TEACHER)
-            .send()
-            .await
-            .unwrap();
+        let r = request(reqwest::Method::GET, &target, Some(TEACHER)).await;
         assert_eq!(r.status().as_u16(), 200);
         let disposition = r.headers()["content-disposition"]
             .to_str()
@@ -567,11 +616,24 @@ async fn kill_9_leaves_whole_records_and_interrupted_sessions() {
             )
             .await;
             let mut expected = std::collections::HashMap::<String, i64>::new();
+            let mut logs = std::collections::HashMap::<String, Vec<u8>>::new();
             for r in &pieces {
-                let n = expected.entry(r.get("attempt_id")).or_insert(0);
+                let attempt: String = r.get("attempt_id");
+                let n = expected.entry(attempt.clone()).or_insert(0);
                 assert_eq!(r.get::<i64, _>("seq"), *n);
                 *n += 1;
-                assert!(!r.get::<Vec<u8>, _>("data").is_empty());
+                let data: Vec<u8> = r.get("data");
+                assert!(!data.is_empty());
+                logs.entry(attempt).or_default().extend(data);
+            }
+            assert!(
+                !logs.is_empty(),
+                "{id}: no input pieces stored in 4 s of driving"
+            );
+            for (attempt, log) in &logs {
+                let entries = seaarms::replay::log::decode(log)
+                    .unwrap_or_else(|e| panic!("{attempt}: stored input log: {e}"));
+                assert!(!entries.is_empty(), "{attempt}: empty input log");
             }
             figures.push((id.to_string(), t_db, overloads_db, csv_path));
         }
@@ -628,12 +690,8 @@ async fn retention_deletes_the_database_rows_of_the_records_it_removes() {
         let old = c["id"].as_str().unwrap().to_string();
         act(&s.base, &old, TEACHER, json!({"type": "pause"})).await;
         tokio::time::sleep(Duration::from_millis(1200)).await;
-        let r = reqwest::Client::new()
-            .delete(format!("{}/api/sessions/{old}", s.base))
-            .bearer_auth(TEACHER)
-            .send()
-            .await
-            .unwrap();
+        let target = format!("{}/api/sessions/{old}", s.base);
+        let r = request(reqwest::Method::DELETE, &target, Some(TEACHER)).await;
         assert_eq!(r.status().as_u16(), 204);
         s.stop();
         let db_url = url_of(&dir, &url);
@@ -683,4 +741,113 @@ async fn retention_deletes_the_database_rows_of_the_records_it_removes() {
         s.stop();
         let _ = std::fs::remove_dir_all(&dir);
     }
+}
+
+/// A database URL the server cannot use stops it at start-up with a message naming the
+/// problem (the password hidden), instead of serving without records.
+#[test]
+fn a_bad_database_url_is_a_start_up_error() {
+    let dir = temp_dir("badurl");
+    for (url, expected) in [
+        (
+            "mysql://me:secret@db/x",
+            "unsupported database URL `mysql://me:***@db/x`",
+        ),
+        (
+            "sqlite:///proc/no-such/dir/x.db",
+            "cannot create /proc/no-such/dir",
+        ),
+    ] {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_seaarms"))
+            .args(["serve", "--bind", "127.0.0.1:0", "--database-url", url])
+            .arg("--data-dir")
+            .arg(&dir)
+            .env("RUST_LOG", "error")
+            .output()
+            .unwrap();
+        assert!(!out.status.success(), "{url}: served anyway");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(expected), "{url}: {err}");
+        assert!(!err.contains("secret"), "{url}: password printed: {err}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// An SQLite URL without `mode=rwc` still creates its file and folder.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_sqlite_url_creates_its_file_and_folder() {
+    let dir = temp_dir("sqliteurl");
+    let file = dir.join("elsewhere").join("records.db");
+    let url = format!("sqlite://{}", file.display());
+    let s = Binary::start(&dir, &["--database-url", &url]);
+    let (st, c) = create_at(&s.base, json!({"trainee": "Lin"})).await;
+    assert_eq!(st, 201, "{c}");
+    s.stop();
+    assert!(file.is_file(), "{} not created", file.display());
+    assert!(
+        !dir.join("seaarms.db").exists(),
+        "the default database was used instead"
+    );
+    let db = Db::open(&url).unwrap();
+    let stored = db.sessions().await.unwrap();
+    assert_eq!(stored.len(), 1);
+    assert_eq!(stored[0].trainee, "Lin");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A database that refuses writes for a while (SQLite locked by another writer beyond the
+/// 5 s busy timeout) loses nothing: the failed batch is counted in /metrics, kept, and
+/// written whole with the next commit once the lock is gone — every event once, in order.
+/// (SQLite only: PostgreSQL makes a blocked writer wait instead of failing.)
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_failed_batch_is_retried_whole() {
+    use sqlx::{Connection, Executor, Row};
+    let dir = temp_dir("retry");
+    let s = Binary::start(&dir, &[]);
+    let (st, c) = create_at(&s.base, json!({"trainee": "Lock"})).await;
+    assert_eq!(st, 201, "{c}");
+    let id = c["id"].as_str().unwrap().to_string();
+    act(&s.base, &id, TEACHER, json!({"type": "pause"})).await;
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    let url = seaarms::db::default_url(&dir);
+    sqlx::any::install_default_drivers();
+    let mut lock = sqlx::AnyConnection::connect(&url).await.unwrap();
+    lock.execute("BEGIN EXCLUSIVE").await.unwrap();
+    act(&s.base, &id, TEACHER, json!({"type": "resume"})).await;
+    act(&s.base, &id, TEACHER, json!({"type": "pause"})).await;
+    let errors = records_common::eventually(Duration::from_secs(15), || async {
+        let n = records_common::metric(&s.base, "seaarms_record_write_errors_total").await;
+        (n > 0).then_some(n)
+    })
+    .await;
+    assert!(errors.is_some(), "the locked database never failed a batch");
+    lock.execute("COMMIT").await.unwrap();
+    lock.close().await.unwrap();
+    let kinds = records_common::eventually(Duration::from_secs(15), || async {
+        let events = rows(
+            &url,
+            "SELECT seq, kind FROM events WHERE session_id = $1 ORDER BY seq",
+            &id,
+        )
+        .await;
+        let kinds: Vec<(i64, String)> = events
+            .iter()
+            .map(|r| (r.get("seq"), r.get("kind")))
+            .collect();
+        (kinds.len() >= 3).then_some(kinds)
+    })
+    .await
+    .expect("the kept batch was never written");
+    let expected: Vec<(i64, String)> = ["pause", "resume", "pause"]
+        .iter()
+        .enumerate()
+        .map(|(i, k)| (i as i64, k.to_string()))
+        .collect();
+    assert_eq!(kinds, expected, "every event once, in order");
+    eprintln!(
+        "locked database: {} failed commits, then the batch was written whole",
+        errors.unwrap_or(0)
+    );
+    s.stop();
+    let _ = std::fs::remove_dir_all(&dir);
 }

@@ -109,7 +109,7 @@ pub struct ServeConfig {
         global = true
     )]
     pub instructor_token: Option<String>,
-    /// Directory of session records and the session index.
+    /// Directory of session records (CSVs) and of the default SQLite records database.
     #[arg(
         long,
         env = "SEAARMS_DATA_DIR",

@@ -29,7 +29,8 @@ pub struct Metrics {
     /// Records (rows, events) dropped: the recorder queue was full or the record could not
     /// be written.
     pub records_dropped: AtomicU64,
-    /// Failed writes of session records or the index (disk full, I/O errors).
+    /// Failed writes of session records: CSV rows or database batches (disk full, I/O
+    /// errors, database unreachable).
     pub record_write_errors: AtomicU64,
     /// Session records deleted by retention.
     pub records_pruned: AtomicU64,

@@ -45,13 +45,7 @@ fn forbidden(msg: &str) -> ApiError {
     ApiError::new(StatusCode::FORBIDDEN, msg)
 }
 
-fn db_error(e: anyhow::Error) -> ApiError {
-    tracing::error!("records database: {e:#}");
-    ApiError::new(
-        StatusCode::SERVICE_UNAVAILABLE,
-        "the records database is not answering; try again",
-    )
-}
+use crate::db::unavailable as db_error;
 
 /// The token of `Authorization: Bearer …`, else `?token=`.
 fn token<'a>(headers: &'a HeaderMap, query: Option<&'a str>) -> Option<&'a str> {

@@ -53,12 +53,7 @@ pub async fn export(
         .db
         .results(group.as_deref(), exercise.as_deref())
         .await
-        .map_err(|e| {
-            ApiError::new(
-                StatusCode::INTERNAL_SERVER_ERROR,
-                format!("the records database failed: {e}"),
-            )
-        })?;
+        .map_err(crate::db::unavailable)?;
     let csv = table(&rows)
         .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
     let name = match (&group, &exercise) {

@@ -79,6 +79,19 @@ pub fn default_url(data_dir: &std::path::Path) -> String {
     format!("sqlite://{encoded}?mode=rwc")
 }
 
+/// An SQLite URL that creates its file when missing: `mode=rwc` added unless a `mode` is
+/// given (other URLs unchanged).
+fn sqlite_creating(url: &str) -> String {
+    if !url.starts_with("sqlite:") {
+        return url.to_string();
+    }
+    match url.split_once('?') {
+        Some((_, query)) if query.split('&').any(|kv| kv.starts_with("mode=")) => url.to_string(),
+        Some(_) => format!("{url}&mode=rwc"),
+        None => format!("{url}?mode=rwc"),
+    }
+}
+
 /// The file of an SQLite URL (None for an in-memory database).
 fn sqlite_file(url: &str) -> Option<PathBuf> {
     let rest = url
@@ -223,6 +236,16 @@ pub struct SessionRecord {
     pub recording_failed: bool,
 }
 
+/// The answer to a request whose database query failed: 503, the error logged (its text may
+/// name the server, so the client gets none of it).
+pub fn unavailable(e: anyhow::Error) -> crate::error::ApiError {
+    tracing::error!("records database: {e:#}");
+    crate::error::ApiError::new(
+        axum::http::StatusCode::SERVICE_UNAVAILABLE,
+        "the records database is not answering; try again",
+    )
+}
+
 /// The end reason given to sessions cut off by a crash or kill.
 pub const INTERRUPTED: &str = "interrupted (server stopped)";
 
@@ -286,6 +309,7 @@ impl Db {
     pub fn open(url: &str) -> Result<Db> {
         sqlx::any::install_default_drivers();
         let backend = Backend::of(url)?;
+        let url = &sqlite_creating(url);
         if let Some(file) = sqlite_file(url).filter(|_| backend == Backend::Sqlite) {
             if let Some(dir) = file.parent().filter(|d| !d.as_os_str().is_empty()) {
                 std::fs::create_dir_all(dir)
@@ -574,5 +598,18 @@ mod tests {
             Some(PathBuf::from("/tmp/a?b%c#d/seaarms.db"))
         );
         assert_eq!(sqlite_file("sqlite::memory:"), None);
+        assert_eq!(
+            sqlite_creating("sqlite:///a/b.db"),
+            "sqlite:///a/b.db?mode=rwc"
+        );
+        assert_eq!(
+            sqlite_creating("sqlite:///a/b.db?cache=shared"),
+            "sqlite:///a/b.db?cache=shared&mode=rwc"
+        );
+        assert_eq!(
+            sqlite_creating("sqlite:///a/b.db?mode=ro"),
+            "sqlite:///a/b.db?mode=ro"
+        );
+        assert_eq!(sqlite_creating("postgres://h/d"), "postgres://h/d");
     }
 }

@@ -5,7 +5,8 @@
 //! * [`SessionManager`]: create, find, list, expire, cap; owns the physics workers.
 //! * [`physics`]: the worker threads that step sessions and publish frames.
 //! * [`snapshot`]: building a [`crate::protocol::StateFrame`] (measures included) from a simulation.
-//! * [`record`]: the recorder thread (CSV time series, events, the session index on disk).
+//! * [`record`]: the recorder thread (CSV time series on disk; sessions, attempts and events
+//!   in the records database, [`crate::db`]).
 //! * [`command`]: the one [`command::Command`] type both edges parse into, applied in one place.
 //! * [`admission`]: who may create sessions how often (per-client token buckets and caps).
 //! * [`ws`]: the WebSocket endpoint; [`rest`]: the REST endpoints.

@@ -18,6 +18,7 @@ use super::command::{self, ActiveFault, Actor, Command, CommandError, Fault};
 use super::record::valid_id;
 use super::{CreateError, LIVE_SCENARIOS, Session, token_eq};
 use crate::app::AppState;
+use crate::db::unavailable as db_error;
 use crate::error::ApiError;
 use crate::json::ApiJson;
 use crate::protocol::{ControlMethod, ControlMode, PausedBy, fault_label, grasp_name, parse_arm};
@@ -445,12 +446,20 @@ fn ended_summary(
     }
 }
 
-fn db_error(e: anyhow::Error) -> ApiError {
-    tracing::error!("records database: {e:#}");
-    ApiError::new(
-        StatusCode::INTERNAL_SERVER_ERROR,
-        format!("the records database failed: {e}"),
-    )
+/// The caller of a request about a session that is not live: the instructor, or the trainee
+/// who held its control token (checked against the stored hash).
+async fn ended_caller(state: &AppState, token: Option<&str>, id: &str) -> Result<Caller, ApiError> {
+    if let Ok(c) = caller(state, token, None) {
+        return Ok(c);
+    }
+    let Some(token) = token else {
+        return Err(forbidden("missing token (Authorization: Bearer …)"));
+    };
+    let stored = state.db.session_token_sha256(id).await.map_err(db_error)?;
+    match stored {
+        Some(hash) if token_eq(&super::sha256_hex(token), &hash) => Ok(Caller::Trainee),
+        _ => Err(forbidden("wrong token")),
+    }
 }
 
 /// Waits until the recorder has stored everything queued so far (sessions just ended).
@@ -496,7 +505,8 @@ pub async fn list(
     Ok(Json(out))
 }
 
-/// `GET /api/sessions/{id}`: one session's summary (instructor, or its own trainee).
+/// `GET /api/sessions/{id}`: one session's summary (instructor, or its own trainee — also
+/// after it ended).
 pub async fn get_one(
     State(state): State<AppState>,
     headers: HeaderMap,
@@ -514,7 +524,7 @@ pub async fn get_one(
             viewer,
         )));
     }
-    require_instructor(&state, &headers)?;
+    ended_caller(&state, bearer(&headers), &id).await?;
     flush_records(&state).await;
     let record = state
         .db
@@ -691,7 +701,8 @@ pub async fn assessment(
         })
 }
 
-/// `GET /api/sessions/{id}/log.csv`: the session's record (flushed first).
+/// `GET /api/sessions/{id}/log.csv`: the session's record (flushed first); the instructor or
+/// the session's trainee (also after it ended).
 pub async fn log_csv(
     State(state): State<AppState>,
     headers: HeaderMap,
@@ -702,8 +713,10 @@ pub async fn log_csv(
         return Err(ApiError::not_found(format!("no session `{id}`")));
     }
     let token = bearer(&headers).or(q.token.as_deref());
-    let live = state.sessions.get(&id);
-    caller(&state, token, live.as_deref())?;
+    match state.sessions.get(&id) {
+        Some(live) => caller(&state, token, Some(&live))?,
+        None => ended_caller(&state, token, &id).await?,
+    };
     let path = state
         .sessions
         .recorder

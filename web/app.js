@@ -34,6 +34,7 @@ function showBanner(kind, text, ms = 0) {
 
 const params = new URLSearchParams(location.search);
 let lastEnded = null; // the last `ended` message ({reason, text}), for tests
+let endedNote = null; // shown once the next session's hello arrives
 
 /** Shows the join-code prompt; resolves with the code the trainee types. */
 function askJoinCode(wrong) {
@@ -59,9 +60,17 @@ const conn = new Connection({
   role: 'trainee',
   joinCode: params.get('join'),
   onJoinCode: askJoinCode,
-  onEnded(e) { lastEnded = e; },
+  onEnded(e) {
+    // why the session ended (e.g. abandoned: no connection for the grace period), shown again
+    // over the next session and on the start screen
+    lastEnded = e;
+    endedNote = `Your previous session ended: ${e.text}.`;
+    startScreen.note = endedNote;
+    status.message(endedNote);
+  },
   onHello(h) {
     setRole(h.role, h.session);
+    if (endedNote) { showBanner('info', `${endedNote} This is a new session.`, 8000); endedNote = null; }
     view.setHello(h);
     setExercise(h);
     settings = { ...h.settings };
@@ -140,10 +149,10 @@ function followScenario(s) {
   conn.reconnect();
 }
 
-/** A new session (keeps the trainee's name). */
+/** A new session (keeps the trainee's name and group; the old session is ended). */
 function newSession(opts) {
-  const trainee = conn.createOpts?.trainee;
-  conn.restart(trainee ? { ...opts, trainee } : opts);
+  const { trainee, group } = conn.createOpts || {};
+  conn.restart({ ...opts, ...(trainee ? { trainee } : {}), ...(group ? { group } : {}) });
 }
 
 async function chooseAndStart() {
@@ -241,7 +250,17 @@ $('chk-plots').addEventListener('change', (e) => {
 // keep keyboard focus on the page after using a menu or a checkbox (web/input.js also
 // ignores focus on anything but text fields)
 for (const el of document.querySelectorAll('#toolbar select, #toolbar input[type=checkbox]')) el.addEventListener('change', () => el.blur());
-setInterval(() => { $('btn-pause').textContent = view.drawn?.paused ? 'Resume' : 'Pause'; }, 250);
+/** The pause button and the instructor's pause: a trainee cannot lift it (the server refuses
+ * a resume, and its error is shown as a banner), so the button is off and says why. */
+setInterval(() => {
+  const st = view.drawn;
+  const byInstructor = !!st?.paused && st.paused_by === 'instructor';
+  const b = $('btn-pause');
+  b.textContent = st?.paused ? 'Resume' : 'Pause';
+  b.disabled = !driving || byInstructor;
+  b.title = byInstructor ? 'Paused by the instructor: only the instructor can resume' : 'Pause / resume (P)';
+  $('paused-note').hidden = !byInstructor;
+}, 250);
 
 function renderHelp() {
   $('help').innerHTML = `<button type="button" class="help-close" data-close aria-label="Close help">✕ Close</button><h3>Keyboard and gamepad</h3>
@@ -278,8 +297,9 @@ function setScenarios(list, current) {
 const DRIVING_CONTROLS = ['sel-mode', 'sel-method', 'sel-speed', 'btn-reset', 'btn-pause', 'btn-release'];
 
 /** Trainee (drives, sends input) or observer (this browser's other tab drives). */
+let driving = false;
 function setRole(role, session) {
-  const driving = role === 'trainee';
+  driving = role === 'trainee';
   tabs.driving(driving ? session : null);
   input.enabled = driving;
   view.setSelectedArm(driving ? selectedArm : null);

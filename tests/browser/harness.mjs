@@ -27,6 +27,7 @@ export const CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--disable-quic',
 const WEB_FROM_DISK = !!process.env.SEAARMS_WEB_FROM_DISK;
 function webFile(pathname) {
   const rel = pathname === '/' ? 'index.html' : pathname === '/instructor' ? 'instructor.html'
+    : pathname.startsWith('/replay/') ? 'replay.html'
     : pathname.startsWith('/web/') ? decodeURIComponent(pathname.slice(5)) : null;
   if (rel === null || rel.includes('..')) return null;
   const f = join(ROOT, 'web', rel);

@@ -9,6 +9,7 @@ import { TouchPad, touchDevice } from './touch.js';
 import { TabGuard } from './tabs.js';
 import { StartScreen, fetchExercises } from './start.js';
 import { TaskPanel } from './task.js';
+import { bindViewControls } from './viewcontrols.js';
 
 const $ = (id) => document.getElementById(id);
 const SPEEDS = [0.25, 0.5, 0.75, 1];
@@ -18,6 +19,7 @@ const NARROW_SCREEN = '(max-width: 700px)';
 const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
 const status = new StatusBar($('status'));
 const plots = new Plots($('plots'));
+const viewControls = bindViewControls(view, plots);
 const banner = $('banner');
 let bannerTimer = null;
 let selectedArm = localStorage.getItem('seaarms.arm') === 'right' ? 'right' : 'left';
@@ -196,7 +198,7 @@ const actions = {
     paused = view.drawn ? !view.drawn.paused : !paused;
     conn.send({ type: paused ? 'pause' : 'resume' });
   },
-  layout() { view.viewports.cycleLayout(); $('btn-layout').textContent = view.viewports.single ? '4 views' : '1 view'; },
+  layout: () => viewControls.layout(),
   help(show) {
     const h = $('help');
     h.hidden = show === undefined ? !h.hidden : !show;
@@ -227,7 +229,6 @@ $('sel-speed').addEventListener('change', (e) => sendSettings({ arm_speed: +e.ta
 $('btn-reset').addEventListener('click', actions.reset);
 $('btn-pause').addEventListener('click', actions.pause);
 $('btn-release').addEventListener('click', actions.release);
-$('btn-layout').addEventListener('click', actions.layout);
 $('btn-help').addEventListener('click', () => actions.help());
 // the overlay closes by its button or a tap outside it (touch screens have no ? key)
 $('help').addEventListener('click', (e) => { if (e.target.closest('[data-close]')) actions.help(false); });
@@ -239,14 +240,6 @@ $('btn-new').addEventListener('click', () => {
   newSession(sc ? { scenario: sc } : {});
 });
 $('btn-exercises').addEventListener('click', () => chooseAndStart());
-$('chk-ell').addEventListener('change', (e) => view.setEllipsoidsVisible(e.target.checked));
-$('chk-poly').addEventListener('change', (e) => view.setPolytopesVisible(e.target.checked));
-$('sel-ell-scale').addEventListener('change', (e) => view.setEllipsoidScale(+e.target.value));
-$('chk-plots').addEventListener('change', (e) => {
-  $('plots').hidden = !e.target.checked;
-  plots.visible = e.target.checked;
-  view.viewports.dirty = true;
-});
 // keep keyboard focus on the page after using a menu or a checkbox (web/input.js also
 // ignores focus on anything but text fields)
 for (const el of document.querySelectorAll('#toolbar select, #toolbar input[type=checkbox]')) el.addEventListener('change', () => el.blur());

@@ -97,6 +97,10 @@ test('dual-lift: start screen, task panel, handles, scripted gamepad through the
     assert.equal(await page.getAttribute('#card [data-score]', 'data-score'), String(Math.round(a.score)), 'the card shows the server\'s score');
     assert.match(card, a.passed ? /Passed/ : /Not passed/);
     for (const t of a.terms) assert.ok(card.includes(t.metric.split('_')[0]), `metric ${t.metric} on the card`);
+    // the card links the finished attempt's debrief, with this trainee's control token
+    await page.waitForSelector('#card [data-act="debrief"]:not([hidden])', { timeout: 10000 });
+    const attempt = (await (await fetch(`${url}/api/sessions/${sid}`, { headers: { authorization: `Bearer ${token}` } })).json()).attempts[0];
+    assert.equal(await page.getAttribute('#card [data-act="debrief"]', 'href'), `/replay/${attempt}?token=${token}`);
     assert.deepEqual(b.errors, []);
   } finally {
     await b.close();

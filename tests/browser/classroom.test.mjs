@@ -1,0 +1,200 @@
+//! The instructor's classroom (issue 16 acceptance, browser part): two trainees who typed their
+//! names on the start screen appear by name on the instructor's Classroom tab; one's attempt is
+//! ended by the instructor's reset and opened from the attempt history in the debrief page,
+//! where clicking an event marker seeks the replay to the marker's time (± one frame) and 4×
+//! playback advances the replay clock about four times faster than the wall clock; a silent
+//! fault reaches the session but not the trainee's page; an instructor's pause is shown to the
+//! trainee as "Paused by the instructor" and the trainee's resume is refused (the clock stays
+//! stopped) until the instructor resumes. Wire: CONTRACT/docs/api.md (attempts, replay socket,
+//! roster fields, paused_by, silent faults).
+
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { join } from 'node:path';
+import { server, openBrowser, until, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+
+const SHOTS = process.env.SEAARMS_SHOTS || ARTIFACTS;
+const auth = { authorization: `Bearer ${INSTRUCTOR_TOKEN}` };
+
+/** A trainee opens the page, types name and group on the start screen and starts `exercise`. */
+async function startTrainee(url, name, group, exercise) {
+  const b = await openBrowser();
+  await b.page.goto(`${url}/`);
+  await b.page.waitForSelector(`#start .ex[data-id="${exercise}"]`, { timeout: 15000 });
+  // the name is required: free play without one is refused on the screen
+  await b.page.fill('#start-name', '   ');
+  await b.page.click('#start-free');
+  assert.equal(await b.page.isVisible('#start-need'), true, 'a blank name is refused');
+  await b.page.fill('#start-name', name);
+  await b.page.fill('#start-group', group);
+  await b.page.click(`#start .ex[data-id="${exercise}"]`);
+  await b.page.click('#start-exercise');
+  const id = await until(b.page, (ex) => window.__seaarms?.hello?.exercise?.id === ex && window.__seaarms.statesDrawn > 2
+    && window.__seaarms.connection.open && window.__seaarms.connection.session, exercise, 30000);
+  return { ...b, id };
+}
+
+async function summary(url, id) {
+  return (await fetch(`${url}/api/sessions/${id}`, { headers: auth })).json();
+}
+
+test('classroom: named roster, attempt history → debrief (seek to a marker, 4× play), silent fault, instructor pause', { timeout: 300000 }, async () => {
+  const url = await server();
+  const tag = Math.random().toString(36).slice(2, 7);
+  const group = `class-${tag}`;
+  const [nameA, nameB] = [`Ada ${tag}`, `Brendan ${tag}`];
+  const instr = await openBrowser({ viewport: { width: 1280, height: 900 } });
+  const a = await startTrainee(url, nameA, group, 'dual-lift');
+  const b = await startTrainee(url, nameB, group, 'reach-targets');
+  const ip = instr.page;
+  let debrief = null;
+  try {
+    // the sessions carry the names and the group typed on the start screen
+    for (const [t, n] of [[a, nameA], [b, nameB]]) {
+      const s = await summary(url, t.id);
+      assert.equal(s.trainee, n);
+      assert.equal(s.group, group);
+    }
+    assert.equal(await a.page.evaluate(() => localStorage.getItem('seaarms.trainee')), nameA, 'the name is remembered');
+
+    // the instructor's Classroom tab lists both by name, in their group
+    await ip.goto(`${url}/instructor`);
+    await ip.fill('#token', INSTRUCTOR_TOKEN);
+    await ip.click('#token-form button');
+    await ip.click('#instr-tabs [data-tab="classroom"]');
+    await ip.fill('#cls-group', group);
+    await ip.dispatchEvent('#cls-group', 'change');
+    const row = (t) => `#roster tr[data-id="${t.id}"]`;
+    await ip.waitForSelector(row(a), { timeout: 10000 });
+    await ip.waitForSelector(row(b), { timeout: 10000 });
+    assert.equal((await ip.textContent(`${row(a)} .cls-name`)).trim(), nameA);
+    assert.equal((await ip.textContent(`${row(b)} .cls-name`)).trim(), nameB);
+    assert.match(await ip.textContent(row(a)), /Cooperative lift/);
+    assert.match(await ip.textContent(`${row(a)} td:nth-child(4)`), /^\d+\/5$/, 'step x/y of dual-lift\'s five');
+    assert.equal(await ip.getAttribute('#cls-export', 'href'), `/api/results.csv?group=${encodeURIComponent(group)}&token=${INSTRUCTOR_TOKEN}`);
+
+    // Trainee A's attempt: the instructor observes, injects a fault (shown), clears it, and after
+    // some seconds resets (ending the attempt as `abandoned`).
+    await ip.click(`${row(a)} [data-observe]`);
+    await until(ip, (id) => window.__seaarms?.hello?.session === id && window.__seaarms.statesDrawn > 2, a.id);
+    const t0 = await a.page.evaluate(() => window.__seaarms.lastState.t);
+    await ip.selectOption('#act-fault', 'supply_drop');
+    await ip.click('#instr-actions button[data-act="fault"]');
+    await a.page.waitForFunction(() => /supply_drop/.test(window.__seaarms.statusText()));
+    await until(a.page, (t) => window.__seaarms.lastState.t > t + 4, t0, 30000);
+    await ip.click('#instr-actions button[data-act="clear_faults"]');
+    await until(a.page, (t) => window.__seaarms.lastState.t > t + 12, t0, 30000);
+    const attemptA = (await summary(url, a.id)).attempts?.[0];
+    assert.ok(attemptA, 'the session names its running attempt');
+    await ip.click('#instr-actions button[data-act="reset"]');
+    await until(ip, () => /reset: ok/.test(document.querySelector('#act-result').textContent));
+
+    // its history lists the attempt as abandoned, with a debrief link carrying the token
+    await ip.click(`${row(a)} [data-history]`);
+    const histRow = `#history tr[data-attempt="${attemptA}"]`;
+    await ip.waitForSelector(`${histRow}[data-outcome="abandoned"]`, { timeout: 20000 });
+    assert.equal(await ip.getAttribute(`${histRow} a.debrief`, 'href'), `/replay/${attemptA}?token=${INSTRUCTOR_TOKEN}`);
+    const [dp] = await Promise.all([instr.context.waitForEvent('page'), ip.click(`${histRow} a.debrief`)]);
+    debrief = dp;
+    const derrors = [];
+    dp.on('pageerror', (e) => derrors.push(String(e)));
+    dp.on('console', (m) => { if (m.type() === 'error') derrors.push(m.text()); });
+
+    // the debrief page: the same four views, the replay's clock, the markers of the events
+    await until(dp, () => window.__seaarms?.hello && window.__seaarms.replay.duration_s > 0 && window.__seaarms.statesDrawn > 0, undefined, 30000);
+    const info = await dp.evaluate(() => ({ views: window.__seaarms.viewports().length, hz: window.__seaarms.hello.frame_hz,
+      d: window.__seaarms.replay.duration_s, events: window.__seaarms.attempt.events }));
+    assert.equal(info.views, 4);
+    assert.ok(info.d > 10, `the attempt lasted ${info.d} s`);
+    const fault = info.events.find((e) => e.kind === 'fault');
+    assert.ok(fault, `a fault event among ${JSON.stringify(info.events.map((e) => e.kind))}`);
+    assert.ok(fault.t > 0 && fault.t < info.d, `fault at ${fault.t} s of ${info.d} s`);
+    assert.equal(await dp.locator('.tl-mark').count(), info.events.length, 'one marker per event');
+    assert.match(await dp.textContent('#rp-card'), /Abandoned/);
+    // click the fault's marker: the replay seeks there (± one frame)
+    const frame = 1 / info.hz;
+    await dp.click(`.tl-mark[data-kind="fault"][data-t="${fault.t}"]`);
+    await until(dp, ([t, f]) => { const r = window.__seaarms.replay; return r.seeks === 1 && Math.abs(r.t - t) <= f + 1e-9; }, [fault.t, frame]);
+    assert.match(await dp.textContent('#rp-time'), /^\d+:\d\d\.\d \/ \d+:\d\d\.\d$/);
+    // a click on the bar seeks too (to its fraction of the duration)
+    const box = await dp.locator('.tl-track').boundingBox();
+    await dp.mouse.click(box.x + box.width * 0.25, box.y + 2);
+    await until(dp, ([d, f]) => { const r = window.__seaarms.replay; return r.seeks === 2 && Math.abs(r.t - 0.25 * d) <= 0.01 * d + f; }, [info.d, frame]);
+    await dp.click('.tl-mark[data-kind="fault"]'); // back to the fault
+    await until(dp, ([t, f]) => Math.abs(window.__seaarms.replay.t - t) <= f + 1e-9, [fault.t, frame]);
+    // play at 4×: the replay's clock runs about four times the wall clock (loosely: over 2×)
+    await dp.selectOption('#rp-speed', '4');
+    await until(dp, () => window.__seaarms.replay.speed === 4);
+    await dp.click('#rp-play');
+    await until(dp, () => window.__seaarms.replay.playing);
+    const s1 = await dp.evaluate(() => ({ t: window.__seaarms.replay.t, w: performance.now() }));
+    await dp.waitForTimeout(1500);
+    const s2 = await dp.evaluate(() => ({ t: window.__seaarms.replay.t, w: performance.now(), playing: window.__seaarms.replay.playing }));
+    const rate = (s2.t - s1.t) / ((s2.w - s1.w) / 1000);
+    console.log(`replay at 4×: ${(s2.t - s1.t).toFixed(2)} s of attempt in ${((s2.w - s1.w) / 1000).toFixed(2)} s wall (${rate.toFixed(2)}×)`);
+    assert.ok(rate > 2, `4× playback ran at ${rate.toFixed(2)}×`);
+    assert.ok(s2.t <= info.d + 1e-9);
+    assert.match(await dp.textContent('#rp-play'), s2.playing ? /Pause/ : /Play/);
+    await dp.click('.tl-mark[data-kind="fault"]'); // the screenshot at the fault
+    await dp.screenshot({ path: join(SHOTS, 'debrief.png') });
+    assert.deepEqual(derrors, []);
+
+    // a silent fault on trainee B: the instructor sees it, the trainee's page shows nothing
+    await ip.click(`${row(b)} [data-observe]`);
+    await until(ip, (id) => window.__seaarms?.hello?.session === id && window.__seaarms.statesDrawn > 2, b.id);
+    await ip.selectOption('#act-fault', 'leak');
+    await ip.check('#act-silent');
+    await ip.click('#instr-actions button[data-act="fault"]');
+    await until(ip, () => /fault \(silent\): ok/.test(document.querySelector('#act-result').textContent));
+    await ip.waitForFunction((r) => /leak/.test(document.querySelector(`${r} td.warn`).textContent), row(b), { timeout: 10000 });
+    const sb = await summary(url, b.id);
+    assert.ok((sb.faults || []).some((f) => typeof f === 'object' && f.silent), `the summary marks it silent: ${JSON.stringify(sb.faults)}`);
+    const n0 = await b.page.evaluate(() => window.__seaarms.connection.framesReceived);
+    await until(b.page, (n) => window.__seaarms.connection.framesReceived > n + 30, n0);
+    const seen = await b.page.evaluate(() => ({ faults: window.__seaarms.lastState.faults, status: window.__seaarms.statusText(),
+      banner: document.querySelector('#banner').hidden ? '' : document.querySelector('#banner').textContent }));
+    assert.deepEqual(seen.faults, [], 'no fault in the trainee\'s frames');
+    assert.doesNotMatch(seen.status, /leak|fault/i, 'nor on its status bar');
+    assert.doesNotMatch(seen.banner, /leak|fault/i, 'nor in a banner');
+    await ip.click('#instr-actions button[data-act="clear_faults"]');
+
+    // the instructor pauses trainee B from the roster: the trainee sees why and cannot resume
+    await ip.click(`${row(b)} .cls-acts button[data-act="pause"]`);
+    await until(b.page, () => window.__seaarms.lastState.paused && window.__seaarms.lastState.paused_by === 'instructor');
+    await b.page.waitForSelector('#paused-note:not([hidden])');
+    assert.equal((await b.page.textContent('#paused-note')).trim(), 'Paused by the instructor');
+    await until(b.page, () => document.getElementById('btn-pause').disabled);
+    await ip.waitForSelector(`${row(b)}[data-paused="instructor"]`);
+    const tStop = await b.page.evaluate(() => window.__seaarms.lastState.t);
+    await b.page.keyboard.press('p'); // the trainee's pause key: a resume the server refuses
+    await b.page.waitForFunction(() => /instructor/i.test(document.querySelector('#banner').textContent) && !document.querySelector('#banner').hidden, undefined, { timeout: 5000 });
+    const n1 = await b.page.evaluate(() => window.__seaarms.connection.framesReceived);
+    await until(b.page, (n) => window.__seaarms.connection.framesReceived > n + 20, n1);
+    const after = await b.page.evaluate(() => ({ t: window.__seaarms.lastState.t, paused: window.__seaarms.lastState.paused }));
+    assert.equal(after.paused, true, 'still paused');
+    assert.equal(after.t, tStop, 'the clock stayed stopped');
+    await ip.waitForSelector(`${row(b)} .cls-acts button[data-act="resume"]`);
+    await ip.screenshot({ path: join(SHOTS, 'classroom.png') });
+    await ip.click(`${row(b)} .cls-acts button[data-act="resume"]`);
+    await until(b.page, () => !window.__seaarms.lastState.paused);
+    await until(b.page, () => document.getElementById('paused-note').hidden && !document.getElementById('btn-pause').disabled);
+
+    // "New session" ends the old session first (it does not linger live and empty)
+    await a.page.click('#btn-new');
+    await until(a.page, (old) => window.__seaarms.connection.open && window.__seaarms.connection.session !== old, a.id, 20000);
+    const old = await summary(url, a.id);
+    assert.equal(old.status, 'ended', `the old session: ${JSON.stringify(old)}`);
+    const fresh = await summary(url, await a.page.evaluate(() => window.__seaarms.connection.session));
+    assert.equal(fresh.trainee, nameA, 'the new session keeps the name');
+    assert.equal(fresh.group, group);
+
+    for (const t of [a, b, instr]) assert.deepEqual(t.errors, [], 'console errors');
+    for (const t of [a, b, instr]) assert.deepEqual(t.offsite, []);
+  } finally {
+    await debrief?.close();
+    for (const t of [a, b]) await fetch(`${url}/api/sessions/${t.id}`, { method: 'DELETE', headers: auth }).catch(() => {});
+    await a.close();
+    await b.close();
+    await instr.close();
+  }
+});

@@ -84,12 +84,20 @@ export class Classroom {
 
   get group() { return this.$('cls-group').value.trim(); }
 
-  /** GET with the instructor token; the JSON body or throws with the server's error. */
-  async get(path) {
-    const r = await fetch(path, { headers: { authorization: `Bearer ${this.ui.token()}` }, cache: 'no-store' });
-    const b = await r.json().catch(() => null);
-    if (!r.ok) throw new Error(b?.error || `HTTP ${r.status}`);
-    return b;
+  /** GET /api/attempts with `filter` (and `group`, when given); the list, or null
+   * (the error shown) when the server refuses or cannot be reached. */
+  async attempts(filter, group) {
+    const q = new URLSearchParams({ ...filter, limit: String(LIMIT) });
+    if (group) q.set('group', group);
+    try {
+      const r = await fetch(`/api/attempts?${q}`, { headers: { authorization: `Bearer ${this.ui.token()}` }, cache: 'no-store' });
+      const b = await r.json().catch(() => null);
+      if (!r.ok) throw new Error(b?.error || `HTTP ${r.status}`);
+      return b.attempts || [];
+    } catch (e) {
+      this.setStatus(`attempts: ${e.message}`, true);
+      return null;
+    }
   }
 
   setStatus(text, bad = false) {
@@ -215,16 +223,8 @@ export class Classroom {
   async refreshHistory() {
     const h = this.history;
     if (!h) return;
-    const q = new URLSearchParams({ trainee: h.trainee, limit: String(LIMIT) });
-    if (h.group) q.set('group', h.group);
-    let list;
-    try {
-      list = (await this.get(`/api/attempts?${q}`)).attempts || [];
-    } catch (e) {
-      this.setStatus(`attempts: ${e.message}`, true);
-      return;
-    }
-    if (this.history !== h) return;
+    const list = await this.attempts({ trainee: h.trainee }, h.group);
+    if (!list || this.history !== h) return;
     const tok = encodeURIComponent(this.ui.token());
     this.$('history').tBodies[0].innerHTML = list.map((a) => {
       const when = a.started_unix ? new Date(a.started_unix * 1000).toLocaleString() : '';
@@ -242,16 +242,8 @@ export class Classroom {
   async refreshCompare() {
     const ex = this.$('cmp-exercise').value;
     if (!ex || !this.ui.token()) return;
-    const q = new URLSearchParams({ exercise: ex, limit: String(LIMIT) });
-    if (this.group) q.set('group', this.group);
-    let list;
-    try {
-      list = (await this.get(`/api/attempts?${q}`)).attempts || [];
-    } catch (e) {
-      this.setStatus(`attempts: ${e.message}`, true);
-      return;
-    }
-    if (this.$('cmp-exercise').value !== ex) return;
+    const list = await this.attempts({ exercise: ex }, this.group);
+    if (!list || this.$('cmp-exercise').value !== ex) return;
     for (const a of list) if (a.group) this.groups.add(a.group);
     const rows = compareRows(list);
     this.$('compare').tBodies[0].innerHTML = rows.map((r) => `<tr data-trainee="${esc(r.trainee)}" data-group="${esc(r.group)}">

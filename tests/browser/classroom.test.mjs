@@ -113,14 +113,15 @@ test('classroom: named roster, attempt history → debrief (seek to a marker, 4�
     assert.match(await dp.textContent('#rp-card'), /Abandoned/);
     // click the fault's marker: the replay seeks there (± one frame)
     const frame = 1 / info.hz;
-    await dp.click(`.tl-mark[data-kind="fault"][data-t="${fault.t}"]`);
+    const marker = `.tl-mark[data-kind="fault"][data-t="${fault.t}"]`;
+    await dp.click(marker);
     await until(dp, ([t, f]) => { const r = window.__seaarms.replay; return r.seeks === 1 && Math.abs(r.t - t) <= f + 1e-9; }, [fault.t, frame]);
     assert.match(await dp.textContent('#rp-time'), /^\d+:\d\d\.\d \/ \d+:\d\d\.\d$/);
     // a click on the bar seeks too (to its fraction of the duration)
     const box = await dp.locator('.tl-track').boundingBox();
-    await dp.mouse.click(box.x + box.width * 0.25, box.y + 2);
+    await dp.mouse.click(box.x + box.width * 0.25, box.y + box.height - 2); // below the markers
     await until(dp, ([d, f]) => { const r = window.__seaarms.replay; return r.seeks === 2 && Math.abs(r.t - 0.25 * d) <= 0.01 * d + f; }, [info.d, frame]);
-    await dp.click('.tl-mark[data-kind="fault"]'); // back to the fault
+    await dp.click(marker); // back to the fault
     await until(dp, ([t, f]) => Math.abs(window.__seaarms.replay.t - t) <= f + 1e-9, [fault.t, frame]);
     // play at 4×: the replay's clock runs about four times the wall clock (loosely: over 2×)
     await dp.selectOption('#rp-speed', '4');
@@ -135,7 +136,7 @@ test('classroom: named roster, attempt history → debrief (seek to a marker, 4�
     assert.ok(rate > 2, `4× playback ran at ${rate.toFixed(2)}×`);
     assert.ok(s2.t <= info.d + 1e-9);
     assert.match(await dp.textContent('#rp-play'), s2.playing ? /Pause/ : /Play/);
-    await dp.click('.tl-mark[data-kind="fault"]'); // the screenshot at the fault
+    await dp.click(marker); // the screenshot at the fault
     await dp.screenshot({ path: join(SHOTS, 'debrief.png') });
     assert.deepEqual(derrors, []);
 

@@ -44,6 +44,8 @@ pub struct AppState {
     pub join_code: Option<Arc<str>>,
     /// The bounded pool of CPU-heavy requests.
     pub compute: Arc<ComputePool>,
+    /// The training records database.
+    pub db: crate::db::Db,
 }
 
 /// Checks an operator-supplied secret (instructor token, join code): it must travel intact
@@ -65,7 +67,13 @@ impl AppState {
     pub fn new(config: &ServeConfig) -> anyhow::Result<AppState> {
         let robots = Arc::new(Robots::load()?);
         let metrics = Arc::new(Metrics::default());
-        let recorder = Recorder::open(&config.data_dir, metrics.clone(), config.record_config())?;
+        let db = crate::db::Db::open(&config.database_url())?;
+        let recorder = Recorder::open(
+            &config.data_dir,
+            db.clone(),
+            metrics.clone(),
+            config.record_config(),
+        )?;
         let magnum = robots
             .get("magnum")
             .ok_or_else(|| anyhow::anyhow!("built-in model magnum missing"))?;
@@ -133,6 +141,7 @@ impl AppState {
             )),
             join_code,
             compute,
+            db,
         })
     }
 }
@@ -165,6 +174,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("post", "/api/sessions/{id}/actions"),
     ("get", "/api/sessions/{id}/log.csv"),
     ("get", "/api/sessions/{id}/assessment"),
+    ("get", "/api/results.csv"),
     ("get", "/api/exercises"),
     ("get", "/api/exercises/{id}"),
     ("get", "/ws/sessions/{id}"),
@@ -223,6 +233,7 @@ pub fn app(state: AppState) -> Router {
             "/api/sessions/{id}/assessment",
             get(sessions::rest::assessment),
         )
+        .route("/api/results.csv", get(api::results::export))
         .route("/api/exercises", get(crate::exercises::list))
         .route("/api/exercises/{id}", get(crate::exercises::get))
         .route("/ws/sessions/{id}", get(sessions::ws::upgrade))

@@ -117,6 +117,15 @@ pub struct ServeConfig {
         global = true
     )]
     pub data_dir: PathBuf,
+    /// Training records database: `sqlite://PATH?mode=rwc` or `postgres://user@host/db`;
+    /// `sqlite://DATA_DIR/seaarms.db?mode=rwc` when not given.
+    #[arg(
+        long,
+        env = "SEAARMS_DATABASE_URL",
+        hide_env_values = true,
+        global = true
+    )]
+    pub database_url: Option<String>,
     /// Most live sessions at once (503 beyond).
     #[arg(
         long,
@@ -267,6 +276,14 @@ fn non_negative(s: &str) -> Result<f64, String> {
 }
 
 impl ServeConfig {
+    /// The records database URL: `--database-url`, else the SQLite file in the data folder.
+    pub fn database_url(&self) -> String {
+        match &self.database_url {
+            Some(url) if !url.is_empty() => url.clone(),
+            _ => crate::db::default_url(&self.data_dir),
+        }
+    }
+
     /// The recorder's settings.
     pub fn record_config(&self) -> crate::sessions::record::RecordConfig {
         crate::sessions::record::RecordConfig {
@@ -286,6 +303,7 @@ impl Default for ServeConfig {
             bind: SocketAddr::from(([127, 0, 0, 1], 8080)),
             instructor_token: None,
             data_dir: PathBuf::from("./data"),
+            database_url: None,
             max_sessions: 64,
             idle_timeout_secs: 900,
             frame_hz: 60,

@@ -19,6 +19,7 @@ use serde::Serialize;
 use crate::error::ApiError;
 use crate::protocol::{ControlMethod, ControlMode};
 use crate::sessions::command::{ArmSticks, Command, StickInput};
+use crate::sessions::record::RecordMsg;
 use crate::sessions::{Live, Scenario};
 
 #[derive(RustEmbed)]
@@ -175,6 +176,29 @@ pub fn run_headless(
     driver: Driver,
     seed: u64,
 ) -> anyhow::Result<Assessment> {
+    run_recorded(spec, models, driver, seed, &mut |_| {}).map(|r| r.assessment)
+}
+
+/// A headless attempt with its record, as a live session records it.
+pub struct HeadlessRun {
+    /// The assessment.
+    pub assessment: Assessment,
+    /// Its initial conditions ([`crate::replay::Init`]).
+    pub init: crate::replay::Init,
+    /// Its input log (every piece, concatenated).
+    pub inputs: Vec<u8>,
+    /// Simulated seconds it ran.
+    pub sim_seconds: f64,
+}
+
+/// [`run_headless`], calling `observe` after every step, and keeping the attempt's record.
+pub fn run_recorded(
+    spec: Arc<ExerciseSpec>,
+    models: &[Arc<seaarms_core::Model>; 2],
+    driver: Driver,
+    seed: u64,
+    observe: &mut dyn FnMut(&Live),
+) -> anyhow::Result<HeadlessRun> {
     let mut live = Live::new(
         "headless",
         models,
@@ -219,13 +243,31 @@ pub fn run_headless(
         }
         for _ in 0..steps_per_tick {
             live.advance();
+            observe(&live);
         }
         steps += steps_per_tick;
         if live.exercise().is_some_and(|r| r.done()) {
             break;
         }
     }
-    live.exercise()
+    let assessment = live
+        .exercise()
         .map(|r| r.assessment())
-        .ok_or_else(|| anyhow::anyhow!("no exercise"))
+        .ok_or_else(|| anyhow::anyhow!("no exercise"))?;
+    let sim_seconds = live.sim().time_s();
+    live.end_attempt("abandoned");
+    let (mut init, mut inputs) = (None, Vec::new());
+    for msg in live.take_records(false) {
+        match msg {
+            RecordMsg::AttemptStarted(a) => init = Some(serde_json::from_value(a.init)?),
+            RecordMsg::AttemptInputs { bytes, .. } => inputs.extend(bytes),
+            _ => {}
+        }
+    }
+    Ok(HeadlessRun {
+        assessment,
+        init: init.ok_or_else(|| anyhow::anyhow!("the attempt recorded no start"))?,
+        inputs,
+        sim_seconds,
+    })
 }

@@ -15,8 +15,10 @@
 //! * [`assets`]: the embedded web page and vendored libraries, and the Content-Security-Policy.
 //! * [`security`]: the middleware for origins, content types, security headers, JSON errors.
 //! * [`sessions`]: live sessions — physics threads, frames, WebSocket, REST, records.
+//! * [`replay`]: attempts' input logs and their exact re-simulation.
 //! * [`metrics`]: Prometheus counters; [`load`]: the `seaarms load` client.
 //! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
+//! * [`db`]: the training records database (SQLite or PostgreSQL).
 //! * [`csv_out`]: the one CSV writer (one number format) for every CSV the server writes.
 
 pub mod api;
@@ -25,6 +27,7 @@ pub mod assets;
 pub mod compute;
 pub mod config;
 pub mod csv_out;
+pub mod db;
 pub mod error;
 pub mod exercises;
 pub mod json;
@@ -33,6 +36,7 @@ pub mod load;
 pub mod metrics;
 pub mod posture;
 pub mod protocol;
+pub mod replay;
 pub mod robots;
 pub mod scenarios;
 pub mod security;

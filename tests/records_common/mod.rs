@@ -178,3 +178,38 @@ where
     }
     None
 }
+
+/// The databases every records test runs against: the default SQLite file in the data
+/// folder (`None`), and a fresh database on the PostgreSQL server of
+/// `SEAARMS_TEST_DATABASE_URL` when it is set (`tests/run.sh` starts one); without it a
+/// notice says the PostgreSQL half is skipped.
+pub(crate) async fn database_urls() -> Vec<Option<String>> {
+    let mut urls = vec![None];
+    match std::env::var("SEAARMS_TEST_DATABASE_URL") {
+        Ok(base) if !base.is_empty() => urls.push(Some(fresh_postgres_database(&base).await)),
+        _ => eprintln!(
+            "NOTICE: SEAARMS_TEST_DATABASE_URL is not set: PostgreSQL skipped, SQLite only \
+             (tests/run.sh starts a throwaway PostgreSQL server and sets it)"
+        ),
+    }
+    urls
+}
+
+/// Creates an empty database beside the one `base` names (so tests running at once do not
+/// see each other's records, e.g. under retention) and returns its URL.
+async fn fresh_postgres_database(base: &str) -> String {
+    use sqlx::{Connection, Executor};
+    sqlx::any::install_default_drivers();
+    let name = format!("seaarms_{}", seaarms::sessions::random_hex(6));
+    let mut c = sqlx::AnyConnection::connect(base)
+        .await
+        .unwrap_or_else(|e| panic!("SEAARMS_TEST_DATABASE_URL {base}: {e}"));
+    c.execute(format!("CREATE DATABASE {name}").as_str())
+        .await
+        .unwrap();
+    c.close().await.unwrap();
+    let (server, _) = base
+        .rsplit_once('/')
+        .unwrap_or_else(|| panic!("{base}: no database name"));
+    format!("{server}/{name}")
+}

@@ -4,6 +4,7 @@
 pub mod analysis;
 pub mod openapi;
 pub mod optimize;
+pub mod results;
 pub mod robots;
 pub mod scenarios;
 pub mod wire;

@@ -12,6 +12,7 @@ use serde_json::json;
 use super::record::RecordMsg;
 use super::{Live, Scenario, Session, SessionManager};
 use crate::protocol::{ControlMethod, ControlMode, EndReason, ServerMessage};
+use crate::replay::log::{Entry, dequantize, quantize};
 
 /// Largest instructor message to a trainee (characters).
 pub const MAX_MESSAGE_CHARS: usize = 500;
@@ -187,6 +188,37 @@ pub struct StickInput {
     /// Closed loop: commanded object twist [vx, vy, vz, wx, wy, wz] (world frame) as
     /// fractions of the controller's maximum speeds, each in [−1, 1].
     pub object: [f64; 6],
+}
+
+impl StickInput {
+    /// The input as applied: every value rounded to the input quantum
+    /// ([`crate::replay::log::INPUT_QUANTUM`]), and its values in quanta (left axes and grip,
+    /// right axes and grip, object twist) for the attempt's log.
+    pub fn quantized(&self) -> (StickInput, Vec<i32>) {
+        let mut quanta = Vec::with_capacity(crate::replay::log::INPUT_VALUES);
+        for a in &self.arms {
+            quanta.extend(a.axes.iter().map(|v| quantize(*v)));
+            quanta.push(quantize(a.grip));
+        }
+        quanta.extend(self.object.iter().map(|v| quantize(*v)));
+        let mut q = StickInput::from_quanta(&quanta);
+        q.seq = self.seq;
+        (q, quanta)
+    }
+
+    /// An input from its values in quanta (the order of [`StickInput::quantized`]; missing
+    /// values are 0).
+    pub fn from_quanta(quanta: &[i32]) -> StickInput {
+        let v = |i: usize| dequantize(quanta.get(i).copied().unwrap_or(0));
+        StickInput {
+            seq: 0,
+            arms: [0, 7].map(|o| ArmSticks {
+                axes: std::array::from_fn(|j| v(o + j)),
+                grip: v(o + 6),
+            }),
+            object: std::array::from_fn(|j| v(14 + j)),
+        }
+    }
 }
 
 /// Settings changes (absent fields unchanged; `arm_speed` validated).
@@ -386,7 +418,13 @@ pub fn apply(
             if actor == Actor::Instructor {
                 live.note_intervention(&command);
             }
-            let detail = live.apply(&command)?;
+            let detail = live.apply(&command);
+            // A reset or switch ended an attempt and started one: records go out in order,
+            // before this command's event.
+            for msg in live.take_records(false) {
+                manager.recorder.send(msg);
+            }
+            let detail = detail?;
             if let Command::Scenario(s) = &command {
                 session.set_scenario(s.name());
                 // Every page redraws the scene and follows the new settings.
@@ -432,10 +470,18 @@ impl Live {
     pub fn apply(&mut self, command: &Command) -> Result<serde_json::Value, CommandError> {
         Ok(match command {
             Command::Input(input) => {
-                self.apply_input(input);
+                let (input, quanta) = input.quantized();
+                self.log(|k| Entry::Input { k, v: quanta });
+                self.apply_input(&input);
                 json!({})
             }
             Command::Settings(change) => {
+                self.log(|k| Entry::Settings {
+                    k,
+                    mode: change.control_mode,
+                    method: change.control_method,
+                    speed: change.arm_speed,
+                });
                 self.apply_settings(change);
                 json!({"settings": self.settings()})
             }
@@ -452,6 +498,7 @@ impl Live {
                 json!({})
             }
             Command::Release => {
+                self.log(|k| Entry::Release { k });
                 self.release(RELEASE_DURATION_S);
                 json!({})
             }
@@ -466,13 +513,22 @@ impl Live {
                     .as_mut()
                     .ok_or_else(|| CommandError::Invalid("no exercise is running".to_string()))?;
                 run.diagnose(answer).map_err(CommandError::Invalid)?;
+                self.log(|k| Entry::Diagnose {
+                    k,
+                    answer: answer.clone(),
+                });
                 json!({"answer": answer})
             }
             Command::InjectFault(f) => {
+                self.log(|k| Entry::Fault {
+                    k,
+                    fault: crate::replay::fault_entry(f),
+                });
                 self.inject_fault(*f);
                 json!({"fault": f})
             }
             Command::ClearFaults => {
+                self.log(|k| Entry::ClearFaults { k });
                 self.clear_faults();
                 json!({})
             }
@@ -487,9 +543,7 @@ impl Live {
             command,
             Command::Input(_) | Command::Message(_) | Command::End
         ) {
-            if let Some(run) = self.exercise.as_mut() {
-                run.intervention();
-            }
+            self.intervene();
         }
     }
 }

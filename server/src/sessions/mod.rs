@@ -189,6 +189,12 @@ pub struct Live {
     session_id: String,
     /// The current attempt's id (records; a new one at every start).
     attempt_id: String,
+    /// Whether attempts are recorded (a replay records nothing).
+    recording: bool,
+    /// The running attempt's input log (when recording).
+    log: Option<crate::replay::log::Writer>,
+    /// Attempt records waiting for the recorder, oldest first ([`Live::take_records`]).
+    pending: Vec<RecordMsg>,
 }
 
 /// What a session runs.
@@ -250,6 +256,46 @@ impl Live {
         method: Option<ControlMethod>,
         seed: u64,
     ) -> Result<Live, seaarms_core::Error> {
+        Self::build(session_id, models, scenario, mode, method, seed, true)
+    }
+
+    /// The state at a recorded attempt's start ([`crate::replay::Init`]), recording nothing.
+    pub fn replaying(
+        models: &[Arc<Model>; 2],
+        scenario: &Scenario,
+        settings: Settings,
+        faults: &[ActiveFault],
+        sim_faults: [seaarms_core::hydraulics::Faults; 2],
+        seed: u64,
+    ) -> Result<Live, seaarms_core::Error> {
+        let mut live = Self::build(
+            "replay",
+            models,
+            scenario,
+            Some(settings.control_mode),
+            Some(settings.control_method),
+            seed,
+            false,
+        )?;
+        live.settings.arm_speed = settings.arm_speed;
+        for f in faults {
+            live.inject_fault(*f);
+        }
+        for arm in command::Arm::BOTH {
+            *live.sim.faults_mut(arm) = sim_faults[arm.index()];
+        }
+        Ok(live)
+    }
+
+    fn build(
+        session_id: &str,
+        models: &[Arc<Model>; 2],
+        scenario: &Scenario,
+        mode: Option<ControlMode>,
+        method: Option<ControlMethod>,
+        seed: u64,
+        recording: bool,
+    ) -> Result<Live, seaarms_core::Error> {
         let sim = scenario.build_sim(models)?;
         let control = scenario.exercise().map(|e| e.control);
         let settings = Settings {
@@ -288,6 +334,9 @@ impl Live {
             next_seed: seed,
             session_id: session_id.to_string(),
             attempt_id: String::new(),
+            recording,
+            log: None,
+            pending: Vec::new(),
         };
         live.start_attempt();
         Ok(live)
@@ -297,11 +346,109 @@ impl Live {
     /// state).
     fn start_attempt(&mut self) {
         self.attempt_id = random_hex(8);
+        // Fresh resolvers, so an attempt's start never depends on what came before it.
+        self.redundancy = [
+            Redundancy::new(&self.models[0], RedundancyParams::default()),
+            Redundancy::new(&self.models[1], RedundancyParams::default()),
+        ];
+        let seed = self.next_seed;
         self.exercise = self.scenario.exercise().map(|spec| {
-            let seed = self.next_seed;
             self.next_seed = self.next_seed.wrapping_add(1);
             ExerciseRun::new(spec.clone(), &self.sim, seed)
         });
+        if self.recording {
+            let init = crate::replay::Init {
+                format: crate::replay::log::FORMAT,
+                scenario: self.scenario.name().to_string(),
+                settings: self.settings,
+                faults: self.faults.iter().map(crate::replay::fault_entry).collect(),
+                sim_faults: command::Arm::BOTH.map(|a| self.sim.params().arms[a.index()].faults),
+                seed,
+            };
+            let exercise = self.scenario.exercise();
+            self.pending
+                .push(RecordMsg::AttemptStarted(Box::new(record::AttemptStart {
+                    id: self.attempt_id.clone(),
+                    session: self.session_id.clone(),
+                    scenario: self.scenario.name().to_string(),
+                    exercise: exercise.map(|e| e.id.clone()),
+                    exercise_version: exercise.map(|e| format!("{}", e.version)),
+                    sim_version: crate::replay::SIM_VERSION.to_string(),
+                    started_unix: unix_now(),
+                    init: serde_json::to_value(&init).unwrap_or_default(),
+                })));
+            self.log = Some(crate::replay::log::Writer::new());
+        }
+    }
+
+    /// Ends the running attempt's record (its log's last piece and its outcome): `passed`
+    /// or `failed` for a finished exercise, `ended` for free play, else `unfinished`
+    /// (`abandoned`, `interrupted`).
+    pub fn end_attempt(&mut self, unfinished: &str) {
+        let Some(mut log) = self.log.take() else {
+            return;
+        };
+        let last = log.finish();
+        if !last.is_empty() {
+            self.pending.push(RecordMsg::AttemptInputs {
+                id: self.attempt_id.clone(),
+                bytes: last,
+            });
+        }
+        let assessment = self.exercise.as_ref().map(ExerciseRun::assessment);
+        let outcome = match &assessment {
+            Some(a) if a.done => {
+                if a.passed {
+                    "passed"
+                } else {
+                    "failed"
+                }
+            }
+            None if unfinished != "interrupted" => "ended",
+            _ => unfinished,
+        };
+        self.pending
+            .push(RecordMsg::AttemptEnded(Box::new(record::AttemptEnd {
+                id: self.attempt_id.clone(),
+                ended_unix: unix_now(),
+                sim_seconds: self.sim.time_s(),
+                outcome: outcome.to_string(),
+                score: assessment.as_ref().map(|a| a.score),
+                assessment: assessment.and_then(|a| serde_json::to_value(a).ok()),
+            })));
+    }
+
+    /// Attempt records for the recorder, oldest first; with the log's piece so far when
+    /// `piece` (about every second, so a killed server loses at most that).
+    pub fn take_records(&mut self, piece: bool) -> Vec<RecordMsg> {
+        if piece {
+            if let Some(bytes) = self.log.as_mut().map(|l| l.take_piece()) {
+                if !bytes.is_empty() {
+                    self.pending.push(RecordMsg::AttemptInputs {
+                        id: self.attempt_id.clone(),
+                        bytes,
+                    });
+                }
+            }
+        }
+        std::mem::take(&mut self.pending)
+    }
+
+    /// Logs an entry of the running attempt (stamped with the current step).
+    fn log(&mut self, entry: impl FnOnce(u64) -> crate::replay::log::Entry) {
+        let k = self.sim.steps();
+        if let Some(log) = self.log.as_mut() {
+            log.push(&entry(k));
+        }
+    }
+
+    /// Counts an instructor's intervention in the running attempt (and logs it: it counts in
+    /// the score).
+    pub fn intervene(&mut self) {
+        self.log(|k| crate::replay::log::Entry::Intervention { k });
+        if let Some(run) = self.exercise.as_mut() {
+            run.intervention();
+        }
     }
 
     /// An event of the current attempt at the current simulated time.
@@ -334,7 +481,9 @@ impl Live {
     /// Switches to `scenario`: a fresh simulation (an exercise has its own scene), faults
     /// cleared, inputs cleared, an exercise's settings, a new attempt.
     pub fn set_scenario(&mut self, scenario: Scenario) -> Result<(), seaarms_core::Error> {
-        self.sim = scenario.build_sim(&self.models)?;
+        let sim = scenario.build_sim(&self.models)?;
+        self.end_attempt("abandoned");
+        self.sim = sim;
         self.faults.clear();
         self.scenario = scenario;
         if let Some(c) = self.scenario.exercise().map(|e| e.control) {
@@ -362,6 +511,11 @@ impl Live {
             .all(|a| a.valves.iter().all(small) && small(&a.jaw))
             && self.cartesian.iter().flatten().all(small)
             && self.input.object_velocity.iter().all(|v| v.abs() < 1e-12)
+    }
+
+    /// The arm models (left, right).
+    pub fn models(&self) -> &[Arc<Model>; 2] {
+        &self.models
     }
 
     /// The simulation (read-only).
@@ -436,6 +590,7 @@ impl Live {
 
     /// Back to the initial position (Lim §4.1): simulation reset, inputs cleared.
     pub fn reset(&mut self) {
+        self.end_attempt("abandoned");
         self.sim.reset();
         self.input.arms = Default::default();
         self.input.object_velocity = [0.0; 6];
@@ -477,6 +632,8 @@ pub struct Session {
     pub id: String,
     /// Trainee label.
     pub label: String,
+    /// The trainee's class or group ("" when none).
+    pub group: String,
     /// Scenario name.
     pub scenario: Mutex<String>,
     /// Token that lets a trainee control this session.
@@ -605,6 +762,11 @@ impl SessionManager {
         })
     }
 
+    /// The arm model sessions use (both arms).
+    pub fn magnum(&self) -> Arc<Model> {
+        self.magnum.clone()
+    }
+
     fn map(&self) -> MutexGuard<'_, HashMap<String, Arc<Session>>> {
         self.live.lock().unwrap_or_else(|e| e.into_inner())
     }
@@ -617,6 +779,7 @@ impl SessionManager {
         mode: Option<ControlMode>,
         method: Option<ControlMethod>,
         label: Option<String>,
+        group: Option<String>,
     ) -> Result<Arc<Session>, CreateError> {
         let name = scenario.unwrap_or_else(|| "training".to_string());
         let scenario = Scenario::resolve(&name).ok_or(CreateError::UnknownScenario(name))?;
@@ -629,9 +792,11 @@ impl SessionManager {
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);
         let label = label.unwrap_or_default().chars().take(64).collect();
+        let group = group.unwrap_or_default().chars().take(64).collect();
         let session = Arc::new(Session {
             id,
             label,
+            group,
             scenario: Mutex::new(scenario.name().to_string()),
             control_token: random_hex(16),
             created_unix: unix_now(),
@@ -655,7 +820,7 @@ impl SessionManager {
         self.recorder.send(RecordMsg::Created {
             id: session.id.clone(),
             label: session.label.clone(),
-            group: String::new(),
+            group: session.group.clone(),
             scenario: session.scenario(),
             created_unix: session.created_unix,
             token_sha256: sha256_hex(&session.control_token),
@@ -712,7 +877,17 @@ impl SessionManager {
         for w in &self.workers {
             w.remove(id);
         }
-        let sim_seconds = session.live().sim.time_s();
+        let sim_seconds = {
+            let mut live = session.live();
+            live.end_attempt(match reason {
+                EndReason::ServerShutdown => "interrupted",
+                _ => "abandoned",
+            });
+            for msg in live.take_records(false) {
+                self.recorder.send(msg);
+            }
+            live.sim.time_s()
+        };
         self.recorder.send(RecordMsg::Ended {
             id: id.to_string(),
             ended_unix: unix_now(),

@@ -26,6 +26,9 @@ use crate::protocol::{ControlMethod, ControlMode, ServerMessage, grasp_name};
 pub const MAX_CATCH_UP_STEPS: u64 = 50;
 /// Record rows every this many steps (100 Hz).
 pub const RECORD_EVERY_STEPS: u64 = 10;
+/// The attempt's input log goes to the recorder every this many steps (1 s: what a killed
+/// server can lose).
+pub const ATTEMPT_PIECE_STEPS: u64 = 1000;
 
 /// Handle to one worker thread.
 pub struct WorkerHandle {
@@ -146,7 +149,7 @@ pub fn step_session(
     }
     if now >= live.next_frame {
         live.frame_seq += 1;
-        let frame = build_frame(session, live);
+        let frame = build_frame(live);
         // Sized for a typical frame (≈ 5 KiB) so serialization does not keep reallocating.
         let mut buf = Vec::with_capacity(8 * 1024);
         match serde_json::to_writer(&mut buf, &ServerMessage::State(Box::new(frame)))
@@ -219,8 +222,12 @@ impl Live {
 }
 
 fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
+    let piece = live.sim.steps() % ATTEMPT_PIECE_STEPS == 0;
+    for msg in live.take_records(piece) {
+        recorder.send(msg);
+    }
     let sim = &live.sim;
-    let row = Box::new(SessionRow::from_sim(sim));
+    let row = Box::new(SessionRow::from_sim(sim, &live.attempt_id));
     let grasp = sim.grasp_state();
     let relief = sim.relief_events();
     if relief > live.relief_recorded {

@@ -1,37 +1,33 @@
-//! Session records on disk, written by one recorder thread so no physics worker ever waits
-//! on a file:
+//! Session records, written by one recorder thread so no physics worker ever waits on a
+//! file or the database:
 //!
-//! * `DATA/sessions.jsonl` — the session index: a line when a session is created, a
-//!   `progress` line about every second for each session whose record grew (simulated
-//!   seconds and overloads of the rows written so far, so a killed server leaves true
-//!   figures), and a line when it ends. The last line of a session wins when reading. An
-//!   append-only index was chosen over an embedded database: it needs no C dependency, a
-//!   crash can at most cut the last line (which the reader skips), and replaying it on
-//!   start-up lists every finished session. It is compacted (one `record` line per
-//!   session, written to a temporary file and renamed) at start-up and by each retention
-//!   pass.
+//! * The database ([`crate::db`]): trainees, sessions (with progress figures: simulated
+//!   seconds and overloads of the rows on disk so far, so a killed server leaves true
+//!   figures), attempts with their compressed input streams, and typed events. Everything
+//!   received in a flush interval (about a second) is written in ONE transaction, so a
+//!   process killed at any moment leaves every earlier batch and nothing of a later one.
+//!   A batch that fails (disk full, database unreachable) is kept and retried with the next
+//!   one, up to [`MAX_PENDING_WRITES`]; beyond that it is dropped and counted.
 //! * `DATA/sessions/<id>.csv` — the time series at 100 Hz ([`SessionRow`], written by
-//!   [`crate::csv_out`]); `DATA/sessions/<id>.events.jsonl` — every event and instructor
-//!   action. Rows are formatted in memory and appended whole about every second; a write
-//!   that fails (disk full, I/O error) is cut back to the last whole row, the session's
-//!   recording is marked `failed`, and its later rows are dropped and counted. A process
-//!   killed inside a write can leave part of a row; readers take
-//!   [`crate::csv_out::complete_lines`], and start-up cuts the records of interrupted
-//!   sessions back to their last whole line.
+//!   [`crate::csv_out`]) for analysis. Rows are formatted in memory and appended whole about
+//!   every second (before the batch that records their figures); a write that fails (disk
+//!   full, I/O error) is cut back to the last whole row, the session's recording is marked
+//!   `failed`, and its later rows are dropped and counted. A process killed inside a write
+//!   can leave part of a row; readers take [`crate::csv_out::complete_lines`], and start-up
+//!   cuts the CSVs of interrupted sessions back to their last whole line.
+//! * At start-up nothing is live: stored sessions without an end are marked
+//!   [`crate::db::INTERRUPTED`] and attempts without an outcome `interrupted`.
 //! * New sessions are refused while the data disk has less free space than the configured
 //!   floor or the records folder cannot be written ([`Recorder::admit`]).
 //! * Retention ([`Retention`]): at start-up and periodically, records older than the
-//!   retention age, then the oldest ended records beyond the size cap, are deleted — never
-//!   a live session's.
+//!   retention age, then the oldest ended records beyond the size cap, are deleted (CSV and
+//!   database rows) — never a live session's.
 
 mod attempt;
-mod index;
 mod retention;
 mod row;
 
 pub use attempt::{AttemptEnd, AttemptStart, EventRecord};
-use index::IndexLine;
-pub use index::{SessionRecord, read_index};
 pub use retention::Retention;
 pub use row::{ArmRow, SessionRow};
 
@@ -46,6 +42,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use crate::csv_out::CsvOut;
+use crate::db::{Db, SessionRecord, Write as DbWrite};
 use crate::metrics::Metrics;
 
 /// Longest time a record stays in memory before it is written.
@@ -54,8 +51,9 @@ pub const FLUSH_INTERVAL: Duration = Duration::from_secs(1);
 pub const QUEUE_CAPACITY: usize = 65_536;
 /// Start-up repair reads this much of the end of an interrupted record.
 const REPAIR_TAIL_BYTES: u64 = 64 << 10;
-/// The index is compacted by a retention pass once it is larger than this.
-const COMPACT_INDEX_BYTES: u64 = 4 << 20;
+/// Database writes kept for retry while the database fails; beyond, they are dropped and
+/// counted (about a minute of a busy class).
+pub const MAX_PENDING_WRITES: usize = 200_000;
 
 /// Recorder settings (from [`crate::config::ServeConfig`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -151,6 +149,7 @@ type FailedSet = Arc<Mutex<HashMap<String, String>>>;
 /// The recorder: its thread and the data directory.
 pub struct Recorder {
     sender: RecordSender,
+    db: Db,
     dir: PathBuf,
     config: RecordConfig,
     failed: FailedSet,
@@ -182,44 +181,53 @@ pub fn free_disk_bytes(dir: &Path) -> Option<u64> {
 }
 
 impl Recorder {
-    /// Creates the data directory, repairs records cut by a crash, compacts the index,
-    /// applies retention and starts the recorder thread.
+    /// Creates the records folder and starts the recorder thread, which first repairs the
+    /// records a crash cut off, marks them interrupted and applies retention; returns once
+    /// that is done (blocking: call at start-up).
     pub fn open(
         dir: &Path,
+        db: Db,
         metrics: Arc<Metrics>,
         config: RecordConfig,
     ) -> anyhow::Result<Recorder> {
         std::fs::create_dir_all(dir.join("sessions"))?;
-        let index_path = dir.join("sessions.jsonl");
-        // Nothing is live yet: every session without an end line was interrupted.
-        for r in read_index(&index_path) {
-            if r.ended_unix.is_none() {
-                for path in [csv_path(dir, &r.id), events_path(dir, &r.id)] {
-                    if let Err(e) = cut_to_last_line(&path) {
-                        tracing::warn!(id = %r.id, "cannot repair {}: {e}", path.display());
-                    }
-                }
-            }
-        }
         let failed: FailedSet = Arc::default();
-        let mut state = RecorderState::new(dir, metrics.clone(), config, failed.clone())?;
-        state.maintain(true);
+        let mut state =
+            RecorderState::new(dir, db.clone(), metrics.clone(), config, failed.clone());
         let (tx, rx) = sync_channel(QUEUE_CAPACITY);
+        let (ready_tx, ready_rx) = sync_channel(1);
         let thread = std::thread::Builder::new()
             .name("recorder".into())
-            .spawn(move || state.run(rx))?;
-        let recorder = Recorder {
+            .spawn(move || {
+                let started = state.start();
+                let ok = started.is_ok();
+                let _ = ready_tx.send(started);
+                if ok {
+                    state.run(rx);
+                }
+            })?;
+        match ready_rx.recv() {
+            Ok(Ok(())) => {}
+            Ok(Err(e)) => return Err(e.context("opening the session records")),
+            Err(_) => anyhow::bail!("the recorder thread died at start-up"),
+        }
+        Ok(Recorder {
             sender: RecordSender {
                 tx,
                 metrics: metrics.clone(),
             },
+            db,
             dir: dir.to_path_buf(),
             config,
             failed,
             metrics,
             thread: Mutex::new(Some(thread)),
-        };
-        Ok(recorder)
+        })
+    }
+
+    /// The records database.
+    pub fn db(&self) -> &Db {
+        &self.db
     }
 
     /// A sending handle.
@@ -301,26 +309,10 @@ impl Recorder {
     pub fn log_path(&self, id: &str) -> Option<PathBuf> {
         valid_id(id).then(|| csv_path(&self.dir, id))
     }
-
-    /// Every session of the index, created order, with end data when ended. A session with
-    /// no end line was cut off by a crash: it is reported with `end_reason: "interrupted"`
-    /// unless it is live now (the caller merges live ones).
-    pub fn index(&self) -> Vec<SessionRecord> {
-        let mut v = read_index(&self.dir.join("sessions.jsonl"));
-        let failed = self.failed.lock().unwrap_or_else(|e| e.into_inner());
-        for r in &mut v {
-            r.recording_failed |= failed.contains_key(&r.id);
-        }
-        v
-    }
 }
 
 fn csv_path(dir: &Path, id: &str) -> PathBuf {
     dir.join("sessions").join(format!("{id}.csv"))
-}
-
-fn events_path(dir: &Path, id: &str) -> PathBuf {
-    dir.join("sessions").join(format!("{id}.events.jsonl"))
 }
 
 /// Cuts a file after its last newline (a line cut by a crash). Missing files are fine. Only
@@ -399,18 +391,17 @@ fn open_whole(path: &Path) -> io::Result<WholeFile<File>> {
 /// One live session in the recorder thread.
 struct Live {
     csv: Option<WholeFile<File>>,
-    events: Option<WholeFile<File>>,
     /// Rows formatted since the last write (whole rows only).
     rows: CsvOut<Vec<u8>>,
     pending_rows: u64,
-    pending_events: Vec<u8>,
-    pending_event_count: u64,
-    /// Figures of the last pending row, and of the last row on disk / in the index.
+    /// Figures of the last pending row, of the last row on disk, and as last stored.
     pending_figures: Option<(f64, u64)>,
     written_figures: Option<(f64, u64)>,
-    indexed_figures: Option<(f64, u64)>,
+    stored_figures: Option<(f64, u64)>,
     failed: bool,
-    failure_indexed: bool,
+    failure_stored: bool,
+    /// Sequence number of the session's next event.
+    next_event: i64,
 }
 
 impl Live {
@@ -435,27 +426,18 @@ impl Live {
                 None
             }
         };
-        let events = match open_whole(&events_path(dir, id)) {
-            Ok(f) => Some(f),
-            Err(e) => {
-                err.get_or_insert(e);
-                None
-            }
-        };
         let failed = err.is_some();
         (
             Live {
                 csv: csv.filter(|_| !failed),
-                events: events.filter(|_| !failed),
                 rows: CsvOut::new(Vec::new()),
                 pending_rows: 0,
-                pending_events: Vec::new(),
-                pending_event_count: 0,
                 pending_figures: None,
                 written_figures: None,
-                indexed_figures: None,
+                stored_figures: None,
                 failed,
-                failure_indexed: false,
+                failure_stored: false,
+                next_event: 0,
             },
             err,
         )
@@ -465,33 +447,65 @@ impl Live {
 /// The recorder thread's state.
 struct RecorderState {
     dir: PathBuf,
-    index: WholeFile<File>,
+    db: Db,
     metrics: Arc<Metrics>,
     config: RecordConfig,
     failed: FailedSet,
     live: HashMap<String, Live>,
+    /// Database writes since the last commit, in arrival order.
+    writes: Vec<DbWrite>,
+    /// Sequence number of each running attempt's next input piece.
+    next_piece: HashMap<String, i64>,
     last_maintenance: Instant,
 }
 
 impl RecorderState {
     fn new(
         dir: &Path,
+        db: Db,
         metrics: Arc<Metrics>,
         config: RecordConfig,
         failed: FailedSet,
-    ) -> io::Result<RecorderState> {
-        Ok(RecorderState {
+    ) -> RecorderState {
+        RecorderState {
             dir: dir.to_path_buf(),
-            index: open_whole(&dir.join("sessions.jsonl"))?,
+            db,
             metrics,
             config,
             failed,
             live: HashMap::new(),
+            writes: Vec::new(),
+            next_piece: HashMap::new(),
             last_maintenance: Instant::now(),
-        })
+        }
     }
 
-    fn write_error(&self, id: &str, what: &str, e: &io::Error) {
+    /// Start-up, before anything is live: repairs the CSVs of sessions a crash cut off,
+    /// marks them and their attempts interrupted, and applies retention.
+    fn start(&mut self) -> anyhow::Result<()> {
+        let unfinished = self.db.block_on(self.db.unfinished_sessions())?;
+        for id in &unfinished {
+            if !valid_id(id) {
+                continue;
+            }
+            let path = csv_path(&self.dir, id);
+            if let Err(e) = cut_to_last_line(&path) {
+                tracing::warn!(%id, "cannot repair {}: {e}", path.display());
+            }
+        }
+        let (sessions, attempts) = self.db.block_on(self.db.mark_interrupted())?;
+        if sessions + attempts > 0 {
+            tracing::info!(
+                sessions,
+                attempts,
+                "records cut off by a stop marked interrupted"
+            );
+        }
+        self.maintain();
+        Ok(())
+    }
+
+    fn mark_failed(&self, id: &str, what: &str, e: &dyn std::fmt::Display) {
         self.metrics
             .record_write_errors
             .fetch_add(1, Ordering::Relaxed);
@@ -507,28 +521,7 @@ impl RecorderState {
         self.metrics.records_dropped.fetch_add(n, Ordering::Relaxed);
     }
 
-    /// Appends index lines in one piece (synced: they are few and small).
-    fn write_index(&mut self, lines: &[IndexLine]) {
-        let mut text = String::new();
-        for line in lines {
-            if let Ok(l) = serde_json::to_string(line) {
-                text.push_str(&l);
-                text.push('\n');
-            }
-        }
-        if let Err(e) = self
-            .index
-            .append(text.as_bytes())
-            .and_then(|()| self.index.file.sync_data())
-        {
-            self.metrics
-                .record_write_errors
-                .fetch_add(1, Ordering::Relaxed);
-            tracing::error!("session index write failed: {e}");
-        }
-    }
-
-    /// Writes a session's pending rows and events; on failure marks it failed.
+    /// Writes a session's pending rows to its CSV; on failure marks it failed.
     fn write_pending(&mut self, id: &str) {
         let Some(live) = self.live.get_mut(id) else {
             return;
@@ -536,61 +529,82 @@ impl RecorderState {
         let rows = std::mem::replace(&mut live.rows, CsvOut::new(Vec::new()))
             .into_inner()
             .unwrap_or_default();
-        let (n_rows, n_events) = (live.pending_rows, live.pending_event_count);
-        live.pending_rows = 0;
-        live.pending_event_count = 0;
-        let events = std::mem::take(&mut live.pending_events);
-        let mut errors = Vec::new();
-        if !live.failed {
-            if let Some(f) = live.csv.as_mut() {
-                match f.append(&rows) {
-                    Ok(()) => live.written_figures = live.pending_figures.or(live.written_figures),
-                    Err(e) => errors.push(("CSV write", e, n_rows + n_events)),
-                }
+        let n_rows = std::mem::take(&mut live.pending_rows);
+        if live.failed {
+            return;
+        }
+        let Some(f) = live.csv.as_mut() else {
+            return;
+        };
+        match f.append(&rows) {
+            Ok(()) => live.written_figures = live.pending_figures.or(live.written_figures),
+            Err(e) => {
+                live.failed = true;
+                self.mark_failed(id, "CSV write", &e);
+                self.dropped(n_rows);
             }
-        }
-        if !live.failed && errors.is_empty() {
-            if let Some(f) = live.events.as_mut() {
-                if let Err(e) = f.append(&events) {
-                    errors.push(("events write", e, n_events));
-                }
-            }
-        }
-        if !errors.is_empty() {
-            live.failed = true;
-        }
-        for (what, e, lost) in &errors {
-            self.write_error(id, what, e);
-            self.dropped(*lost);
         }
     }
 
-    /// Writes every pending record, then one index line per session whose figures changed.
+    /// Commits the pending database writes in one transaction. On failure they are kept for
+    /// the next commit (the transaction left nothing), up to [`MAX_PENDING_WRITES`].
+    fn commit(&mut self) {
+        if self.writes.is_empty() {
+            return;
+        }
+        let result = self.db.block_on(self.db.write_batch(&self.writes));
+        match result {
+            Ok(()) => self.writes.clear(),
+            Err(e) => {
+                self.metrics
+                    .record_write_errors
+                    .fetch_add(1, Ordering::Relaxed);
+                tracing::error!(
+                    pending = self.writes.len(),
+                    "records database write failed (kept for retry): {e:#}"
+                );
+                if self.writes.len() > MAX_PENDING_WRITES {
+                    let lost = std::mem::take(&mut self.writes);
+                    self.dropped(lost.len() as u64);
+                    let ids: HashSet<&str> = lost.iter().filter_map(write_session).collect();
+                    for id in ids {
+                        self.mark_failed(id, "database write", &e);
+                    }
+                }
+            }
+        }
+    }
+
+    /// Writes every pending CSV row, then commits the batch with one progress write per
+    /// session whose figures changed.
     fn flush_all(&mut self) {
         let ids: Vec<String> = self.live.keys().cloned().collect();
         for id in &ids {
             self.write_pending(id);
         }
-        let mut lines = Vec::new();
+        let failed_now = self
+            .failed
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .clone();
         for (id, live) in &mut self.live {
-            let changed = live.written_figures != live.indexed_figures
-                || (live.failed && !live.failure_indexed);
+            live.failed |= failed_now.contains_key(id);
+            let changed = live.written_figures != live.stored_figures
+                || (live.failed && !live.failure_stored);
             if changed {
                 // Only a failure before any row leaves no figures: 0 s recorded.
                 let (t, overloads) = live.written_figures.unwrap_or((0.0, 0));
-                lines.push(IndexLine::Progress {
+                self.writes.push(DbWrite::Progress {
                     id: id.clone(),
                     sim_seconds: t,
                     overloads,
                     recording_failed: live.failed,
                 });
-                live.indexed_figures = live.written_figures;
-                live.failure_indexed = live.failed;
+                live.stored_figures = live.written_figures;
+                live.failure_stored = live.failed;
             }
         }
-        if !lines.is_empty() {
-            self.write_index(&lines);
-        }
+        self.commit();
     }
 
     fn handle(&mut self, msg: RecordMsg) {
@@ -598,31 +612,24 @@ impl RecorderState {
             RecordMsg::Created {
                 id,
                 label,
+                group,
                 scenario,
                 created_unix,
-                ..
+                token_sha256,
             } => {
                 let (live, err) = Live::open(&self.dir, &id);
                 if let Some(e) = &err {
-                    self.write_error(&id, "opening the record", e);
+                    self.mark_failed(&id, "opening the record", e);
                 }
-                let failed = live.failed;
                 self.live.insert(id.clone(), live);
-                let mut lines = vec![IndexLine::Created {
-                    id: id.clone(),
-                    label,
+                self.writes.push(DbWrite::Session {
+                    id,
+                    trainee: label,
+                    group,
                     scenario,
                     created_unix,
-                }];
-                if failed {
-                    lines.push(IndexLine::Progress {
-                        id,
-                        sim_seconds: 0.0,
-                        overloads: 0,
-                        recording_failed: true,
-                    });
-                }
-                self.write_index(&lines);
+                    token_sha256,
+                });
             }
             RecordMsg::Row { id, row, overloads } => {
                 let Some(live) = self.live.get_mut(&id) else {
@@ -642,27 +649,47 @@ impl RecorderState {
                 live.pending_figures = Some((row.t_s, overloads));
             }
             RecordMsg::Event(event) => {
-                let id = event.session.clone();
-                let mut json = event.detail.clone();
-                if !json.is_object() {
-                    json = serde_json::json!({"detail": json});
-                }
-                json["t"] = serde_json::json!(event.t);
-                json["event"] = serde_json::json!(event.kind);
-                if let Some(by) = event.actor {
-                    json["by"] = serde_json::json!(by);
-                }
-                let json = json.to_string();
-                let Some(live) = self.live.get_mut(&id) else {
+                let EventRecord {
+                    session,
+                    attempt,
+                    t,
+                    kind,
+                    actor,
+                    detail,
+                } = *event;
+                let Some(live) = self.live.get_mut(&session) else {
                     return;
                 };
-                if live.failed {
-                    self.dropped(1);
-                    return;
-                }
-                live.pending_events.extend_from_slice(json.as_bytes());
-                live.pending_events.push(b'\n');
-                live.pending_event_count += 1;
+                let seq = live.next_event;
+                live.next_event += 1;
+                self.writes.push(DbWrite::Event {
+                    session,
+                    seq,
+                    attempt,
+                    t,
+                    unix: super::unix_now(),
+                    kind,
+                    actor,
+                    detail: detail.to_string(),
+                });
+            }
+            RecordMsg::AttemptStarted(start) => {
+                self.next_piece.insert(start.id.clone(), 0);
+                self.writes.push(DbWrite::AttemptStart(start));
+            }
+            RecordMsg::AttemptInputs { id, bytes } => {
+                let next = self.next_piece.entry(id.clone()).or_insert(0);
+                let seq = *next;
+                *next += 1;
+                self.writes.push(DbWrite::AttemptInputs {
+                    id,
+                    seq,
+                    data: bytes,
+                });
+            }
+            RecordMsg::AttemptEnded(end) => {
+                self.next_piece.remove(&end.id);
+                self.writes.push(DbWrite::AttemptEnd(end));
             }
             RecordMsg::Ended {
                 id,
@@ -672,23 +699,27 @@ impl RecorderState {
                 overloads,
             } => {
                 self.write_pending(&id);
-                let failed = self.live.remove(&id).is_some_and(|l| l.failed);
-                self.write_index(&[IndexLine::Ended {
+                let failed = self.live.remove(&id).is_some_and(|l| l.failed)
+                    || self
+                        .failed
+                        .lock()
+                        .unwrap_or_else(|e| e.into_inner())
+                        .contains_key(&id);
+                self.writes.push(DbWrite::SessionEnd {
                     id,
                     ended_unix,
                     sim_seconds,
                     reason,
                     overloads,
                     recording_failed: failed,
-                }]);
+                });
+                // Ends are rare: stored at once, so the list shows the session ended.
+                self.commit();
             }
             RecordMsg::Flush(done) => {
                 self.flush_all();
                 let _ = done.send(());
             }
-            RecordMsg::AttemptStarted(_)
-            | RecordMsg::AttemptInputs { .. }
-            | RecordMsg::AttemptEnded(_) => {}
             RecordMsg::Shutdown(_) => {}
         }
     }
@@ -715,89 +746,81 @@ impl RecorderState {
                 last_flush = Instant::now();
             }
             if self.last_maintenance.elapsed() >= self.config.retention_interval {
-                self.maintain(false);
+                self.maintain();
             }
         }
     }
 
-    /// Retention, then index compaction when something was deleted, the index has grown
-    /// large, or `compact` is set (start-up).
-    fn maintain(&mut self, compact: bool) {
+    /// Retention: deletes the CSVs and database rows of the records it selects.
+    fn maintain(&mut self) {
         self.last_maintenance = Instant::now();
         if let Some(free) = free_disk_bytes(&self.dir) {
             self.metrics
                 .data_disk_free_bytes
                 .store(free, Ordering::Relaxed);
         }
-        let index_path = self.dir.join("sessions.jsonl");
-        let records = read_index(&index_path);
-        let sized: Vec<(SessionRecord, u64)> = records
-            .iter()
-            .map(|r| {
-                let size = [csv_path(&self.dir, &r.id), events_path(&self.dir, &r.id)]
-                    .iter()
-                    .filter_map(|p| std::fs::metadata(p).ok())
-                    .map(|m| m.len())
-                    .sum();
-                (r.clone(), size)
+        // The database first holds everything received so far.
+        self.flush_all();
+        let stored = match self.db.block_on(self.db.sessions_with_bytes()) {
+            Ok(s) => s,
+            Err(e) => {
+                tracing::error!("retention cannot read the records database: {e:#}");
+                return;
+            }
+        };
+        let sized: Vec<(SessionRecord, u64)> = stored
+            .into_iter()
+            .map(|(r, db_bytes)| {
+                let csv = if valid_id(&r.id) {
+                    std::fs::metadata(csv_path(&self.dir, &r.id)).map_or(0, |m| m.len())
+                } else {
+                    0
+                };
+                (r, csv + db_bytes)
             })
             .collect();
         let live: HashSet<String> = self.live.keys().cloned().collect();
         let prune = retention::select(&sized, &live, self.config.retention, super::unix_now());
-        let mut deleted: HashSet<String> = HashSet::new();
+        let mut deleted = Vec::new();
         for id in prune {
-            let mut ok = true;
-            for p in [csv_path(&self.dir, &id), events_path(&self.dir, &id)] {
+            if valid_id(&id) {
+                let p = csv_path(&self.dir, &id);
                 if let Err(e) = std::fs::remove_file(&p) {
                     if e.kind() != io::ErrorKind::NotFound {
                         tracing::error!(%id, "retention cannot delete {}: {e}", p.display());
-                        ok = false;
+                        continue;
                     }
                 }
             }
-            if ok {
-                tracing::info!(%id, "session record deleted by retention");
-                deleted.insert(id);
-            }
+            deleted.push(id);
         }
-        self.metrics
-            .records_pruned
-            .fetch_add(deleted.len() as u64, Ordering::Relaxed);
-        if compact || !deleted.is_empty() || self.index.len > COMPACT_INDEX_BYTES {
-            let kept: Vec<SessionRecord> = records
-                .into_iter()
-                .filter(|r| !deleted.contains(&r.id))
-                .collect();
-            if let Err(e) = self.compact(&kept) {
+        if deleted.is_empty() {
+            return;
+        }
+        match self.db.block_on(self.db.delete_sessions(&deleted)) {
+            Ok(()) => {
+                for id in &deleted {
+                    tracing::info!(%id, "session record deleted by retention");
+                }
                 self.metrics
-                    .record_write_errors
-                    .fetch_add(1, Ordering::Relaxed);
-                tracing::error!("session index compaction failed: {e}");
+                    .records_pruned
+                    .fetch_add(deleted.len() as u64, Ordering::Relaxed);
             }
+            Err(e) => tracing::error!("retention cannot delete database rows: {e:#}"),
         }
     }
+}
 
-    /// Rewrites the index as one line per record (temporary file, synced, renamed).
-    fn compact(&mut self, records: &[SessionRecord]) -> io::Result<()> {
-        let path = self.dir.join("sessions.jsonl");
-        let tmp = self.dir.join("sessions.jsonl.tmp");
-        let mut text = String::new();
-        for r in records {
-            text.push_str(&serde_json::to_string(&IndexLine::Record(r.clone()))?);
-            text.push('\n');
-        }
-        let result = (|| {
-            let mut f = File::create(&tmp)?;
-            f.write_all(text.as_bytes())?;
-            f.sync_all()?;
-            std::fs::rename(&tmp, &path)?;
-            self.index = open_whole(&path)?;
-            Ok(())
-        })();
-        if result.is_err() {
-            let _ = std::fs::remove_file(&tmp);
-        }
-        result
+/// The session a database write belongs to (None for attempt writes, which name only their
+/// attempt).
+fn write_session(w: &DbWrite) -> Option<&str> {
+    match w {
+        DbWrite::Session { id, .. }
+        | DbWrite::Progress { id, .. }
+        | DbWrite::SessionEnd { id, .. } => Some(id),
+        DbWrite::Event { session, .. } => Some(session),
+        DbWrite::AttemptStart(a) => Some(&a.session),
+        DbWrite::AttemptInputs { .. } | DbWrite::AttemptEnd(_) => None,
     }
 }
 

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 
 use super::admission::{ClientKey, Peer, client_ip};
 use super::command::{self, ActiveFault, Actor, Command, CommandError, Fault};
-use super::record::{SessionRecord, valid_id};
+use super::record::valid_id;
 use super::{CreateError, LIVE_SCENARIOS, Session, token_eq};
 use crate::app::AppState;
 use crate::error::ApiError;
@@ -73,7 +73,8 @@ fn caller(
     Err(forbidden("wrong token"))
 }
 
-fn require_instructor(state: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {
+/// 403 unless the request carries the instructor token.
+pub(crate) fn require_instructor(state: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {
     match caller(state, bearer(headers), None)? {
         Caller::Instructor => Ok(()),
         Caller::Trainee => Err(forbidden("instructor token required")),
@@ -102,6 +103,9 @@ pub struct CreateRequest {
     /// The trainee's display name (same as `label`).
     #[serde(default)]
     pub trainee: Option<String>,
+    /// The trainee's class or group (at most 64 characters are kept, like the name).
+    #[serde(default)]
+    pub group: Option<String>,
     /// The class join code, when the server requires one (or send `X-Join-Code`).
     #[serde(default)]
     pub join_code: Option<String>,
@@ -182,6 +186,7 @@ pub async fn create(
             req.control_mode,
             req.control_method,
             label,
+            req.group,
         )
     })
     .await
@@ -245,6 +250,12 @@ pub struct SessionSummary {
     pub status: &'static str,
     /// Trainee label.
     pub label: String,
+    /// Trainee display name (the same as `label`).
+    pub trainee: String,
+    /// The trainee's class or group ("" when none).
+    pub group: String,
+    /// Ids of the session's recorded attempts, newest first.
+    pub attempts: Vec<String>,
     /// Scenario.
     pub scenario: String,
     /// Unix seconds.
@@ -278,7 +289,7 @@ pub struct SessionSummary {
     pub recording: &'static str,
 }
 
-fn live_summary(s: &Session, recording: &'static str) -> SessionSummary {
+fn live_summary(s: &Session, recording: &'static str, attempts: Vec<String>) -> SessionSummary {
     let live = s.live();
     let sim = live.sim();
     let arm = |arm: Arm| {
@@ -296,6 +307,9 @@ fn live_summary(s: &Session, recording: &'static str) -> SessionSummary {
         id: s.id.clone(),
         status: "live",
         label: s.label.clone(),
+        trainee: s.label.clone(),
+        group: s.group.clone(),
+        attempts,
         scenario: s.scenario(),
         created_unix: s.created_unix,
         ended_unix: None,
@@ -311,54 +325,87 @@ fn live_summary(s: &Session, recording: &'static str) -> SessionSummary {
     }
 }
 
-fn ended_summary(r: SessionRecord) -> SessionSummary {
+fn ended_summary(
+    r: crate::db::SessionRecord,
+    failed_now: bool,
+    attempts: Vec<String>,
+) -> SessionSummary {
     SessionSummary {
         id: r.id,
         status: "ended",
-        label: r.label,
+        label: r.trainee.clone(),
+        trainee: r.trainee,
+        group: r.group,
+        attempts,
         scenario: r.scenario,
         created_unix: r.created_unix,
         ended_unix: r.ended_unix,
         end_reason: Some(
             r.end_reason
-                .unwrap_or_else(|| "interrupted (server stopped)".into()),
+                .unwrap_or_else(|| crate::db::INTERRUPTED.into()),
         ),
-        sim_seconds: r.sim_seconds.unwrap_or(0.0),
+        sim_seconds: r.sim_seconds,
         grasp: None,
         paused: None,
         trainees: None,
         measures: None,
-        overload_count: r.overloads.unwrap_or(0),
+        overload_count: r.overloads,
         faults: None,
-        recording: if r.recording_failed { "failed" } else { "ok" },
+        recording: if r.recording_failed || failed_now {
+            "failed"
+        } else {
+            "ok"
+        },
     }
 }
 
+fn db_error(e: anyhow::Error) -> ApiError {
+    tracing::error!("records database: {e:#}");
+    ApiError::new(
+        StatusCode::INTERNAL_SERVER_ERROR,
+        format!("the records database failed: {e}"),
+    )
+}
+
+/// Waits until the recorder has stored everything queued so far (sessions just ended).
+async fn flush_records(state: &AppState) {
+    let sessions = state.sessions.clone();
+    let _ = tokio::task::spawn_blocking(move || sessions.recorder.flush()).await;
+}
+
 /// `GET /api/sessions` (instructor): live sessions with live summaries, then finished ones
-/// from the on-disk index (newest last).
+/// from the records database (oldest first).
 pub async fn list(
     State(state): State<AppState>,
     headers: HeaderMap,
 ) -> Result<Json<Vec<SessionSummary>>, ApiError> {
     require_instructor(&state, &headers)?;
+    flush_records(&state).await;
     let live: Vec<Arc<Session>> = state.sessions.all();
-    let live_ids: Vec<String> = live.iter().map(|s| s.id.clone()).collect();
-    let recorder_index = {
-        let sessions = state.sessions.clone();
-        tokio::task::spawn_blocking(move || sessions.recorder.index())
-            .await
-            .unwrap_or_default()
-    };
+    let stored = state.db.sessions().await.map_err(db_error)?;
+    let mut attempts: std::collections::HashMap<String, Vec<String>> =
+        std::collections::HashMap::new();
+    for (session, attempt) in state.db.attempt_ids(None).await.map_err(db_error)? {
+        attempts.entry(session).or_default().push(attempt);
+    }
     let recorder = &state.sessions.recorder;
     let mut out: Vec<SessionSummary> = live
         .iter()
-        .map(|s| live_summary(s, recorder.recording(&s.id)))
+        .map(|s| {
+            let a = attempts.remove(&s.id).unwrap_or_default();
+            live_summary(s, recorder.recording(&s.id), a)
+        })
         .collect();
+    let live_ids: std::collections::HashSet<&str> = live.iter().map(|s| s.id.as_str()).collect();
     out.extend(
-        recorder_index
+        stored
             .into_iter()
-            .filter(|r| !live_ids.contains(&r.id))
-            .map(ended_summary),
+            .filter(|r| !live_ids.contains(r.id.as_str()))
+            .map(|r| {
+                let failed = recorder.recording(&r.id) == "failed";
+                let a = attempts.remove(&r.id).unwrap_or_default();
+                ended_summary(r, failed, a)
+            }),
     );
     Ok(Json(out))
 }
@@ -369,20 +416,28 @@ pub async fn get_one(
     headers: HeaderMap,
     Path(id): Path<String>,
 ) -> Result<Json<SessionSummary>, ApiError> {
+    let ids = |v: Vec<(String, String)>| v.into_iter().map(|(_, a)| a).collect::<Vec<_>>();
     if let Some(s) = state.sessions.get(&id) {
         caller(&state, bearer(&headers), Some(&s))?;
+        flush_records(&state).await;
+        let attempts = ids(state.db.attempt_ids(Some(&id)).await.map_err(db_error)?);
         return Ok(Json(live_summary(
             &s,
             state.sessions.recorder.recording(&s.id),
+            attempts,
         )));
     }
     require_instructor(&state, &headers)?;
-    let index = state.sessions.recorder.index();
-    index
-        .into_iter()
-        .find(|r| r.id == id)
-        .map(|r| Json(ended_summary(r)))
-        .ok_or_else(|| ApiError::not_found(format!("no session `{id}`")))
+    flush_records(&state).await;
+    let record = state
+        .db
+        .session(&id)
+        .await
+        .map_err(db_error)?
+        .ok_or_else(|| ApiError::not_found(format!("no session `{id}`")))?;
+    let attempts = ids(state.db.attempt_ids(Some(&id)).await.map_err(db_error)?);
+    let failed = state.sessions.recorder.recording(&id) == "failed";
+    Ok(Json(ended_summary(record, failed, attempts)))
 }
 
 /// `DELETE /api/sessions/{id}`: end a live session (the instructor any, a trainee its own);

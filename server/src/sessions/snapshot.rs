@@ -8,7 +8,7 @@ use seaarms_core::kinematics::forward_kinematics;
 use seaarms_core::manipulability::{Measures, dual_measures, jlm};
 use seaarms_core::sim::Arm;
 
-use super::{Live, Session};
+use super::Live;
 use crate::api::wire::PoseOut;
 use crate::protocol::{
     ArmFrame, ArmsFrame, DualFrame, EllipsoidFrame, MeasuresFrame, ObjectFrame, StateFrame,
@@ -48,15 +48,10 @@ fn measures_frame(m: &Measures, jlm: Option<f64>) -> MeasuresFrame {
 }
 
 /// One arm's frame and its translational Jacobian (world), with its warnings.
-fn arm_frame(
-    session: &Session,
-    live: &mut Live,
-    arm: Arm,
-    warnings: &mut Vec<String>,
-) -> (ArmFrame, DMatrix<f64>) {
+fn arm_frame(live: &mut Live, arm: Arm, warnings: &mut Vec<String>) -> (ArmFrame, DMatrix<f64>) {
     let name = arm_name(arm);
     let sim = &live.sim;
-    let model = &session.models[arm.index()];
+    let model = &*live.models[arm.index()];
     let state = sim.arm(arm);
     let jw = sim.jacobian_world(arm);
     let jt = DMatrix::from_fn(3, 6, |r, c| jw[(r, c)]);
@@ -110,11 +105,11 @@ fn arm_frame(
     (frame, jt)
 }
 
-/// Builds the frame for the session's current state.
-pub fn build_frame(session: &Session, live: &mut Live) -> StateFrame {
+/// Builds the frame for a live state (a session's, or a replay's).
+pub fn build_frame(live: &mut Live) -> StateFrame {
     let mut warnings = Vec::new();
-    let (left, jl) = arm_frame(session, live, Arm::Left, &mut warnings);
-    let (right, jr) = arm_frame(session, live, Arm::Right, &mut warnings);
+    let (left, jl) = arm_frame(live, Arm::Left, &mut warnings);
+    let (right, jr) = arm_frame(live, Arm::Right, &mut warnings);
     let sim = &live.sim;
     let dual = if left.holding && right.holding {
         dual_measures(&jl, &jr).ok().map(|m| DualFrame {

@@ -109,19 +109,33 @@ fn error_text(message: impl Into<String>) -> Utf8Bytes {
 }
 
 fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
-    let live = session.live();
+    let role = match role {
+        Role::Trainee => "trainee",
+        Role::Observer => "observer",
+    };
+    let hello = hello_for(&session.id, role, &session.live(), &state.sessions.config);
+    serde_json::to_string(&ServerMessage::Hello(Box::new(hello)))
+        .unwrap_or_default()
+        .into()
+}
+
+/// The `hello` of session `id` in state `live` (a live session's, or a replay's).
+pub fn hello_for(
+    id: &str,
+    role: &'static str,
+    live: &super::Live,
+    config: &super::SessionConfig,
+) -> Hello {
     let params = live.sim().params();
+    let models = live.models();
     let arm = |arm: Arm| ArmModelOut {
-        model: session.models[arm.index()].spec.clone(),
+        model: models[arm.index()].spec.clone(),
         base: PoseOut::from(&params.arms[arm.index()].base),
     };
     let size = params.object.size_m;
-    let msg = ServerMessage::Hello(Box::new(Hello {
-        session: session.id.clone(),
-        role: match role {
-            Role::Trainee => "trainee",
-            Role::Observer => "observer",
-        },
+    Hello {
+        session: id.to_string(),
+        role,
         arms: Arm::BOTH.map(arm),
         object: ObjectModelOut {
             size_m: [size.x, size.y, size.z],
@@ -129,17 +143,16 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
         },
         seabed_z_m: params.object.seabed_z_m,
         settings: live.settings(),
-        scenario: session.scenario(),
-        frame_hz: state.sessions.config.frame_hz,
-        max_messages_per_second: state.sessions.config.max_messages_per_second,
+        scenario: live.scenario().name().to_string(),
+        frame_hz: config.frame_hz,
+        max_messages_per_second: config.max_messages_per_second,
         scenarios: super::LIVE_SCENARIOS
             .iter()
             .map(|&(name, description)| ScenarioOut { name, description })
             .collect(),
         exercise: live.scenario().exercise().cloned(),
         scene: SceneOut::new(params, live.scenario().exercise().map(|e| &**e)),
-    }));
-    serde_json::to_string(&msg).unwrap_or_default().into()
+    }
 }
 
 /// The `ended` message, once the session has ended (sent right before the close frame).

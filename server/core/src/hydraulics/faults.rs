@@ -6,7 +6,7 @@ use crate::finite_or;
 
 /// Per-arm fault injection, plain mutable parameters (all "no fault" by default). Any value is
 /// accepted; non-finite or out-of-range values are clamped by the simulation at use.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Faults {
     /// Supply pressure drop (Pa), subtracted from the supply, clamped to [0, supply].
     pub supply_drop_pa: f64,

@@ -3,15 +3,15 @@
 
 use std::collections::HashSet;
 
-use super::SessionRecord;
+use crate::db::SessionRecord;
 
 /// Retention limits (0 turns a limit off).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Retention {
     /// Records of sessions that ended longer ago than this are deleted (days; 0 = kept).
     pub max_age_days: f64,
-    /// The records (CSV + events of every session, live ones included) are kept below this
-    /// many bytes by deleting the oldest ended ones (0 = no cap).
+    /// The records (CSV + database rows of every session, live ones included) are kept below
+    /// this many bytes by deleting the oldest ended ones (0 = no cap).
     pub max_bytes: u64,
 }
 
@@ -57,13 +57,14 @@ mod tests {
     fn rec(id: &str, created: f64, ended: Option<f64>) -> SessionRecord {
         SessionRecord {
             id: id.into(),
-            label: String::new(),
+            trainee: String::new(),
+            group: String::new(),
             scenario: "training".into(),
             created_unix: created,
             ended_unix: ended,
-            sim_seconds: None,
             end_reason: None,
-            overloads: None,
+            sim_seconds: 0.0,
+            overloads: 0,
             recording_failed: false,
         }
     }

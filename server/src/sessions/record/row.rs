@@ -41,13 +41,15 @@ pub struct SessionRow {
     pub grasp: &'static str,
     /// Relief-valve openings of the simulation (since its last reset).
     pub relief_events: u64,
+    /// The attempt the row belongs to (`t` restarts at each attempt's start).
+    pub attempt: String,
 }
 
 const WRENCH: [&str; 6] = ["fx", "fy", "fz", "tx", "ty", "tz"];
 
 impl SessionRow {
-    /// The row of the simulation's current state.
-    pub fn from_sim(sim: &Simulation) -> SessionRow {
+    /// The row of the simulation's current state in attempt `attempt`.
+    pub fn from_sim(sim: &Simulation, attempt: &str) -> SessionRow {
         let arm = |arm: Arm| {
             let a = sim.arm(arm);
             ArmRow {
@@ -68,6 +70,7 @@ impl SessionRow {
             internal: sim.internal_wrench(),
             grasp: sim.grasp_state().as_str(),
             relief_events: sim.relief_events(),
+            attempt: attempt.to_string(),
         }
     }
 
@@ -84,7 +87,7 @@ impl SessionRow {
         }
         h.extend(["object_x", "object_y", "object_z"].map(String::from));
         h.extend(WRENCH.iter().map(|c| format!("internal_{c}")));
-        h.extend(["grasp", "relief_events"].map(String::from));
+        h.extend(["grasp", "relief_events", "attempt"].map(String::from));
         h
     }
 
@@ -106,6 +109,7 @@ impl SessionRow {
         }
         out.field(Field::Text(self.grasp))?;
         out.field(Field::Int(self.relief_events))?;
+        out.field(Field::Text(&self.attempt))?;
         out.end_row()
     }
 }

@@ -1,0 +1,175 @@
+//! `GET /api/results.csv?group=&exercise=` (instructor): a class's results, one row per
+//! finished exercise attempt (outcome `passed` or `failed`), with the assessment's metrics,
+//! written by [`crate::csv_out`].
+
+use axum::extract::{Query, State};
+use axum::http::{HeaderMap, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use serde::Deserialize;
+
+use crate::app::AppState;
+use crate::csv_out::{CsvOut, Field};
+use crate::db::AttemptRow;
+use crate::error::ApiError;
+
+/// Query of `GET /api/results.csv` (both optional; empty = any).
+#[derive(Debug, Default, Deserialize)]
+pub struct ResultsQuery {
+    /// Class or group.
+    #[serde(default)]
+    pub group: Option<String>,
+    /// Exercise id.
+    #[serde(default)]
+    pub exercise: Option<String>,
+}
+
+/// The columns of the export.
+pub const COLUMNS: [&str; 13] = [
+    "trainee",
+    "group",
+    "exercise",
+    "attempt",
+    "session",
+    "started_utc",
+    "outcome",
+    "score",
+    "duration_s",
+    "strikes",
+    "overloads",
+    "drops",
+    "interventions",
+];
+
+/// `GET /api/results.csv`.
+pub async fn export(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    Query(q): Query<ResultsQuery>,
+) -> Result<Response, ApiError> {
+    crate::sessions::rest::require_instructor(&state, &headers)?;
+    let group = q.group.filter(|g| !g.is_empty());
+    let exercise = q.exercise.filter(|e| !e.is_empty());
+    let rows = state
+        .db
+        .results(group.as_deref(), exercise.as_deref())
+        .await
+        .map_err(|e| {
+            ApiError::new(
+                StatusCode::INTERNAL_SERVER_ERROR,
+                format!("the records database failed: {e}"),
+            )
+        })?;
+    let csv = table(&rows)
+        .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
+    let name = match (&group, &exercise) {
+        (Some(g), _) => file_safe(g),
+        (None, Some(e)) => file_safe(e),
+        (None, None) => "all".to_string(),
+    };
+    Ok((
+        [
+            (header::CONTENT_TYPE, "text/csv; charset=utf-8".to_string()),
+            (
+                header::CONTENT_DISPOSITION,
+                format!("attachment; filename=\"seaarms-results-{name}.csv\""),
+            ),
+        ],
+        csv,
+    )
+        .into_response())
+}
+
+/// A name for a file: letters, digits, `-` and `_` kept, the rest `_` (at most 40).
+fn file_safe(s: &str) -> String {
+    s.chars()
+        .take(40)
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || c == '-' || c == '_' {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// The CSV of `rows` (header first).
+fn table(rows: &[AttemptRow]) -> std::io::Result<Vec<u8>> {
+    let mut out = CsvOut::new(Vec::new());
+    out.header(&COLUMNS[..])?;
+    for a in rows {
+        let metric = |name: &str| {
+            a.assessment
+                .as_ref()
+                .and_then(|v| v.get(name))
+                .and_then(serde_json::Value::as_f64)
+        };
+        // Counts are whole numbers stored as f64 in the assessment.
+        let count = |x: Option<f64>| match x {
+            Some(v) if v.is_finite() && v >= 0.0 => Field::Int(v.round() as u64),
+            _ => Field::Empty,
+        };
+        let strikes = match (metric("seabed_strikes"), metric("obstacle_strikes")) {
+            (None, None) => None,
+            (s, o) => Some(s.unwrap_or(0.0) + o.unwrap_or(0.0)),
+        };
+        let started = rfc3339(a.started_unix);
+        out.row([
+            Field::Text(&a.trainee),
+            Field::Text(&a.group),
+            Field::Text(a.exercise.as_deref().unwrap_or_default()),
+            Field::Text(&a.id),
+            Field::Text(&a.session),
+            Field::Text(&started),
+            Field::Text(a.outcome.as_deref().unwrap_or_default()),
+            Field::from(a.score),
+            Field::Num(metric("time_s").unwrap_or(a.sim_seconds)),
+            count(strikes),
+            count(metric("overloads")),
+            count(metric("drops")),
+            count(metric("interventions")),
+        ])?;
+    }
+    out.into_inner()
+}
+
+/// Unix seconds as RFC 3339 UTC: `2023-11-14T22:13:20Z`, with milliseconds when not whole
+/// (`…:20.500Z`). Days to a civil date by Howard Hinnant's `civil_from_days` (proleptic
+/// Gregorian calendar).
+pub fn rfc3339(unix: f64) -> String {
+    let ms_total = (unix * 1000.0).round() as i64;
+    let (secs, ms) = (ms_total.div_euclid(1000), ms_total.rem_euclid(1000));
+    let (days, sod) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    let (h, m, s) = (sod / 3600, sod % 3600 / 60, sod % 60);
+    let frac = if ms == 0 {
+        String::new()
+    } else {
+        format!(".{ms:03}")
+    };
+    format!("{year:04}-{month:02}-{day:02}T{h:02}:{m:02}:{s:02}{frac}Z")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Known instants: the epoch, 2000-02-29 (a leap day of a century leap year; 951782400
+    /// s), 1 700 000 000 s = 2023-11-14T22:13:20Z, and a day before the epoch.
+    #[test]
+    fn rfc3339_matches_known_instants() {
+        assert_eq!(rfc3339(0.0), "1970-01-01T00:00:00Z");
+        assert_eq!(rfc3339(951_782_400.0), "2000-02-29T00:00:00Z");
+        assert_eq!(rfc3339(1_700_000_000.0), "2023-11-14T22:13:20Z");
+        assert_eq!(rfc3339(1_700_000_000.25), "2023-11-14T22:13:20.250Z");
+        assert_eq!(rfc3339(-86_400.0), "1969-12-31T00:00:00Z");
+    }
+}

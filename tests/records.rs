@@ -1,0 +1,686 @@
+//! Training records in the database (issue 16), over real sockets: every test runs against
+//! SQLite (the default file in the data folder) and, when `SEAARMS_TEST_DATABASE_URL` names
+//! a PostgreSQL server (`tests/run.sh` starts a throwaway one), against a fresh database on
+//! it as well — the same code path through sqlx's `Any` driver.
+
+#![allow(clippy::unwrap_used)]
+
+mod common;
+mod records_common;
+
+use std::time::Duration;
+
+use common::{TEACHER, create_at, get_json, get_text};
+use records_common::{Binary, Csv, database_urls, drive, temp_dir};
+use seaarms::db::{AttemptFilter, Db, Write};
+use seaarms::sessions::record::{AttemptEnd, AttemptStart};
+use serde_json::{Value, json};
+use sha2::Digest;
+
+async fn act(base: &str, id: &str, token: &str, action: Value) {
+    let r = reqwest::Client::new()
+        .post(format!("{base}/api/sessions/{id}/actions"))
+        .bearer_auth(token)
+        .json(&action)
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(
+        r.status().as_u16(),
+        204,
+        "{action}: {}",
+        r.text().await.unwrap()
+    );
+}
+
+/// Opens the database the server of `dir` uses (the test's own pool beside the server's).
+fn open_db(dir: &std::path::Path, url: &Option<String>) -> Db {
+    let url = url.clone().unwrap_or_else(|| seaarms::db::default_url(dir));
+    Db::open(&url).unwrap()
+}
+
+/// Raw rows for checks the query API does not cover.
+async fn rows(url: &str, sql: &str, bind: &str) -> Vec<sqlx::any::AnyRow> {
+    use sqlx::Connection;
+    sqlx::any::install_default_drivers();
+    let mut c = sqlx::AnyConnection::connect(url).await.unwrap();
+    let out = sqlx::query(sql).bind(bind).fetch_all(&mut c).await.unwrap();
+    c.close().await.unwrap();
+    out
+}
+
+fn url_of(dir: &std::path::Path, url: &Option<String>) -> String {
+    url.clone().unwrap_or_else(|| seaarms::db::default_url(dir))
+}
+
+fn extra_args(url: &Option<String>) -> Vec<String> {
+    let mut v: Vec<String> = ["--retention-days", "0", "--retention-max-mb", "0"]
+        .map(String::from)
+        .to_vec();
+    if let Some(u) = url {
+        v.push("--database-url".into());
+        v.push(u.clone());
+    }
+    v
+}
+
+/// A named trainee of a group: trainee, session (with the control token's hash) and typed
+/// events (commands with their actor, JSON details) are stored; the summaries carry trainee
+/// and group; a server restarted on the same database lists the ended session.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_named_trainees_session_is_recorded_and_listed_after_a_restart() {
+    for url in database_urls().await {
+        let dir = temp_dir("named");
+        let args = extra_args(&url);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let s = Binary::start(&dir, &args);
+        let (st, c) = create_at(
+            &s.base,
+            json!({"trainee": "Ada Lovelace", "group": "ROV-2", "scenario": "case4-dual-closed-loop"}),
+        )
+        .await;
+        assert_eq!(st, 201, "{c}");
+        let id = c["id"].as_str().unwrap().to_string();
+        let token = c["control_token"].as_str().unwrap().to_string();
+        let live = get_json(&format!("{}/api/sessions/{id}", s.base)).await;
+        assert_eq!(live["trainee"], "Ada Lovelace", "{live}");
+        assert_eq!(live["group"], "ROV-2");
+        assert_eq!(live["label"], "Ada Lovelace");
+        drive(&c, 1, 1.0).await;
+        act(&s.base, &id, &token, json!({"type": "release"})).await;
+        tokio::time::sleep(Duration::from_millis(1500)).await;
+        act(&s.base, &id, TEACHER, json!({"type": "pause"})).await;
+        act(&s.base, &id, TEACHER, json!({"type": "resume"})).await;
+        act(&s.base, &id, &token, json!({"type": "reset"})).await;
+        tokio::time::sleep(Duration::from_millis(300)).await;
+        let r = reqwest::Client::new()
+            .delete(format!("{}/api/sessions/{id}", s.base))
+            .bearer_auth(&token)
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(r.status().as_u16(), 204);
+        let ended = get_json(&format!("{}/api/sessions/{id}", s.base)).await;
+        assert_eq!(ended["status"], "ended", "{ended}");
+        assert_eq!(ended["end_reason"], "ended by trainee");
+        assert_eq!(ended["trainee"], "Ada Lovelace");
+        assert_eq!(ended["group"], "ROV-2");
+        assert!(ended["attempts"].is_array(), "{ended}");
+
+        let db_url = url_of(&dir, &url);
+        let trainees = rows(
+            &db_url,
+            "SELECT t.id, t.name, t.grp FROM trainees t JOIN sessions s ON s.trainee_id = t.id \
+             WHERE s.id = $1",
+            &id,
+        )
+        .await;
+        assert_eq!(trainees.len(), 1, "the session names its trainee");
+        use sqlx::Row;
+        assert_eq!(trainees[0].get::<String, _>("name"), "Ada Lovelace");
+        assert_eq!(trainees[0].get::<String, _>("grp"), "ROV-2");
+        let db = open_db(&dir, &url);
+        let expected_hash = hex(&sha2::Sha256::digest(token.as_bytes()));
+        assert_eq!(
+            db.session_token_sha256(&id).await.unwrap(),
+            Some(expected_hash)
+        );
+        let events = rows(
+            &db_url,
+            "SELECT seq, kind, actor, detail, t, attempt_id FROM events WHERE session_id = $1 \
+             ORDER BY seq",
+            &id,
+        )
+        .await;
+        let kinds: Vec<(String, Option<String>)> = events
+            .iter()
+            .map(|r| (r.get("kind"), r.get("actor")))
+            .collect();
+        for (kind, actor) in [
+            ("release", "trainee"),
+            ("pause", "instructor"),
+            ("resume", "instructor"),
+            ("reset", "trainee"),
+        ] {
+            assert!(
+                kinds.contains(&(kind.to_string(), Some(actor.to_string()))),
+                "no {kind} by {actor} in {kinds:?}"
+            );
+        }
+        for (i, r) in events.iter().enumerate() {
+            assert_eq!(r.get::<i64, _>("seq"), i as i64, "event seq 0, 1, 2, …");
+            let detail: Value = serde_json::from_str(&r.get::<String, _>("detail")).unwrap();
+            assert!(detail.is_object(), "typed detail, not a debug string");
+            assert!(r.get::<f64, _>("t").is_finite());
+        }
+        s.stop();
+
+        // A new server on the same records: the session is listed, ended, with its trainee.
+        let s = Binary::start(&dir, &args);
+        let list = get_json(&format!("{}/api/sessions", s.base)).await;
+        let entry = list
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|e| e["id"] == id.as_str())
+            .unwrap_or_else(|| panic!("{id} not listed after the restart: {list}"));
+        assert_eq!(entry["status"], "ended");
+        assert_eq!(entry["end_reason"], "ended by trainee");
+        assert_eq!(entry["trainee"], "Ada Lovelace");
+        assert_eq!(entry["group"], "ROV-2");
+        // The simulated clock restarts at a reset: 0.3 s ran after it.
+        assert!(entry["sim_seconds"].as_f64().unwrap() > 0.0, "{entry}");
+        s.stop();
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+fn hex(bytes: &[u8]) -> String {
+    bytes.iter().map(|b| format!("{b:02x}")).collect()
+}
+
+/// The query API on rows written by the recorder's batch writer: attempts newest first and
+/// filtered (trainee, group, exercise, session — `$N` parameters used twice in one query),
+/// input pieces concatenated in their order, events by time; the class export's rows.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn attempts_inputs_and_events_read_back_as_written() {
+    for url in database_urls().await {
+        let dir = temp_dir("dbapi");
+        let db = open_db(&dir, &url);
+        let session = |id: &str, trainee: &str, group: &str| Write::Session {
+            id: id.into(),
+            trainee: trainee.into(),
+            group: group.into(),
+            scenario: "pick-and-place".into(),
+            created_unix: 1_700_000_000.0,
+            token_sha256: "ab".repeat(32),
+        };
+        let start = |id: &str, session: &str, exercise: Option<&str>, started: f64| {
+            Write::AttemptStart(Box::new(AttemptStart {
+                id: id.into(),
+                session: session.into(),
+                scenario: exercise.unwrap_or("training").into(),
+                exercise: exercise.map(String::from),
+                exercise_version: exercise.map(|_| "1:abc".to_string()),
+                sim_version: "sim-1".into(),
+                started_unix: started,
+                init: json!({"seed": 7, "q": [0.5, -1.25]}),
+            }))
+        };
+        let end = |id: &str, outcome: &str, score: Option<f64>| {
+            Write::AttemptEnd(Box::new(AttemptEnd {
+                id: id.into(),
+                ended_unix: 1_700_000_100.0,
+                sim_seconds: 61.5,
+                outcome: outcome.into(),
+                score,
+                assessment: score.map(|s| {
+                    json!({"score": s, "seabed_strikes": 2.0,
+                    "obstacle_strikes": 1.0, "overloads": 3.0, "drops": 0.0,
+                    "interventions": 4.0, "time_s": 58.25})
+                }),
+            }))
+        };
+        let event = |seq: i64, attempt: &str, t: f64, kind: &str| Write::Event {
+            session: "s1".into(),
+            seq,
+            attempt: Some(attempt.into()),
+            t,
+            unix: 1_700_000_001.0 + t,
+            kind: kind.into(),
+            actor: (kind == "pause").then_some("instructor"),
+            detail: json!({"n": seq}).to_string(),
+        };
+        let pieces: Vec<Vec<u8>> = vec![vec![0, 1, 2, 255], vec![], vec![7; 300], vec![9, 8]];
+        let mut batch = vec![
+            session("s1", "Ada", "ROV-2"),
+            session("s2", "Grace", "ROV-3"),
+            start("a1", "s1", Some("pick-and-place"), 1_700_000_010.0),
+        ];
+        for (i, p) in pieces.iter().enumerate() {
+            batch.push(Write::AttemptInputs {
+                id: "a1".into(),
+                seq: i as i64,
+                data: p.clone(),
+            });
+        }
+        batch.extend([
+            event(0, "a1", 3.0, "grasp"),
+            event(1, "a1", 1.5, "pause"),
+            end("a1", "passed", Some(87.5)),
+            start("a2", "s1", None, 1_700_000_020.0),
+            end("a2", "abandoned", None),
+            start("a3", "s2", Some("pick-and-place"), 1_700_000_030.0),
+            end("a3", "failed", Some(12.0)),
+            start("a4", "s2", Some("pick-and-place"), 1_700_000_040.0),
+        ]);
+        db.write_batch(&batch).await.unwrap();
+        // Written twice (a retry after a lost commit answer): nothing is doubled.
+        db.write_batch(&batch).await.unwrap();
+
+        let all = db.attempts(&AttemptFilter::default()).await.unwrap();
+        let ids: Vec<&str> = all.iter().map(|a| a.id.as_str()).collect();
+        assert_eq!(ids, ["a4", "a3", "a2", "a1"], "newest first");
+        let ada = db
+            .attempts(&AttemptFilter {
+                trainee: Some("Ada".into()),
+                ..Default::default()
+            })
+            .await
+            .unwrap();
+        assert_eq!(
+            ada.iter().map(|a| a.id.as_str()).collect::<Vec<_>>(),
+            ["a2", "a1"]
+        );
+        let rov3 = db
+            .attempts(&AttemptFilter {
+                group: Some("ROV-3".into()),
+                exercise: Some("pick-and-place".into()),
+                limit: 1,
+                ..Default::default()
+            })
+            .await
+            .unwrap();
+        assert_eq!(rov3.len(), 1);
+        assert_eq!(rov3[0].id, "a4");
+        assert_eq!(rov3[0].outcome, None, "a4 is still running");
+        let by_session = db
+            .attempts(&AttemptFilter {
+                session: Some("s2".into()),
+                ..Default::default()
+            })
+            .await
+            .unwrap();
+        assert_eq!(by_session.len(), 2);
+
+        let a1 = db.attempt("a1").await.unwrap().unwrap();
+        assert_eq!(a1.session, "s1");
+        assert_eq!((a1.trainee.as_str(), a1.group.as_str()), ("Ada", "ROV-2"));
+        assert_eq!(a1.outcome.as_deref(), Some("passed"));
+        assert_eq!(a1.score, Some(87.5));
+        assert_eq!(a1.sim_seconds, 61.5);
+        assert_eq!(a1.ended_unix, Some(1_700_000_100.0));
+        assert_eq!(a1.exercise_version.as_deref(), Some("1:abc"));
+        assert_eq!(a1.init, json!({"seed": 7, "q": [0.5, -1.25]}));
+        assert_eq!(a1.assessment.as_ref().unwrap()["interventions"], 4.0);
+        let total: usize = pieces.iter().map(Vec::len).sum();
+        assert_eq!(a1.inputs_bytes, total as i64);
+        assert_eq!(db.attempt_inputs("a1").await.unwrap(), pieces.concat());
+        assert!(db.attempt_inputs("a2").await.unwrap().is_empty());
+        assert!(db.attempt("nope").await.unwrap().is_none());
+
+        let events = db.attempt_events("a1").await.unwrap();
+        assert_eq!(events.len(), 2);
+        assert_eq!((events[0].t, events[0].kind.as_str()), (1.5, "pause"));
+        assert_eq!(events[0].actor.as_deref(), Some("instructor"));
+        assert_eq!(events[1].detail, json!({"n": 0}));
+        assert_eq!(events[1].actor, None);
+
+        let results = db.results(Some("ROV-2"), None).await.unwrap();
+        assert_eq!(
+            results.iter().map(|a| a.id.as_str()).collect::<Vec<_>>(),
+            ["a1"],
+            "finished exercise attempts only"
+        );
+        let results = db.results(None, Some("pick-and-place")).await.unwrap();
+        assert_eq!(results.len(), 2);
+        drop(db);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+/// `GET /api/results.csv` (instructor): one row per finished exercise attempt of the group,
+/// the assessment's metrics in columns (strikes = seabed + obstacle strikes), the start in
+/// RFC 3339 UTC, as an attachment.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_class_results_export_is_a_csv_of_finished_attempts() {
+    for url in database_urls().await {
+        let dir = temp_dir("results");
+        let db = open_db(&dir, &url);
+        let mut batch = vec![Write::Session {
+            id: "0123456789abcdef".into(),
+            trainee: "Ada, \"the first\"".into(),
+            group: "ROV-2".into(),
+            scenario: "pick-and-place".into(),
+            created_unix: 1_700_000_000.0,
+            token_sha256: "cd".repeat(32),
+        }];
+        // 1 700 000 000 s after the epoch is 2023-11-14T22:13:20Z (a known instant).
+        for (id, started, outcome, score) in [
+            ("b1", 1_700_000_000.0, "passed", Some(91.25)),
+            ("b2", 1_700_000_600.0, "abandoned", None),
+            ("b3", 1_700_003_600.5, "failed", Some(40.0)),
+        ] {
+            batch.push(Write::AttemptStart(Box::new(AttemptStart {
+                id: id.into(),
+                session: "0123456789abcdef".into(),
+                scenario: "pick-and-place".into(),
+                exercise: Some("pick-and-place".into()),
+                exercise_version: Some("1".into()),
+                sim_version: "sim-1".into(),
+                started_unix: started,
+                init: json!({}),
+            })));
+            batch.push(Write::AttemptEnd(Box::new(AttemptEnd {
+                id: id.into(),
+                ended_unix: started + 90.0,
+                sim_seconds: 88.0,
+                outcome: outcome.into(),
+                score,
+                assessment: score.map(|_| {
+                    json!({"time_s": 75.5, "seabed_strikes": 2.0, "obstacle_strikes": 1.0,
+                        "overloads": 4.0, "drops": 1.0, "interventions": 3.0})
+                }),
+            })));
+        }
+        batch.push(Write::SessionEnd {
+            id: "0123456789abcdef".into(),
+            ended_unix: 1_700_004_000.0,
+            sim_seconds: 300.0,
+            reason: "ended by trainee".into(),
+            overloads: 4,
+            recording_failed: false,
+        });
+        db.write_batch(&batch).await.unwrap();
+        drop(db);
+
+        let args = extra_args(&url);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let s = Binary::start(&dir, &args);
+        let denied = reqwest::get(format!("{}/api/results.csv?group=ROV-2", s.base))
+            .await
+            .unwrap();
+        assert_eq!(denied.status().as_u16(), 403, "instructor only");
+        let r = reqwest::Client::new()
+            .get(format!("{}/api/results.csv?group=ROV-2", s.base))
+            .bearer_auth(TEACHER)
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(r.status().as_u16(), 200);
+        let disposition = r.headers()["content-disposition"]
+            .to_str()
+            .unwrap()
+            .to_string();
+        assert!(disposition.starts_with("attachment"), "{disposition}");
+        assert!(
+            r.headers()["content-type"]
+                .to_str()
+                .unwrap()
+                .starts_with("text/csv")
+        );
+        let text = r.text().await.unwrap();
+        let mut reader = csv::Reader::from_reader(text.as_bytes());
+        let header: Vec<String> = reader.headers().unwrap().iter().map(String::from).collect();
+        assert_eq!(
+            header,
+            [
+                "trainee",
+                "group",
+                "exercise",
+                "attempt",
+                "session",
+                "started_utc",
+                "outcome",
+                "score",
+                "duration_s",
+                "strikes",
+                "overloads",
+                "drops",
+                "interventions"
+            ]
+        );
+        let rows: Vec<Vec<String>> = reader
+            .records()
+            .map(|r| r.unwrap().iter().map(String::from).collect())
+            .collect();
+        assert_eq!(rows.len(), 2, "{text}");
+        assert_eq!(
+            rows[0],
+            [
+                "Ada, \"the first\"",
+                "ROV-2",
+                "pick-and-place",
+                "b1",
+                "0123456789abcdef",
+                "2023-11-14T22:13:20Z",
+                "passed",
+                "91.25",
+                "75.5",
+                "3",
+                "4",
+                "1",
+                "3"
+            ]
+        );
+        assert_eq!(rows[1][3], "b3");
+        assert_eq!(rows[1][5], "2023-11-14T23:13:20.500Z");
+        assert_eq!(rows[1][6], "failed");
+        // Another group: a header only.
+        let other = get_text(&format!("{}/api/results.csv?group=ROV-9", s.base)).await;
+        assert_eq!(other.lines().count(), 1, "{other}");
+        s.stop();
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+/// `kill -9` while sessions run: a restarted server lists them `interrupted (server stopped)`
+/// with the figures of the last committed batch (within a second of the CSV's last whole row,
+/// never ahead of it); every stored event and input piece is whole; the CSV ends with a
+/// whole row after the start-up repair.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn kill_9_leaves_whole_records_and_interrupted_sessions() {
+    for url in database_urls().await {
+        let dir = temp_dir("kill9");
+        let args = extra_args(&url);
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let server = Binary::start(&dir, &args);
+        let mut sessions = Vec::new();
+        for (name, scenario) in [("a", "training"), ("b", "case4-dual-closed-loop")] {
+            let (st, c) = create_at(
+                &server.base,
+                json!({"trainee": name, "group": "night", "scenario": scenario}),
+            )
+            .await;
+            assert_eq!(st, 201, "{c}");
+            sessions.push(c);
+        }
+        // Drive both for three seconds (shoulders full down, into the seabed / limit), with
+        // instructor actions on the way, then let the recorder commit once more.
+        let actions = async {
+            for s in &sessions {
+                let id = s["id"].as_str().unwrap();
+                act(&server.base, id, TEACHER, json!({"type": "pause"})).await;
+                act(&server.base, id, TEACHER, json!({"type": "resume"})).await;
+            }
+        };
+        tokio::join!(
+            drive(&sessions[0], 0, 3.0),
+            drive(&sessions[1], 0, 3.0),
+            actions
+        );
+        tokio::time::sleep(Duration::from_millis(1200)).await;
+        server.kill9();
+
+        let db_url = url_of(&dir, &url);
+        use sqlx::Row;
+        let mut figures = Vec::new();
+        for c in &sessions {
+            let id = c["id"].as_str().unwrap();
+            let stored = rows(
+                &db_url,
+                "SELECT end_reason, sim_seconds, overloads FROM sessions WHERE id = $1",
+                id,
+            )
+            .await;
+            assert_eq!(stored.len(), 1, "{id} not stored");
+            assert_eq!(
+                stored[0].get::<Option<String>, _>("end_reason"),
+                None,
+                "killed"
+            );
+            let t_db: f64 = stored[0].get("sim_seconds");
+            let overloads_db: i64 = stored[0].get("overloads");
+            let csv_path = dir.join("sessions").join(format!("{id}.csv"));
+            let csv = Csv::read(&csv_path);
+            let t_csv = csv.last("t");
+            let relief_csv = csv.last("relief_events") as i64;
+            eprintln!(
+                "{id}: CSV {} rows to t {t_csv} s (cut tail {} B), relief {relief_csv}; \
+                 database {t_db} s, overloads {overloads_db}",
+                csv.rows.len(),
+                csv.cut_tail
+            );
+            assert!(
+                t_csv > 1.5,
+                "{id}: ~4 s of running recorded only to {t_csv} s"
+            );
+            assert!(
+                (t_csv - t_db).abs() <= 1.0,
+                "{id}: db {t_db} s vs CSV {t_csv} s"
+            );
+            assert!(t_db <= t_csv, "the database describes rows already on disk");
+            assert!(overloads_db <= relief_csv);
+            // Every event row decodes; seq has no gap (a batch is all or nothing).
+            let events = rows(
+                &db_url,
+                "SELECT seq, kind, actor, detail FROM events WHERE session_id = $1 ORDER BY seq",
+                id,
+            )
+            .await;
+            assert!(
+                events.iter().any(|r| r.get::<String, _>("kind") == "pause"),
+                "{id}: the instructor's pause (3 s before the kill) is stored"
+            );
+            for (i, r) in events.iter().enumerate() {
+                assert_eq!(r.get::<i64, _>("seq"), i as i64);
+                let d: Value = serde_json::from_str(&r.get::<String, _>("detail")).unwrap();
+                assert!(d.is_object());
+            }
+            // Input pieces: per attempt, seq 0, 1, 2, … with no gap, and each non-empty.
+            let pieces = rows(
+                &db_url,
+                "SELECT i.attempt_id, i.seq, i.data FROM attempt_inputs i \
+                 JOIN attempts a ON a.id = i.attempt_id WHERE a.session_id = $1 \
+                 ORDER BY i.attempt_id, i.seq",
+                id,
+            )
+            .await;
+            let mut expected = std::collections::HashMap::<String, i64>::new();
+            for r in &pieces {
+                let n = expected.entry(r.get("attempt_id")).or_insert(0);
+                assert_eq!(r.get::<i64, _>("seq"), *n);
+                *n += 1;
+                assert!(!r.get::<Vec<u8>, _>("data").is_empty());
+            }
+            figures.push((id.to_string(), t_db, overloads_db, csv_path));
+        }
+
+        // A new server on the same records: both sessions interrupted with the stored
+        // figures; running attempts interrupted; CSVs cut back to whole rows.
+        let server = Binary::start(&dir, &args);
+        let list = get_json(&format!("{}/api/sessions", server.base)).await;
+        for (id, t_db, overloads_db, csv_path) in &figures {
+            let entry = list
+                .as_array()
+                .unwrap()
+                .iter()
+                .find(|e| e["id"] == id.as_str())
+                .unwrap_or_else(|| panic!("{id} not listed: {list}"));
+            assert_eq!(entry["status"], "ended");
+            assert_eq!(entry["end_reason"], "interrupted (server stopped)");
+            assert_eq!(entry["sim_seconds"].as_f64().unwrap(), *t_db);
+            assert_eq!(entry["overload_count"].as_i64().unwrap(), *overloads_db);
+            assert_eq!(entry["group"], "night");
+            let bytes = std::fs::read(csv_path).unwrap();
+            assert_eq!(
+                bytes.last(),
+                Some(&b'\n'),
+                "{id}: CSV ends mid-row after restart"
+            );
+            let running = rows(
+                &db_url,
+                "SELECT id FROM attempts WHERE session_id = $1 AND outcome IS NULL",
+                id,
+            )
+            .await;
+            assert!(
+                running.is_empty(),
+                "{id}: attempts left running after restart"
+            );
+        }
+        server.kill9();
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
+
+/// Retention deletes a record's database rows with its CSV: a cap below one record deletes
+/// every ended session at start-up (sessions, attempts, input pieces, events), keeps none.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn retention_deletes_the_database_rows_of_the_records_it_removes() {
+    for url in database_urls().await {
+        let dir = temp_dir("retdb");
+        let args = extra_args(&url);
+        let args_ref: Vec<&str> = args.iter().map(String::as_str).collect();
+        let s = Binary::start(&dir, &args_ref);
+        let (st, c) = create_at(&s.base, json!({"trainee": "Old", "group": "g"})).await;
+        assert_eq!(st, 201);
+        let old = c["id"].as_str().unwrap().to_string();
+        act(&s.base, &old, TEACHER, json!({"type": "pause"})).await;
+        tokio::time::sleep(Duration::from_millis(1200)).await;
+        let r = reqwest::Client::new()
+            .delete(format!("{}/api/sessions/{old}", s.base))
+            .bearer_auth(TEACHER)
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(r.status().as_u16(), 204);
+        s.stop();
+        let db_url = url_of(&dir, &url);
+        let count = |sql: &'static str| {
+            let db_url = db_url.clone();
+            let old = old.clone();
+            async move { rows(&db_url, sql, &old).await.len() }
+        };
+        assert_eq!(count("SELECT id FROM sessions WHERE id = $1").await, 1);
+        assert!(count("SELECT seq FROM events WHERE session_id = $1").await > 0);
+        let attempts_before = count("SELECT id FROM attempts WHERE session_id = $1").await;
+
+        // A cap of 1 byte: the ended record goes at start-up, CSV and rows.
+        let mut args = args.clone();
+        args[3] = "0.000001".into();
+        args.extend(["--retention-check-secs".to_string(), "1".to_string()]);
+        let args_ref: Vec<&str> = args.iter().map(String::as_str).collect();
+        let s = Binary::start(&dir, &args_ref);
+        assert!(!dir.join("sessions").join(format!("{old}.csv")).exists());
+        assert_eq!(count("SELECT id FROM sessions WHERE id = $1").await, 0);
+        assert_eq!(
+            count("SELECT seq FROM events WHERE session_id = $1").await,
+            0
+        );
+        assert_eq!(
+            count("SELECT id FROM attempts WHERE session_id = $1").await,
+            0
+        );
+        assert_eq!(
+            count(
+                "SELECT i.seq FROM attempt_inputs i WHERE i.attempt_id IN \
+                 (SELECT id FROM attempts WHERE session_id = $1)"
+            )
+            .await,
+            0
+        );
+        eprintln!("retention removed the session, its events and {attempts_before} attempts");
+        // A live session under the same cap is never deleted.
+        let (st, c) = create_at(&s.base, json!({"trainee": "Live"})).await;
+        assert_eq!(st, 201);
+        let id = c["id"].as_str().unwrap().to_string();
+        // Passes run every second meanwhile.
+        tokio::time::sleep(Duration::from_millis(2500)).await;
+        let v = get_json(&format!("{}/api/sessions/{id}", s.base)).await;
+        assert_eq!(v["status"], "live");
+        assert!(dir.join("sessions").join(format!("{id}.csv")).exists());
+        s.stop();
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -1,0 +1,94 @@
+//! Issue 16's replay acceptance: for an autopilot attempt of every exercise, the state
+//! re-simulated from the attempt's record (initial conditions + input log) equals the state
+//! the attempt went through, bit for bit, at 20 random times (q, q̇, line pressures, object
+//! pose and velocity), seeking forward and back; and the input log stays under 50 KB per
+//! simulated minute. The reference is the recorded run itself (an independent run of the
+//! same `Live` driven by the autopilot), not the replay code.
+
+use std::collections::BTreeMap;
+use std::sync::Arc;
+
+use seaarms::exercises::{Driver, EXERCISES, run_recorded};
+use seaarms::replay::{Replay, log};
+use seaarms::sessions::Live;
+use seaarms_core::sim::Arm;
+
+fn magnum() -> [Arc<seaarms_core::Model>; 2] {
+    let robots = seaarms::robots::Robots::load().expect("built-in robots");
+    let m = robots.get("magnum").expect("magnum");
+    [m.clone(), m]
+}
+
+/// Every number of the state the issue names, as bits.
+fn state_bits(live: &Live) -> Vec<u64> {
+    let sim = live.sim();
+    let mut v = Vec::new();
+    for arm in Arm::BOTH {
+        let a = sim.arm(arm);
+        for x in a.q.iter().chain(&a.qd).chain(&a.p_in).chain(&a.p_out) {
+            v.push(x.to_bits());
+        }
+    }
+    let o = sim.object();
+    let t = o.pose.translation.vector;
+    let r = o.pose.rotation.coords;
+    for x in t.iter().chain(r.iter()).chain(o.velocity.iter()) {
+        v.push(x.to_bits());
+    }
+    v.push(sim.time_s().to_bits());
+    v
+}
+
+/// splitmix64 (Steele et al. 2014): a fixed sequence of sample times per exercise.
+fn splitmix(state: &mut u64) -> u64 {
+    *state = state.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+#[test]
+fn every_exercise_replays_bit_for_bit_at_20_random_times() {
+    let models = magnum();
+    let mut rng = 16;
+    for spec in EXERCISES.all() {
+        // The attempt's length is known only after it ran: record every step's state in a
+        // map keyed by step, keep 20 random ones.
+        let mut states: BTreeMap<u64, Vec<u64>> = BTreeMap::new();
+        let run = run_recorded(spec.clone(), &models, Driver::Autopilot, 7, &mut |live| {
+            states.insert(live.sim().steps(), state_bits(live));
+        })
+        .expect("autopilot run");
+        assert!(run.assessment.passed, "{}: the autopilot passes", spec.id);
+        let last = *states.keys().next_back().expect("steps");
+        let mut picks: Vec<u64> = (0..20).map(|_| 1 + splitmix(&mut rng) % last).collect();
+        // Seek forward in a random order, so backward seeks (a fresh start) are tested too.
+        picks.push(last);
+        let entries = log::decode(&run.inputs).expect("log decodes");
+        let mut replay =
+            Replay::new(&models, run.init.clone(), entries, run.sim_seconds).expect("replayable");
+        for &step in &picks {
+            replay.seek_step(step).expect("seek");
+            assert_eq!(replay.live().sim().steps(), step);
+            assert!(
+                state_bits(replay.live()) == states[&step],
+                "{}: the replayed state at step {step} differs from the recorded one",
+                spec.id
+            );
+        }
+        let per_minute = run.inputs.len() as f64 / (run.sim_seconds / 60.0);
+        println!(
+            "{}: {} steps, input log {} B ({:.1} KB per simulated minute)",
+            spec.id,
+            last,
+            run.inputs.len(),
+            per_minute / 1000.0
+        );
+        assert!(
+            per_minute < 50_000.0,
+            "{}: the input log is {per_minute:.0} B per simulated minute (limit 50 KB)",
+            spec.id
+        );
+    }
+}

@@ -1,8 +1,9 @@
 //! The instructor's classroom (issue 16 acceptance, browser part): two trainees who typed their
-//! names on the start screen appear by name on the instructor's Classroom tab; one's attempt is
-//! ended by the instructor's reset and opened from the attempt history in the debrief page,
-//! where clicking an event marker seeks the replay to the marker's time (± one frame) and 4×
-//! playback advances the replay clock about four times faster than the wall clock; a silent
+//! names on the start screen appear by name on the instructor's Classroom tab; one works the
+//! dual-lift exercise to its end with the (scripted, fake) gamepad, and the instructor opens
+//! that finished attempt from its history in the debrief page, where clicking an event marker
+//! seeks the replay to the marker's time (± one frame) and 4× playback advances the replay
+//! clock about four times faster than the wall clock (loosely: over 2×); a silent
 //! fault reaches the session but not the trainee's page; an instructor's pause is shown to the
 //! trainee as "Paused by the instructor" and the trainee's resume is refused (the clock stays
 //! stopped) until the instructor resumes. Wire: CONTRACT/docs/api.md (attempts, replay socket,
@@ -11,14 +12,14 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+import { server, openBrowser, until, FAKE_GAMEPAD, workDualLift, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || ARTIFACTS;
 const auth = { authorization: `Bearer ${INSTRUCTOR_TOKEN}` };
 
 /** A trainee opens the page, types name and group on the start screen and starts `exercise`. */
-async function startTrainee(url, name, group, exercise) {
-  const b = await openBrowser();
+async function startTrainee(url, name, group, exercise, opts = {}) {
+  const b = await openBrowser(opts);
   await b.page.goto(`${url}/`);
   await b.page.waitForSelector(`#start .ex[data-id="${exercise}"]`, { timeout: 15000 });
   // the name is required: free play without one is refused on the screen
@@ -38,13 +39,13 @@ async function summary(url, id) {
   return (await fetch(`${url}/api/sessions/${id}`, { headers: auth })).json();
 }
 
-test('classroom: named roster, attempt history → debrief (seek to a marker, 4× play), silent fault, instructor pause', { timeout: 300000 }, async () => {
+test('classroom: named roster, attempt history → debrief (seek to a marker, 4× play), silent fault, instructor pause', { timeout: 480000 }, async () => {
   const url = await server();
   const tag = Math.random().toString(36).slice(2, 7);
   const group = `class-${tag}`;
   const [nameA, nameB] = [`Ada ${tag}`, `Brendan ${tag}`];
   const instr = await openBrowser({ viewport: { width: 1280, height: 900 } });
-  const a = await startTrainee(url, nameA, group, 'dual-lift');
+  const a = await startTrainee(url, nameA, group, 'dual-lift', { initScript: FAKE_GAMEPAD });
   const b = await startTrainee(url, nameB, group, 'reach-targets');
   const ip = instr.page;
   let debrief = null;
@@ -73,26 +74,34 @@ test('classroom: named roster, attempt history → debrief (seek to a marker, 4�
     assert.match(await ip.textContent(`${row(a)} td:nth-child(4)`), /^\d+\/5$/, 'step x/y of dual-lift\'s five');
     assert.equal(await ip.getAttribute('#cls-export', 'href'), `/api/results.csv?group=${encodeURIComponent(group)}&token=${INSTRUCTOR_TOKEN}`);
 
-    // Trainee A's attempt: the instructor observes, injects a fault (shown), clears it, and after
-    // some seconds resets (ending the attempt as `abandoned`).
-    await ip.click(`${row(a)} [data-observe]`);
-    await until(ip, (id) => window.__seaarms?.hello?.session === id && window.__seaarms.statesDrawn > 2, a.id);
-    const t0 = await a.page.evaluate(() => window.__seaarms.lastState.t);
-    await ip.selectOption('#act-fault', 'supply_drop');
-    await ip.click('#instr-actions button[data-act="fault"]');
-    await a.page.waitForFunction(() => /supply_drop/.test(window.__seaarms.statusText()));
-    await until(a.page, (t) => window.__seaarms.lastState.t > t + 4, t0, 30000);
-    await ip.click('#instr-actions button[data-act="clear_faults"]');
-    await until(a.page, (t) => window.__seaarms.lastState.t > t + 12, t0, 30000);
+    // Trainee A works dual-lift to its end with the gamepad (its completion card links the debrief)
+    await workDualLift(a.page);
+    await a.page.waitForSelector('#card:not([hidden]) [data-score]', { timeout: 20000 });
     const attemptA = (await summary(url, a.id)).attempts?.[0];
-    assert.ok(attemptA, 'the session names its running attempt');
-    await ip.click('#instr-actions button[data-act="reset"]');
-    await until(ip, () => /reset: ok/.test(document.querySelector('#act-result').textContent));
+    assert.ok(attemptA, 'the session names its attempt');
+    await a.page.waitForSelector('#card [data-act="debrief"]:not([hidden])', { timeout: 10000 });
+    assert.match(await a.page.getAttribute('#card [data-act="debrief"]', 'href'), new RegExp(`^/replay/${attemptA}\\?token=`));
+    let recorded = null; // the recorder writes each second's batch: the attempt's end follows soon
+    for (let i = 0; i < 100 && !recorded?.outcome; i++) {
+      if (i) await new Promise((ok) => setTimeout(ok, 200));
+      const r = await fetch(`${url}/api/attempts/${attemptA}`, { headers: auth });
+      recorded = r.ok ? await r.json() : null;
+    }
+    assert.ok(recorded?.outcome === 'passed' || recorded?.outcome === 'failed', `finished: ${recorded?.outcome}`);
+    assert.equal(recorded.replayable, true, recorded.replay_note);
 
-    // its history lists the attempt as abandoned, with a debrief link carrying the token
+    // the comparison on dual-lift (it follows the roster's exercise) has the trainee's score
+    const cmpRow = `#compare tr[data-trainee="${nameA}"]`;
+    await ip.waitForSelector(cmpRow, { timeout: 15000 });
+    assert.equal(await ip.inputValue('#cmp-exercise'), 'dual-lift');
+    assert.equal(await ip.textContent(`${cmpRow} td:nth-child(5)`), String(Math.round(recorded.score)), 'best score');
+    assert.equal(await ip.textContent(`${cmpRow} td:nth-child(6)`), String(Math.round(recorded.score)), 'last score');
+
+    // its history lists the attempt with its outcome and a debrief link carrying the token
     await ip.click(`${row(a)} [data-history]`);
     const histRow = `#history tr[data-attempt="${attemptA}"]`;
-    await ip.waitForSelector(`${histRow}[data-outcome="abandoned"]`, { timeout: 20000 });
+    await ip.waitForSelector(`${histRow}[data-outcome="${recorded.outcome}"]`, { timeout: 20000 });
+    assert.equal(await ip.textContent(`${histRow} td:nth-child(4)`), String(Math.round(recorded.score)), 'its score');
     assert.equal(await ip.getAttribute(`${histRow} a.debrief`, 'href'), `/replay/${attemptA}?token=${INSTRUCTOR_TOKEN}`);
     const [dp] = await Promise.all([instr.context.waitForEvent('page'), ip.click(`${histRow} a.debrief`)]);
     debrief = dp;
@@ -105,24 +114,25 @@ test('classroom: named roster, attempt history → debrief (seek to a marker, 4�
     const info = await dp.evaluate(() => ({ views: window.__seaarms.viewports().length, hz: window.__seaarms.hello.frame_hz,
       d: window.__seaarms.replay.duration_s, events: window.__seaarms.attempt.events }));
     assert.equal(info.views, 4);
-    assert.ok(info.d > 10, `the attempt lasted ${info.d} s`);
-    const fault = info.events.find((e) => e.kind === 'fault');
-    assert.ok(fault, `a fault event among ${JSON.stringify(info.events.map((e) => e.kind))}`);
-    assert.ok(fault.t > 0 && fault.t < info.d, `fault at ${fault.t} s of ${info.d} s`);
+    assert.ok(info.d > 8, `the attempt lasted ${info.d} s`);
+    const grasp = info.events.find((e) => e.kind === 'grasp' && e.t > 1);
+    assert.ok(grasp, `a grasp event among ${JSON.stringify(info.events.map((e) => [e.kind, e.t]))}`);
+    assert.ok(grasp.t < info.d, `grasp at ${grasp.t} s of ${info.d} s`);
     assert.equal(await dp.locator('.tl-mark').count(), info.events.length, 'one marker per event');
-    assert.match(await dp.textContent('#rp-card'), /Abandoned/);
-    // click the fault's marker: the replay seeks there (± one frame)
+    assert.equal(await dp.getAttribute('#rp-card [data-score]', 'data-score'), String(Math.round(recorded.score)));
+    assert.match(await dp.textContent('#rp-card'), recorded.outcome === 'passed' ? /Passed/ : /Not passed/);
+    // click the grasp's marker: the replay seeks there (± one frame)
     const frame = 1 / info.hz;
-    const marker = `.tl-mark[data-kind="fault"][data-t="${fault.t}"]`;
+    const marker = `.tl-mark[data-kind="grasp"][data-t="${grasp.t}"]`;
     await dp.click(marker);
-    await until(dp, ([t, f]) => { const r = window.__seaarms.replay; return r.seeks === 1 && Math.abs(r.t - t) <= f + 1e-9; }, [fault.t, frame]);
+    await until(dp, ([t, f]) => { const r = window.__seaarms.replay; return r.seeks === 1 && Math.abs(r.t - t) <= f + 1e-9; }, [grasp.t, frame]);
     assert.match(await dp.textContent('#rp-time'), /^\d+:\d\d\.\d \/ \d+:\d\d\.\d$/);
     // a click on the bar seeks too (to its fraction of the duration)
     const box = await dp.locator('.tl-track').boundingBox();
     await dp.mouse.click(box.x + box.width * 0.25, box.y + box.height - 2); // below the markers
     await until(dp, ([d, f]) => { const r = window.__seaarms.replay; return r.seeks === 2 && Math.abs(r.t - 0.25 * d) <= 0.01 * d + f; }, [info.d, frame]);
-    await dp.click(marker); // back to the fault
-    await until(dp, ([t, f]) => Math.abs(window.__seaarms.replay.t - t) <= f + 1e-9, [fault.t, frame]);
+    await dp.click(marker); // back to the grasp
+    await until(dp, ([t, f]) => Math.abs(window.__seaarms.replay.t - t) <= f + 1e-9, [grasp.t, frame]);
     // play at 4×: the replay's clock runs about four times the wall clock (loosely: over 2×)
     await dp.selectOption('#rp-speed', '4');
     await until(dp, () => window.__seaarms.replay.speed === 4);
@@ -136,7 +146,7 @@ test('classroom: named roster, attempt history → debrief (seek to a marker, 4�
     assert.ok(rate > 2, `4× playback ran at ${rate.toFixed(2)}×`);
     assert.ok(s2.t <= info.d + 1e-9);
     assert.match(await dp.textContent('#rp-play'), s2.playing ? /Pause/ : /Play/);
-    await dp.click(marker); // the screenshot at the fault
+    await dp.click(marker); // the screenshot at the grasp
     await dp.screenshot({ path: join(SHOTS, 'debrief.png') });
     assert.deepEqual(derrors, []);
 

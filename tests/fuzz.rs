@@ -1058,13 +1058,15 @@ fn action_body() -> BoxedStrategy<J> {
                 0.01..=1.0f64,
                 -1.0e7..1.0e7f64,
             ],
+            option::of(any::<bool>()),
         )
-            .prop_map(move |(fault, arm, joint, value)| obj(vec![
+            .prop_map(move |(fault, arm, joint, value, silent)| obj(vec![
                 ("type", ty("fault")),
                 ("fault", Some(s(fault))),
                 ("arm", Some(s(arm))),
                 ("joint", joint.map(|j| J::Raw(j.to_string()))),
                 ("value", Some(num(value))),
+                ("silent", silent.map(|b| J::Raw(b.to_string()))),
             ])),
         "\\PC{0,600}"
             .prop_map(move |t| obj(vec![("type", ty("message")), ("text", Some(J::Str(t)))])),
@@ -1379,6 +1381,11 @@ const PATH_ROUTES: &[(&str, &str)] = &[
     ("GET", "/web/{}"),
     ("GET", "/static/{}"),
     ("GET", "/ws/sessions/{}"),
+    ("GET", "/api/attempts/{}"),
+    ("GET", "/api/attempts/{}/replay"),
+    ("GET", "/api/attempts/{}/inputs"),
+    ("GET", "/ws/replay/{}"),
+    ("GET", "/replay/{}"),
     ("GET", "/api/sessions"),
     ("GET", "/api/studies/{}"),
     ("PUT", "/api/sessions/{}"),

@@ -90,6 +90,7 @@ impl AppState {
                 max_messages_per_second: config.max_messages_per_second,
                 physics_threads: threads,
                 unjoined_grace: Duration::from_secs(config.unjoined_grace_secs),
+                abandon_grace: Duration::from_secs(config.abandon_grace_seconds),
                 max_sessions_per_client: config.max_sessions_per_client,
             },
             recorder,
@@ -178,6 +179,11 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/exercises"),
     ("get", "/api/exercises/{id}"),
     ("get", "/ws/sessions/{id}"),
+    ("get", "/api/attempts"),
+    ("get", "/api/attempts/{id}"),
+    ("get", "/api/attempts/{id}/inputs"),
+    ("get", "/api/attempts/{id}/replay"),
+    ("get", "/ws/replay/{id}"),
 ];
 
 async fn count_requests(State(metrics): State<Arc<Metrics>>, req: Request, next: Next) -> Response {
@@ -237,6 +243,11 @@ pub fn app(state: AppState) -> Router {
         .route("/api/exercises", get(crate::exercises::list))
         .route("/api/exercises/{id}", get(crate::exercises::get))
         .route("/ws/sessions/{id}", get(sessions::ws::upgrade))
+        .route("/api/attempts", get(api::attempts::list))
+        .route("/api/attempts/{id}", get(api::attempts::get))
+        .route("/api/attempts/{id}/inputs", get(api::attempts::inputs))
+        .route("/api/attempts/{id}/replay", get(api::attempts::replay_at))
+        .route("/ws/replay/{id}", get(api::attempts::replay_ws))
         .fallback(|uri: axum::http::Uri| async move {
             ApiError::not_found(format!("no route for {}", uri.path()))
         })

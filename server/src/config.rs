@@ -134,7 +134,7 @@ pub struct ServeConfig {
         global = true
     )]
     pub max_sessions: usize,
-    /// A session with no trainee connected and no input for this many seconds ends.
+    /// A session whose trainee gives no input for this many seconds ends (connected or not).
     #[arg(
         long,
         env = "SEAARMS_IDLE_TIMEOUT_SECS",
@@ -190,6 +190,15 @@ pub struct ServeConfig {
         global = true
     )]
     pub unjoined_grace_secs: u64,
+    /// A session whose trainee left (its last trainee connection closed) ends after this many
+    /// seconds unless a trainee connects again (end reason `abandoned`).
+    #[arg(
+        long,
+        env = "SEAARMS_ABANDON_GRACE_SECONDS",
+        default_value_t = 30,
+        global = true
+    )]
+    pub abandon_grace_seconds: u64,
     /// Reverse proxies (IP addresses, comma-separated) whose `X-Forwarded-For` and
     /// `X-Forwarded-Proto` are believed; none by default (the headers are ignored).
     #[arg(
@@ -313,6 +322,7 @@ impl Default for ServeConfig {
             sessions_per_minute: 6.0,
             max_sessions_per_client: 16,
             unjoined_grace_secs: 60,
+            abandon_grace_seconds: 30,
             trusted_proxies: Vec::new(),
             join_code: None,
             allowed_origins: Vec::new(),

@@ -187,6 +187,17 @@ pub enum ClientMessage {
     },
 }
 
+/// Who paused a session's clock (state frames' and summaries' `paused_by`): an instructor's
+/// pause is lifted only by the instructor.
+#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum PausedBy {
+    /// The instructor (the trainee cannot resume).
+    Instructor,
+    /// The trainee.
+    Trainee,
+}
+
 /// Current settings of a session.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
 pub struct Settings {
@@ -342,33 +353,58 @@ impl SceneOut {
     }
 }
 
-/// Why a session ended (the `ended` message; its [`EndReason::text`] is the session
-/// record's `end_reason`).
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
+/// Why a session ended (the `ended` message's `reason` is its [`EndReason::code`]; its
+/// [`EndReason::text`] is the session record's `end_reason`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum EndReason {
     /// An instructor ended it (`DELETE /api/sessions/{id}` or the `end` action).
     Instructor,
     /// The trainee ended it.
     Trainee,
-    /// No trainee connected and no input for the idle timeout.
+    /// No input for the idle timeout (a trainee connected but inactive, or none connected).
     IdleTimeout,
     /// No trainee joined within the grace period after creation.
     NoTraineeJoined,
+    /// The trainee left: its last connection closed and none came back within the grace.
+    Abandoned {
+        /// The grace period (s, `--abandon-grace-seconds`).
+        grace_s: u64,
+    },
     /// The server is shutting down.
     ServerShutdown,
 }
 
 impl EndReason {
-    /// Human text, as session records and summaries give it (`end_reason`).
-    pub fn text(self) -> &'static str {
+    /// Wire code (the `ended` message's `reason`).
+    pub fn code(self) -> &'static str {
         match self {
-            EndReason::Instructor => "ended by instructor",
-            EndReason::Trainee => "ended by trainee",
-            EndReason::IdleTimeout => "idle timeout",
-            EndReason::NoTraineeJoined => "no trainee joined",
-            EndReason::ServerShutdown => "server shutdown",
+            EndReason::Instructor => "instructor",
+            EndReason::Trainee => "trainee",
+            EndReason::IdleTimeout => "idle_timeout",
+            EndReason::NoTraineeJoined => "no_trainee_joined",
+            EndReason::Abandoned { .. } => "abandoned",
+            EndReason::ServerShutdown => "server_shutdown",
         }
+    }
+
+    /// Human text, as session records and summaries give it (`end_reason`).
+    pub fn text(self) -> String {
+        match self {
+            EndReason::Instructor => "ended by instructor".into(),
+            EndReason::Trainee => "ended by trainee".into(),
+            EndReason::IdleTimeout => "idle timeout".into(),
+            EndReason::NoTraineeJoined => "no trainee joined".into(),
+            EndReason::Abandoned { grace_s } => {
+                format!("the trainee left: no connection for {grace_s} s")
+            }
+            EndReason::ServerShutdown => "server shutdown".into(),
+        }
+    }
+}
+
+impl Serialize for EndReason {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.code())
     }
 }
 
@@ -462,6 +498,8 @@ pub struct StateFrame {
     pub input_seq: u64,
     /// Clock paused.
     pub paused: bool,
+    /// Who paused it (`instructor`, `trainee`), `null` while running.
+    pub paused_by: Option<PausedBy>,
     /// Current settings.
     pub settings: Settings,
     /// Left and right arm.
@@ -481,8 +519,8 @@ pub struct StateFrame {
     pub relief_events: u64,
     /// Active warnings: `near_singularity:left`, `near_joint_limit:right:3`, `relief:left:2`, …
     pub warnings: Vec<String>,
-    /// Active faults, as instructors set them (labels, see [`fault_label`]); a fault drill's
-    /// hidden fault is not listed.
+    /// Active faults, as instructors set them (labels, see [`fault_label`]); neither a fault
+    /// drill's hidden fault nor a silent fault (`"silent": true` on injection) is listed.
     pub faults: Vec<ActiveFault>,
     /// The scenario or exercise id the session runs.
     pub scenario: String,
@@ -543,7 +581,7 @@ pub enum ServerMessage {
         /// Why, as a code.
         reason: EndReason,
         /// Why, as text (the record's `end_reason`).
-        text: &'static str,
+        text: String,
     },
 }
 
@@ -575,6 +613,13 @@ mod tests {
         assert_eq!(v["reason"], "no_trainee_joined");
         assert_eq!(v["text"], "no trainee joined");
         assert_eq!(EndReason::ServerShutdown.text(), "server shutdown");
+        let v = serde_json::to_value(ServerMessage::ended(EndReason::Abandoned { grace_s: 30 }))
+            .unwrap();
+        assert_eq!(
+            v,
+            serde_json::json!({"type": "ended", "reason": "abandoned",
+                "text": "the trainee left: no connection for 30 s"})
+        );
     }
 
     /// The wire strings the page and the instructor dashboard rely on (README "Protocol",
@@ -585,6 +630,7 @@ mod tests {
             fault_label(&ActiveFault {
                 arm,
                 fault: Fault::new(kind, joint, value).unwrap(),
+                silent: false,
             })
         };
         assert_eq!(
@@ -606,6 +652,7 @@ mod tests {
         let f = ActiveFault {
             arm: Arm::Left,
             fault: Fault::new(FaultKind::Air, None, 0.3).unwrap(),
+            silent: true,
         };
         assert_eq!(serde_json::to_value(f).unwrap(), "air:left:0.3");
         for kind in FaultKind::ALL {

@@ -198,6 +198,19 @@ pub async fn next_of(ws: &mut Ws, kind: &str, timeout: Duration) -> Value {
     }
 }
 
+/// Holds the sticks: sends `count` input messages 40 ms apart (seq `first_seq`, …) with the
+/// `arms` given (e.g. `{"left": {"axes": [1, 0, 0, 0, 0, 0]}}`).
+pub async fn hold_sticks(ws: &mut Ws, first_seq: u64, count: u64, arms: Value) {
+    use futures_util::SinkExt;
+    for seq in first_seq..first_seq + count {
+        let msg = serde_json::json!({"type": "input", "seq": seq, "arms": arms});
+        ws.send(Message::Text(msg.to_string().into()))
+            .await
+            .unwrap();
+        tokio::time::sleep(Duration::from_millis(40)).await;
+    }
+}
+
 /// The first state frame with simulated time ≥ `t_min` (frames buffered in the socket while
 /// the test was busy are read and dropped on the way).
 pub async fn state_after(ws: &mut Ws, t_min: f64) -> Value {
@@ -401,9 +414,10 @@ pub async fn send(
 
 /// JSON paths (object keys) whose value may be `null` in a state frame: no dual ellipsoid
 /// unless both jaws hold, no condition number at a singularity, no capture cue, exercise,
-/// event or panel when there is none (protocol.rs).
+/// event or panel when there is none, no `paused_by` while the clock runs (protocol.rs).
 const NULLABLE_STATE_KEYS: &[&str] = &[
     "dual",
+    "paused_by",
     "condition_number",
     "capture",
     "exercise",

@@ -2,6 +2,7 @@
 //! never the core's internal structs.
 
 pub mod analysis;
+pub mod attempts;
 pub mod openapi;
 pub mod optimize;
 pub mod results;

@@ -105,6 +105,8 @@ pub fn active_fault(e: &FaultEntry) -> Result<ActiveFault, String> {
     Ok(ActiveFault {
         arm,
         fault: Fault::new(kind, e.joint, e.value)?,
+        // A debrief shows every fault, silent ones too.
+        silent: false,
     })
 }
 
@@ -177,6 +179,11 @@ impl Replay {
     /// Current time (s since the attempt's start).
     pub fn time_s(&self) -> f64 {
         self.live.sim().time_s()
+    }
+
+    /// At the attempt's end.
+    pub fn at_end(&self) -> bool {
+        self.live.sim().steps() >= self.duration_steps
     }
 
     /// The state now.

@@ -11,9 +11,11 @@ use serde_json::json;
 
 use super::record::RecordMsg;
 use super::{Live, Scenario, Session, SessionManager};
-use crate::protocol::{ControlMethod, ControlMode, EndReason, ServerMessage};
+use crate::protocol::{ControlMethod, ControlMode, EndReason, PausedBy, ServerMessage};
 use crate::replay::log::{Entry, dequantize, quantize};
 
+/// What a trainee's `resume` gets while the instructor has paused the session.
+pub const PAUSED_BY_INSTRUCTOR: &str = "paused by the instructor; only the instructor can resume";
 /// Largest instructor message to a trainee (characters).
 pub const MAX_MESSAGE_CHARS: usize = 500;
 /// How long `release` drives both jaws open (s): 7.5 cm at 10.2 cm/s takes 0.74 s (Lim
@@ -158,6 +160,10 @@ pub struct ActiveFault {
     pub arm: Arm,
     /// What and how much.
     pub fault: Fault,
+    /// Injected without telling the trainee (a diagnosis drill): it acts on the simulation
+    /// like any fault but is left out of the state frames and of the trainee's summary; only
+    /// the instructor's session summary lists it.
+    pub silent: bool,
 }
 
 impl ActiveFault {
@@ -273,6 +279,15 @@ pub enum Actor {
 }
 
 impl Actor {
+    /// Whose pause a `pause` from this actor is (observers cannot pause).
+    pub fn pauser(self) -> Option<PausedBy> {
+        match self {
+            Actor::Instructor => Some(PausedBy::Instructor),
+            Actor::Trainee => Some(PausedBy::Trainee),
+            Actor::Observer => None,
+        }
+    }
+
     /// Name in records and messages.
     pub fn as_str(self) -> &'static str {
         match self {
@@ -418,7 +433,11 @@ pub fn apply(
             if actor == Actor::Instructor {
                 live.note_intervention(&command);
             }
-            let detail = live.apply(&command);
+            let detail = match (&command, actor.pauser()) {
+                (Command::Pause, Some(by)) => live.pause_as(by, true),
+                (Command::Resume, Some(by)) => live.pause_as(by, false),
+                _ => live.apply(&command),
+            };
             // A reset or switch ended an attempt and started one: records go out in order,
             // before this command's event.
             for msg in live.take_records(false) {
@@ -489,14 +508,9 @@ impl Live {
                 self.reset();
                 json!({})
             }
-            Command::Pause => {
-                self.set_paused(true);
-                json!({})
-            }
-            Command::Resume => {
-                self.set_paused(false);
-                json!({})
-            }
+            // Without an actor (headless attempts), pause and resume act as the trainee's.
+            Command::Pause => self.pause_as(PausedBy::Trainee, true)?,
+            Command::Resume => self.pause_as(PausedBy::Trainee, false)?,
             Command::Release => {
                 self.log(|k| Entry::Release { k });
                 self.release(RELEASE_DURATION_S);
@@ -525,7 +539,7 @@ impl Live {
                     fault: crate::replay::fault_entry(f),
                 });
                 self.inject_fault(*f);
-                json!({"fault": f})
+                json!({"fault": f, "silent": f.silent})
             }
             Command::ClearFaults => {
                 self.log(|k| Entry::ClearFaults { k });
@@ -536,13 +550,39 @@ impl Live {
         })
     }
 
+    /// Pauses (`pause`) or resumes the clock on behalf of `by`. An instructor's pause is
+    /// lifted only by the instructor: the trainee's `resume` is refused
+    /// ([`PAUSED_BY_INSTRUCTOR`]) and the trainee's `pause` leaves it the instructor's. The
+    /// instructor's pause takes over a trainee's; the instructor's resume lifts any pause.
+    /// Returns the record's detail (who holds the pause now).
+    pub fn pause_as(
+        &mut self,
+        by: PausedBy,
+        pause: bool,
+    ) -> Result<serde_json::Value, CommandError> {
+        let instructors = self.paused_by() == Some(PausedBy::Instructor);
+        match (pause, by) {
+            (false, PausedBy::Trainee) if instructors => {
+                return Err(CommandError::Forbidden(PAUSED_BY_INSTRUCTOR.to_string()));
+            }
+            (true, PausedBy::Trainee) if instructors => {}
+            (true, _) => self.set_paused(Some(by)),
+            (false, _) => self.set_paused(None),
+        }
+        Ok(json!({"paused_by": self.paused_by()}))
+    }
+
     /// Counts an instructor's command as an intervention in the running attempt (stick
-    /// input and messages do not count).
+    /// input and messages do not count, nor silent faults: they set up a diagnosis drill,
+    /// and a count the trainee's assessment shows would give them away).
     fn note_intervention(&mut self, command: &Command) {
-        if !matches!(
-            command,
-            Command::Input(_) | Command::Message(_) | Command::End
-        ) {
+        let silent = matches!(command, Command::InjectFault(f) if f.silent);
+        if !silent
+            && !matches!(
+                command,
+                Command::Input(_) | Command::Message(_) | Command::End
+            )
+        {
             self.intervene();
         }
     }
@@ -574,6 +614,7 @@ mod tests {
         let a = |arm, joint, v| ActiveFault {
             arm,
             fault: Fault::new(FaultKind::StuckValve, Some(joint), v).unwrap(),
+            silent: false,
         };
         assert!(a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Left, 2, -0.5)));
         assert!(!a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Left, 3, 0.5)));

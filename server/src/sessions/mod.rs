@@ -33,7 +33,7 @@ use seaarms_core::sim::{Input, SimParams, Simulation};
 use tokio::sync::watch;
 
 use crate::metrics::Metrics;
-use crate::protocol::{ControlMethod, ControlMode, EndReason, Settings};
+use crate::protocol::{ControlMethod, ControlMode, EndReason, PausedBy, Settings};
 use admission::ClientKey;
 use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
@@ -69,7 +69,7 @@ pub const LIVE_SCENARIOS: &[(&str, &str)] = &[
 pub struct SessionConfig {
     /// Most live sessions at once.
     pub max_sessions: usize,
-    /// A session with no connected trainee and no input for this long ends.
+    /// A session whose trainee gives no input for this long ends (connected or not).
     pub idle_timeout: Duration,
     /// State frames per second (10–120).
     pub frame_hz: u32,
@@ -79,6 +79,8 @@ pub struct SessionConfig {
     pub physics_threads: usize,
     /// A session no trainee has ever connected to ends after this long.
     pub unjoined_grace: Duration,
+    /// A joined session with no trainee connection for this long ends (`abandoned`).
+    pub abandon_grace: Duration,
     /// Most live sessions created by one client (peer address) at once.
     pub max_sessions_per_client: usize,
 }
@@ -150,8 +152,8 @@ pub struct Live {
     input: Input,
     /// Current settings.
     settings: Settings,
-    /// Clock paused.
-    paused: bool,
+    /// Who paused the clock; `None` while it runs.
+    paused: Option<PausedBy>,
     /// Last input sequence number applied.
     input_seq: u64,
     /// Cartesian-mode stick commands per arm (fractions of the maximum speeds), turned into
@@ -312,7 +314,7 @@ impl Live {
             input: Input::default(),
             sim,
             settings,
-            paused: false,
+            paused: None,
             input_seq: 0,
             cartesian: [[0.0; 6]; 2],
             faults: Vec::new(),
@@ -530,6 +532,11 @@ impl Live {
 
     /// Whether the clock is paused.
     pub fn paused(&self) -> bool {
+        self.paused.is_some()
+    }
+
+    /// Who paused the clock, while it is paused.
+    pub fn paused_by(&self) -> Option<PausedBy> {
         self.paused
     }
 
@@ -600,9 +607,10 @@ impl Live {
         self.start_attempt();
     }
 
-    /// Pauses or resumes the clock.
-    pub fn set_paused(&mut self, paused: bool) {
-        self.paused = paused;
+    /// Pauses the clock on behalf of `by`, or resumes it (`None`); who may lift whose pause
+    /// is [`Live::pause_as`]'s rule.
+    pub fn set_paused(&mut self, by: Option<PausedBy>) {
+        self.paused = by;
     }
 
     /// Drives both jaws open for `duration_s` of simulated time, whatever the sticks say.
@@ -662,6 +670,8 @@ pub struct Session {
     pub client: ClientKey,
     /// Set once a trainee has connected (sessions never joined end after a grace period).
     pub joined: AtomicBool,
+    /// When the last trainee connection closed (Unix seconds, as f64 bits; 0 before).
+    trainee_left: AtomicU64,
 }
 
 impl Session {
@@ -697,6 +707,17 @@ impl Session {
     /// Seconds since creation.
     pub fn age_seconds(&self) -> f64 {
         unix_now() - self.created_unix
+    }
+
+    /// Marks that the last trainee connection has closed, now.
+    pub fn trainee_left(&self) {
+        self.trainee_left
+            .store(unix_now().to_bits(), Ordering::Relaxed);
+    }
+
+    /// Seconds since the last trainee connection closed.
+    pub fn seconds_since_trainee_left(&self) -> f64 {
+        unix_now() - f64::from_bits(self.trainee_left.load(Ordering::Relaxed))
     }
 }
 
@@ -811,6 +832,7 @@ impl SessionManager {
             models,
             client,
             joined: AtomicBool::new(false),
+            trainee_left: AtomicU64::new(0),
         });
         {
             let mut map = self.map();
@@ -904,28 +926,37 @@ impl SessionManager {
         tracing::info!(%id, reason = reason.text(), "session ended");
     }
 
-    /// Ends sessions idle for longer than the configured timeout, and sessions no trainee
-    /// has joined within the grace period.
+    /// Ends sessions no trainee joined within the grace period, joined sessions whose
+    /// trainee left (no trainee connection for the abandon grace), and sessions whose trainee
+    /// gave no input for the idle timeout, connected or not.
     pub fn expire_idle(&self) {
         let limit = self.config.idle_timeout.as_secs_f64();
-        let grace = self.config.unjoined_grace.as_secs_f64();
+        let unjoined = self.config.unjoined_grace.as_secs_f64();
+        let abandon = self.config.abandon_grace;
         for s in self.all() {
-            if s.trainees.load(Ordering::Relaxed) != 0 {
-                continue;
-            }
-            if !s.joined.load(Ordering::Relaxed) && s.age_seconds() > grace {
+            let connected = s.trainees.load(Ordering::Relaxed) != 0;
+            let joined = s.joined.load(Ordering::Relaxed);
+            if !joined && s.age_seconds() > unjoined {
                 self.end(&s.id, EndReason::NoTraineeJoined);
+            } else if joined && !connected && s.seconds_since_trainee_left() > abandon.as_secs_f64()
+            {
+                let grace_s = abandon.as_secs();
+                self.end(&s.id, EndReason::Abandoned { grace_s });
             } else if s.idle_seconds() > limit {
                 self.end(&s.id, EndReason::IdleTimeout);
             }
         }
     }
 
-    /// How often [`SessionManager::expire_idle`] should run: a quarter of the shorter of
-    /// the idle timeout and the grace period, between 0.25 s and 5 s.
+    /// How often [`SessionManager::expire_idle`] should run: a quarter of the shortest of
+    /// the idle timeout and the grace periods, between 0.25 s and 5 s.
     pub fn expiry_interval(&self) -> Duration {
-        let shorter = self.config.idle_timeout.min(self.config.unjoined_grace);
-        (shorter / 4).clamp(Duration::from_millis(250), Duration::from_secs(5))
+        let shortest = self
+            .config
+            .idle_timeout
+            .min(self.config.unjoined_grace)
+            .min(self.config.abandon_grace);
+        (shortest / 4).clamp(Duration::from_millis(250), Duration::from_secs(5))
     }
 
     /// Ends every session (graceful shutdown) and flushes the recorder.

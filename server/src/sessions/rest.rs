@@ -8,8 +8,9 @@ use axum::Json;
 use axum::extract::{Path, Query, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
+use seaarms_core::exercise::ExerciseRun;
 use seaarms_core::manipulability::{jlm, measures};
-use seaarms_core::sim::Arm;
+use seaarms_core::sim::{Arm, Simulation};
 use serde::{Deserialize, Serialize};
 
 use super::admission::{ClientKey, Peer, client_ip};
@@ -20,7 +21,8 @@ use crate::app::AppState;
 use crate::error::ApiError;
 use crate::json::ApiJson;
 use crate::protocol::{
-    ControlMethod, ControlMode, fault_kind_name, grasp_name, parse_arm, parse_fault_kind,
+    ControlMethod, ControlMode, PausedBy, fault_kind_name, fault_label, grasp_name, parse_arm,
+    parse_fault_kind,
 };
 use crate::security::ws_base;
 
@@ -282,14 +284,85 @@ pub struct SessionSummary {
     pub measures: Option<[ArmSummary; 2]>,
     /// Relief-valve events (overloads).
     pub overload_count: u64,
-    /// Active faults (live only; labels of [`crate::protocol::fault_label`]).
+    /// Active faults (live only). The session's own trainee is not shown silent ones.
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub faults: Option<Vec<ActiveFault>>,
+    pub faults: Option<Vec<FaultSummary>>,
     /// `ok`, or `failed` when part of the session's record could not be written.
     pub recording: &'static str,
+    /// What the instructor's roster shows of a live session (absent for ended ones).
+    #[serde(flatten, skip_serializing_if = "Option::is_none")]
+    pub roster: Option<Roster>,
 }
 
-fn live_summary(s: &Session, recording: &'static str, attempts: Vec<String>) -> SessionSummary {
+/// The roster fields of a live session's summary.
+#[derive(Debug, Serialize)]
+pub struct Roster {
+    /// Who paused the clock (`instructor`, `trainee`), `null` while it runs.
+    pub paused_by: Option<PausedBy>,
+    /// The running exercise attempt, `null` in free play.
+    pub exercise: Option<ExerciseSummary>,
+    /// The warnings of the session's current state frame.
+    pub warnings: Vec<String>,
+    /// The running attempt's id.
+    pub attempt: String,
+}
+
+/// A running exercise attempt in the roster.
+#[derive(Debug, Serialize)]
+pub struct ExerciseSummary {
+    /// Exercise id.
+    pub id: String,
+    /// Its title.
+    pub title: String,
+    /// Steps done (the current step's 0-based index; `steps_total` once all are done).
+    pub step: usize,
+    /// Number of steps.
+    pub steps_total: usize,
+    /// Overall progress in [0, 1].
+    pub progress: f64,
+    /// Score so far, 0–100 (final once done).
+    pub score: f64,
+    /// `running`, `passed` or `failed`.
+    pub status: &'static str,
+}
+
+impl ExerciseSummary {
+    /// The summary of the attempt `run` on `sim`.
+    fn new(run: &ExerciseRun, sim: &Simulation) -> ExerciseSummary {
+        let st = run.status(sim);
+        ExerciseSummary {
+            id: st.id,
+            title: run.spec().title.clone(),
+            step: st.step,
+            steps_total: st.steps,
+            progress: st.progress,
+            score: st.score,
+            status: match (st.done, st.passed) {
+                (false, _) => "running",
+                (true, true) => "passed",
+                (true, false) => "failed",
+            },
+        }
+    }
+}
+
+/// An active fault in a session summary.
+#[derive(Debug, Serialize)]
+pub struct FaultSummary {
+    /// Its label ([`crate::protocol::fault_label`], as state frames list faults).
+    pub label: String,
+    /// Injected without telling the trainee (absent from the state frames).
+    pub silent: bool,
+}
+
+/// The live summary of `s` as `viewer` may see it (the session's trainee is not shown
+/// silent faults).
+fn live_summary(
+    s: &Session,
+    recording: &'static str,
+    attempts: Vec<String>,
+    viewer: Caller,
+) -> SessionSummary {
     let live = s.live();
     let sim = live.sim();
     let arm = |arm: Arm| {
@@ -320,8 +393,23 @@ fn live_summary(s: &Session, recording: &'static str, attempts: Vec<String>) -> 
         trainees: Some(s.trainees.load(std::sync::atomic::Ordering::Relaxed)),
         measures: Some(Arm::BOTH.map(arm)),
         overload_count: s.overloads.load(std::sync::atomic::Ordering::Relaxed),
-        faults: Some(live.faults().to_vec()),
+        faults: Some(
+            live.faults()
+                .iter()
+                .filter(|f| viewer == Caller::Instructor || !f.silent)
+                .map(|f| FaultSummary {
+                    label: fault_label(f),
+                    silent: f.silent,
+                })
+                .collect(),
+        ),
         recording,
+        roster: Some(Roster {
+            paused_by: live.paused_by(),
+            exercise: live.exercise().map(|run| ExerciseSummary::new(run, sim)),
+            warnings: super::snapshot::warnings(&live),
+            attempt: live.attempt_id().to_string(),
+        }),
     }
 }
 
@@ -356,6 +444,7 @@ fn ended_summary(
         } else {
             "ok"
         },
+        roster: None,
     }
 }
 
@@ -393,7 +482,7 @@ pub async fn list(
         .iter()
         .map(|s| {
             let a = attempts.remove(&s.id).unwrap_or_default();
-            live_summary(s, recorder.recording(&s.id), a)
+            live_summary(s, recorder.recording(&s.id), a, Caller::Instructor)
         })
         .collect();
     let live_ids: std::collections::HashSet<&str> = live.iter().map(|s| s.id.as_str()).collect();
@@ -418,13 +507,14 @@ pub async fn get_one(
 ) -> Result<Json<SessionSummary>, ApiError> {
     let ids = |v: Vec<(String, String)>| v.into_iter().map(|(_, a)| a).collect::<Vec<_>>();
     if let Some(s) = state.sessions.get(&id) {
-        caller(&state, bearer(&headers), Some(&s))?;
+        let viewer = caller(&state, bearer(&headers), Some(&s))?;
         flush_records(&state).await;
         let attempts = ids(state.db.attempt_ids(Some(&id)).await.map_err(db_error)?);
         return Ok(Json(live_summary(
             &s,
             state.sessions.recorder.recording(&s.id),
             attempts,
+            viewer,
         )));
     }
     require_instructor(&state, &headers)?;
@@ -501,6 +591,10 @@ pub enum Action {
         joint: Option<usize>,
         /// Size of the fault (see `fault`).
         value: f64,
+        /// Injected without telling the trainee: left out of the state frames and the
+        /// trainee's view; the instructor's session summary lists it with `"silent": true`.
+        #[serde(default)]
+        silent: bool,
     },
     /// Remove every fault.
     ClearFaults,
@@ -527,6 +621,7 @@ impl TryFrom<Action> for Command {
                 arm,
                 joint,
                 value,
+                silent,
             } => {
                 let arm = parse_arm(&arm).ok_or_else(|| {
                     CommandError::Invalid(format!("arm must be `left` or `right`, got `{arm}`"))
@@ -538,7 +633,7 @@ impl TryFrom<Action> for Command {
                     ))
                 })?;
                 let fault = Fault::new(kind, joint, value).map_err(CommandError::Invalid)?;
-                Command::InjectFault(ActiveFault { arm, fault })
+                Command::InjectFault(ActiveFault { arm, fault, silent })
             }
             Action::ClearFaults => Command::ClearFaults,
             Action::Message { text } => Command::message(&text)?,

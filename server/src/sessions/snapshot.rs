@@ -47,19 +47,16 @@ fn measures_frame(m: &Measures, jlm: Option<f64>) -> MeasuresFrame {
     }
 }
 
-/// One arm's frame and its translational Jacobian (world), with its warnings.
-fn arm_frame(live: &mut Live, arm: Arm, warnings: &mut Vec<String>) -> (ArmFrame, DMatrix<f64>) {
+/// One arm's warnings: near a singularity (translational `isotropy` below
+/// [`NEAR_SINGULAR_ISOTROPY`]), joints near a limit, relief valves open. The one rule behind
+/// the frames' and the summaries' `warnings`.
+fn arm_warnings(live: &Live, arm: Arm, isotropy: f64, warnings: &mut Vec<String>) {
     let name = arm_name(arm);
-    let sim = &live.sim;
-    let model = &*live.models[arm.index()];
-    let state = sim.arm(arm);
-    let jw = sim.jacobian_world(arm);
-    let jt = DMatrix::from_fn(3, 6, |r, c| jw[(r, c)]);
-    let m = translational_measures(jw);
-    if m.isotropy < NEAR_SINGULAR_ISOTROPY {
+    let state = live.sim.arm(arm);
+    if isotropy < NEAR_SINGULAR_ISOTROPY {
         warnings.push(format!("near_singularity:{name}"));
     }
-    for (i, near) in near_limits(model, &state.q, NEAR_LIMIT_FRACTION)
+    for (i, near) in near_limits(&live.models[arm.index()], &state.q, NEAR_LIMIT_FRACTION)
         .iter()
         .enumerate()
     {
@@ -72,6 +69,28 @@ fn arm_frame(live: &mut Live, arm: Arm, warnings: &mut Vec<String>) -> (ArmFrame
             warnings.push(format!("relief:{name}:{i}"));
         }
     }
+}
+
+/// The warnings a frame of the session's current state carries (`near_singularity:left`,
+/// `near_joint_limit:right:3`, `relief:left:2`, …), without building the frame.
+pub fn warnings(live: &Live) -> Vec<String> {
+    let mut warnings = Vec::new();
+    for arm in Arm::BOTH {
+        let isotropy = translational_measures(live.sim.jacobian_world(arm)).isotropy;
+        arm_warnings(live, arm, isotropy, &mut warnings);
+    }
+    warnings
+}
+
+/// One arm's frame and its translational Jacobian (world), with its warnings.
+fn arm_frame(live: &mut Live, arm: Arm, warnings: &mut Vec<String>) -> (ArmFrame, DMatrix<f64>) {
+    let sim = &live.sim;
+    let model = &*live.models[arm.index()];
+    let state = sim.arm(arm);
+    let jw = sim.jacobian_world(arm);
+    let jt = DMatrix::from_fn(3, 6, |r, c| jw[(r, c)]);
+    let m = translational_measures(jw);
+    arm_warnings(live, arm, m.isotropy, warnings);
     let base: Isometry3<f64> = sim.params().arms[arm.index()].base;
     forward_kinematics(model, &mut live.kin[arm.index()], &state.q);
     let base_m = seaarms_core::model::as_matrix_isometry(&base);
@@ -126,7 +145,8 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
         t: sim.time_s(),
         seq: live.frame_seq,
         input_seq: live.input_seq,
-        paused: live.paused,
+        paused: live.paused(),
+        paused_by: live.paused_by(),
         settings: live.settings,
         arms: ArmsFrame { left, right },
         dual,
@@ -139,7 +159,8 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
         internal_torque_nm: [internal[3], internal[4], internal[5]],
         relief_events: sim.relief_events(),
         warnings,
-        faults: live.faults.clone(),
+        // Frames go to every client: a silent fault must not be in them at all.
+        faults: live.faults.iter().filter(|f| !f.silent).copied().collect(),
         scenario: live.scenario.name().to_string(),
         exercise: live.exercise.as_ref().map(|run| run.status(sim)),
         panel: sim.panel().map(|p| crate::protocol::PanelFrame {

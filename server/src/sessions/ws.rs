@@ -240,7 +240,10 @@ fn connected(metrics: &Metrics, session: &Session, role: Role) {
 fn disconnected(metrics: &Metrics, session: &Session, role: Role) {
     metrics.ws_clients.fetch_sub(1, Ordering::Relaxed);
     if role == Role::Trainee {
-        session.trainees.fetch_sub(1, Ordering::Relaxed);
+        // The last one out starts the abandon grace (SessionManager::expire_idle).
+        if session.trainees.fetch_sub(1, Ordering::Relaxed) == 1 {
+            session.trainee_left();
+        }
         session.touch();
     }
 }

@@ -1,0 +1,481 @@
+//! Attempts: their records (from [`crate::db`]) and their replay ([`crate::replay`]).
+//!
+//! * `GET /api/attempts` (instructor): filtered by trainee, group, exercise or session,
+//!   newest first.
+//! * `GET /api/attempts/{id}`: the record with its events; `…/inputs`: the decoded input
+//!   log; `…/replay?t=`: the state frame at t.
+//! * `GET /ws/replay/{id}`: a replay streamed at the frame rate, with play, pause, seek and
+//!   speed (0.25–8×).
+//!
+//! The instructor token sees every attempt; a session's control token sees that session's
+//! attempts, also after the session ended (the database keeps the token's SHA-256).
+//! Re-simulation runs on blocking threads, one request at a time per connection, and at most
+//! [`MAX_REPLAYS`] replay sockets at once.
+
+use std::sync::LazyLock;
+use std::time::Duration;
+
+use axum::Json;
+use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
+use axum::extract::{Path, Query, State};
+use axum::http::{HeaderMap, StatusCode, header};
+use axum::response::{IntoResponse, Response};
+use futures_util::{SinkExt, StreamExt};
+use serde::{Deserialize, Serialize};
+use serde_json::{Value, json};
+use tokio::sync::Semaphore;
+
+use crate::app::AppState;
+use crate::db::{AttemptFilter, AttemptRow, EventRow};
+use crate::error::ApiError;
+use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ServerMessage};
+use crate::replay::{Init, Replay, ReplayError, check_version, log};
+use crate::sessions::{sha256_hex, token_eq};
+
+/// Most replay WebSockets open at once (each may re-simulate on a blocking thread).
+pub const MAX_REPLAYS: usize = 32;
+/// Slowest and fastest replay speeds.
+pub const SPEED_RANGE: (f64, f64) = (0.25, 8.0);
+/// Most attempts one listing returns.
+pub const MAX_LIST: usize = 1000;
+
+static REPLAY_SLOTS: LazyLock<Semaphore> = LazyLock::new(|| Semaphore::new(MAX_REPLAYS));
+
+fn forbidden(msg: &str) -> ApiError {
+    ApiError::new(StatusCode::FORBIDDEN, msg)
+}
+
+fn db_error(e: anyhow::Error) -> ApiError {
+    tracing::error!("records database: {e:#}");
+    ApiError::new(
+        StatusCode::SERVICE_UNAVAILABLE,
+        "the records database is not answering; try again",
+    )
+}
+
+/// The token of `Authorization: Bearer …`, else `?token=`.
+fn token<'a>(headers: &'a HeaderMap, query: Option<&'a str>) -> Option<&'a str> {
+    headers
+        .get(header::AUTHORIZATION)
+        .and_then(|v| v.to_str().ok())
+        .and_then(|v| v.split_once(' '))
+        .filter(|(scheme, _)| scheme.eq_ignore_ascii_case("bearer"))
+        .map(|(_, t)| t)
+        .or(query)
+}
+
+fn is_instructor(state: &AppState, token: Option<&str>) -> bool {
+    token.is_some_and(|t| token_eq(t, &state.instructor_token))
+}
+
+/// The attempt, if `token` may see it: 403 for a wrong token, 404 for an unknown id (after
+/// the token check for the instructor, so ids are not probed without one).
+async fn authorized(
+    state: &AppState,
+    token: Option<&str>,
+    id: &str,
+) -> Result<AttemptRow, ApiError> {
+    let Some(token) = token else {
+        return Err(forbidden(
+            "missing token (Authorization: Bearer … or ?token=)",
+        ));
+    };
+    let not_found = || ApiError::not_found(format!("no attempt `{id}`"));
+    if !crate::sessions::record::valid_id(id) {
+        return Err(not_found());
+    }
+    let row = state.db.attempt(id).await.map_err(db_error)?;
+    if token_eq(token, &state.instructor_token) {
+        return row.ok_or_else(not_found);
+    }
+    let Some(row) = row else {
+        return Err(forbidden("wrong token"));
+    };
+    let hash = state
+        .db
+        .session_token_sha256(&row.session)
+        .await
+        .map_err(db_error)?;
+    match hash {
+        Some(h) if token_eq(&sha256_hex(token), &h) => Ok(row),
+        _ => Err(forbidden("wrong token")),
+    }
+}
+
+/// A trainee opens an attempt's inputs and replay once it has ended (a running drill's
+/// silent fault is in them); the instructor at any time.
+fn check_open(state: &AppState, token: Option<&str>, row: &AttemptRow) -> Result<(), ApiError> {
+    if row.outcome.is_none() && !is_instructor(state, token) {
+        return Err(ApiError::new(
+            StatusCode::CONFLICT,
+            "the attempt is still running; its replay opens when it ends",
+        ));
+    }
+    Ok(())
+}
+
+/// An attempt on the wire: the record (without its initial conditions), whether it can be
+/// replayed here, and its links.
+#[derive(Debug, Serialize)]
+pub struct AttemptOut {
+    #[serde(flatten)]
+    row: AttemptRow,
+    replayable: bool,
+    replay_note: Option<String>,
+    links: Value,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    events: Option<Vec<EventRow>>,
+}
+
+impl AttemptOut {
+    fn new(mut row: AttemptRow, events: Option<Vec<EventRow>>) -> AttemptOut {
+        let note = check_version(&row.sim_version).err().map(|e| e.to_string());
+        let links = json!({
+            "self": format!("/api/attempts/{}", row.id),
+            "replay": format!("/replay/{}", row.id),
+            "inputs": format!("/api/attempts/{}/inputs", row.id),
+            "csv": format!("/api/sessions/{}/log.csv", row.session),
+        });
+        row.init = Value::Null;
+        AttemptOut {
+            row,
+            replayable: note.is_none(),
+            replay_note: note,
+            links,
+            events,
+        }
+    }
+}
+
+/// Query of `GET /api/attempts`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ListQuery {
+    trainee: Option<String>,
+    group: Option<String>,
+    exercise: Option<String>,
+    session: Option<String>,
+    limit: Option<usize>,
+    token: Option<String>,
+}
+
+/// `GET /api/attempts` (instructor).
+pub async fn list(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    Query(q): Query<ListQuery>,
+) -> Result<Json<Value>, ApiError> {
+    if !is_instructor(&state, token(&headers, q.token.as_deref())) {
+        return Err(forbidden("instructor token required"));
+    }
+    let filter = AttemptFilter {
+        trainee: q.trainee,
+        group: q.group,
+        exercise: q.exercise,
+        session: q.session,
+        limit: q.limit.unwrap_or(MAX_LIST).clamp(1, MAX_LIST),
+    };
+    let rows = state.db.attempts(&filter).await.map_err(db_error)?;
+    let out: Vec<AttemptOut> = rows.into_iter().map(|r| AttemptOut::new(r, None)).collect();
+    Ok(Json(json!({ "attempts": out })))
+}
+
+/// `?token=` of the single-attempt routes.
+#[derive(Debug, Default, Deserialize)]
+pub struct TokenQuery {
+    token: Option<String>,
+}
+
+/// `GET /api/attempts/{id}`: the record, its assessment and its events.
+pub async fn get(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    Path(id): Path<String>,
+    Query(q): Query<TokenQuery>,
+) -> Result<Json<AttemptOut>, ApiError> {
+    let token = token(&headers, q.token.as_deref());
+    let row = authorized(&state, token, &id).await?;
+    let mut events = state.db.attempt_events(&id).await.map_err(db_error)?;
+    // A silent fault stays hidden from the trainee while the attempt runs (a drill).
+    if row.outcome.is_none() && !is_instructor(&state, token) {
+        events.retain(|e| e.detail.get("silent") != Some(&Value::Bool(true)));
+    }
+    Ok(Json(AttemptOut::new(row, Some(events))))
+}
+
+/// `GET /api/attempts/{id}/inputs`: the initial conditions and the decoded input log.
+pub async fn inputs(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    Path(id): Path<String>,
+    Query(q): Query<TokenQuery>,
+) -> Result<Json<Value>, ApiError> {
+    let token = token(&headers, q.token.as_deref());
+    let row = authorized(&state, token, &id).await?;
+    check_open(&state, token, &row)?;
+    let bytes = state.db.attempt_inputs(&id).await.map_err(db_error)?;
+    let entries = log::decode(&bytes).map_err(|e| {
+        ApiError::new(
+            StatusCode::CONFLICT,
+            format!("the input log is damaged: {e}"),
+        )
+    })?;
+    Ok(Json(json!({
+        "format": log::FORMAT,
+        "sim_version": row.sim_version,
+        "init": row.init,
+        "input_quantum": log::INPUT_QUANTUM,
+        "bytes": bytes.len(),
+        "entries": entries,
+    })))
+}
+
+/// Builds the replay of an attempt (409 when it cannot be replayed here).
+async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, ApiError> {
+    let conflict = |e: ReplayError| ApiError::new(StatusCode::CONFLICT, e.to_string());
+    check_version(&row.sim_version).map_err(conflict)?;
+    let init: Init = serde_json::from_value(row.init.clone())
+        .map_err(|e| conflict(ReplayError::Record(format!("initial conditions: {e}"))))?;
+    // A running attempt: what the recorder has written so far (whole seconds).
+    let duration_s = if row.ended_unix.is_some() {
+        row.sim_seconds
+    } else {
+        let sessions = state.sessions.clone();
+        tokio::task::spawn_blocking(move || sessions.recorder.flush())
+            .await
+            .ok();
+        state.sessions.get(&row.session).map_or(0.0, |s| {
+            let live = s.live();
+            if live.attempt_id() == row.id {
+                live.sim().time_s().floor()
+            } else {
+                0.0
+            }
+        })
+    };
+    let bytes = state.db.attempt_inputs(&row.id).await.map_err(db_error)?;
+    let entries = log::decode(&bytes).map_err(|e| conflict(ReplayError::Record(e.to_string())))?;
+    let models = [state.sessions.magnum(), state.sessions.magnum()];
+    Replay::new(&models, init, entries, duration_s).map_err(conflict)
+}
+
+/// Query of `GET /api/attempts/{id}/replay`.
+#[derive(Debug, Default, Deserialize)]
+pub struct ReplayQuery {
+    t: Option<f64>,
+    token: Option<String>,
+}
+
+/// `GET /api/attempts/{id}/replay?t=`: the state frame at t (s since the attempt's start,
+/// clamped to its length), re-simulated from the record.
+pub async fn replay_at(
+    State(state): State<AppState>,
+    headers: HeaderMap,
+    Path(id): Path<String>,
+    Query(q): Query<ReplayQuery>,
+) -> Result<Response, ApiError> {
+    let t = q.t.unwrap_or(0.0);
+    if !t.is_finite() {
+        return Err(ApiError::bad_request(
+            "`t` must be a finite number of seconds",
+        ));
+    }
+    let token = token(&headers, q.token.as_deref());
+    let row = authorized(&state, token, &id).await?;
+    check_open(&state, token, &row)?;
+    let mut replay = load(&state, &row).await?;
+    let json = tokio::task::spawn_blocking(move || {
+        replay.seek(t)?;
+        Ok::<_, ReplayError>(state_text(&mut replay))
+    })
+    .await
+    .map_err(|_| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "replay failed"))?
+    .map_err(|e| ApiError::new(StatusCode::CONFLICT, e.to_string()))?;
+    Ok((
+        [(header::CONTENT_TYPE, "application/json")],
+        json.to_string(),
+    )
+        .into_response())
+}
+
+fn state_text(replay: &mut Replay) -> Utf8Bytes {
+    let frame = replay.frame();
+    serde_json::to_string(&ServerMessage::State(Box::new(frame)))
+        .unwrap_or_default()
+        .into()
+}
+
+/// `GET /ws/replay/{id}?token=`: the replay WebSocket (see the module doc and docs/api.md).
+pub async fn replay_ws(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    Query(q): Query<TokenQuery>,
+    ws: WebSocketUpgrade,
+) -> Result<Response, ApiError> {
+    let row = authorized(&state, q.token.as_deref(), &id).await?;
+    check_open(&state, q.token.as_deref(), &row)?;
+    let permit = REPLAY_SLOTS.try_acquire().map_err(|_| {
+        ApiError::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!("{MAX_REPLAYS} replays are open; try again shortly"),
+        )
+    })?;
+    let mut replay = load(&state, &row).await?;
+    let hello = replay_hello(&state, &row, &mut replay);
+    let frame_hz = state.sessions.config.frame_hz.clamp(10, 120);
+    Ok(ws
+        .max_message_size(MAX_CLIENT_MESSAGE_BYTES)
+        .on_upgrade(move |socket| async move {
+            let _permit = permit;
+            serve_replay(socket, replay, hello, frame_hz).await;
+        }))
+}
+
+fn replay_hello(state: &AppState, row: &AttemptRow, replay: &mut Replay) -> Utf8Bytes {
+    let hello = crate::sessions::ws::hello_for(
+        &row.session,
+        "observer",
+        replay.live(),
+        &state.sessions.config,
+    );
+    let mut v = serde_json::to_value(ServerMessage::Hello(Box::new(hello))).unwrap_or_default();
+    v["replay"] = json!({"attempt": row.id, "duration_s": replay.duration_s()});
+    v.to_string().into()
+}
+
+/// What a replay client may send.
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+enum ReplayCommand {
+    Play,
+    Pause,
+    Seek { t: f64 },
+    Speed { value: f64 },
+}
+
+/// Playback state of one replay socket.
+struct Playback {
+    replay: Replay,
+    playing: bool,
+    speed: f64,
+}
+
+impl Playback {
+    fn status(&self) -> Utf8Bytes {
+        json!({
+            "type": "replay",
+            "t": self.replay.time_s(),
+            "playing": self.playing,
+            "speed": self.speed,
+            "duration_s": self.replay.duration_s(),
+        })
+        .to_string()
+        .into()
+    }
+
+    /// Moves to `t` on a blocking thread; returns the frame there (None if the thread
+    /// failed: the socket closes).
+    async fn seek(mut self, t: f64) -> Option<(Playback, Result<Utf8Bytes, String>)> {
+        tokio::task::spawn_blocking(move || {
+            let r = self.replay.seek(t).map(|()| state_text(&mut self.replay));
+            (self, r.map_err(|e| e.to_string()))
+        })
+        .await
+        .ok()
+    }
+}
+
+fn error_text(message: impl Into<String>) -> Utf8Bytes {
+    serde_json::to_string(&ServerMessage::Error {
+        message: message.into(),
+    })
+    .unwrap_or_default()
+    .into()
+}
+
+async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame_hz: u32) {
+    let (mut tx, mut rx) = socket.split();
+    let mut pb = Playback {
+        replay,
+        playing: false,
+        speed: 1.0,
+    };
+    let first = state_text(&mut pb.replay);
+    for text in [hello, first, pb.status()] {
+        if tx.send(Message::Text(text)).await.is_err() {
+            return;
+        }
+    }
+    let interval = Duration::from_secs_f64(1.0 / f64::from(frame_hz));
+    let mut tick = tokio::time::interval(interval);
+    tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    loop {
+        let mut out: Vec<Utf8Bytes> = Vec::new();
+        tokio::select! {
+            msg = rx.next() => {
+                let text = match msg {
+                    Some(Ok(Message::Text(t))) => t,
+                    Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
+                    Some(Ok(_)) => continue,
+                };
+                match serde_json::from_str::<ReplayCommand>(&text) {
+                    Ok(ReplayCommand::Play) => {
+                        if pb.replay.at_end() {
+                            let Some((p, frame)) = pb.seek(0.0).await else { return };
+                            pb = p;
+                            out.extend(frame.ok());
+                        }
+                        pb.playing = true;
+                    }
+                    Ok(ReplayCommand::Pause) => pb.playing = false,
+                    Ok(ReplayCommand::Seek { t }) if t.is_finite() => {
+                        let Some((p, frame)) = pb.seek(t).await else { return };
+                        pb = p;
+                        match frame {
+                            Ok(f) => out.push(f),
+                            Err(e) => out.push(error_text(e)),
+                        }
+                    }
+                    Ok(ReplayCommand::Seek { .. }) => {
+                        out.push(error_text("`t` must be a finite number of seconds"));
+                    }
+                    Ok(ReplayCommand::Speed { value })
+                        if (SPEED_RANGE.0..=SPEED_RANGE.1).contains(&value) =>
+                    {
+                        pb.speed = value;
+                    }
+                    Ok(ReplayCommand::Speed { value }) => out.push(error_text(format!(
+                        "speed must be in [{}, {}], got {value}",
+                        SPEED_RANGE.0, SPEED_RANGE.1
+                    ))),
+                    Err(e) => out.push(error_text(format!(
+                        "expected {{\"type\": \"play\"|\"pause\"|\"seek\"|\"speed\", …}}: {e}"
+                    ))),
+                }
+                out.push(pb.status());
+            }
+            _ = tick.tick(), if pb.playing => {
+                let t = (pb.replay.time_s() + pb.speed * interval.as_secs_f64())
+                    .min(pb.replay.duration_s());
+                let Some((p, frame)) = pb.seek(t).await else { return };
+                pb = p;
+                match frame {
+                    Ok(f) => out.push(f),
+                    Err(e) => {
+                        pb.playing = false;
+                        out.push(error_text(e));
+                    }
+                }
+                if pb.replay.at_end() {
+                    pb.playing = false;
+                }
+                out.push(pb.status());
+            }
+        }
+        for text in out {
+            if tx.send(Message::Text(text)).await.is_err() {
+                return;
+            }
+        }
+    }
+}

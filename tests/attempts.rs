@@ -1,0 +1,249 @@
+//! Issue 16: attempts recorded by a live server over real sockets, listed, protected by
+//! token, and replayed: the state the replay gives at a recorded time equals the recorded
+//! CSV row exactly (the CSV's numbers are shortest round-trip decimals, so they parse back
+//! to the very bits the simulation had), for an attempt that began after a reset; and the
+//! replay WebSocket plays, seeks and changes speed.
+
+#![allow(clippy::unwrap_used)]
+
+mod common;
+
+use std::time::Duration;
+
+use common::*;
+use futures_util::SinkExt;
+use serde_json::{Value, json};
+use tokio_tungstenite::tungstenite::Message;
+
+async fn send(ws: &mut Ws, v: Value) {
+    ws.send(Message::Text(v.to_string().into())).await.unwrap();
+}
+
+async fn get_with(url: &str, token: &str) -> (u16, Value) {
+    let r = reqwest::Client::new()
+        .get(url)
+        .bearer_auth(token)
+        .send()
+        .await
+        .unwrap();
+    let st = r.status().as_u16();
+    let text = r.text().await.unwrap();
+    (
+        st,
+        serde_json::from_str(&text).unwrap_or(Value::String(text)),
+    )
+}
+
+/// Drives the left arm and the right jaw with changing sticks for `messages` × 20 ms.
+async fn drive(ws: &mut Ws, seq: &mut u64, messages: u64, phase: f64) {
+    for i in 0..messages {
+        *seq += 1;
+        let a = (phase + i as f64 * 0.07).sin();
+        send(
+            ws,
+            json!({"type": "input", "seq": *seq, "arms": {
+                "left": {"axes": [0.8 * a, 0.6, -0.4 * a, 0.3, 0.0, 0.2], "grip": 0},
+                "right": {"axes": [0, 0, 0.5, 0, 0, 0], "grip": -a}}}),
+        )
+        .await;
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}
+
+/// Columns of the CSV header.
+fn columns(header: &str) -> Vec<String> {
+    header.split(',').map(str::to_string).collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn attempts_are_recorded_listed_and_replay_the_recorded_rows_exactly() {
+    let s = start().await;
+    let (st, c) = create(
+        &s,
+        json!({"trainee": "Ada Lovelace", "group": "Class A", "scenario": "training"}),
+    )
+    .await;
+    assert_eq!(st, 201, "{c}");
+    let id = c["id"].as_str().unwrap().to_string();
+    let token = c["control_token"].as_str().unwrap().to_string();
+    let mut ws = trainee(&s, &id, &token).await;
+    let mut seq = 0;
+    drive(&mut ws, &mut seq, 60, 0.0).await;
+    send(&mut ws, json!({"type": "reset"})).await;
+    drive(&mut ws, &mut seq, 40, 1.0).await;
+    send(
+        &mut ws,
+        json!({"type": "settings", "control_method": "closed"}),
+    )
+    .await;
+    drive(&mut ws, &mut seq, 40, 2.0).await;
+    // The session ends: its running attempt ends with it.
+    let r = reqwest::Client::new()
+        .delete(format!("{}/api/sessions/{id}", s.base))
+        .bearer_auth(&token)
+        .send()
+        .await
+        .unwrap();
+    assert!(r.status().is_success(), "{}", r.status());
+
+    // Both attempts are listed for the session, newest first, ended.
+    let mut attempts = Vec::new();
+    for _ in 0..50 {
+        let list = get_json(&format!("{}/api/attempts?session={id}", s.base)).await;
+        attempts = list["attempts"].as_array().unwrap().clone();
+        if attempts.len() == 2 && attempts.iter().all(|a| a["outcome"].is_string()) {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    assert_eq!(attempts.len(), 2, "{attempts:?}");
+    let (second, first) = (&attempts[0], &attempts[1]);
+    assert!(second["started_unix"].as_f64() >= first["started_unix"].as_f64());
+    for a in &attempts {
+        assert_eq!(a["trainee"], "Ada Lovelace");
+        assert_eq!(a["group"], "Class A");
+        assert_eq!(a["session"], id.as_str());
+        assert_eq!(
+            a["outcome"], "ended",
+            "free play ends, it is not passed or failed"
+        );
+        assert_eq!(a["replayable"], true, "{a}");
+        assert!(
+            a["links"]["replay"]
+                .as_str()
+                .unwrap()
+                .starts_with("/replay/")
+        );
+    }
+    let a2 = second["id"].as_str().unwrap();
+
+    // Who may read it: the trainee's token (after the session ended), the instructor; not
+    // another token; an unknown id is 404 for the instructor.
+    let (st, rec) = get_with(&format!("{}/api/attempts/{a2}", s.base), &token).await;
+    assert_eq!(st, 200, "{rec}");
+    assert!(
+        rec["events"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|e| e["kind"] == "settings" && e["actor"] == "trainee"),
+        "the settings change is a typed event: {}",
+        rec["events"]
+    );
+    let (st, _) = get_with(&format!("{}/api/attempts/{a2}", s.base), "not-a-token").await;
+    assert_eq!(st, 403);
+    let (st, _) = get_with(
+        &format!("{}/api/attempts/0123456789abcdef", s.base),
+        TEACHER,
+    )
+    .await;
+    assert_eq!(st, 404);
+    let (st, _) = get_with(&format!("{}/api/attempts", s.base), &token).await;
+    assert_eq!(st, 403, "listing is the instructor's");
+
+    // The input log: small, and its inputs are the quantized sticks.
+    let (st, inputs) = get_with(&format!("{}/api/attempts/{a2}/inputs", s.base), &token).await;
+    assert_eq!(st, 200, "{inputs}");
+    let entries = inputs["entries"].as_array().unwrap();
+    assert!(entries.iter().any(|e| e["c"] == "settings"), "{inputs}");
+    assert!(entries.iter().filter(|e| e["c"] == "input").count() >= 30);
+    assert!(
+        inputs["bytes"].as_u64().unwrap() < 8_000,
+        "{}",
+        inputs["bytes"]
+    );
+
+    // The CSV's rows of the second attempt (its `attempt` column; t restarts at the reset).
+    let csv = get_text(&format!("{}/api/sessions/{id}/log.csv", s.base)).await;
+    let mut lines = csv.lines();
+    let cols = columns(lines.next().unwrap());
+    let col = |name: &str| cols.iter().position(|c| c == name).unwrap();
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    let second_rows: Vec<&Vec<String>> = rows.iter().filter(|r| r[col("attempt")] == a2).collect();
+    assert!(second_rows.len() > 100, "{} rows", second_rows.len());
+    assert!(
+        second_rows[0][0].parse::<f64>().unwrap() < 0.02,
+        "t restarts at the attempt"
+    );
+    assert!(
+        rows.iter()
+            .any(|r| r[col("attempt")] == first["id"].as_str().unwrap())
+    );
+    for row in second_rows.iter().step_by(second_rows.len() / 8).take(8) {
+        let t: f64 = row[0].parse().unwrap();
+        let (st, frame) = get_with(
+            &format!("{}/api/attempts/{a2}/replay?t={t}", s.base),
+            &token,
+        )
+        .await;
+        assert_eq!(st, 200, "{frame}");
+        assert_eq!(frame["t"].as_f64().unwrap(), t);
+        for arm in ["left", "right"] {
+            for (key, name) in [
+                ("q", "q"),
+                ("qd", "qd"),
+                ("p_in", "p_in"),
+                ("p_out", "p_out"),
+            ] {
+                for j in 0..6 {
+                    let recorded: f64 =
+                        row[col(&format!("{arm}_{name}{}", j + 1))].parse().unwrap();
+                    let replayed = frame["arms"][arm][key][j].as_f64().unwrap();
+                    assert_eq!(
+                        replayed.to_bits(),
+                        recorded.to_bits(),
+                        "{arm} {key}[{j}] at t = {t}: replay {replayed} vs record {recorded}"
+                    );
+                }
+            }
+        }
+        let pos = frame["object"]["pose"]["position"].as_array().unwrap();
+        for (i, c) in ["object_x", "object_y", "object_z"].iter().enumerate() {
+            let recorded: f64 = row[col(c)].parse().unwrap();
+            assert_eq!(
+                pos[i].as_f64().unwrap().to_bits(),
+                recorded.to_bits(),
+                "{c} at {t}"
+            );
+        }
+    }
+
+    // The replay socket: hello with the attempt's length, paused at 0; seek; play at 4×.
+    let url = format!(
+        "{}/ws/replay/{a2}?token={token}",
+        s.base.replace("http://", "ws://")
+    );
+    let (mut rs, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    let hello = next_of(&mut rs, "hello", Duration::from_secs(10)).await;
+    let duration = hello["replay"]["duration_s"].as_f64().unwrap();
+    assert!(duration > 1.5, "{duration}");
+    let st = next_of(&mut rs, "replay", Duration::from_secs(10)).await;
+    assert_eq!(st["playing"], false);
+    assert_eq!(st["t"], 0.0);
+    send(&mut rs, json!({"type": "seek", "t": 0.5})).await;
+    let f = next_of(&mut rs, "state", Duration::from_secs(10)).await;
+    assert!((f["t"].as_f64().unwrap() - 0.5).abs() < 1e-9, "{}", f["t"]);
+    send(&mut rs, json!({"type": "speed", "value": 9})).await;
+    let e = next_of(&mut rs, "error", Duration::from_secs(10)).await;
+    assert!(e["message"].as_str().unwrap().contains("speed"), "{e}");
+    send(&mut rs, json!({"type": "speed", "value": 4})).await;
+    send(&mut rs, json!({"type": "play"})).await;
+    let wall = std::time::Instant::now();
+    let mut last = next_of(&mut rs, "replay", Duration::from_secs(10)).await;
+    while last["playing"] != true {
+        last = next_of(&mut rs, "replay", Duration::from_secs(10)).await;
+    }
+    // Until 1 s of the attempt has played (it is longer than 1.5 s).
+    while last["t"].as_f64().unwrap() < 1.5 {
+        last = next_of(&mut rs, "replay", Duration::from_secs(10)).await;
+    }
+    let advanced = last["t"].as_f64().unwrap() - 0.5;
+    let rate = advanced / wall.elapsed().as_secs_f64();
+    // Loose: playback at 4× advances faster than real time (a loaded machine may lag).
+    assert!(rate > 1.5, "4× playback advanced at {rate:.2}× real time");
+    send(&mut rs, json!({"type": "bogus"})).await;
+    next_of(&mut rs, "error", Duration::from_secs(10)).await;
+    s.stop().await;
+}

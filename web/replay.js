@@ -113,7 +113,8 @@ function connect() {
   conn = new Connection({
     role: 'replay',
     sessionId: attemptId,
-    replay: { path: `/ws/replay/${encodeURIComponent(attemptId)}?token=${encodeURIComponent(token)}`, refused: 'The replay was refused' },
+    replay: { path: `/ws/replay/${encodeURIComponent(attemptId)}?token=${encodeURIComponent(token)}`,
+      refused: attempt?.outcome ? 'The replay was refused' : 'The attempt is still running; its replay opens when it ends' },
     onHello(h) {
       view.setHello(h);
       status.role('replay');
@@ -167,10 +168,16 @@ setInterval(() => { if (view.drawn) status.update(view.drawn, { arm }); }, 100);
   }
   try {
     attempt = await fetchAttempt();
+    // just finished: its end reaches the database with the recorder's next batch
+    for (let i = 0; i < FETCH_TRIES && !attempt.outcome; i++) {
+      await new Promise((ok) => setTimeout(ok, FETCH_RETRY_MS));
+      attempt = await fetchAttempt();
+    }
   } catch (e) {
     note(`Cannot open attempt ${attemptId}: ${e.message}.`);
     return;
   }
+  if (!attempt.outcome) note('This attempt is still running: the replay shows it up to the last recorded second.');
   let title = attempt.exercise || attempt.scenario || 'free play';
   if (attempt.exercise) {
     const ex = await fetch(`/api/exercises/${encodeURIComponent(attempt.exercise)}`).then((r) => (r.ok ? r.json() : null)).catch(() => null);

@@ -71,15 +71,16 @@ async function fetchAttempt() {
 }
 
 function showAttempt(a, title) {
-  const who = [a.trainee, a.group].filter(Boolean).join(', ');
+  const who = a.trainee ? `${a.trainee}${a.group ? ` (${a.group})` : ''}` : '';
   const when = a.started_unix ? new Date(a.started_unix * 1000).toLocaleString() : '';
-  $('rp-title').textContent = `${who || 'trainee'} · ${title} · ${when}`;
+  $('rp-title').textContent = `${who || 'trainee'} · ${title}`;
   document.title = `seaarms — debrief: ${who || attemptId} · ${title}`;
   const outcome = OUTCOMES[a.outcome] || (a.outcome ? a.outcome : 'running');
   $('rp-card').innerHTML = a.assessment
     ? assessmentHtml(a.assessment, { title, verdict: a.outcome === 'passed' || a.outcome === 'failed' ? null : outcome })
     : `<div class="card-head"><span class="card-verdict">${esc(outcome)}</span></div>
        <p class="card-title">${esc(title)}${a.sim_seconds ? ` — ${a.sim_seconds.toFixed(1)} s` : ''}. No assessment (not an exercise, or not finished).</p>`;
+  $('rp-card').insertAdjacentHTML('beforeend', `<p class="rp-meta">Started ${esc(when)} · attempt ${esc(a.id)} · session ${esc(a.session)}</p>`);
   $('rp-card').dataset.outcome = a.outcome || '';
   plots.setSession(a.session, token);
 }

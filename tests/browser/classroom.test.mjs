@@ -147,7 +147,20 @@ test('classroom: named roster, attempt history → debrief (seek to a marker, 4�
     assert.ok(rate > 2, `4× playback ran at ${rate.toFixed(2)}×`);
     assert.ok(s2.t <= info.d + 1e-9);
     assert.match(await dp.textContent('#rp-play'), s2.playing ? /Pause/ : /Play/);
-    await dp.click(marker); // the screenshot at the grasp
+    // the screenshot: the five seconds up to the lift's step event (keyboard: Shift+← seeks −5 s),
+    // played at 4× and paused there
+    if (s2.playing) await dp.click('#rp-play');
+    await until(dp, () => !window.__seaarms.replay.playing);
+    const lift = info.events.filter((e) => e.kind === 'exercise').at(-2) ?? grasp;
+    await dp.locator(`.tl-mark[data-t="${lift.t}"]`).first().click();
+    await until(dp, (t) => Math.abs(window.__seaarms.replay.t - t) < 0.1, lift.t);
+    await dp.keyboard.press('Shift+ArrowLeft');
+    await until(dp, (t) => Math.abs(window.__seaarms.replay.t - Math.max(0, t - 5)) < 0.1, lift.t);
+    await dp.click('#rp-play');
+    await until(dp, (t) => window.__seaarms.replay.t >= t, lift.t, 20000);
+    await dp.click('#rp-play');
+    await until(dp, () => !window.__seaarms.replay.playing);
+    await dp.waitForTimeout(500);
     await dp.screenshot({ path: join(SHOTS, 'debrief.png') });
     assert.deepEqual(derrors, []);
 
@@ -186,6 +199,7 @@ test('classroom: named roster, attempt history → debrief (seek to a marker, 4�
     assert.equal(after.paused, true, 'still paused');
     assert.equal(after.t, tStop, 'the clock stayed stopped');
     await ip.waitForSelector(`${row(b)} .cls-acts button[data-act="resume"]`);
+    await b.page.screenshot({ path: join(SHOTS, 'trainee-paused-by-instructor.png') });
     await ip.screenshot({ path: join(SHOTS, 'classroom.png') });
     await ip.click(`${row(b)} .cls-acts button[data-act="resume"]`);
     await until(b.page, () => !window.__seaarms.lastState.paused);

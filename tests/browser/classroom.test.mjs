@@ -12,7 +12,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, FAKE_GAMEPAD, workDualLift, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+import { server, startServer, openBrowser, until, FAKE_GAMEPAD, workDualLift, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || ARTIFACTS;
 const auth = { authorization: `Bearer ${INSTRUCTOR_TOKEN}` };
@@ -222,5 +222,30 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     await a.close();
     await b.close();
     await instr.close();
+  }
+});
+
+test('a session abandoned while the page was away: the page says why it ended when the trainee comes back', { timeout: 90000 }, async () => {
+  const own = await startServer(['--abandon-grace-seconds', '1']); // its own server: a short grace
+  const b = await openBrowser();
+  try {
+    await b.page.goto(`${own.url}/?scenario=training`);
+    const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open && window.__seaarms.connection.session);
+    // the tab goes away (its socket closes); the same browser comes back after the grace
+    const page2 = await b.context.newPage();
+    await b.page.close();
+    let s = null;
+    for (let i = 0; i < 100 && s?.status !== 'ended'; i++) {
+      await new Promise((ok) => setTimeout(ok, 100));
+      s = await (await fetch(`${own.url}/api/sessions/${id}`, { headers: auth })).json();
+    }
+    assert.equal(s.status, 'ended');
+    assert.match(s.end_reason, /left|abandon/i);
+    await page2.goto(`${own.url}/`);
+    await page2.waitForSelector('#start .start-note');
+    assert.equal(await page2.textContent('#start .start-note'), `Your previous session ended: ${s.end_reason}.`);
+  } finally {
+    await b.close();
+    own.stop();
   }
 });

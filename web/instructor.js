@@ -64,7 +64,11 @@ function renderList() {
   const tb = document.querySelector('#sessions tbody');
   tb.innerHTML = sessions.map((s) => {
     const r = summary(s);
-    const btn = r.status === 'live' ? `<button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button>` : '';
+    // an ended session links its record: the newest attempts' debriefs and the CSV
+    const tok = encodeURIComponent(token);
+    const btn = r.status === 'live' ? `<button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button>`
+      : `${(s.attempts || []).slice(0, 3).map((a, i) => `<a href="/replay/${esc(encodeURIComponent(a))}?token=${tok}" target="_blank" rel="noopener">debrief${i ? ` ${i + 1}` : ''}</a>`).join(' ')}
+        <a href="/api/sessions/${esc(encodeURIComponent(r.id))}/log.csv?token=${tok}" download>CSV</a>`;
     return `<tr data-id="${esc(r.id)}" data-status="${esc(r.status)}" class="${[r.id === observed ? 'open' : '', r.recordingFailed ? 'rec-failed' : ''].join(' ').trim()}"><td>${esc(r.id)}</td><td>${esc(r.status)}</td><td>${esc(r.label)}</td>
       <td>${esc(r.scenario)}</td><td>${esc(r.clients)}</td><td>${esc(r.t)}</td><td>${esc(r.grasp)}</td><td>${esc(r.w)}</td>
       <td class="warn">${esc(r.warn)}</td><td>${btn}</td></tr>`;

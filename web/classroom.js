@@ -187,7 +187,8 @@ export class Classroom {
     const byInstructor = s.paused && s.paused_by === 'instructor';
     return `<td class="cls-name"><button type="button" class="link" data-history="${esc(name)}" data-group="${esc(s.group ?? '')}" title="attempt history">${esc(name)}</button></td>
       <td>${esc(s.group ?? '')}</td>
-      <td>${ex ? esc(ex.title ?? ex.id) : `<span class="dim">${esc(s.scenario ?? '')}</span>`}</td>
+      <td>${ex ? `${esc(ex.title ?? ex.id)}${ex.status && ex.status !== 'running' ? ` <span class="out-${esc(ex.status)}">· ${esc(OUTCOMES[ex.status] ?? ex.status)}</span>` : ''}`
+    : `<span class="dim">${esc(s.scenario ?? '')}</span>`}</td>
       <td>${step}</td>
       <td>${ex ? `<span class="cls-bar-o" title="${pct} %"><span class="cls-fill" data-w="${pct}"></span></span>` : ''}</td>
       <td class="num">${ex && Number.isFinite(ex.score) ? Math.round(ex.score) : ''}</td>

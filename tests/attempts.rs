@@ -2,11 +2,13 @@
 //! token, and replayed: the state the replay gives at a recorded time equals the recorded
 //! CSV row exactly (the CSV's numbers are shortest round-trip decimals, so they parse back
 //! to the very bits the simulation had), for an attempt that began after a reset; and the
-//! replay WebSocket plays, seeks and changes speed.
+//! replay WebSocket plays, seeks and changes speed. Runs on SQLite and, when
+//! `SEAARMS_TEST_DATABASE_URL` is set (tests/run.sh), on PostgreSQL.
 
 #![allow(clippy::unwrap_used)]
 
 mod common;
+mod records_common;
 
 use std::time::Duration;
 
@@ -57,7 +59,14 @@ fn columns(header: &str) -> Vec<String> {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn attempts_are_recorded_listed_and_replay_the_recorded_rows_exactly() {
-    let s = start().await;
+    for url in records_common::database_urls().await {
+        eprintln!("database: {}", url.as_deref().unwrap_or("SQLite (default)"));
+        recorded_listed_replayed(url).await;
+    }
+}
+
+async fn recorded_listed_replayed(database_url: Option<String>) {
+    let s = start_with(temp_dir(), |c| c.database_url = database_url).await;
     let (st, c) = create(
         &s,
         json!({"trainee": "Ada Lovelace", "group": "Class A", "scenario": "training"}),
@@ -245,5 +254,64 @@ async fn attempts_are_recorded_listed_and_replay_the_recorded_rows_exactly() {
     assert!(rate > 1.5, "4× playback advanced at {rate:.2}× real time");
     send(&mut rs, json!({"type": "bogus"})).await;
     next_of(&mut rs, "error", Duration::from_secs(10)).await;
+    s.stop().await;
+}
+
+/// An attempt recorded by another build is listed with its assessment but not re-simulated:
+/// `replayable` is false, `replay_note` names both versions, and the replay answers 409.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_attempt_of_another_simulator_version_says_it_cannot_be_replayed() {
+    use seaarms::db::{Db, Write};
+    use seaarms::sessions::record::{AttemptEnd, AttemptStart};
+    let dir = temp_dir();
+    let db = Db::open(&seaarms::db::default_url(&dir)).unwrap();
+    let (session, attempt) = ("00000000000000aa", "00000000000000bb");
+    let old = "0.0.1+0123456789abcdef";
+    db.block_on(db.write_batch(&[
+        Write::Session {
+            id: session.into(),
+            trainee: "Grace".into(),
+            group: "B".into(),
+            scenario: "training".into(),
+            created_unix: 1.0,
+            token_sha256: seaarms::sessions::sha256_hex("old-token"),
+        },
+        Write::AttemptStart(Box::new(AttemptStart {
+            id: attempt.into(),
+            session: session.into(),
+            scenario: "training".into(),
+            exercise: None,
+            exercise_version: None,
+            sim_version: old.into(),
+            started_unix: 1.0,
+            init: json!({}),
+        })),
+        Write::AttemptEnd(Box::new(AttemptEnd {
+            id: attempt.into(),
+            ended_unix: 2.0,
+            sim_seconds: 1.0,
+            outcome: "ended".into(),
+            score: None,
+            assessment: None,
+        })),
+    ]))
+    .unwrap();
+    drop(db);
+    let s = start_with(dir, |_| {}).await;
+    let (st, a) = get_with(&format!("{}/api/attempts/{attempt}", s.base), "old-token").await;
+    assert_eq!(st, 200, "{a}");
+    assert_eq!(a["replayable"], false);
+    let note = a["replay_note"].as_str().unwrap();
+    assert!(
+        note.contains(old) && note.contains(seaarms::replay::SIM_VERSION),
+        "{note}"
+    );
+    let (st, e) = get_with(
+        &format!("{}/api/attempts/{attempt}/replay?t=0.5", s.base),
+        "old-token",
+    )
+    .await;
+    assert_eq!(st, 409, "{e}");
+    assert!(e.to_string().contains(old), "{e}");
     s.stop().await;
 }

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use seaarms::exercises::{Driver, EXERCISES, run_headless};
 use seaarms_core::exercise::Assessment;
-use seaarms_core::exercise::spec::DrillFault;
+use seaarms_core::hydraulics::FaultKind;
 
 /// Seeds 1..=16: the drill's splitmix64 draw over the file's eight choices (two per kind)
 /// gives each fault kind three to five times (checked below, not assumed).
@@ -52,7 +52,7 @@ fn autopilot_names_every_fault_and_passes() {
         }
     }
     assert!(failures.is_empty(), "{failures:?}");
-    for kind in DrillFault::ANSWERS {
+    for kind in FaultKind::NAMES {
         assert!(
             seen.get(kind).copied().unwrap_or(0) >= 2,
             "{kind} drawn < 2 times: {seen:?}"

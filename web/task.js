@@ -12,7 +12,7 @@ import { assessmentHtml } from './assessment.js';
 const BAD_EVENTS = new Set(['strike', 'obstacle', 'drop', 'overload', 'relief', 'limit', 'fault']);
 const COUNTERS = [['strikes', 'strikes'], ['drops', 'drops'], ['overloads', 'overloads'], ['relief', 'relief'], ['limit_hits', 'limit hits']];
 
-/** The fault drill's answers (DrillFault::ANSWERS) and their labels. */
+/** The fault drill's answers (FaultKind::NAMES in the core) and their labels. */
 const DIAGNOSES = [['supply_drop', 'Supply pressure drop'], ['stuck_valve', 'Stuck valve'],
   ['leak', 'Internal leak'], ['air', 'Air in the oil']];
 

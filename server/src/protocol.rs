@@ -15,7 +15,7 @@ use seaarms_core::grasp::GraspState;
 use serde::{Deserialize, Serialize, Serializer};
 
 use crate::api::wire::PoseOut;
-use crate::sessions::command::{ActiveFault, Arm, Fault, FaultKind};
+use crate::sessions::command::{ActiveFault, Arm, Fault};
 
 /// Largest WebSocket message accepted from a client (bytes); a larger one closes the
 /// connection with a close frame, code 1009 (message too big, RFC 6455 §7.4.1).
@@ -43,23 +43,6 @@ pub fn parse_arm(name: &str) -> Option<Arm> {
     }
 }
 
-/// Wire name of a fault kind (REST `fault` field, fault labels).
-pub fn fault_kind_name(kind: FaultKind) -> &'static str {
-    match kind {
-        FaultKind::SupplyDrop => "supply_drop",
-        FaultKind::StuckValve => "stuck_valve",
-        FaultKind::Leak => "leak",
-        FaultKind::Air => "air",
-    }
-}
-
-/// A fault kind from its wire name.
-pub fn parse_fault_kind(name: &str) -> Option<FaultKind> {
-    FaultKind::ALL
-        .into_iter()
-        .find(|k| fault_kind_name(*k) == name)
-}
-
 /// Wire name of a grasp state (state frames, session summaries, records).
 pub fn grasp_name(state: GraspState) -> &'static str {
     // The core's names are the wire names (pinned by this module's tests).
@@ -74,7 +57,7 @@ fn serialize_grasp<S: Serializer>(state: &GraspState, s: S) -> Result<S::Ok, S::
 /// `leak:left:1:5e-10`, `air:right:0.3`.
 pub fn fault_label(f: &ActiveFault) -> String {
     let arm = arm_name(f.arm);
-    let kind = fault_kind_name(f.fault.kind());
+    let kind = f.fault.kind().name();
     match f.fault {
         Fault::SupplyDrop { drop_pa } => format!("{kind}:{arm}:{drop_pa:.0}Pa"),
         Fault::StuckValve { joint, spool } => format!("{kind}:{arm}:{joint}:{spool}"),
@@ -598,6 +581,7 @@ impl ServerMessage {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sessions::command::FaultKind;
 
     /// The `ended` message as web/connection.js reads it (`type`, `reason` code, `text`);
     /// the texts are the record strings tests/sessions.rs and tests/admission_and_security.rs
@@ -656,7 +640,7 @@ mod tests {
         };
         assert_eq!(serde_json::to_value(f).unwrap(), "air:left:0.3");
         for kind in FaultKind::ALL {
-            assert_eq!(parse_fault_kind(fault_kind_name(kind)), Some(kind));
+            assert_eq!(FaultKind::parse(kind.name()), Some(kind));
         }
         for arm in Arm::BOTH {
             assert_eq!(parse_arm(arm_name(arm)), Some(arm));

@@ -15,8 +15,8 @@ use seaarms_core::Model;
 use seaarms_core::hydraulics::Faults;
 use serde::{Deserialize, Serialize};
 
-use crate::protocol::{Settings, StateFrame, parse_fault_kind};
-use crate::sessions::command::{ActiveFault, Arm, Command, Fault};
+use crate::protocol::{Settings, StateFrame};
+use crate::sessions::command::{ActiveFault, Arm, Command, Fault, FaultKind};
 use crate::sessions::snapshot::build_frame;
 use crate::sessions::{Live, Scenario};
 use log::{Entry, FaultEntry};
@@ -79,26 +79,17 @@ pub fn check_version(sim_version: &str) -> Result<(), ReplayError> {
 
 /// A fault as logged.
 pub fn fault_entry(f: &ActiveFault) -> FaultEntry {
-    let (value, joint) = match f.fault {
-        Fault::SupplyDrop { drop_pa } => (drop_pa, None),
-        Fault::StuckValve { joint, spool } => (spool, Some(joint)),
-        Fault::Leak {
-            joint,
-            coefficient_m3_s_pa,
-        } => (coefficient_m3_s_pa, Some(joint)),
-        Fault::Air { bulk_modulus_scale } => (bulk_modulus_scale, None),
-    };
     FaultEntry {
         arm: f.arm.index(),
-        kind: crate::protocol::fault_kind_name(f.fault.kind()).to_string(),
-        joint,
-        value,
+        kind: f.fault.kind().name().to_string(),
+        joint: f.fault.joint(),
+        value: f.fault.value(),
     }
 }
 
 /// A logged fault back as a fault.
 pub fn active_fault(e: &FaultEntry) -> Result<ActiveFault, String> {
-    let kind = parse_fault_kind(&e.kind).ok_or_else(|| format!("unknown fault `{}`", e.kind))?;
+    let kind = FaultKind::parse(&e.kind).ok_or_else(|| format!("unknown fault `{}`", e.kind))?;
     let arm = *Arm::BOTH
         .get(e.arm)
         .ok_or_else(|| format!("arm {}", e.arm))?;

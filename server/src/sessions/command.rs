@@ -21,137 +21,13 @@ pub const MAX_MESSAGE_CHARS: usize = 500;
 /// How long `release` drives both jaws open (s): 7.5 cm at 10.2 cm/s takes 0.74 s (Lim
 /// Table 1-1), so 1 s opens them fully whatever grip the sticks send meanwhile.
 pub const RELEASE_DURATION_S: f64 = 1.0;
-/// Supply-pressure drop range (Pa): up to the full supply of 6.89 MPa (Lim Table 1-1).
-pub const SUPPLY_DROP_RANGE_PA: (f64, f64) = (0.0, 6.89e6);
-/// Stuck-valve spool position range.
-pub const STUCK_SPOOL_RANGE: (f64, f64) = (-1.0, 1.0);
-/// Cross-piston leakage coefficient range (m³/(s·Pa)).
-pub const LEAK_RANGE_M3_S_PA: (f64, f64) = (0.0, 1e-9);
-/// Entrained-air bulk-modulus scale range.
-pub const AIR_SCALE_RANGE: (f64, f64) = (0.01, 1.0);
 /// Actuators per arm (swing, shoulder, elbow, pitch, yaw, rotate).
 pub const JOINTS: usize = 6;
 
+pub use seaarms_core::hydraulics::{
+    AIR_SCALE_RANGE, Fault, FaultKind, LEAK_RANGE_M3_S_PA, STUCK_SPOOL_RANGE, SUPPLY_DROP_RANGE_PA,
+};
 pub use seaarms_core::sim::Arm;
-
-/// An instructor-injected hydraulic fault on one arm (sizes validated on construction).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum Fault {
-    /// The supply pressure drops by this much (Pa).
-    SupplyDrop {
-        /// Drop (Pa), in [`SUPPLY_DROP_RANGE_PA`].
-        drop_pa: f64,
-    },
-    /// A valve's spool sticks at a position whatever the command.
-    StuckValve {
-        /// Actuator 0..5.
-        joint: usize,
-        /// Spool position in [−1, 1].
-        spool: f64,
-    },
-    /// Cross-piston leakage in one actuator.
-    Leak {
-        /// Actuator 0..5.
-        joint: usize,
-        /// Leakage coefficient (m³/(s·Pa)), in [`LEAK_RANGE_M3_S_PA`].
-        coefficient_m3_s_pa: f64,
-    },
-    /// Entrained air: the bulk modulus is scaled down.
-    Air {
-        /// Bulk-modulus scale, in [`AIR_SCALE_RANGE`].
-        bulk_modulus_scale: f64,
-    },
-}
-
-/// The kinds of [`Fault`], for keeping one entry per (arm, kind, joint).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum FaultKind {
-    /// [`Fault::SupplyDrop`].
-    SupplyDrop,
-    /// [`Fault::StuckValve`].
-    StuckValve,
-    /// [`Fault::Leak`].
-    Leak,
-    /// [`Fault::Air`].
-    Air,
-}
-
-impl FaultKind {
-    /// Every kind.
-    pub const ALL: [FaultKind; 4] = [
-        FaultKind::SupplyDrop,
-        FaultKind::StuckValve,
-        FaultKind::Leak,
-        FaultKind::Air,
-    ];
-}
-
-impl Fault {
-    /// Builds a fault from its kind, joint and size, checking ranges (messages name the field).
-    pub fn new(kind: FaultKind, joint: Option<usize>, value: f64) -> Result<Fault, String> {
-        let in_range = |(lo, hi): (f64, f64)| -> Result<f64, String> {
-            if value.is_finite() && value >= lo && value <= hi {
-                Ok(value)
-            } else {
-                Err(format!(
-                    "`value` for {} must be in [{lo}, {hi}], got {value}",
-                    crate::protocol::fault_kind_name(kind)
-                ))
-            }
-        };
-        let joint = || match joint {
-            Some(j) if j < JOINTS => Ok(j),
-            _ => Err(format!("this fault needs `joint` in 0..={}", JOINTS - 1)),
-        };
-        Ok(match kind {
-            FaultKind::SupplyDrop => Fault::SupplyDrop {
-                drop_pa: in_range(SUPPLY_DROP_RANGE_PA)?,
-            },
-            FaultKind::StuckValve => Fault::StuckValve {
-                joint: joint()?,
-                spool: in_range(STUCK_SPOOL_RANGE)?,
-            },
-            FaultKind::Leak => Fault::Leak {
-                joint: joint()?,
-                coefficient_m3_s_pa: in_range(LEAK_RANGE_M3_S_PA)?,
-            },
-            FaultKind::Air => Fault::Air {
-                bulk_modulus_scale: in_range(AIR_SCALE_RANGE)?,
-            },
-        })
-    }
-
-    /// Its kind.
-    pub fn kind(&self) -> FaultKind {
-        match self {
-            Fault::SupplyDrop { .. } => FaultKind::SupplyDrop,
-            Fault::StuckValve { .. } => FaultKind::StuckValve,
-            Fault::Leak { .. } => FaultKind::Leak,
-            Fault::Air { .. } => FaultKind::Air,
-        }
-    }
-
-    /// The actuator it acts on, for per-joint faults.
-    pub fn joint(&self) -> Option<usize> {
-        match self {
-            Fault::StuckValve { joint, .. } | Fault::Leak { joint, .. } => Some(*joint),
-            Fault::SupplyDrop { .. } | Fault::Air { .. } => None,
-        }
-    }
-
-    /// Writes the fault into the simulation's fault set of its arm.
-    pub fn apply_to(&self, faults: &mut seaarms_core::hydraulics::Faults) {
-        match *self {
-            Fault::SupplyDrop { drop_pa } => faults.supply_drop_pa = drop_pa,
-            Fault::StuckValve { joint, spool } => faults.stuck_valve[joint] = Some(spool),
-            Fault::Leak {
-                joint,
-                coefficient_m3_s_pa,
-            } => faults.leak_m3_s_pa[joint] = coefficient_m3_s_pa,
-            Fault::Air { bulk_modulus_scale } => faults.bulk_modulus_scale = bulk_modulus_scale,
-        }
-    }
-}
 
 /// A fault active on one arm (shown to users through [`crate::protocol`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -591,23 +467,6 @@ impl Live {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn fault_ranges_are_checked_and_name_the_field() {
-        assert!(Fault::new(FaultKind::SupplyDrop, None, 3e6).is_ok());
-        assert!(Fault::new(FaultKind::SupplyDrop, None, 7e6).is_err());
-        assert!(Fault::new(FaultKind::Air, None, f64::NAN).is_err());
-        let e = Fault::new(FaultKind::StuckValve, None, 0.5).unwrap_err();
-        assert!(e.contains("joint"), "{e}");
-        assert!(Fault::new(FaultKind::Leak, Some(6), 1e-10).is_err());
-        assert_eq!(
-            Fault::new(FaultKind::Leak, Some(5), 1e-10),
-            Ok(Fault::Leak {
-                joint: 5,
-                coefficient_m3_s_pa: 1e-10
-            })
-        );
-    }
 
     #[test]
     fn a_second_fault_of_the_same_kind_on_the_same_actuator_replaces_the_first() {

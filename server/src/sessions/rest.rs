@@ -20,10 +20,7 @@ use super::{CreateError, LIVE_SCENARIOS, Session, token_eq};
 use crate::app::AppState;
 use crate::error::ApiError;
 use crate::json::ApiJson;
-use crate::protocol::{
-    ControlMethod, ControlMode, PausedBy, fault_kind_name, fault_label, grasp_name, parse_arm,
-    parse_fault_kind,
-};
+use crate::protocol::{ControlMethod, ControlMode, PausedBy, fault_label, grasp_name, parse_arm};
 use crate::security::ws_base;
 
 fn forbidden(msg: &str) -> ApiError {
@@ -626,10 +623,10 @@ impl TryFrom<Action> for Command {
                 let arm = parse_arm(&arm).ok_or_else(|| {
                     CommandError::Invalid(format!("arm must be `left` or `right`, got `{arm}`"))
                 })?;
-                let kind = parse_fault_kind(&fault).ok_or_else(|| {
+                let kind = command::FaultKind::parse(&fault).ok_or_else(|| {
                     CommandError::Invalid(format!(
                         "unknown fault `{fault}` ({})",
-                        command::FaultKind::ALL.map(fault_kind_name).join(", ")
+                        command::FaultKind::NAMES.join(", ")
                     ))
                 })?;
                 let fault = Fault::new(kind, joint, value).map_err(CommandError::Invalid)?;

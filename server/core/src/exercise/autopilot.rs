@@ -11,8 +11,9 @@ use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::condition::{Condition, Facts};
-use super::spec::{ArmName, DrillFault, Method, Mode, Scene};
+use super::spec::{ArmName, Method, Mode, Scene};
 use crate::control::rotation_error;
+use crate::hydraulics::FaultKind;
 use crate::sim::{Arm, Simulation};
 
 /// Interval between autopilot commands (s): 0.02, the page's 50 Hz send rate.
@@ -264,11 +265,11 @@ const LEAK_WATCH_S: f64 = 2.0;
 /// is leaking across its piston (Pa): 0.1 MPa; a shut healthy valve holds them to ≈ 0.01 MPa.
 const LEAK_DRIFT_PA: f64 = 1.0e5;
 
-/// The answers, as [`DrillFault::ANSWERS`] lists them.
-const SUPPLY_DROP: &str = DrillFault::ANSWERS[0];
-const STUCK_VALVE: &str = DrillFault::ANSWERS[1];
-const LEAK: &str = DrillFault::ANSWERS[2];
-const AIR: &str = DrillFault::ANSWERS[3];
+/// The answers, as [`FaultKind::NAMES`] lists them.
+const SUPPLY_DROP: &str = FaultKind::NAMES[0];
+const STUCK_VALVE: &str = FaultKind::NAMES[1];
+const LEAK: &str = FaultKind::NAMES[2];
+const AIR: &str = FaultKind::NAMES[3];
 
 /// The fault-diagnosis procedure: what a pilot does with the sticks in joint mode (a centred
 /// stick shuts its closed-centre valve, so what the arm does then is the hydraulics) while

@@ -25,8 +25,8 @@ pub use spec::{ExerciseSpec, Method, Mode};
 use serde::Serialize;
 use std::sync::Arc;
 
+use crate::hydraulics::{Fault, FaultKind};
 use crate::sim::{Arm, Simulation};
-use spec::DrillFault;
 
 /// The drill's draw: splitmix64 (Steele, Lea & Flood 2014), so an attempt's fault and its
 /// time follow from its seed alone.
@@ -147,7 +147,7 @@ pub struct ExerciseRun {
     hold_since: Option<f64>,
     step_times: Vec<f64>,
     done: bool,
-    drill: Option<(f64, DrillFault)>,
+    drill: Option<(f64, Fault)>,
     fault_injected: bool,
     answer: Option<String>,
     assessor: Assessor,
@@ -210,7 +210,7 @@ impl ExerciseRun {
     }
 
     /// The drill's fault, once injected (for records; the trainee's page is not told).
-    pub fn injected_fault(&self) -> Option<(Arm, DrillFault)> {
+    pub fn injected_fault(&self) -> Option<(Arm, Fault)> {
         let arm = self.spec.fault_drill.as_ref()?.arm;
         self.drill
             .filter(|_| self.fault_injected)
@@ -222,10 +222,10 @@ impl ExerciseRun {
         if self.spec.fault_drill.is_none() {
             return Err("this exercise has no fault to diagnose".into());
         }
-        if !DrillFault::ANSWERS.contains(&answer) {
+        if !FaultKind::NAMES.contains(&answer) {
             return Err(format!(
                 "answer must be one of {}",
-                DrillFault::ANSWERS.join(", ")
+                FaultKind::NAMES.join(", ")
             ));
         }
         if self.answer.is_none() && !self.done {
@@ -360,9 +360,9 @@ impl ExerciseRun {
         let completed = self.step >= self.spec.steps.len();
         let diagnosis = self.drill.map(|(at, f)| DiagnosisOut {
             answer: self.answer.clone().unwrap_or_default(),
-            fault: f.answer().to_string(),
+            fault: f.kind().name().to_string(),
             injected_at_s: at,
-            correct: self.answer.as_deref() == Some(f.answer()),
+            correct: self.answer.as_deref() == Some(f.kind().name()),
         });
         let mut failed = Vec::new();
         if self.done {

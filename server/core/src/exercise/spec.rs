@@ -299,73 +299,7 @@ pub struct FaultDrill {
     /// Injection time window after the start (s); the time is drawn uniformly from it.
     pub window_s: [f64; 2],
     /// The faults one is drawn from (uniformly).
-    pub choices: Vec<DrillFault>,
-}
-
-/// A fault of the drill, with its answer name.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
-pub enum DrillFault {
-    /// Supply pressure drop (Pa).
-    SupplyDrop {
-        /// Drop (Pa).
-        drop_pa: f64,
-    },
-    /// A valve spool stuck at `spool` on `joint` (0-based).
-    StuckValve {
-        /// Joint.
-        joint: usize,
-        /// Spool position in [−1, 1].
-        spool: f64,
-    },
-    /// Cross-piston leakage on `joint`.
-    Leak {
-        /// Joint.
-        joint: usize,
-        /// Coefficient (m³/s per Pa).
-        coefficient_m3_s_pa: f64,
-    },
-    /// Entrained air: bulk modulus scale.
-    Air {
-        /// Scale in (0, 1].
-        bulk_modulus_scale: f64,
-    },
-}
-
-impl DrillFault {
-    /// The answer that names it.
-    pub fn answer(&self) -> &'static str {
-        match self {
-            DrillFault::SupplyDrop { .. } => "supply_drop",
-            DrillFault::StuckValve { .. } => "stuck_valve",
-            DrillFault::Leak { .. } => "leak",
-            DrillFault::Air { .. } => "air",
-        }
-    }
-
-    /// Every answer a trainee may give.
-    pub const ANSWERS: [&'static str; 4] = ["supply_drop", "stuck_valve", "leak", "air"];
-
-    /// Applies it to an arm's fault settings.
-    pub fn apply_to(&self, f: &mut crate::hydraulics::Faults) {
-        match *self {
-            DrillFault::SupplyDrop { drop_pa } => f.supply_drop_pa = drop_pa,
-            DrillFault::StuckValve { joint, spool } => {
-                if let Some(s) = f.stuck_valve.get_mut(joint) {
-                    *s = Some(spool);
-                }
-            }
-            DrillFault::Leak {
-                joint,
-                coefficient_m3_s_pa,
-            } => {
-                if let Some(l) = f.leak_m3_s_pa.get_mut(joint) {
-                    *l = coefficient_m3_s_pa;
-                }
-            }
-            DrillFault::Air { bulk_modulus_scale } => f.bulk_modulus_scale = bulk_modulus_scale,
-        }
-    }
+    pub choices: Vec<crate::hydraulics::Fault>,
 }
 
 impl ExerciseSpec {

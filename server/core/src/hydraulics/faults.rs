@@ -55,6 +55,171 @@ impl Faults {
     }
 }
 
+/// Supply-pressure drop range (Pa): up to the full supply of 6.89 MPa (Lim Table 1-1).
+pub const SUPPLY_DROP_RANGE_PA: (f64, f64) = (0.0, 6.89e6);
+/// Stuck-valve spool position range.
+pub const STUCK_SPOOL_RANGE: (f64, f64) = (-1.0, 1.0);
+/// Cross-piston leakage coefficient range (m³/(s·Pa)).
+pub const LEAK_RANGE_M3_S_PA: (f64, f64) = (0.0, 1e-9);
+/// Entrained-air bulk-modulus scale range.
+pub const AIR_SCALE_RANGE: (f64, f64) = (0.01, 1.0);
+
+/// One fault to inject on one arm: what instructors inject and what a fault drill draws
+/// (exercise files name it as `{"kind": "stuck_valve", "joint": 2, "spool": 0.4}`). It
+/// writes itself into the arm's [`Faults`].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Fault {
+    /// The supply pressure drops by this much (Pa).
+    SupplyDrop {
+        /// Drop (Pa), in [`SUPPLY_DROP_RANGE_PA`].
+        drop_pa: f64,
+    },
+    /// A valve's spool sticks at a position whatever the command.
+    StuckValve {
+        /// Actuator 0..5.
+        joint: usize,
+        /// Spool position in [−1, 1].
+        spool: f64,
+    },
+    /// Cross-piston leakage in one actuator.
+    Leak {
+        /// Actuator 0..5.
+        joint: usize,
+        /// Leakage coefficient (m³/(s·Pa)), in [`LEAK_RANGE_M3_S_PA`].
+        coefficient_m3_s_pa: f64,
+    },
+    /// Entrained air: the bulk modulus is scaled down.
+    Air {
+        /// Bulk-modulus scale, in [`AIR_SCALE_RANGE`].
+        bulk_modulus_scale: f64,
+    },
+}
+
+/// The kinds of [`Fault`]: one entry per (arm, kind, joint), and the fault drill's answers.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FaultKind {
+    /// [`Fault::SupplyDrop`].
+    SupplyDrop,
+    /// [`Fault::StuckValve`].
+    StuckValve,
+    /// [`Fault::Leak`].
+    Leak,
+    /// [`Fault::Air`].
+    Air,
+}
+
+impl FaultKind {
+    /// Every kind.
+    pub const ALL: [FaultKind; 4] = [
+        FaultKind::SupplyDrop,
+        FaultKind::StuckValve,
+        FaultKind::Leak,
+        FaultKind::Air,
+    ];
+
+    /// Every name, in [`FaultKind::ALL`] order (the drill's answers).
+    pub const NAMES: [&'static str; 4] = ["supply_drop", "stuck_valve", "leak", "air"];
+
+    /// Its name: the wire's `fault` field, fault labels, exercise files and drill answers.
+    pub fn name(self) -> &'static str {
+        Self::NAMES[self as usize]
+    }
+
+    /// A kind from its name.
+    pub fn parse(name: &str) -> Option<FaultKind> {
+        Self::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
+impl Fault {
+    /// Builds a fault from its kind, joint and size, checking ranges (messages name the field).
+    pub fn new(kind: FaultKind, joint: Option<usize>, value: f64) -> Result<Fault, String> {
+        let in_range = |(lo, hi): (f64, f64)| -> Result<f64, String> {
+            if value.is_finite() && value >= lo && value <= hi {
+                Ok(value)
+            } else {
+                Err(format!(
+                    "`value` for {} must be in [{lo}, {hi}], got {value}",
+                    kind.name()
+                ))
+            }
+        };
+        let joint = || match joint {
+            Some(j) if j < N_ACT => Ok(j),
+            _ => Err(format!("this fault needs `joint` in 0..={}", N_ACT - 1)),
+        };
+        Ok(match kind {
+            FaultKind::SupplyDrop => Fault::SupplyDrop {
+                drop_pa: in_range(SUPPLY_DROP_RANGE_PA)?,
+            },
+            FaultKind::StuckValve => Fault::StuckValve {
+                joint: joint()?,
+                spool: in_range(STUCK_SPOOL_RANGE)?,
+            },
+            FaultKind::Leak => Fault::Leak {
+                joint: joint()?,
+                coefficient_m3_s_pa: in_range(LEAK_RANGE_M3_S_PA)?,
+            },
+            FaultKind::Air => Fault::Air {
+                bulk_modulus_scale: in_range(AIR_SCALE_RANGE)?,
+            },
+        })
+    }
+
+    /// Its kind.
+    pub fn kind(&self) -> FaultKind {
+        match self {
+            Fault::SupplyDrop { .. } => FaultKind::SupplyDrop,
+            Fault::StuckValve { .. } => FaultKind::StuckValve,
+            Fault::Leak { .. } => FaultKind::Leak,
+            Fault::Air { .. } => FaultKind::Air,
+        }
+    }
+
+    /// The actuator it acts on, for per-joint faults.
+    pub fn joint(&self) -> Option<usize> {
+        match self {
+            Fault::StuckValve { joint, .. } | Fault::Leak { joint, .. } => Some(*joint),
+            Fault::SupplyDrop { .. } | Fault::Air { .. } => None,
+        }
+    }
+
+    /// Its size (Pa, spool position, m³/(s·Pa) or bulk-modulus scale).
+    pub fn value(&self) -> f64 {
+        match *self {
+            Fault::SupplyDrop { drop_pa } => drop_pa,
+            Fault::StuckValve { spool, .. } => spool,
+            Fault::Leak {
+                coefficient_m3_s_pa,
+                ..
+            } => coefficient_m3_s_pa,
+            Fault::Air { bulk_modulus_scale } => bulk_modulus_scale,
+        }
+    }
+
+    /// Writes the fault into an arm's fault set (a joint out of range changes nothing).
+    pub fn apply_to(&self, faults: &mut Faults) {
+        match *self {
+            Fault::SupplyDrop { drop_pa } => faults.supply_drop_pa = drop_pa,
+            Fault::StuckValve { joint, spool } => {
+                if let Some(s) = faults.stuck_valve.get_mut(joint) {
+                    *s = Some(spool);
+                }
+            }
+            Fault::Leak {
+                joint,
+                coefficient_m3_s_pa,
+            } => {
+                if let Some(l) = faults.leak_m3_s_pa.get_mut(joint) {
+                    *l = coefficient_m3_s_pa;
+                }
+            }
+            Fault::Air { bulk_modulus_scale } => faults.bulk_modulus_scale = bulk_modulus_scale,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -78,5 +243,30 @@ mod tests {
         assert_eq!((f.spool(1, 0.5), f.spool(3, 0.5)), (-1.0, 0.0));
         f.bulk_modulus_scale = 0.0;
         assert_eq!(f.bulk_modulus_pa(&hp), 0.01 * hp.bulk_modulus_pa);
+    }
+}
+
+#[cfg(test)]
+mod fault_tests {
+    use super::*;
+
+    #[test]
+    fn fault_ranges_are_checked_and_name_the_field() {
+        assert!(Fault::new(FaultKind::SupplyDrop, None, 3e6).is_ok());
+        assert!(Fault::new(FaultKind::SupplyDrop, None, 7e6).is_err());
+        assert!(Fault::new(FaultKind::Air, None, f64::NAN).is_err());
+        let e = Fault::new(FaultKind::StuckValve, None, 0.5).unwrap_err();
+        assert!(e.contains("joint"), "{e}");
+        assert!(Fault::new(FaultKind::Leak, Some(6), 1e-10).is_err());
+        assert_eq!(
+            Fault::new(FaultKind::Leak, Some(5), 1e-10),
+            Ok(Fault::Leak {
+                joint: 5,
+                coefficient_m3_s_pa: 1e-10
+            })
+        );
+        for k in FaultKind::ALL {
+            assert_eq!(FaultKind::parse(k.name()), Some(k));
+        }
     }
 }

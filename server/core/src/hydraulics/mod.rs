@@ -25,7 +25,10 @@ mod sizing;
 mod valve;
 
 pub use chamber::{ChamberFlags, update_chambers};
-pub use faults::Faults;
+pub use faults::{
+    AIR_SCALE_RANGE, Fault, FaultKind, Faults, LEAK_RANGE_M3_S_PA, STUCK_SPOOL_RANGE,
+    SUPPLY_DROP_RANGE_PA,
+};
 pub use linkage::Linkage;
 pub use sizing::{
     AREA_RATIO, HOLD_MARGIN, MAGNUM_FULL_EXTENSION, MAGNUM_LIFT_KG, MAGNUM_SPEEDS_DEG_S,

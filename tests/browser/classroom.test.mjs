@@ -181,7 +181,6 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     assert.deepEqual(seen.faults, [], 'no fault in the trainee\'s frames');
     assert.doesNotMatch(seen.status, /leak|fault/i, 'nor on its status bar');
     assert.doesNotMatch(seen.banner, /leak|fault/i, 'nor in a banner');
-    await ip.click('#instr-actions button[data-act="clear_faults"]');
 
     // the instructor pauses trainee B from the roster: the trainee sees why and cannot resume
     await ip.click(`${row(b)} .cls-acts button[data-act="pause"]`);
@@ -200,7 +199,8 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     assert.equal(after.t, tStop, 'the clock stayed stopped');
     await ip.waitForSelector(`${row(b)} .cls-acts button[data-act="resume"]`);
     await b.page.screenshot({ path: join(SHOTS, 'trainee-paused-by-instructor.png') });
-    await ip.screenshot({ path: join(SHOTS, 'classroom.png') });
+    await ip.screenshot({ path: join(SHOTS, 'classroom.png') }); // (the silent fault still listed)
+    await ip.click('#instr-actions button[data-act="clear_faults"]');
     await ip.click(`${row(b)} .cls-acts button[data-act="resume"]`);
     await until(b.page, () => !window.__seaarms.lastState.paused);
     await until(b.page, () => document.getElementById('paused-note').hidden && !document.getElementById('btn-pause').disabled);

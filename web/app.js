@@ -9,6 +9,7 @@ import { TouchPad, touchDevice } from './touch.js';
 import { TabGuard } from './tabs.js';
 import { StartScreen, fetchExercises } from './start.js';
 import { TaskPanel } from './task.js';
+import { bindViewControls } from './viewcontrols.js';
 
 const $ = (id) => document.getElementById(id);
 const SPEEDS = [0.25, 0.5, 0.75, 1];
@@ -18,6 +19,7 @@ const NARROW_SCREEN = '(max-width: 700px)';
 const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
 const status = new StatusBar($('status'));
 const plots = new Plots($('plots'));
+const viewControls = bindViewControls(view, plots);
 const banner = $('banner');
 let bannerTimer = null;
 let selectedArm = localStorage.getItem('seaarms.arm') === 'right' ? 'right' : 'left';
@@ -34,6 +36,7 @@ function showBanner(kind, text, ms = 0) {
 
 const params = new URLSearchParams(location.search);
 let lastEnded = null; // the last `ended` message ({reason, text}), for tests
+let endedNote = null; // shown once the next session's hello arrives
 
 /** Shows the join-code prompt; resolves with the code the trainee types. */
 function askJoinCode(wrong) {
@@ -59,9 +62,17 @@ const conn = new Connection({
   role: 'trainee',
   joinCode: params.get('join'),
   onJoinCode: askJoinCode,
-  onEnded(e) { lastEnded = e; },
+  onEnded(e) {
+    // why the session ended (e.g. abandoned: no connection for the grace period), shown again
+    // over the next session and on the start screen
+    lastEnded = e;
+    endedNote = `Your previous session ended: ${e.text}.`;
+    startScreen.note = endedNote;
+    status.message(endedNote);
+  },
   onHello(h) {
     setRole(h.role, h.session);
+    if (endedNote) { showBanner('info', `${endedNote} This is a new session.`, 8000); endedNote = null; }
     view.setHello(h);
     setExercise(h);
     settings = { ...h.settings };
@@ -140,10 +151,10 @@ function followScenario(s) {
   conn.reconnect();
 }
 
-/** A new session (keeps the trainee's name). */
+/** A new session (keeps the trainee's name and group; the old session is ended). */
 function newSession(opts) {
-  const trainee = conn.createOpts?.trainee;
-  conn.restart(trainee ? { ...opts, trainee } : opts);
+  const { trainee, group } = conn.createOpts || {};
+  conn.restart({ ...opts, ...(trainee ? { trainee } : {}), ...(group ? { group } : {}) });
 }
 
 async function chooseAndStart() {
@@ -187,7 +198,7 @@ const actions = {
     paused = view.drawn ? !view.drawn.paused : !paused;
     conn.send({ type: paused ? 'pause' : 'resume' });
   },
-  layout() { view.viewports.cycleLayout(); $('btn-layout').textContent = view.viewports.single ? '4 views' : '1 view'; },
+  layout: () => viewControls.layout(),
   help(show) {
     const h = $('help');
     h.hidden = show === undefined ? !h.hidden : !show;
@@ -218,7 +229,6 @@ $('sel-speed').addEventListener('change', (e) => sendSettings({ arm_speed: +e.ta
 $('btn-reset').addEventListener('click', actions.reset);
 $('btn-pause').addEventListener('click', actions.pause);
 $('btn-release').addEventListener('click', actions.release);
-$('btn-layout').addEventListener('click', actions.layout);
 $('btn-help').addEventListener('click', () => actions.help());
 // the overlay closes by its button or a tap outside it (touch screens have no ? key)
 $('help').addEventListener('click', (e) => { if (e.target.closest('[data-close]')) actions.help(false); });
@@ -230,18 +240,20 @@ $('btn-new').addEventListener('click', () => {
   newSession(sc ? { scenario: sc } : {});
 });
 $('btn-exercises').addEventListener('click', () => chooseAndStart());
-$('chk-ell').addEventListener('change', (e) => view.setEllipsoidsVisible(e.target.checked));
-$('chk-poly').addEventListener('change', (e) => view.setPolytopesVisible(e.target.checked));
-$('sel-ell-scale').addEventListener('change', (e) => view.setEllipsoidScale(+e.target.value));
-$('chk-plots').addEventListener('change', (e) => {
-  $('plots').hidden = !e.target.checked;
-  plots.visible = e.target.checked;
-  view.viewports.dirty = true;
-});
 // keep keyboard focus on the page after using a menu or a checkbox (web/input.js also
 // ignores focus on anything but text fields)
 for (const el of document.querySelectorAll('#toolbar select, #toolbar input[type=checkbox]')) el.addEventListener('change', () => el.blur());
-setInterval(() => { $('btn-pause').textContent = view.drawn?.paused ? 'Resume' : 'Pause'; }, 250);
+/** The pause button and the instructor's pause: a trainee cannot lift it (the server refuses
+ * a resume, and its error is shown as a banner), so the button is off and says why. */
+setInterval(() => {
+  const st = view.drawn;
+  const byInstructor = !!st?.paused && st.paused_by === 'instructor';
+  const b = $('btn-pause');
+  b.textContent = st?.paused ? 'Resume' : 'Pause';
+  b.disabled = !driving || byInstructor;
+  b.title = byInstructor ? 'Paused by the instructor: only the instructor can resume' : 'Pause / resume (P)';
+  $('paused-note').hidden = !byInstructor;
+}, 250);
 
 function renderHelp() {
   $('help').innerHTML = `<button type="button" class="help-close" data-close aria-label="Close help">✕ Close</button><h3>Keyboard and gamepad</h3>
@@ -278,8 +290,9 @@ function setScenarios(list, current) {
 const DRIVING_CONTROLS = ['sel-mode', 'sel-method', 'sel-speed', 'btn-reset', 'btn-pause', 'btn-release'];
 
 /** Trainee (drives, sends input) or observer (this browser's other tab drives). */
+let driving = false;
 function setRole(role, session) {
-  const driving = role === 'trainee';
+  driving = role === 'trainee';
   tabs.driving(driving ? session : null);
   input.enabled = driving;
   view.setSelectedArm(driving ? selectedArm : null);

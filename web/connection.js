@@ -1,5 +1,6 @@
 // Session and WebSocket connection (protocol: server/src/protocol.rs). Creates or resumes a
-// trainee session (id + token kept in localStorage), or joins one read-only as an observer;
+// trainee session (id + token kept in localStorage), or joins one read-only as an observer,
+// or plays a recorded attempt (role `replay`: the replay socket of docs/api.md);
 // reconnects with exponential backoff after a drop or a server restart; measures latency with
 // ping/pong. Latest state wins: only the newest frame is kept for drawing. A session that ended
 // says so with an `ended` message ({reason, text}) before the close; the page never reads
@@ -28,9 +29,10 @@ async function jsonOrError(resp) {
 
 export class Connection {
   /**
-   * @param opts {role: 'trainee'|'observer', sessionId?, token?, joinCode?, onHello, onState,
-   *              onMessage, onError, onEnded({reason, text}), onStatus(kind, text), onPong(ms),
-   *              onJoinCode(wrong: boolean) → Promise<string> (the class join code)}
+   * @param opts {role: 'trainee'|'observer'|'replay', sessionId?, token?, joinCode?, onHello,
+   *              onState, onMessage, onError, onEnded({reason, text}), onStatus(kind, text),
+   *              onPong(ms), onJoinCode(wrong: boolean) → Promise<string> (the class join code),
+   *              replay: {path (WebSocket path with its token), refused (text)}, onReplay(msg)}
    */
   constructor(opts) {
     this.opts = opts;
@@ -82,6 +84,8 @@ export class Connection {
         if (stored) localStorage.removeItem(STORE_KEY);
         if (!(await this.create())) return;
       }
+    } else if (this.role === 'replay') {
+      this.session = { id: this.opts.sessionId, ws_url: this.opts.replay.path };
     } else {
       this.session = { id: this.opts.sessionId, control_token: this.opts.token,
         ws_url: `/ws/sessions/${encodeURIComponent(this.opts.sessionId)}?token=${encodeURIComponent(this.opts.token)}&role=observer` };
@@ -89,14 +93,20 @@ export class Connection {
     this.open();
   }
 
-  /** GET /api/sessions/{id} with the control token: is the stored session still live? */
+  /** GET /api/sessions/{id} with the control token: is the stored session still live? One
+   * that ended while this page was away (e.g. abandoned) is reported through `onEnded`. */
   async stillLive(stored) {
     try {
       const r = await fetch(`/api/sessions/${encodeURIComponent(stored.id)}`, {
         headers: { authorization: `Bearer ${stored.control_token}` }, cache: 'no-store' });
       if (!r.ok) return false;
       const s = await r.json();
-      return s.status === undefined || s.status === 'live';
+      const live = s.status === undefined || s.status === 'live';
+      if (!live && s.end_reason && this.endedReported !== stored.id) {
+        this.endedReported = stored.id;
+        this.opts.onEnded?.({ type: 'ended', reason: null, text: s.end_reason, session: stored.id });
+      }
+      return live;
     } catch {
       return true; // server unreachable: try the socket, which retries with backoff
     }
@@ -143,15 +153,24 @@ export class Connection {
     return true;
   }
 
-  /** Ends the current session link and starts a new session created with `opts` (the body
-   * of POST /api/sessions, e.g. another scenario or exercise). */
+  /** Ends the current session (DELETE /api/sessions/{id} with its control token, so it does
+   * not linger live and empty) and starts a new one created with `opts` (the body of
+   * POST /api/sessions, e.g. another scenario or exercise). */
   async restart(opts) {
     this.close();
     this.closedByUs = false;
     this.createOpts = { ...opts };
     localStorage.removeItem(STORE_KEY);
+    const old = this.session;
+    const watched = this.observing; // another tab drives that one: it stays
     this.session = null;
     this.hello = null;
+    if (old?.control_token && !watched) {
+      try {
+        await fetch(`/api/sessions/${encodeURIComponent(old.id)}`, {
+          method: 'DELETE', headers: { authorization: `Bearer ${old.control_token}` } });
+      } catch { /* unreachable: the server ends it after its grace period */ }
+    }
     if (await this.create()) this.open();
   }
 
@@ -177,7 +196,8 @@ export class Connection {
     this.ws = ws;
     this.status('info', this.attempt ? `Reconnecting (attempt ${this.attempt + 1})…` : 'Connecting…');
     ws.onopen = () => {
-      this.pingTimer = setInterval(() => this.send({ type: 'ping', t: performance.now() }), 1000);
+      // the replay socket has no ping (it is not a live link)
+      if (this.role !== 'replay') this.pingTimer = setInterval(() => this.send({ type: 'ping', t: performance.now() }), 1000);
     };
     ws.onmessage = (ev) => this.onMessage(ev.data);
     ws.onclose = (ev) => this.onClose(ev);
@@ -214,6 +234,9 @@ export class Connection {
       case 'ended':
         this.ended = msg;
         break;
+      case 'replay':
+        this.opts.onReplay?.(msg);
+        break;
       default:
         break;
     }
@@ -239,6 +262,8 @@ export class Connection {
         if (this.hello || this.attempt > 3) await new Promise((r) => setTimeout(r, 1000));
         this.attempt++;
         if (await this.create()) this.open();
+      } else if (this.role === 'replay') {
+        this.status('error', `${this.opts.replay.refused}${why ? ': ' + why : ''}.`);
       } else {
         this.status('error', `Cannot observe this session${why ? ': ' + why : ' (ended, or wrong instructor token)'}.`);
       }

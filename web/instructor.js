@@ -1,10 +1,13 @@
 // Instructor dashboard: sign in with the instructor token, list every session with its live
 // summary (polls GET /api/sessions), observe one read-only in the same 3D view (observer
-// WebSocket), and act on it (POST /api/sessions/{id}/actions).
+// WebSocket), and act on it (POST /api/sessions/{id}/actions); the Classroom tab
+// (web/classroom.js) shows the same summaries as a roster by trainee name, with attempt
+// histories, a comparison on one exercise and the class results export.
 
 import { View } from './view.js';
 import { Connection } from './connection.js';
 import { StatusBar, fmt } from './status.js';
+import { Classroom, faultText } from './classroom.js';
 
 const $ = (id) => document.getElementById(id);
 const TOKEN_KEY = 'seaarms.instructor_token';
@@ -45,14 +48,14 @@ function summary(s) {
   return {
     id: s.id,
     status: s.status || 'live',
-    label: s.label ?? '',
+    label: s.trainee ?? s.label ?? '',
     scenario: s.scenario ?? '',
     clients: s.status === 'ended' ? (s.end_reason || 'ended') : `${s.trainees ?? 0} trainee(s)${s.paused ? ', paused' : ''}`,
     t: s.sim_seconds === undefined ? '' : Number(s.sim_seconds).toFixed(1),
     grasp: s.grasp ?? '',
     w: `${w(0)} / ${w(1)}`,
     recordingFailed: s.recording === 'failed',
-    warn: [s.recording === 'failed' ? 'recording failed (record incomplete)' : '', ...(s.faults || []),
+    warn: [s.recording === 'failed' ? 'recording failed (record incomplete)' : '', ...(s.faults || []).map(faultText),
       s.overload_count ? `${s.overload_count} overload(s)` : ''].filter(Boolean).join(', '),
   };
 }
@@ -61,7 +64,11 @@ function renderList() {
   const tb = document.querySelector('#sessions tbody');
   tb.innerHTML = sessions.map((s) => {
     const r = summary(s);
-    const btn = r.status === 'live' ? `<button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button>` : '';
+    // an ended session links its record: the newest attempts' debriefs and the CSV
+    const tok = encodeURIComponent(token);
+    const btn = r.status === 'live' ? `<button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button>`
+      : `${(s.attempts || []).slice(0, 3).map((a, i) => `<a href="/replay/${esc(encodeURIComponent(a))}?token=${tok}" target="_blank" rel="noopener">debrief${i ? ` ${i + 1}` : ''}</a>`).join(' ')}
+        <a href="/api/sessions/${esc(encodeURIComponent(r.id))}/log.csv?token=${tok}" download>CSV</a>`;
     return `<tr data-id="${esc(r.id)}" data-status="${esc(r.status)}" class="${[r.id === observed ? 'open' : '', r.recordingFailed ? 'rec-failed' : ''].join(' ').trim()}"><td>${esc(r.id)}</td><td>${esc(r.status)}</td><td>${esc(r.label)}</td>
       <td>${esc(r.scenario)}</td><td>${esc(r.clients)}</td><td>${esc(r.t)}</td><td>${esc(r.grasp)}</td><td>${esc(r.w)}</td>
       <td class="warn">${esc(r.warn)}</td><td>${btn}</td></tr>`;
@@ -83,6 +90,7 @@ async function poll() {
     sessions = Array.isArray(body) ? body : body.sessions || [];
     setListStatus(`${sessions.length} session(s) · ${new Date().toLocaleTimeString()}`);
     renderList();
+    classroom.render(sessions);
   } catch {
     setListStatus('Server unreachable; retrying…', true);
   }
@@ -98,6 +106,7 @@ $('token-form').addEventListener('submit', (e) => {
   e.preventDefault();
   token = $('token').value.trim();
   sessionStorage.setItem(TOKEN_KEY, token);
+  classroom.exportLink();
   startPolling();
 });
 
@@ -122,7 +131,9 @@ function observe(id) {
     });
   }
   $('instr-actions').hidden = false;
-  $('obs-title').textContent = `session ${id}`;
+  const who = sessions.find((s) => s.id === id);
+  const name = who?.trainee || who?.label;
+  $('obs-title').textContent = name ? `${name}${who.group ? ` (${who.group})` : ''} · session ${id}` : `session ${id}`;
   $('act-csv').href = `/api/sessions/${encodeURIComponent(id)}/log.csv?token=${encodeURIComponent(token)}`;
   conn = new Connection({
     role: 'observer', sessionId: id, token,
@@ -136,6 +147,20 @@ function observe(id) {
   conn.start();
 }
 
+/** POST /api/sessions/{id}/actions; resolves {ok, error}. */
+async function postAction(id, body) {
+  try {
+    const r = await fetch(`/api/sessions/${encodeURIComponent(id)}/actions`, {
+      method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${token}` }, body: JSON.stringify(body),
+    });
+    let b = null;
+    try { b = await r.json(); } catch { /* empty body */ }
+    return { ok: r.ok, error: r.ok ? null : b?.error || `HTTP ${r.status}` };
+  } catch {
+    return { ok: false, error: 'server unreachable' };
+  }
+}
+
 async function act(type) {
   if (!observed) return;
   const body = { type };
@@ -147,22 +172,14 @@ async function act(type) {
     const v = $('act-value').value.trim();
     body.value = v === '' ? FAULT_DEFAULTS[body.fault] : +v;
     if ((body.fault === 'stuck_valve' || body.fault === 'leak') && body.joint === undefined) body.joint = 1;
+    if ($('act-silent').checked) body.silent = true; // a diagnosis drill: the trainee is not told
   }
   if (type === 'message') body.text = $('act-text').value;
   const out = $('act-result');
-  try {
-    const r = await fetch(`/api/sessions/${encodeURIComponent(observed)}/actions`, {
-      method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${token}` }, body: JSON.stringify(body),
-    });
-    let b = null;
-    try { b = await r.json(); } catch { /* empty body */ }
-    out.textContent = r.ok ? `${type}: ok` : `${type}: ${b?.error || 'HTTP ' + r.status}`;
-    out.className = r.ok ? '' : 'bad';
-    if (r.ok && type === 'message') $('act-text').value = '';
-  } catch {
-    out.textContent = `${type}: server unreachable`;
-    out.className = 'bad';
-  }
+  const r = await postAction(observed, body);
+  out.textContent = r.ok ? `${type}${body.silent ? ' (silent)' : ''}: ok` : `${type}: ${r.error}`;
+  out.className = r.ok ? '' : 'bad';
+  if (r.ok && type === 'message') $('act-text').value = '';
 }
 
 for (const b of document.querySelectorAll('#instr-actions button[data-act]')) {
@@ -185,6 +202,23 @@ for (const b of document.querySelectorAll('#instr-actions button[data-act]')) {
     }).join('');
   } catch { /* no scenarios endpoint */ }
 })();
+
+const classroom = new Classroom({
+  token: () => token,
+  observe: (id) => observe(id),
+  act: postAction,
+  observed: () => observed,
+});
+
+/** Sessions / Classroom tabs (the 3D view and the action bar stay below both). */
+function showTab(name) {
+  for (const b of document.querySelectorAll('#instr-tabs [data-tab]')) b.classList.toggle('on', b.dataset.tab === name);
+  $('instr-list').hidden = name !== 'sessions';
+  classroom.show(name === 'classroom');
+  sessionStorage.setItem('seaarms.instructor_tab', name);
+}
+for (const b of document.querySelectorAll('#instr-tabs [data-tab]')) b.addEventListener('click', () => showTab(b.dataset.tab));
+showTab(new URLSearchParams(location.search).get('tab') || sessionStorage.getItem('seaarms.instructor_tab') || 'sessions');
 
 if (token) startPolling();
 const want = new URLSearchParams(location.search).get('session');

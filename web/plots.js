@@ -88,6 +88,14 @@ export class Plots {
 
   clearSelected() { this.pressure.s.clear(); }
 
+  /** Empties every plot (a replay's seek: the next frame starts a new trace). */
+  reset() {
+    for (const p of this.all) p.s.clear();
+    this.lastT = null;
+    this.lastSample = -Infinity;
+    this.dirty = true;
+  }
+
   /** Called for every state frame; samples at SAMPLE_HZ of sim time. */
   add(state, arm) {
     const t = state.t;

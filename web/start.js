@@ -1,11 +1,13 @@
-// The start screen: the trainee's name, the exercises with their goals (GET /api/exercises,
+// The start screen: the trainee's name (required) and class/group (optional), both
+// remembered in this browser, the exercises with their goals (GET /api/exercises,
 // docs/exercises.md) and free play. Resolves with the body of POST /api/sessions:
-// {exercise, trainee} or {scenario: 'training', trainee}.
+// {exercise, trainee, group?} or {scenario: 'training', trainee, group?}.
 
 import { esc } from './status.js';
 
 const NAME_KEY = 'seaarms.trainee';
-/** Longest display name sent (the server keeps its own limit). */
+const GROUP_KEY = 'seaarms.group';
+/** Longest display name and group sent (the server accepts up to 64 characters). */
 const MAX_NAME_CHARS = 40;
 
 /** GET /api/exercises → the list (empty when the server has none or cannot say). */
@@ -23,6 +25,7 @@ export class StartScreen {
   constructor(el) {
     this.el = el;
     this.exercises = [];
+    this.note = null; // e.g. why the previous session ended, shown on the card once
   }
 
   /** The exercise after `id` in the server's list (wrapping), for "next exercise". */
@@ -36,11 +39,18 @@ export class StartScreen {
   async choose(selected) {
     this.exercises = await fetchExercises();
     const name = localStorage.getItem(NAME_KEY) || '';
+    const group = localStorage.getItem(GROUP_KEY) || '';
     const el = this.el;
-    el.innerHTML = `<form class="start-card">
+    el.innerHTML = `<form class="start-card" novalidate>
       <h2>seaarms training</h2>
-      <label class="start-name">Your name <input id="start-name" name="trainee" maxlength="${MAX_NAME_CHARS}"
-        autocomplete="nickname" spellcheck="false" value="${esc(name)}" placeholder="shown to your instructor"></label>
+      ${this.note ? `<p class="start-note">${esc(this.note)}</p>` : ''}
+      <div class="start-who">
+        <label class="start-name">Your name <input id="start-name" name="trainee" maxlength="${MAX_NAME_CHARS}" required
+          autocomplete="nickname" spellcheck="false" value="${esc(name)}" placeholder="shown to your instructor"></label>
+        <label class="start-name">Class / group <input id="start-group" name="group" maxlength="${MAX_NAME_CHARS}"
+          autocomplete="off" spellcheck="false" value="${esc(group)}" placeholder="optional"></label>
+      </div>
+      <p class="start-need" id="start-need" hidden>Type your name first: your instructor finds you by it.</p>
       <h3>Choose an exercise</h3>
       <ul class="ex-list">${this.exercises.map((e) => `
         <li><label class="ex" data-id="${esc(e.id)}"><input type="radio" name="exercise" value="${esc(e.id)}"${e.id === selected ? ' checked' : ''}>
@@ -56,18 +66,28 @@ export class StartScreen {
       </div>
     </form>`;
     el.hidden = false;
+    this.note = null;
     const form = el.querySelector('form');
     const start = el.querySelector('#start-exercise');
     const picked = () => form.querySelector('input[name=exercise]:checked')?.value;
     start.disabled = !picked();
     form.addEventListener('change', () => { start.disabled = !picked(); });
     return new Promise((resolve) => {
+      const nameField = el.querySelector('#start-name');
       const done = (choice) => {
-        const trainee = el.querySelector('#start-name').value.trim().slice(0, MAX_NAME_CHARS);
+        const trainee = nameField.value.trim().slice(0, MAX_NAME_CHARS);
+        const grp = el.querySelector('#start-group').value.trim().slice(0, MAX_NAME_CHARS);
+        if (!trainee) { // the name is required (a blank of spaces passes `required`)
+          el.querySelector('#start-need').hidden = false;
+          nameField.value = '';
+          nameField.focus();
+          return;
+        }
         localStorage.setItem(NAME_KEY, trainee);
+        localStorage.setItem(GROUP_KEY, grp);
         el.hidden = true;
         el.replaceChildren();
-        resolve(trainee ? { ...choice, trainee } : choice);
+        resolve(grp ? { ...choice, trainee, group: grp } : { ...choice, trainee });
       };
       form.addEventListener('submit', (e) => {
         e.preventDefault();

@@ -69,7 +69,7 @@ export class StatusBar {
     this.set('speed', `${Math.round(state.settings.arm_speed * 100)} %`);
     this.set('arm', ui.arm);
     this.set('t', state.t.toFixed(2));
-    this.set('paused', state.paused ? 'PAUSED' : '');
+    this.set('paused', state.paused ? (state.paused_by === 'instructor' ? 'PAUSED by the instructor' : 'PAUSED') : '');
     this.set('relief', String(state.relief_events));
     this.set('warnings', state.warnings.length ? '⚠ ' + state.warnings.map(describeWarning).join(', ') : '');
     this.set('faults', state.faults.length ? 'faults: ' + state.faults.join(', ') : '');

@@ -2,29 +2,15 @@
 // current step's live readouts (value against target), timer, progress and counters, from
 // the hello's `exercise` and each state frame's `exercise`; banners for counted events
 // (`last_event`); and the completion card with the score and each metric against its
-// threshold (GET /api/sessions/{id}/assessment). Every number is the server's.
+// threshold (GET /api/sessions/{id}/assessment, web/assessment.js) and a link to the
+// attempt's debrief (/replay/{attempt}). Every number is the server's.
 
 import { fmt, esc } from './status.js';
+import { assessmentHtml } from './assessment.js';
 
 /** Event kinds shown as a warning banner (the rest, e.g. `step`, as information). */
 const BAD_EVENTS = new Set(['strike', 'obstacle', 'drop', 'overload', 'relief', 'limit', 'fault']);
 const COUNTERS = [['strikes', 'strikes'], ['drops', 'drops'], ['overloads', 'overloads'], ['relief', 'relief'], ['limit_hits', 'limit hits']];
-
-/** "metric_name_unit" → "metric name (unit)" for the card. */
-export function metricLabel(m) {
-  const units = { _s: 's', _n: 'N', _m: 'm', _m_s3: 'm/s³', _deg: '°', _nm: 'N·m' };
-  for (const [suffix, unit] of Object.entries(units).sort((a, b) => b[0].length - a[0].length)) {
-    if (m.endsWith(suffix)) return `${m.slice(0, -suffix.length).replaceAll('_', ' ')} (${unit})`;
-  }
-  return m.replaceAll('_', ' ');
-}
-
-/** A number for the card: integers as such, others to 3 significant digits. */
-function num(v) {
-  if (v === null || v === undefined) return '—';
-  if (!Number.isFinite(v)) return String(v);
-  return Number.isInteger(v) ? String(v) : Number(v.toPrecision(3)).toString();
-}
 
 /** The fault drill's answers (FaultKind::NAMES in the core) and their labels. */
 const DIAGNOSES = [['supply_drop', 'Supply pressure drop'], ['stuck_valve', 'Stuck valve'],
@@ -120,35 +106,20 @@ export class TaskPanel {
 
   /** The completion card, from the session's assessment. */
   async showCard(ex) {
+    const s = this.session;
+    const auth = { headers: { authorization: `Bearer ${s.control_token}` }, cache: 'no-store' };
     let a = null;
     try {
-      const s = this.session;
-      const r = await fetch(`/api/sessions/${encodeURIComponent(s.id)}/assessment`, {
-        headers: { authorization: `Bearer ${s.control_token}` }, cache: 'no-store' });
+      const r = await fetch(`/api/sessions/${encodeURIComponent(s.id)}/assessment`, auth);
       if (r.ok) a = await r.json();
     } catch { /* shown from the frame below */ }
-    const score = a ? a.score : ex.score;
-    const passed = a ? a.passed : ex.passed;
-    const terms = a?.terms || [];
-    const limits = a?.limits || [];
     const next = this.ui.nextTitle?.();
-    this.card.innerHTML = `<div class="card-head ${passed ? 'pass' : 'fail'}">
-        <span class="card-verdict">${passed ? 'Passed' : 'Not passed'}</span>
-        <span class="card-score" data-score="${Math.round(score)}">${Math.round(score)}<small>/100</small></span></div>
-      <p class="card-title">${esc(this.spec.title)} — ${a ? `${num(a.time_s)} s` : `${ex.elapsed_s.toFixed(1)} s`},
-        ${a ? `${a.step_times_s.length} of ${a.steps_total}` : `${ex.step} of ${ex.steps}`} steps</p>
-      ${a && a.failed_because.length ? `<ul class="card-why">${a.failed_because.map((w) => `<li>${esc(w)}</li>`).join('')}</ul>` : ''}
-      ${terms.length ? `<table class="card-terms"><tr><th>metric</th><th>yours</th><th>good</th><th>poor</th><th>points</th></tr>
-        ${terms.map((t) => `<tr><td>${esc(metricLabel(t.metric))}</td><td>${num(t.value)}</td><td>${num(t.good)}</td><td>${num(t.bad)}</td>
-          <td>${(t.score * t.weight).toFixed(1)} / ${num(t.weight)}</td></tr>`).join('')}</table>` : ''}
-      ${limits.length ? `<table class="card-limits"><tr><th>pass limit</th><th>yours</th><th>allowed</th><th></th></tr>
-        ${limits.map((l) => `<tr class="${l.met ? 'ok' : 'bad'}"><td>${esc(metricLabel(l.metric))}</td><td>${num(l.value)}</td>
-          <td>${l.max !== null && l.max !== undefined ? `≤ ${num(l.max)}` : ''}${l.min !== null && l.min !== undefined ? ` ≥ ${num(l.min)}` : ''}</td>
-          <td>${l.met ? '✓' : '✗'}</td></tr>`).join('')}</table>` : ''}
+    this.card.innerHTML = `${assessmentHtml(a, { title: this.spec.title, frame: ex })}
       <div class="card-actions">
         <button type="button" data-act="again">Try again</button>
         ${next ? `<button type="button" data-act="next">Next: ${esc(next)}</button>` : ''}
         <button type="button" data-act="choose">All exercises</button>
+        <a class="card-debrief" data-act="debrief" hidden target="_blank" rel="noopener">Debrief ▶</a>
         <button type="button" data-act="close">Close</button>
       </div>`;
     this.card.hidden = false;
@@ -156,6 +127,18 @@ export class TaskPanel {
     this.card.querySelector('[data-act="next"]')?.addEventListener('click', () => { this.card.hidden = true; this.ui.next(); });
     this.card.querySelector('[data-act="choose"]').addEventListener('click', () => { this.card.hidden = true; this.ui.choose(); });
     this.card.querySelector('[data-act="close"]').addEventListener('click', () => { this.card.hidden = true; });
+    // the finished attempt: the session's newest (GET /api/sessions/{id} names its attempts,
+    // newest first; a new one starts only with "try again")
+    try {
+      const r = await fetch(`/api/sessions/${encodeURIComponent(s.id)}`, auth);
+      const sum = r.ok ? await r.json() : null;
+      const id = sum?.attempts?.[0] ?? sum?.attempt;
+      const link = this.card.querySelector('[data-act="debrief"]');
+      if (id && link) {
+        link.href = `/replay/${encodeURIComponent(id)}?token=${encodeURIComponent(s.control_token)}`;
+        link.hidden = false;
+      }
+    } catch { /* no link: the server cannot say which attempt */ }
   }
 
   /** After "try again" (the same session restarts the attempt). */

@@ -1,5 +1,5 @@
 //! The pages run under the server's Content-Security-Policy (issue 13): the trainee page, the
-//! instructor dashboard and the workspace map load and work with no policy violation, the
+//! instructor dashboard, the workspace map and the debrief page load and work with no policy violation, the
 //! legend swatches still get their colours (set through the CSSOM, not style="" attributes),
 //! and the policy is really enforced: an injected inline script is blocked and reported, and
 //! a cross-origin page cannot frame the simulator.
@@ -32,6 +32,8 @@ test('the pages work under the CSP, which blocks injected inline script', { time
     ['/?scenario=training', () => window.__seaarms?.statesDrawn > 3],
     ['/instructor', () => document.readyState === 'complete' && document.getElementById('token')],
     ['/web/workspace.html', () => window.__workspace?.doc],
+    // the debrief page's modules load and run (without a token it says so and fetches nothing)
+    ['/replay/no-such-attempt', () => window.__seaarms?.replay && !document.getElementById('rp-note').hidden],
   ];
   for (const [path, ready] of pages) {
     const b = await openBrowser({ initScript: WATCH_CSP });

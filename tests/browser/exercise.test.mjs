@@ -6,7 +6,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, FAKE_GAMEPAD, padDriver, ROOT, INSTRUCTOR_TOKEN } from './harness.mjs';
+import { server, openBrowser, until, FAKE_GAMEPAD, workDualLift, ROOT, INSTRUCTOR_TOKEN } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || join(ROOT, 'tests', 'browser', 'artifacts');
 
@@ -47,45 +47,21 @@ test('dual-lift: start screen, task panel, handles, scripted gamepad through the
     assert.equal(await page.evaluate(() => window.__seaarms.lastState.settings.control_mode), 'cartesian', 'the exercise set Cartesian mode');
 
     const steps = [];
-    const { setSticks, selectArm, grab } = padDriver(page, (st) => { if (st.exercise && !steps.includes(st.exercise.step)) steps.push(st.exercise.step); });
-    await page.evaluate(() => window.__connectPad());
     // the drawn capture cue (a handle's sphere lit while a jaw is within grasp range), sampled in the page
     await page.evaluate(() => {
       window.__cues = new Set();
       setInterval(() => window.__seaarms.drawnScene().handles.forEach((h, i) => { if (h.capture) window.__cues.add(`${i}:${h.capture}`); }), 20);
     });
-    await selectArm('left');
-    await grab('left');
-    await selectArm('right');
-    await grab('right');
-    await until(page, () => window.__seaarms.lastState.exercise.step >= 2, undefined, 20000);
-    const cues = await page.evaluate(() => [...window.__cues].sort());
-    assert.deepEqual(cues, ['0:left', '1:right'], 'each handle lit for its jaw before the grasp');
-    // closed loop (gamepad X): the sticks move the box, RT (still held) grips with both jaws
-    await page.evaluate(() => window.__setButton(2, 1));
-    await until(page, () => window.__seaarms.lastState.settings.control_method === 'closed');
-    await page.evaluate(() => window.__setButton(2, 0));
-    await until(page, () => window.__seaarms.lastState.exercise.step >= 3, undefined, 20000);
-    // lift to 0.2 m and hold it there: proportional control of the height readout (right stick Y = vz)
-    const t0 = Date.now();
     let shot = false;
-    while (Date.now() - t0 < 150000) {
-      const ex = await page.evaluate(() => window.__seaarms.lastState.exercise);
+    await workDualLift(page, async (ex) => {
       if (!steps.includes(ex.step)) steps.push(ex.step);
-      if (ex.done) break;
-      // the lift readout (its unit is the server's: m or cm)
-      const h = ex.readouts.find((r) => /lift|height/i.test(r.label));
-      if (h) {
-        const e = (h.target - h.value) * ({ cm: 0.01, mm: 0.001 }[h.unit] ?? 1); // m
-        await setSticks([0, 0, Math.abs(e) < 0.004 ? 0 : Math.max(-0.5, Math.min(0.5, e / 0.06))]);
-      }
       if (!shot && ex.step === 4 && ex.readouts.some((r) => r.label === 'Hold' && r.value > 1.5)) {
-        await page.screenshot({ path: join(SHOTS, 'task-panel.png') });
         shot = true;
+        await page.screenshot({ path: join(SHOTS, 'task-panel.png') });
       }
-      await page.waitForTimeout(50);
-    }
-    await setSticks([0, 0, 0]);
+    });
+    const cues = await page.evaluate(() => [...window.__cues].sort());
+    assert.deepEqual(cues, ['0:left', '1:right'], 'each handle lit for its jaw before the grasp (and no other)');
     await page.waitForSelector('#card:not([hidden]) [data-score]', { timeout: 20000 });
     await page.waitForTimeout(300);
     await page.screenshot({ path: join(SHOTS, 'completion-card.png') });
@@ -97,6 +73,10 @@ test('dual-lift: start screen, task panel, handles, scripted gamepad through the
     assert.equal(await page.getAttribute('#card [data-score]', 'data-score'), String(Math.round(a.score)), 'the card shows the server\'s score');
     assert.match(card, a.passed ? /Passed/ : /Not passed/);
     for (const t of a.terms) assert.ok(card.includes(t.metric.split('_')[0]), `metric ${t.metric} on the card`);
+    // the card links the finished attempt's debrief, with this trainee's control token
+    await page.waitForSelector('#card [data-act="debrief"]:not([hidden])', { timeout: 10000 });
+    const attempt = (await (await fetch(`${url}/api/sessions/${sid}`, { headers: { authorization: `Bearer ${token}` } })).json()).attempts[0];
+    assert.equal(await page.getAttribute('#card [data-act="debrief"]', 'href'), `/replay/${attempt}?token=${token}`);
     assert.deepEqual(b.errors, []);
   } finally {
     await b.close();

@@ -27,6 +27,7 @@ export const CHROMIUM_ARGS = ['--no-sandbox', '--disable-gpu', '--disable-quic',
 const WEB_FROM_DISK = !!process.env.SEAARMS_WEB_FROM_DISK;
 function webFile(pathname) {
   const rel = pathname === '/' ? 'index.html' : pathname === '/instructor' ? 'instructor.html'
+    : pathname.startsWith('/replay/') ? 'replay.html'
     : pathname.startsWith('/web/') ? decodeURIComponent(pathname.slice(5)) : null;
   if (rel === null || rel.includes('..')) return null;
   const f = join(ROOT, 'web', rel);
@@ -301,4 +302,40 @@ export function padDriver(page, onState = () => {}) {
     throw new Error(`${side} jaw could not grab its handle`);
   };
   return { setSticks, driveTo, selectArm, grab };
+}
+
+/**
+ * Works the `dual-lift` exercise to its end through the page's own input path (FAKE_GAMEPAD,
+ * padDriver), in the order of the autopilot script of exercises/dual-lift.json: left handle,
+ * right handle, closed loop (gamepad X; RT stays pressed so both jaws grip), lift the box to
+ * the height readout's target and hold it there. `onExercise(ex)` is called (and awaited in
+ * the lift loop) with the polled frames' `exercise`. Returns when the frame says done.
+ */
+export async function workDualLift(page, onExercise = () => {}) {
+  const { setSticks, selectArm, grab } = padDriver(page, (st) => { if (st.exercise) onExercise(st.exercise); });
+  await page.evaluate(() => window.__connectPad());
+  await selectArm('left');
+  await grab('left');
+  await selectArm('right');
+  await grab('right');
+  await until(page, () => window.__seaarms.lastState.exercise.step >= 2, undefined, 20000);
+  await page.evaluate(() => window.__setButton(2, 1));
+  await until(page, () => window.__seaarms.lastState.settings.control_method === 'closed');
+  await page.evaluate(() => window.__setButton(2, 0));
+  await until(page, () => window.__seaarms.lastState.exercise.step >= 3, undefined, 20000);
+  // lift and hold: proportional control of the height readout (right stick Y = vz)
+  const t0 = Date.now();
+  while (Date.now() - t0 < 150000) {
+    const ex = await page.evaluate(() => window.__seaarms.lastState.exercise);
+    await onExercise(ex);
+    if (ex.done) break;
+    // the lift readout (its unit is the server's: m or cm)
+    const h = ex.readouts.find((r) => /lift|height/i.test(r.label));
+    if (h) {
+      const e = (h.target - h.value) * ({ cm: 0.01, mm: 0.001 }[h.unit] ?? 1); // m
+      await setSticks([0, 0, Math.abs(e) < 0.004 ? 0 : Math.max(-0.5, Math.min(0.5, e / 0.06))]);
+    }
+    await page.waitForTimeout(50);
+  }
+  await setSticks([0, 0, 0]);
 }

@@ -1,0 +1,53 @@
+// The assessment card of an exercise attempt (docs/exercises.md "The assessment"): verdict,
+// score, time and steps, why it did not pass, each scoring term and each pass limit against
+// the attempt's value. Shared by the trainee's completion card (web/task.js) and the debrief
+// page (web/replay.js). Every number is the server's.
+
+import { esc } from './status.js';
+
+/** "metric_name_unit" → "metric name (unit)". */
+export function metricLabel(m) {
+  const units = { _s: 's', _n: 'N', _m: 'm', _m_s3: 'm/s³', _deg: '°', _nm: 'N·m' };
+  for (const [suffix, unit] of Object.entries(units).sort((a, b) => b[0].length - a[0].length)) {
+    if (m.endsWith(suffix)) return `${m.slice(0, -suffix.length).replaceAll('_', ' ')} (${unit})`;
+  }
+  return m.replaceAll('_', ' ');
+}
+
+/** A number for the card: integers as such, others to 3 significant digits. */
+export function num(v) {
+  if (v === null || v === undefined) return '—';
+  if (!Number.isFinite(v)) return String(v);
+  return Number.isInteger(v) ? String(v) : Number(v.toPrecision(3)).toString();
+}
+
+/**
+ * The card's HTML.
+ * @param a the assessment JSON (GET /api/sessions/{id}/assessment, or an attempt's
+ *          `assessment`), or null when it could not be read
+ * @param title the exercise's title
+ * @param frame the last state frame's `exercise` (score, passed, elapsed_s, step, steps),
+ *          used when `a` is null
+ * @param verdict overrides the pass/fail headline (e.g. "Abandoned"), optional
+ */
+export function assessmentHtml(a, { title, frame = null, verdict = null }) {
+  const score = a ? a.score : frame?.score ?? 0;
+  const passed = a ? a.passed : !!frame?.passed;
+  const terms = a?.terms || [];
+  const limits = a?.limits || [];
+  const time = a ? `${num(a.time_s)} s` : frame ? `${frame.elapsed_s.toFixed(1)} s` : '';
+  const steps = a ? `${a.step_times_s.length} of ${a.steps_total}` : frame ? `${frame.step} of ${frame.steps}` : '';
+  const why = a?.failed_because || [];
+  return `<div class="card-head ${passed ? 'pass' : 'fail'}">
+      <span class="card-verdict">${esc(verdict || (passed ? 'Passed' : 'Not passed'))}</span>
+      <span class="card-score" data-score="${Math.round(score)}">${Math.round(score)}<small>/100</small></span></div>
+    <p class="card-title">${esc(title)}${time ? ` — ${time}` : ''}${steps ? `, ${steps} steps` : ''}</p>
+    ${why.length ? `<ul class="card-why">${why.map((w) => `<li>${esc(w)}</li>`).join('')}</ul>` : ''}
+    ${terms.length ? `<table class="card-terms"><tr><th>metric</th><th>yours</th><th>good</th><th>poor</th><th>points</th></tr>
+      ${terms.map((t) => `<tr><td>${esc(metricLabel(t.metric))}</td><td>${num(t.value)}</td><td>${num(t.good)}</td><td>${num(t.bad)}</td>
+        <td>${(t.score * t.weight).toFixed(1)} / ${num(t.weight)}</td></tr>`).join('')}</table>` : ''}
+    ${limits.length ? `<table class="card-limits"><tr><th>pass limit</th><th>yours</th><th>allowed</th><th></th></tr>
+      ${limits.map((l) => `<tr class="${l.met ? 'ok' : 'bad'}"><td>${esc(metricLabel(l.metric))}</td><td>${num(l.value)}</td>
+        <td>${l.max !== null && l.max !== undefined ? `≤ ${num(l.max)}` : ''}${l.min !== null && l.min !== undefined ? ` ≥ ${num(l.min)}` : ''}</td>
+        <td>${l.met ? '✓' : '✗'}</td></tr>`).join('')}</table>` : ''}`;
+}

@@ -1,0 +1,204 @@
+// Debrief page (/replay/{attempt}?token=…): one recorded attempt re-simulated by the server and
+// streamed over the replay WebSocket (docs/api.md "Attempts and replay"), drawn with the same
+// 3D views, plots and status bar as the trainee page; a timeline with the attempt's events
+// (click a marker or the bar to seek), play/pause, speed 0.25×–8×, the current time, and the
+// attempt's assessment card. The token is the instructor's or the trainee session's control
+// token (a trainee sees its own attempts). No physics here: every frame is the server's.
+
+import { View } from './view.js';
+import { Connection } from './connection.js';
+import { StatusBar, esc } from './status.js';
+import { Plots } from './plots.js';
+import { assessmentHtml } from './assessment.js';
+import { Timeline, clock } from './timeline.js';
+import { bindViewControls } from './viewcontrols.js';
+
+const $ = (id) => document.getElementById(id);
+const params = new URLSearchParams(location.search);
+const attemptId = decodeURIComponent(location.pathname.split('/').filter(Boolean).pop() || '');
+const token = params.get('token') || '';
+/** A just-finished attempt reaches the database within about a second (the recorder's batch). */
+const FETCH_TRIES = 8;
+const FETCH_RETRY_MS = 750;
+const OUTCOMES = {
+  passed: 'Passed', failed: 'Not passed', abandoned: 'Abandoned (reset or switched before the end)',
+  ended: 'Free play (ended)', interrupted: 'Interrupted (the server stopped)',
+};
+
+const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
+const status = new StatusBar($('status'));
+const plots = new Plots($('plots'));
+const viewControls = bindViewControls(view, plots);
+const timeline = new Timeline($('timeline'), $('rp-events'), (t) => seek(t));
+let arm = 'left';
+let attempt = null;
+/** The replay's state as the server last reported it ({t, playing, speed, duration_s}). */
+const rp = { t: 0, playing: false, speed: 1, duration_s: 0, seeks: 0 };
+let conn = null;
+
+function banner(kind, text, ms = 0) {
+  const b = $('banner');
+  clearTimeout(banner.timer);
+  if (!text) { b.hidden = true; return; }
+  b.className = kind === 'error' ? '' : kind;
+  b.textContent = text;
+  b.hidden = false;
+  if (ms) banner.timer = setTimeout(() => { b.hidden = true; }, ms);
+}
+
+function note(text) {
+  $('rp-note').textContent = text;
+  $('rp-note').hidden = !text;
+}
+
+/** GET /api/attempts/{id} (metadata, assessment, events), retried while it is not recorded yet. */
+async function fetchAttempt() {
+  for (let i = 0; i < FETCH_TRIES; i++) {
+    let r;
+    try {
+      r = await fetch(`/api/attempts/${encodeURIComponent(attemptId)}`, { headers: { authorization: `Bearer ${token}` }, cache: 'no-store' });
+    } catch {
+      r = null;
+    }
+    if (r?.ok) return r.json();
+    if (r && r.status !== 404) {
+      const b = await r.json().catch(() => null);
+      throw new Error(b?.error || `HTTP ${r.status}`);
+    }
+    await new Promise((ok) => setTimeout(ok, FETCH_RETRY_MS));
+  }
+  throw new Error('no such attempt');
+}
+
+function showAttempt(a, title) {
+  const who = a.trainee ? `${a.trainee}${a.group ? ` (${a.group})` : ''}` : '';
+  const when = a.started_unix ? new Date(a.started_unix * 1000).toLocaleString() : '';
+  $('rp-title').textContent = `${who || 'trainee'} · ${title}`;
+  document.title = `seaarms — debrief: ${who || attemptId} · ${title}`;
+  const outcome = OUTCOMES[a.outcome] || (a.outcome ? a.outcome : 'running');
+  $('rp-card').innerHTML = a.assessment
+    ? assessmentHtml(a.assessment, { title, verdict: a.outcome === 'passed' || a.outcome === 'failed' ? null : outcome })
+    : `<div class="card-head"><span class="card-verdict">${esc(outcome)}</span></div>
+       <p class="card-title">${esc(title)}${a.sim_seconds ? ` — ${a.sim_seconds.toFixed(1)} s` : ''}. No assessment (not an exercise, or not finished).</p>`;
+  $('rp-card').insertAdjacentHTML('beforeend', `<p class="rp-meta">Started ${esc(when)} · attempt ${esc(a.id)} · session ${esc(a.session)}</p>`);
+  $('rp-card').dataset.outcome = a.outcome || '';
+  plots.setSession(a.session, token);
+}
+
+function renderTime() {
+  $('rp-time').textContent = `${clock(rp.t)} / ${clock(rp.duration_s)}`;
+  $('rp-time').title = `${rp.t.toFixed(2)} s of ${rp.duration_s.toFixed(2)} s`;
+  $('rp-play').textContent = rp.playing ? '❚❚ Pause' : '▶ Play';
+  timeline.setTime(rp.t);
+}
+
+function send(msg) {
+  if (!conn?.send(msg)) banner('error', 'Not connected to the replay yet.', 3000);
+}
+
+function seek(t) {
+  if (!conn) return;
+  rp.seeks++;
+  plots.reset();
+  send({ type: 'seek', t: Math.max(0, Math.min(rp.duration_s, t)) });
+}
+
+function togglePlay() {
+  if (rp.playing) { send({ type: 'pause' }); return; }
+  if (rp.duration_s > 0 && rp.t >= rp.duration_s - 1e-6) seek(0); // at the end: from the start
+  send({ type: 'play' });
+}
+
+function connect() {
+  let resumeAt = null; // after a dropped socket: where it was
+  conn = new Connection({
+    role: 'replay',
+    sessionId: attemptId,
+    replay: { path: `/ws/replay/${encodeURIComponent(attemptId)}?token=${encodeURIComponent(token)}`,
+      refused: attempt?.outcome ? 'The replay was refused' : 'The attempt is still running; its replay opens when it ends' },
+    onHello(h) {
+      view.setHello(h);
+      status.role('replay');
+      if (h.exercise?.control?.arm === 'left' || h.exercise?.control?.arm === 'right') setArm(h.exercise.control.arm);
+      rp.duration_s = h.replay?.duration_s ?? rp.duration_s;
+      timeline.set(attempt?.events || [], rp.duration_s);
+      $('rp-play').disabled = false;
+      if (resumeAt !== null && resumeAt > 0) { send({ type: 'seek', t: resumeAt }); }
+      if (rp.speed !== 1) send({ type: 'speed', value: rp.speed });
+      renderTime();
+    },
+    onState(s) {
+      view.setState(s);
+      plots.add(s, arm);
+    },
+    onReplay(m) {
+      rp.t = m.t;
+      rp.playing = m.playing;
+      rp.speed = m.speed;
+      rp.duration_s = m.duration_s;
+      resumeAt = m.t;
+      $('rp-speed').value = String(m.speed);
+      renderTime();
+    },
+    onError(msg) { banner('error', msg, 6000); },
+    onStatus(kind, text) { banner(kind === 'ok' ? null : kind, kind === 'ok' ? '' : text); },
+  });
+  conn.start();
+}
+
+function setArm(side) {
+  arm = side;
+  $('sel-arm').value = side;
+}
+
+$('rp-play').addEventListener('click', togglePlay);
+$('rp-speed').addEventListener('change', (e) => { send({ type: 'speed', value: +e.target.value }); e.target.blur(); });
+$('sel-arm').addEventListener('change', (e) => { setArm(e.target.value); plots.reset(); e.target.blur(); });
+document.addEventListener('keydown', (e) => {
+  if (e.target.closest?.('input, select, textarea')) return;
+  if (e.key === ' ') { e.preventDefault(); togglePlay(); } else if (e.key === 'ArrowRight') seek(rp.t + (e.shiftKey ? 5 : 1));
+  else if (e.key === 'ArrowLeft') seek(rp.t - (e.shiftKey ? 5 : 1));
+  else if (e.key === 'v' || e.key === 'V') viewControls.layout();
+});
+setInterval(() => { if (view.drawn) status.update(view.drawn, { arm }); }, 100);
+
+(async () => {
+  if (!token) {
+    note('This debrief link has no token: open it from the instructor page or from your completion card.');
+    return;
+  }
+  try {
+    attempt = await fetchAttempt();
+    // just finished: its end reaches the database with the recorder's next batch
+    for (let i = 0; i < FETCH_TRIES && !attempt.outcome; i++) {
+      await new Promise((ok) => setTimeout(ok, FETCH_RETRY_MS));
+      attempt = await fetchAttempt();
+    }
+  } catch (e) {
+    note(`Cannot open attempt ${attemptId}: ${e.message}.`);
+    return;
+  }
+  if (!attempt.outcome) note('This attempt is still running: the replay shows it up to the last recorded second.');
+  let title = attempt.exercise || attempt.scenario || 'free play';
+  if (attempt.exercise) {
+    const ex = await fetch(`/api/exercises/${encodeURIComponent(attempt.exercise)}`).then((r) => (r.ok ? r.json() : null)).catch(() => null);
+    if (ex?.title) title = ex.title;
+  }
+  showAttempt(attempt, title);
+  rp.duration_s = attempt.sim_seconds || 0;
+  timeline.set(attempt.events || [], rp.duration_s);
+  renderTime();
+  if (attempt.replayable === false) {
+    note(`This attempt cannot be replayed: ${attempt.replay_note || 'no reason given'}. Its events and assessment are shown.`);
+    return;
+  }
+  connect();
+})();
+
+window.__seaarms = view.debugHooks({
+  get replay() { return { ...rp }; },
+  get attempt() { return attempt; },
+  get connection() { return conn ? { session: attemptId, framesReceived: conn.framesReceived, open: !!conn.ws && conn.gotHello } : null; },
+  get lastReceived() { return conn?.latest; },
+  statusText() { return $('status').innerText; },
+});

@@ -1,0 +1,25 @@
+// The toolbar's view controls shared by the trainee page and the debrief page: ellipsoids,
+// polytopes, ellipsoid scale, plots on/off and the four views / one large view switch. The
+// pages carry the same elements (ids chk-ell, chk-plots, btn-layout; chk-poly and sel-ell-scale
+// where the page has them).
+
+const $ = (id) => document.getElementById(id);
+
+/** Binds the controls to `view` (web/view.js) and `plots` (web/plots.js, its panel #plots);
+ * returns {layout()} (the keyboard's V). */
+export function bindViewControls(view, plots) {
+  const layout = () => {
+    view.viewports.cycleLayout();
+    $('btn-layout').textContent = view.viewports.single ? '4 views' : '1 view';
+  };
+  $('btn-layout').addEventListener('click', layout);
+  $('chk-ell').addEventListener('change', (e) => view.setEllipsoidsVisible(e.target.checked));
+  $('chk-poly')?.addEventListener('change', (e) => view.setPolytopesVisible(e.target.checked));
+  $('sel-ell-scale')?.addEventListener('change', (e) => view.setEllipsoidScale(+e.target.value));
+  $('chk-plots').addEventListener('change', (e) => {
+    $('plots').hidden = !e.target.checked;
+    plots.visible = e.target.checked;
+    view.viewports.dirty = true;
+  });
+  return { layout };
+}

@@ -1284,6 +1284,11 @@ fn odd_segment() -> BoxedStrategy<String> {
 /// Percent-encodes a segment (RFC 3986 unreserved characters kept), except an existing
 /// `%XX` form which is passed through (so encoded odd bytes reach the router).
 fn pct(seg: &str) -> String {
+    // A bare "." or ".." segment would be removed by the client's URL normalization (RFC 3986
+    // §5.2.4) and the request would hit another route; sent encoded, it reaches the server.
+    if seg == "." || seg == ".." {
+        return seg.replace('.', "%2E");
+    }
     let mut out = String::new();
     for b in seg.bytes() {
         if b.is_ascii_alphanumeric() || matches!(b, b'-' | b'.' | b'_' | b'~' | b'%') {

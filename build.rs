@@ -4,7 +4,8 @@
 //!
 //! Also stamps the simulator's version for replays: `SEAARMS_SIM_HASH` is an FNV-1a hash of
 //! every source that decides what a recorded attempt's inputs make the simulation do (the
-//! core, the robot files, the exercises, the session and replay code). An attempt recorded
+//! core, the robot files, the exercises, the live state, its commands and its step, the
+//! replay code; not the recorder, the frames or the edges). An attempt recorded
 //! under another hash is reported as not replayable rather than replayed wrongly.
 use std::path::Path;
 
@@ -12,7 +13,9 @@ const SIM_SOURCES: &[&str] = &[
     "server/core/src",
     "server/core/robots",
     "exercises",
-    "server/src/sessions",
+    "server/src/sessions/mod.rs",
+    "server/src/sessions/command.rs",
+    "server/src/sessions/physics.rs",
     "server/src/replay",
     "server/src/exercises.rs",
 ];

@@ -250,8 +250,12 @@ async fn recorded_listed_replayed(database_url: Option<String>) {
     }
     let advanced = last["t"].as_f64().unwrap() - 0.5;
     let rate = advanced / wall.elapsed().as_secs_f64();
-    // Loose: playback at 4× advances faster than real time (a loaded machine may lag).
-    assert!(rate > 1.5, "4× playback advanced at {rate:.2}× real time");
+    eprintln!(
+        "4x playback: {advanced:.3} s in {:.3} s wall = {rate:.2}x",
+        wall.elapsed().as_secs_f64()
+    );
+    // Playback follows the wall clock; loose, since a loaded machine may lag.
+    assert!(rate > 2.0, "4× playback advanced at {rate:.2}× real time");
     send(&mut rs, json!({"type": "bogus"})).await;
     next_of(&mut rs, "error", Duration::from_secs(10)).await;
     s.stop().await;

@@ -352,6 +352,9 @@ struct Playback {
     replay: Replay,
     playing: bool,
     speed: f64,
+    /// Wall clock and replay time when playing last started or changed: playback follows
+    /// the wall clock (a slow tick does not slow it down).
+    anchor: Option<(std::time::Instant, f64)>,
 }
 
 impl Playback {
@@ -393,6 +396,7 @@ async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame
         replay,
         playing: false,
         speed: 1.0,
+        anchor: None,
     };
     let first = state_text(&mut pb.replay);
     for text in [hello, first, pb.status()] {
@@ -446,10 +450,14 @@ async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame
                         "expected {{\"type\": \"play\"|\"pause\"|\"seek\"|\"speed\", …}}: {e}"
                     ))),
                 }
+                pb.anchor = None;
                 out.push(pb.status());
             }
             _ = tick.tick(), if pb.playing => {
-                let t = (pb.replay.time_s() + pb.speed * interval.as_secs_f64())
+                let (wall, t0) = *pb
+                    .anchor
+                    .get_or_insert((std::time::Instant::now(), pb.replay.time_s()));
+                let t = (t0 + pb.speed * wall.elapsed().as_secs_f64())
                     .min(pb.replay.duration_s());
                 let Some((p, frame)) = pb.seek(t).await else { return };
                 pb = p;

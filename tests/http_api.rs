@@ -326,3 +326,60 @@ async fn page_and_health_are_served() {
     let resp = reqwest::get(format!("{}/healthz", s.base)).await.unwrap();
     assert_eq!(resp.status().as_u16(), 200);
 }
+
+/// Kilic Fig. 4.2 over HTTP: the planar 2R arm's velocity polytope for the task rows vx, vy is
+/// the parallelogram spanned by ±j₁ and ±j₂ (unit joint rates), area 4·l1·l2·|sin q2| (the
+/// closed form: |det J| = l1·l2·|sin q2| for the planar 2R Jacobian, times the 2×2 box's area
+/// 4), with four corners; its cone-cell index equals the area (the origin is inside). With
+/// joint-limit rates (here also 1 rad/s) it is the same; for a row set that is not planar
+/// the 3-D polytope of a planar arm is flat and refused, as before.
+#[tokio::test]
+async fn the_planar_2r_polytope_is_kilics_parallelogram() {
+    let s = start().await;
+    let (l1, l2) = (1.0, 1.0);
+    for (q1, q2) in [(0.1, 1.0), (-0.7, 2.3), (1.2, -0.4)] {
+        for rates in ["unit", "limits"] {
+            let (st, v) = post(
+                &s,
+                "/api/analysis",
+                json!({"robot": "planar2r", "q": [q1, q2], "rows": [0, 1], "polytope": true,
+                       "polytope_rates": rates})
+                .to_string(),
+            )
+            .await;
+            assert_eq!(st, 200, "{v}");
+            let p = &v["polytope"];
+            let area = 4.0 * l1 * l2 * f64::sin(q2).abs();
+            let got = p["volume"].as_f64().unwrap();
+            assert!((got - area).abs() < 1e-9 * area.max(1.0), "{got} vs {area}");
+            assert!(
+                (p["w_p"].as_f64().unwrap() - area).abs() < 1e-9,
+                "{}",
+                p["w_p"]
+            );
+            let verts = p["vertices"].as_array().unwrap();
+            assert_eq!(verts.len(), 4, "a parallelogram: {verts:?}");
+            // Its corners are ±j₁ ± j₂ (Jacobian columns from the same answer).
+            let j = &v["jacobian"];
+            for v in verts {
+                let (x, y) = (v[0].as_f64().unwrap(), v[1].as_f64().unwrap());
+                let hit = [(1.0, 1.0), (1.0, -1.0), (-1.0, 1.0), (-1.0, -1.0)]
+                    .iter()
+                    .any(|(a, b)| {
+                        let cx = a * j[0][0].as_f64().unwrap() + b * j[0][1].as_f64().unwrap();
+                        let cy = a * j[1][0].as_f64().unwrap() + b * j[1][1].as_f64().unwrap();
+                        (cx - x).abs() < 1e-12 && (cy - y).abs() < 1e-12
+                    });
+                assert!(hit, "corner ({x}, {y}) is not ±j1 ± j2");
+            }
+        }
+    }
+    let (st, v) = post(
+        &s,
+        "/api/analysis",
+        json!({"robot": "planar2r", "q": [0.1, 1.0], "polytope": true, "polytope_rates": "fast"})
+            .to_string(),
+    )
+    .await;
+    assert_eq!(st, 400, "{v}");
+}

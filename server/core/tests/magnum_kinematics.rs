@@ -67,6 +67,30 @@ proptest! {
         prop_assert!((pose.translation.vector - p).abs().max() < 1e-12);
     }
 
+    /// Lim eq. 3.16 as printed, θ1 = atan2((l5+l6)a_y − p_y, (l5+l6)a_x − p_x), negates both
+    /// arguments of the wrist-centre projection and so returns θ1 + π (mod 2π); the corrected
+    /// form atan2(p_y − (l5+l6)a_y, p_x − (l5+l6)a_x), used by `magnum_ik`, returns θ1 (the
+    /// README's errata list). The pose comes from forward kinematics at q (eq. 3.9).
+    #[test]
+    fn eq_3_16_as_printed_gives_theta1_plus_pi(q in magnum_q()) {
+        let model = common::builtin("magnum");
+        let l = MagnumLengths::from_model(&model).unwrap();
+        let pose = end_effector_pose(&model, &q);
+        let r = pose.rotation.to_rotation_matrix().into_inner();
+        let (a, p) = (r.column(2), pose.translation.vector);
+        let lw = l.l5 + l.l6;
+        // Away from the shoulder axis, where θ1 is undefined.
+        prop_assume!((p.x - lw * a.x).hypot(p.y - lw * a.y) > 1e-6);
+        let wrapped = |x: f64| {
+            let d = x.rem_euclid(std::f64::consts::TAU);
+            d.min(std::f64::consts::TAU - d)
+        };
+        let printed = (lw * a.y - p.y).atan2(lw * a.x - p.x);
+        let corrected = (p.y - lw * a.y).atan2(p.x - lw * a.x);
+        prop_assert!(wrapped(corrected - q[0]) < 1e-9, "corrected {corrected} vs θ1 {}", q[0]);
+        prop_assert!(wrapped(printed - q[0] - std::f64::consts::PI) < 1e-9);
+    }
+
     #[test]
     fn closed_form_ik_round_trips(q in magnum_q()) {
         let model = common::builtin("magnum");

@@ -31,9 +31,40 @@ pub struct AnalysisRequest {
     /// Task rows of the 6×n Jacobian (0..6: vx vy vz wx wy wz), for Jun's TOMM.
     #[serde(default)]
     pub rows: Option<Vec<usize>>,
-    /// Also compute the translational velocity polytope.
+    /// Also compute the translational velocity polytope: over the requested `rows` when
+    /// they are two or three of vx, vy, vz (two rows: a planar task, the 2-D zonogon of
+    /// Kilic Fig. 4.2), else over vx vy vz.
     #[serde(default)]
     pub polytope: bool,
+    /// The polytope's joint-rate bounds: `limits` (each joint's `max_velocity`, default) or
+    /// `unit` (|q̇ᵢ| ≤ 1, the constraint the unit-norm ellipsoid is drawn for, so Kilic's
+    /// "polytope vs ellipsoid" comparison is on the same joint rates).
+    #[serde(default)]
+    pub polytope_rates: PolytopeRates,
+}
+
+/// Joint-rate bounds of a velocity polytope.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PolytopeRates {
+    /// Each joint's `max_velocity`.
+    #[default]
+    Limits,
+    /// |q̇ᵢ| ≤ 1 for every joint.
+    Unit,
+}
+
+/// The rows a polytope is built over: the requested translational rows (2 or 3 of them),
+/// else vx vy vz.
+fn polytope_rows(rows: Option<&[usize]>) -> Vec<usize> {
+    match rows {
+        Some(r)
+            if (2..=3).contains(&r.len()) && r.iter().all(|i| TRANSLATIONAL_ROWS.contains(i)) =>
+        {
+            r.to_vec()
+        }
+        _ => TRANSLATIONAL_ROWS.to_vec(),
+    }
 }
 
 /// Measures of every row selection.
@@ -130,8 +161,12 @@ impl From<Polytope> for PolytopeOut {
 fn analysis_response(model: &Model, req: &AnalysisRequest) -> Result<AnalysisResponse, ApiError> {
     let a = analyze(model, &req.q, req.rows.as_deref())?;
     let polytope = if req.polytope {
-        let jt = a.jacobian.select_rows(&TRANSLATIONAL_ROWS);
-        Some(polytope::velocity_polytope(&jt, &model.max_velocities())?.into())
+        let jt = a.jacobian.select_rows(&polytope_rows(req.rows.as_deref()));
+        let rates = match req.polytope_rates {
+            PolytopeRates::Limits => model.max_velocities(),
+            PolytopeRates::Unit => vec![1.0; model.dof()],
+        };
+        Some(polytope::velocity_polytope(&jt, &rates)?.into())
     } else {
         None
     };

@@ -307,6 +307,39 @@ async fn optimal_posture_and_studies() {
     );
     let (st, d) = post(&s, "/api/studies/dual-distance", "".into()).await;
     assert_eq!(st, 200, "{d}");
+    // Rows marked unreachable carry no numbers (issue 17 item 4): the dual pitch/yaw study
+    // has unreachable rows at the thesis's points.
+    let (st, d) = post(&s, "/api/studies/dual-pitch-yaw", "".into()).await;
+    assert_eq!(st, 200, "{d:.300}");
+    let rows = d["rows"].as_array().unwrap();
+    let unreachable: Vec<&Value> = rows.iter().filter(|r| r["reachable"] == false).collect();
+    assert!(!unreachable.is_empty());
+    for r in unreachable {
+        for key in [
+            "yoshikawa",
+            "isotropy",
+            "hong",
+            "left_yoshikawa",
+            "left_isotropy",
+            "left_hong",
+            "dual_yoshikawa",
+            "dual_isotropy",
+            "dual_hong",
+            "distance_m",
+            "q",
+            "q_left",
+        ] {
+            assert!(
+                r[key].is_null(),
+                "unreachable row with {key} = {}: {r}",
+                r[key]
+            );
+        }
+    }
+    assert!(
+        rows.iter()
+            .any(|r| r["reachable"] == true && r["dual_yoshikawa"].is_number())
+    );
     let (st, e) = post(&s, "/api/studies/nope", "".into()).await;
     assert_error(st, &e, 404, "unknown study");
 }

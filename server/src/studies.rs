@@ -629,7 +629,22 @@ struct StudyRowOut {
 }
 
 impl From<&StudyRow> for StudyRowOut {
+    /// An unreachable row carries no measures and no posture, whatever an arm of it reached
+    /// (a dual row is reachable only when both arms are).
     fn from(r: &StudyRow) -> Self {
+        let r = &if r.reachable {
+            r.clone()
+        } else {
+            StudyRow {
+                single: None,
+                left: None,
+                dual: None,
+                distance_m: None,
+                q: None,
+                q_left: None,
+                ..r.clone()
+            }
+        };
         StudyRowOut {
             series: r.series.clone(),
             parameter: r.parameter,

@@ -34,6 +34,10 @@ impl ApiError {
             detail: None,
         }
     }
+    /// 403 with a message (a missing or wrong token).
+    pub fn forbidden(error: impl Into<String>) -> ApiError {
+        ApiError::new(StatusCode::FORBIDDEN, error)
+    }
     /// 400 with a message.
     pub fn bad_request(error: impl Into<String>) -> ApiError {
         ApiError {

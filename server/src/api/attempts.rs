@@ -26,10 +26,12 @@ use serde_json::{Value, json};
 use tokio::sync::Semaphore;
 
 use crate::app::AppState;
-use crate::db::{AttemptFilter, AttemptRow, EventRow};
+use crate::db::{AttemptFilter, AttemptRow, EventRow, unavailable as db_error};
 use crate::error::ApiError;
 use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ServerMessage};
 use crate::replay::{Init, Replay, ReplayError, check_version, log};
+use crate::sessions::rest::bearer;
+use crate::sessions::ws::error_text;
 use crate::sessions::{sha256_hex, token_eq};
 
 /// Most replay WebSockets open at once (each may re-simulate on a blocking thread).
@@ -41,21 +43,9 @@ pub const MAX_LIST: usize = 1000;
 
 static REPLAY_SLOTS: LazyLock<Semaphore> = LazyLock::new(|| Semaphore::new(MAX_REPLAYS));
 
-fn forbidden(msg: &str) -> ApiError {
-    ApiError::new(StatusCode::FORBIDDEN, msg)
-}
-
-use crate::db::unavailable as db_error;
-
 /// The token of `Authorization: Bearer …`, else `?token=`.
 fn token<'a>(headers: &'a HeaderMap, query: Option<&'a str>) -> Option<&'a str> {
-    headers
-        .get(header::AUTHORIZATION)
-        .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.split_once(' '))
-        .filter(|(scheme, _)| scheme.eq_ignore_ascii_case("bearer"))
-        .map(|(_, t)| t)
-        .or(query)
+    bearer(headers).or(query)
 }
 
 fn is_instructor(state: &AppState, token: Option<&str>) -> bool {
@@ -70,7 +60,7 @@ async fn authorized(
     id: &str,
 ) -> Result<AttemptRow, ApiError> {
     let Some(token) = token else {
-        return Err(forbidden(
+        return Err(ApiError::forbidden(
             "missing token (Authorization: Bearer … or ?token=)",
         ));
     };
@@ -83,7 +73,7 @@ async fn authorized(
         return row.ok_or_else(not_found);
     }
     let Some(row) = row else {
-        return Err(forbidden("wrong token"));
+        return Err(ApiError::forbidden("wrong token"));
     };
     let hash = state
         .db
@@ -92,7 +82,7 @@ async fn authorized(
         .map_err(db_error)?;
     match hash {
         Some(h) if token_eq(&sha256_hex(token), &h) => Ok(row),
-        _ => Err(forbidden("wrong token")),
+        _ => Err(ApiError::forbidden("wrong token")),
     }
 }
 
@@ -160,7 +150,7 @@ pub async fn list(
     Query(q): Query<ListQuery>,
 ) -> Result<Json<Value>, ApiError> {
     if !is_instructor(&state, token(&headers, q.token.as_deref())) {
-        return Err(forbidden("instructor token required"));
+        return Err(ApiError::forbidden("instructor token required"));
     }
     let filter = AttemptFilter {
         trainee: q.trainee,
@@ -380,14 +370,6 @@ impl Playback {
         .await
         .ok()
     }
-}
-
-fn error_text(message: impl Into<String>) -> Utf8Bytes {
-    serde_json::to_string(&ServerMessage::Error {
-        message: message.into(),
-    })
-    .unwrap_or_default()
-    .into()
 }
 
 async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame_hz: u32) {

@@ -24,12 +24,8 @@ use crate::json::ApiJson;
 use crate::protocol::{ControlMethod, ControlMode, PausedBy, fault_label, grasp_name, parse_arm};
 use crate::security::ws_base;
 
-fn forbidden(msg: &str) -> ApiError {
-    ApiError::new(StatusCode::FORBIDDEN, msg)
-}
-
 /// The token of `Authorization: Bearer <token>`, exactly as sent (no trimming).
-fn bearer(headers: &HeaderMap) -> Option<&str> {
+pub(crate) fn bearer(headers: &HeaderMap) -> Option<&str> {
     let (scheme, token) = headers
         .get(header::AUTHORIZATION)?
         .to_str()
@@ -60,7 +56,9 @@ fn caller(
     session: Option<&Session>,
 ) -> Result<Caller, ApiError> {
     let Some(token) = token else {
-        return Err(forbidden("missing token (Authorization: Bearer …)"));
+        return Err(ApiError::forbidden(
+            "missing token (Authorization: Bearer …)",
+        ));
     };
     if token_eq(token, &state.instructor_token) {
         return Ok(Caller::Instructor);
@@ -70,14 +68,14 @@ fn caller(
             return Ok(Caller::Trainee);
         }
     }
-    Err(forbidden("wrong token"))
+    Err(ApiError::forbidden("wrong token"))
 }
 
 /// 403 unless the request carries the instructor token.
 pub(crate) fn require_instructor(state: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {
     match caller(state, bearer(headers), None)? {
         Caller::Instructor => Ok(()),
-        Caller::Trainee => Err(forbidden("instructor token required")),
+        Caller::Trainee => Err(ApiError::forbidden("instructor token required")),
     }
 }
 
@@ -161,7 +159,7 @@ pub async fn create(
             .as_deref()
             .or_else(|| headers.get("x-join-code").and_then(|v| v.to_str().ok()));
         if !presented.is_some_and(|p| token_eq(p, code)) {
-            return Err(forbidden(
+            return Err(ApiError::forbidden(
                 "this server needs the class join code (`join_code` field or X-Join-Code header)",
             ));
         }
@@ -453,12 +451,14 @@ async fn ended_caller(state: &AppState, token: Option<&str>, id: &str) -> Result
         return Ok(c);
     }
     let Some(token) = token else {
-        return Err(forbidden("missing token (Authorization: Bearer …)"));
+        return Err(ApiError::forbidden(
+            "missing token (Authorization: Bearer …)",
+        ));
     };
     let stored = state.db.session_token_sha256(id).await.map_err(db_error)?;
     match stored {
         Some(hash) if token_eq(&super::sha256_hex(token), &hash) => Ok(Caller::Trainee),
-        _ => Err(forbidden("wrong token")),
+        _ => Err(ApiError::forbidden("wrong token")),
     }
 }
 

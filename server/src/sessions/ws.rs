@@ -101,7 +101,8 @@ pub async fn upgrade(
 /// Read buffer of a WebSocket connection (bytes).
 pub const WS_READ_BUFFER_BYTES: usize = 8 * 1024;
 
-fn error_text(message: impl Into<String>) -> Utf8Bytes {
+/// The `error` message with `message`.
+pub(crate) fn error_text(message: impl Into<String>) -> Utf8Bytes {
     let msg = ServerMessage::Error {
         message: message.into(),
     };

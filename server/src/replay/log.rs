@@ -41,22 +41,28 @@ pub fn dequantize(n: i32) -> f64 {
     f64::from(n) * INPUT_QUANTUM
 }
 
-/// One logged entry, `k` = the simulation's step count when it was applied (it acts from
-/// the next step on).
+/// One logged entry: what was applied, stamped with the simulation's step count `k` when it
+/// was applied (it acts from the next step on). On the API: `{"k": …, "c": kind, …}`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Entry {
+    /// Step.
+    pub k: u64,
+    /// What.
+    #[serde(flatten)]
+    pub what: Applied,
+}
+
+/// What an entry applied.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "c", rename_all = "snake_case")]
-pub enum Entry {
+pub enum Applied {
     /// Stick input, in quanta.
     Input {
-        /// Step.
-        k: u64,
         /// The 20 values ([`INPUT_VALUES`]).
         v: Vec<i32>,
     },
     /// Settings change.
     Settings {
-        /// Step.
-        k: u64,
         /// Joint or Cartesian.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         mode: Option<ControlMode>,
@@ -68,61 +74,21 @@ pub enum Entry {
         speed: Option<f64>,
     },
     /// Both jaws driven open.
-    Release {
-        /// Step.
-        k: u64,
-    },
+    Release,
     /// A fault-drill answer.
     Diagnose {
-        /// Step.
-        k: u64,
         /// The answer.
         answer: String,
     },
     /// A fault injected.
     Fault {
-        /// Step.
-        k: u64,
         /// The fault (arm, kind, joint, size).
         fault: FaultEntry,
     },
     /// Every fault removed.
-    ClearFaults {
-        /// Step.
-        k: u64,
-    },
+    ClearFaults,
     /// An instructor's command counted as an intervention.
-    Intervention {
-        /// Step.
-        k: u64,
-    },
-}
-
-impl Entry {
-    /// The step it was applied at.
-    pub fn step(&self) -> u64 {
-        match self {
-            Entry::Input { k, .. }
-            | Entry::Settings { k, .. }
-            | Entry::Release { k }
-            | Entry::Diagnose { k, .. }
-            | Entry::Fault { k, .. }
-            | Entry::ClearFaults { k }
-            | Entry::Intervention { k } => *k,
-        }
-    }
-
-    fn set_step(&mut self, step: u64) {
-        match self {
-            Entry::Input { k, .. }
-            | Entry::Settings { k, .. }
-            | Entry::Release { k }
-            | Entry::Diagnose { k, .. }
-            | Entry::Fault { k, .. }
-            | Entry::ClearFaults { k }
-            | Entry::Intervention { k } => *k = step,
-        }
-    }
+    Intervention,
 }
 
 /// A fault as logged (the wire's fields, see `POST /api/sessions/{id}/actions`).
@@ -169,9 +135,9 @@ impl Writer {
     /// changes nothing); any other entry forgets the last input, since a mode change
     /// clears the applied sticks and the same input then matters again.
     pub fn push(&mut self, entry: &Entry) {
-        let dk = entry.step().saturating_sub(self.last_step);
-        let line = match entry {
-            Entry::Input { v, .. } => {
+        let dk = entry.k.saturating_sub(self.last_step);
+        let line = match &entry.what {
+            Applied::Input { v } => {
                 if self.last_input.as_ref() == Some(v) {
                     return;
                 }
@@ -188,16 +154,17 @@ impl Writer {
             }
             other => {
                 self.last_input = None;
-                let mut e = other.clone();
-                e.set_step(dk);
-                serde_json::to_string(&e).map(|s| s.replacen("\"k\":", "\"dk\":", 1))
+                serde_json::to_value(other).and_then(|mut v| {
+                    v["dk"] = dk.into();
+                    serde_json::to_string(&v)
+                })
             }
         };
         let Ok(mut line) = line else {
             return;
         };
         line.push('\n');
-        self.last_step = entry.step();
+        self.last_step = entry.k;
         self.raw_bytes += line.len() as u64;
         // Writing into a Vec does not fail.
         let _ = self.enc.write_all(line.as_bytes());
@@ -273,14 +240,22 @@ pub fn decode(bytes: &[u8]) -> Result<Vec<Entry>, DecodeError> {
                     .map_err(|_| err("input value out of range".into()))?;
             }
             last = Some(v.clone());
-            entries.push(Entry::Input { k: step, v });
+            entries.push(Entry {
+                k: step,
+                what: Applied::Input { v },
+            });
         } else {
-            let text = String::from_utf8_lossy(line).replacen("\"dk\":", "\"k\":", 1);
-            let mut e: Entry = serde_json::from_str(&text).map_err(|e| err(e.to_string()))?;
-            step += e.step();
-            e.set_step(step);
+            let mut value: serde_json::Value =
+                serde_json::from_slice(line).map_err(|e| err(e.to_string()))?;
+            let dk = value
+                .as_object_mut()
+                .and_then(|o| o.remove("dk"))
+                .and_then(|d| d.as_u64())
+                .ok_or_else(|| err("no step (dk)".into()))?;
+            step += dk;
+            let what: Applied = serde_json::from_value(value).map_err(|e| err(e.to_string()))?;
             last = None;
-            entries.push(e);
+            entries.push(Entry { k: step, what });
         }
     }
     Ok(entries)
@@ -299,17 +274,22 @@ mod tests {
             let mut v = vec![0; INPUT_VALUES];
             v[2] = quantize((k as f64 * 0.01).sin());
             v[19] = -(k as i32 % 7);
-            let e = Entry::Input { k: k * 20, v };
+            let e = Entry {
+                k: k * 20,
+                what: Applied::Input { v },
+            };
             w.push(&e);
             all.push(e);
             if k % 100 == 50 {
-                let e = Entry::Fault {
+                let e = Entry {
                     k: k * 20,
-                    fault: FaultEntry {
-                        arm: 1,
-                        kind: "leak".into(),
-                        joint: Some(3),
-                        value: 1e-11,
+                    what: Applied::Fault {
+                        fault: FaultEntry {
+                            arm: 1,
+                            kind: "leak".into(),
+                            joint: Some(3),
+                            value: 1e-11,
+                        },
                     },
                 };
                 w.push(&e);
@@ -360,7 +340,10 @@ mod size {
                 let phase = m as f64 * 0.02 * (0.3 + 0.2 * n as f64);
                 v[slot] = quantize(0.8 * phase.sin()) + jitter;
             }
-            w.push(&Entry::Input { k: m * 20, v });
+            w.push(&Entry {
+                k: m * 20,
+                what: Applied::Input { v },
+            });
         }
         let bytes = w.finish().len();
         println!("busy minute: {} B raw, {bytes} B compressed", w.raw_bytes());

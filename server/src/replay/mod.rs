@@ -19,7 +19,7 @@ use crate::protocol::{Settings, StateFrame};
 use crate::sessions::command::{ActiveFault, Arm, Command, Fault, FaultKind};
 use crate::sessions::snapshot::build_frame;
 use crate::sessions::{Live, Scenario};
-use log::{Entry, FaultEntry};
+use log::{Applied, Entry, FaultEntry};
 
 /// The simulator's version stamp: the crate version and a hash of every source that decides
 /// what the logged inputs do (see `build.rs`).
@@ -123,7 +123,7 @@ impl Replay {
         duration_s: f64,
     ) -> Result<Replay, ReplayError> {
         let live = Self::start(models, &init)?;
-        let last = entries.last().map_or(0, Entry::step);
+        let last = entries.last().map_or(0, |e| e.k);
         let duration_steps = ((duration_s.max(0.0) * STEPS_PER_S).round() as u64).max(last);
         Ok(Replay {
             models: models.clone(),
@@ -192,7 +192,7 @@ impl Replay {
         }
         while self.live.sim().steps() < step {
             let k = self.live.sim().steps();
-            while let Some(e) = self.entries.get(self.next).filter(|e| e.step() <= k) {
+            while let Some(e) = self.entries.get(self.next).filter(|e| e.k <= k) {
                 apply_entry(&mut self.live, e)?;
                 self.next += 1;
             }
@@ -215,30 +215,29 @@ impl Replay {
 
 /// Applies one logged entry, through the same [`Live::apply`] a live session uses.
 fn apply_entry(live: &mut Live, e: &Entry) -> Result<(), ReplayError> {
-    let command = match e {
-        Entry::Input { v, .. } => {
+    let command = match &e.what {
+        Applied::Input { v } => {
             if v.len() != log::INPUT_VALUES {
                 return Err(ReplayError::Record(format!("input of {} values", v.len())));
             }
             Command::Input(crate::sessions::command::StickInput::from_quanta(v))
         }
-        Entry::Settings {
+        Applied::Settings {
             mode,
             method,
             speed,
-            ..
         } => Command::Settings(crate::sessions::command::SettingsChange {
             control_mode: *mode,
             control_method: *method,
             arm_speed: *speed,
         }),
-        Entry::Release { .. } => Command::Release,
-        Entry::Diagnose { answer, .. } => Command::Diagnose(answer.clone()),
-        Entry::Fault { fault, .. } => {
+        Applied::Release => Command::Release,
+        Applied::Diagnose { answer } => Command::Diagnose(answer.clone()),
+        Applied::Fault { fault } => {
             Command::InjectFault(active_fault(fault).map_err(ReplayError::Record)?)
         }
-        Entry::ClearFaults { .. } => Command::ClearFaults,
-        Entry::Intervention { .. } => {
+        Applied::ClearFaults => Command::ClearFaults,
+        Applied::Intervention => {
             live.intervene();
             return Ok(());
         }

@@ -12,7 +12,7 @@ use serde_json::json;
 use super::record::RecordMsg;
 use super::{Live, Scenario, Session, SessionManager};
 use crate::protocol::{ControlMethod, ControlMode, EndReason, PausedBy, ServerMessage};
-use crate::replay::log::{Entry, dequantize, quantize};
+use crate::replay::log::{Applied, dequantize, quantize};
 
 /// What a trainee's `resume` gets while the instructor has paused the session.
 pub const PAUSED_BY_INSTRUCTOR: &str = "paused by the instructor; only the instructor can resume";
@@ -366,13 +366,12 @@ impl Live {
         Ok(match command {
             Command::Input(input) => {
                 let (input, quanta) = input.quantized();
-                self.log(|k| Entry::Input { k, v: quanta });
+                self.log(Applied::Input { v: quanta });
                 self.apply_input(&input);
                 json!({})
             }
             Command::Settings(change) => {
-                self.log(|k| Entry::Settings {
-                    k,
+                self.log(Applied::Settings {
                     mode: change.control_mode,
                     method: change.control_method,
                     speed: change.arm_speed,
@@ -388,7 +387,7 @@ impl Live {
             Command::Pause => self.pause_as(PausedBy::Trainee, true)?,
             Command::Resume => self.pause_as(PausedBy::Trainee, false)?,
             Command::Release => {
-                self.log(|k| Entry::Release { k });
+                self.log(Applied::Release);
                 self.release(RELEASE_DURATION_S);
                 json!({})
             }
@@ -403,22 +402,20 @@ impl Live {
                     .as_mut()
                     .ok_or_else(|| CommandError::Invalid("no exercise is running".to_string()))?;
                 run.diagnose(answer).map_err(CommandError::Invalid)?;
-                self.log(|k| Entry::Diagnose {
-                    k,
+                self.log(Applied::Diagnose {
                     answer: answer.clone(),
                 });
                 json!({"answer": answer})
             }
             Command::InjectFault(f) => {
-                self.log(|k| Entry::Fault {
-                    k,
+                self.log(Applied::Fault {
                     fault: crate::replay::fault_entry(f),
                 });
                 self.inject_fault(*f);
                 json!({"fault": f, "silent": f.silent})
             }
             Command::ClearFaults => {
-                self.log(|k| Entry::ClearFaults { k });
+                self.log(Applied::ClearFaults);
                 self.clear_faults();
                 json!({})
             }

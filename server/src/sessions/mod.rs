@@ -437,18 +437,18 @@ impl Live {
         std::mem::take(&mut self.pending)
     }
 
-    /// Logs an entry of the running attempt (stamped with the current step).
-    fn log(&mut self, entry: impl FnOnce(u64) -> crate::replay::log::Entry) {
+    /// Logs what was applied in the running attempt, stamped with the current step.
+    fn log(&mut self, what: crate::replay::log::Applied) {
         let k = self.sim.steps();
         if let Some(log) = self.log.as_mut() {
-            log.push(&entry(k));
+            log.push(&crate::replay::log::Entry { k, what });
         }
     }
 
     /// Counts an instructor's intervention in the running attempt (and logs it: it counts in
     /// the score).
     pub fn intervene(&mut self) {
-        self.log(|k| crate::replay::log::Entry::Intervention { k });
+        self.log(crate::replay::log::Applied::Intervention);
         if let Some(run) = self.exercise.as_mut() {
             run.intervention();
         }

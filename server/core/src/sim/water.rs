@@ -21,6 +21,7 @@
 //!   - both enter the joint equation through the point's Jacobian transpose: τ = J_xᵀF and
 //!     ΔH = J_xᵀ·M_a·J_x (symmetric positive semi-definite, so H + ΔH stays SPD and the
 //!     step's fixed-size LDLᵀ factor takes it unchanged).
+//!
 //!   Three pieces: a link turning about its own joint gets ∫₀ᴸ s·s² ds = L⁴/4 from the
 //!   midpoint rule as 0.236·L⁴ (5.6 % low); one piece would give 0.125·L⁴ (50 % low).
 //! * **Object** (the box, bluff body): drag per body axis on the relative velocity,

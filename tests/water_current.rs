@@ -13,18 +13,9 @@ use serde_json::{Value, json};
 mod common;
 use common::*;
 
-/// `POST /api/sessions/{id}/actions` with `token`: the status and the body (JSON, or null
-/// for an empty body).
-async fn act(s: &Server, id: &str, token: &str, body: Value) -> (u16, Value) {
-    let r = reqwest::Client::new()
-        .post(format!("{}/api/sessions/{id}/actions", s.base))
-        .bearer_auth(token)
-        .json(&body)
-        .send()
-        .await
-        .unwrap();
-    let st = r.status().as_u16();
-    let text = r.text().await.unwrap();
+/// [`act`] with the body parsed as JSON (null for an empty body).
+async fn act_json(s: &Server, id: &str, token: &str, body: Value) -> (u16, Value) {
+    let (st, text) = act(s, id, token, body).await;
     (st, serde_json::from_str(&text).unwrap_or(Value::Null))
 }
 
@@ -59,7 +50,7 @@ async fn the_instructor_sets_the_current_and_the_trainee_sees_it() {
     assert_eq!(current(&first), (0.0, 0.0), "free play: still sea water");
 
     // The trainee may not.
-    let (st, body) = act(
+    let (st, body) = act_json(
         &s,
         &id,
         &token,
@@ -103,7 +94,7 @@ async fn the_instructor_sets_the_current_and_the_trainee_sees_it() {
             "speed_m_s",
         ),
     ] {
-        let (st, body) = act(&s, &id, TEACHER, bad.clone()).await;
+        let (st, body) = act_json(&s, &id, TEACHER, bad.clone()).await;
         assert_eq!(st, 400, "{bad} → {body}");
         let msg = body["error"]
             .as_str()
@@ -127,7 +118,7 @@ async fn the_instructor_sets_the_current_and_the_trainee_sees_it() {
     );
 
     // The instructor sets 0.5 m/s towards −90° (stored as 270°: flowing to −y).
-    let (st, body) = act(
+    let (st, body) = act_json(
         &s,
         &id,
         TEACHER,
@@ -145,7 +136,7 @@ async fn the_instructor_sets_the_current_and_the_trainee_sees_it() {
     assert_eq!(current(&frame), (0.5, 270.0));
 
     // Switching to a live case-study set-up puts the session in air: no current to set.
-    let (st, _) = act(
+    let (st, _) = act_json(
         &s,
         &id,
         TEACHER,
@@ -153,7 +144,7 @@ async fn the_instructor_sets_the_current_and_the_trainee_sees_it() {
     )
     .await;
     assert_eq!(st, 204);
-    let (st, body) = act(
+    let (st, body) = act_json(
         &s,
         &id,
         TEACHER,

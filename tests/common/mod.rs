@@ -104,6 +104,18 @@ pub async fn create_at(base: &str, body: Value) -> (u16, Value) {
     (st, r.json().await.unwrap())
 }
 
+/// `POST /api/sessions/{id}/actions` with `token`; the status and the body text.
+pub async fn act(s: &Server, id: &str, token: &str, body: Value) -> (u16, String) {
+    let r = reqwest::Client::new()
+        .post(format!("{}/api/sessions/{id}/actions", s.base))
+        .bearer_auth(token)
+        .json(&body)
+        .send()
+        .await
+        .unwrap();
+    (r.status().as_u16(), r.text().await.unwrap())
+}
+
 /// Creates a default session; its id and control token.
 pub async fn new_session(s: &Server) -> (String, String) {
     let (st, c) = create(s, serde_json::json!({})).await;

@@ -54,7 +54,7 @@
 //! mass. Neglected: the added mass's velocity-product terms (J̇q̇ of each piece) — at the
 //! arms' ≤ 0.5 rad/s they are below 1 % of the added mass's share of the inertia torques.
 
-use nalgebra::{Matrix3, Matrix6, SMatrix, Vector3, Vector6};
+use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
 use crate::Error;
 use crate::dynamics::Inertials;
@@ -279,7 +279,6 @@ pub fn arm_hydro(
         matrix: Matrix6::zeros(),
         torque: Vector6::zeros(),
     };
-    let qdv = Vector6::from(*qd);
     for i in 0..N_ACT {
         let start = p[i];
         let end = if i + 1 < N_ACT {
@@ -303,25 +302,37 @@ pub fn arm_hydro(
         for s in 0..LINK_SEGMENTS {
             let x = start + seg * ((s as f64 + 0.5) / LINK_SEGMENTS as f64);
             // Linear Jacobian of the point x: column k ≤ i is z_k × (x − p_k) (revolute) or
-            // z_k (prismatic); joints past i do not move it.
-            let mut jx = SMatrix::<f64, 3, N_ACT>::zeros();
+            // z_k (prismatic); joints past i do not move it (their columns are zero and are
+            // skipped below).
+            let mut jx = [Vector3::zeros(); N_ACT];
+            let mut v = -u;
             for k in 0..=i {
-                let c = match model.joints[k].kind {
+                jx[k] = match model.joints[k].kind {
                     JointKind::Revolute => z[k].cross(&(x - p[k])),
                     JointKind::Prismatic => z[k],
                 };
-                jx.set_column(k, &c);
+                v += jx[k] * qd[k];
             }
-            let w = proj * (jx * qdv - u);
+            let w = proj * v;
             let speed = w.norm();
             let force = w * (-drag * speed);
-            let k_drag = if speed > 0.0 {
-                (proj * speed + w * w.transpose() / speed) * drag
-            } else {
-                Matrix3::zeros()
-            };
-            out.torque += jx.transpose() * force;
-            out.matrix += jx.transpose() * (added + k_drag * h) * jx;
+            let mut m3 = added;
+            if speed > 0.0 {
+                m3 += (proj * speed + w * w.transpose() / speed) * (drag * h);
+            }
+            // τ = J_xᵀF; ΔH = J_xᵀ·M₃·J_x on the (i+1)×(i+1) block, upper triangle here.
+            for a in 0..=i {
+                out.torque[a] += jx[a].dot(&force);
+                let ma = m3 * jx[a];
+                for b in a..=i {
+                    out.matrix[(a, b)] += ma.dot(&jx[b]);
+                }
+            }
+        }
+    }
+    for a in 0..N_ACT {
+        for b in 0..a {
+            out.matrix[(a, b)] = out.matrix[(b, a)];
         }
     }
     out

@@ -324,8 +324,8 @@ pub fn arm_hydro(
             for a in 0..=i {
                 out.torque[a] += jx[a].dot(&force);
                 let ma = m3 * jx[a];
-                for b in a..=i {
-                    out.matrix[(a, b)] += ma.dot(&jx[b]);
+                for (b, jb) in jx.iter().enumerate().take(i + 1).skip(a) {
+                    out.matrix[(a, b)] += ma.dot(jb);
                 }
             }
         }

@@ -426,7 +426,8 @@ pub async fn send(
 
 /// JSON paths (object keys) whose value may be `null` in a state frame: no dual ellipsoid
 /// unless both jaws hold, no condition number at a singularity, no capture cue, exercise,
-/// event or panel when there is none, no `paused_by` while the clock runs (protocol.rs).
+/// event or panel when there is none, no `paused_by` while the clock runs, no water `current`
+/// in air (protocol.rs).
 const NULLABLE_STATE_KEYS: &[&str] = &[
     "dual",
     "paused_by",
@@ -435,6 +436,7 @@ const NULLABLE_STATE_KEYS: &[&str] = &[
     "exercise",
     "last_event",
     "panel",
+    "current",
 ];
 
 /// Checks a state frame: every number finite (serde_json writes NaN and ±∞ as `null`, so a

@@ -175,6 +175,12 @@ async function act(type) {
     if ($('act-silent').checked) body.silent = true; // a diagnosis drill: the trainee is not told
   }
   if (type === 'message') body.text = $('act-text').value;
+  if (type === 'set_current') {
+    // Empty boxes mean 0; anything else goes as typed and the server checks it.
+    const num = (id) => { const v = $(id).value.trim(); return v === '' ? 0 : Number(v); };
+    body.speed_m_s = num('act-cur-speed');
+    body.heading_deg = num('act-cur-heading');
+  }
   const out = $('act-result');
   const r = await postAction(observed, body);
   out.textContent = r.ok ? `${type}${body.silent ? ' (silent)' : ''}: ok` : `${type}: ${r.error}`;

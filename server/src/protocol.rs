@@ -511,6 +511,9 @@ pub struct StateFrame {
     pub exercise: Option<seaarms_core::exercise::Status>,
     /// The panel's moving parts (`null` without a panel).
     pub panel: Option<PanelFrame>,
+    /// The water's current `{speed_m_s, heading_deg}` (heading: the direction it flows
+    /// towards, degrees from +x towards +y) in a subsea session; `null` in air.
+    pub current: Option<seaarms_core::sim::Current>,
 }
 
 /// Left and right arm frames.

@@ -32,6 +32,8 @@ pub enum ScenarioError {
 pub struct ScenarioSummary {
     /// Scenario name.
     pub scenario: String,
+    /// The medium: `air` (the thesis's setting; every case study runs in air).
+    pub environment: String,
     /// Highest line pressure of any actuator (Pa).
     pub peak_line_pressure_pa: f64,
     /// Relief valve setting (Pa).
@@ -118,6 +120,7 @@ pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioErr
     Ok((
         ScenarioSummary {
             scenario: s.scenario.to_string(),
+            environment: s.environment.to_string(),
             peak_line_pressure_pa: s.peak_line_pressure_pa,
             relief_setting_pa: s.relief_setting_pa,
             peak_internal_force_n: s.peak_internal_force_n,

@@ -605,6 +605,14 @@ pub enum Action {
     },
     /// Remove every fault.
     ClearFaults,
+    /// Set the water's current (a subsea session): speed in [0, 2.5] m/s, heading (the
+    /// direction it flows towards, degrees from +x towards +y) within ±360°.
+    SetCurrent {
+        /// Speed (m/s).
+        speed_m_s: f64,
+        /// Heading (degrees).
+        heading_deg: f64,
+    },
     /// Show a message on the trainee's page.
     Message {
         /// Up to 500 characters.
@@ -643,6 +651,10 @@ impl TryFrom<Action> for Command {
                 Command::InjectFault(ActiveFault { arm, fault, silent })
             }
             Action::ClearFaults => Command::ClearFaults,
+            Action::SetCurrent {
+                speed_m_s,
+                heading_deg,
+            } => Command::current(speed_m_s, heading_deg)?,
             Action::Message { text } => Command::message(&text)?,
         })
     }

@@ -170,5 +170,6 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
             stab_depth_m: p.stab_depth_m,
             side_load_n: p.side_load_n,
         }),
+        current: sim.environment().water().map(|w| w.current),
     }
 }

@@ -152,6 +152,10 @@ pub struct Scene {
     /// The intervention panel (valve, hot stab; [`crate::panel::PanelParams::standard`]).
     #[serde(default)]
     pub panel: bool,
+    /// The medium: `"subsea"` (the default: sea water, [`crate::sim::Environment::subsea`])
+    /// or `"air"`.
+    #[serde(default)]
+    pub environment: crate::sim::Medium,
 }
 
 /// A floating marker.
@@ -356,13 +360,15 @@ impl ExerciseSpec {
         Ok(())
     }
 
-    /// Simulation parameters for this exercise's scene, from the case-study set-up.
+    /// Simulation parameters for this exercise's scene, from the case-study set-up in the
+    /// scene's medium.
     pub fn sim_params(
         &self,
         left: &crate::Model,
         right: &crate::Model,
     ) -> Result<crate::sim::SimParams, Error> {
-        let mut p = crate::sim::SimParams::case_study(left, right)?;
+        let mut p = crate::sim::SimParams::case_study(left, right)?
+            .with_environment(self.scene.environment.environment());
         if let Some(q) = self.scene.initial_q_deg {
             for (arm, q) in p.arms.iter_mut().zip(q) {
                 arm.initial_q = q.map(f64::to_radians);

@@ -369,6 +369,8 @@ impl Scenario {
 pub struct Summary {
     /// Scenario name.
     pub scenario: &'static str,
+    /// The medium it ran in: `"air"` (the thesis's setting, every case study) or `"subsea"`.
+    pub environment: &'static str,
     /// Highest line pressure of any actuator (Pa).
     pub peak_line_pressure_pa: f64,
     /// Relief valve setting (Pa), for reference.
@@ -418,6 +420,7 @@ pub fn run(
     let z0 = sim.object().pose.translation.z;
     let mut s = Summary {
         scenario: sc.name,
+        environment: sc.params.step.environment.name(),
         peak_line_pressure_pa: 0.0,
         relief_setting_pa: relief,
         peak_internal_force_n: 0.0,

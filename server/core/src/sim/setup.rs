@@ -4,7 +4,7 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
-use super::{ArmParams, SimParams, StepParams};
+use super::{ArmParams, Environment, SimParams, StepParams};
 use crate::Error;
 use crate::control::ControlParams;
 use crate::dynamics::Inertials;
@@ -30,7 +30,8 @@ impl SimParams {
     /// What [`super::Simulation::new`] requires of `left`, `right` and these parameters:
     /// 6-joint arms with 6 links of finite positive mass, finite initial angles, a step in
     /// (0, 10 ms] with 1..=1000 sub-steps, a positive object mass, and a panel (if any) that
-    /// passes [`PanelParams::check`] with grips the jaws can open around.
+    /// passes [`PanelParams::check`] with grips the jaws can open around, and water (if any)
+    /// of positive finite density with a current within [`super::Current::new`]'s bounds.
     pub fn check(&self, left: &Model, right: &Model) -> Result<(), Error> {
         for m in [&left, &right] {
             if m.dof() != N_ACT {
@@ -80,6 +81,18 @@ impl SimParams {
                 reason: "mass must be > 0".into(),
             });
         }
+        if let Some(w) = s.environment.water() {
+            let c = &w.current;
+            if !(w.density_kgm3.is_finite() && w.density_kgm3 > 0.0)
+                || super::Current::new(c.speed_m_s, c.heading_deg).is_err()
+            {
+                return Err(Error::InvalidParameter {
+                    what: "environment",
+                    reason: "water density must be finite and > 0, the current within bounds"
+                        .into(),
+                });
+            }
+        }
         if let Some(p) = &self.panel {
             let jaw = self.arms[0]
                 .hydraulics
@@ -113,6 +126,18 @@ impl SimParams {
             control: ControlParams::default(),
             panel: None,
         })
+    }
+
+    /// The training set-up: [`SimParams::case_study`] submerged in still sea water
+    /// ([`Environment::subsea`]) — what sessions and exercises run unless they ask for air.
+    pub fn training(left: &Model, right: &Model) -> Result<SimParams, Error> {
+        Ok(Self::case_study(left, right)?.with_environment(Environment::subsea()))
+    }
+
+    /// These parameters in `environment`.
+    pub fn with_environment(mut self, environment: Environment) -> SimParams {
+        self.step.environment = environment;
+        self
     }
 
     /// These parameters with the intervention panel `panel` (e.g. [`PanelParams::standard`],

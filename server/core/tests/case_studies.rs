@@ -12,9 +12,10 @@
 
 mod common;
 
+use common::scenario_util::run_rows;
 use seaarms_core::grasp::GraspState;
 use seaarms_core::sim::Arm;
-use seaarms_core::sim::scenario::{Row, Scenario, Summary, run, scenario};
+use seaarms_core::sim::scenario::{Row, Scenario, Summary, scenario};
 
 fn build(name: &str) -> Scenario {
     let m = common::builtin("magnum");
@@ -24,17 +25,8 @@ fn build(name: &str) -> Scenario {
     sc
 }
 
-fn run_scenario(sc: &Scenario) -> (Summary, Vec<Row>) {
-    let m = common::builtin("magnum");
-    let mut rows = Vec::new();
-    let s = run(sc, &m, &m, |r| rows.push(r.clone())).expect("run");
-    println!("{}: {s:?}", sc.name);
-    assert_eq!(s.numerical_faults, 0);
-    (s, rows)
-}
-
 fn run_case(name: &str) -> (Summary, Vec<Row>) {
-    let (s, rows) = run_scenario(&build(name));
+    let (s, rows) = run_rows(&build(name));
     // Lim's assumption (i) (§3.5.2.1), the case studies' default, and said in the output.
     assert_eq!(s.grasp_model, "rigid");
     assert_eq!((s.slips, s.drops), (0, 0));
@@ -231,7 +223,7 @@ fn case3_without_relief_valves_still_lifts() {
     for a in sc.params.arms.iter_mut() {
         a.hydraulics.relief_pa = 1.0e9;
     }
-    let (s, rows) = run_scenario(&sc);
+    let (s, rows) = run_rows(&sc);
     assert_eq!(s.relief_events, 0);
     assert!(
         s.peak_line_pressure_pa > 12.0e6,
@@ -261,7 +253,7 @@ fn case3_with_the_finite_grip_slips() {
     // per jaw), so the jaws slip.
     let mut sc = build("case3-dual-open-loop");
     sc.params.rigid_grasp = false;
-    let (s, _) = run_scenario(&sc);
+    let (s, _) = run_rows(&sc);
     assert_eq!(s.grasp_model, "finite");
     assert!(s.slips > 0, "{s:?}");
 }

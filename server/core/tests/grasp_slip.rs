@@ -7,8 +7,9 @@
 
 mod common;
 
+use common::scenario_util::run_rows;
 use seaarms_core::grasp::{GraspState, GripCapacity, GripParams, ObjectParams};
-use seaarms_core::sim::scenario::{Row, Scenario, Summary, run, scenario};
+use seaarms_core::sim::scenario::{Scenario, scenario};
 
 /// Lim Table 1-1: "Clamp force 150 kg" = 150 kgf.
 const CLAMP_N: f64 = 150.0 * 9.80665;
@@ -29,15 +30,6 @@ fn case(name: &str, rigid: bool, mass_kg: f64) -> Scenario {
     // The environment these figures assume: in air (the thesis's case-study setting).
     sc.params.step.buoyancy = false;
     sc
-}
-
-fn go(sc: &Scenario) -> (Summary, Vec<Row>) {
-    let m = common::builtin("magnum");
-    let mut rows = Vec::new();
-    let s = run(sc, &m, &m, |r| rows.push(r.clone())).expect("run");
-    println!("{}: {s:?}", sc.name);
-    assert_eq!(s.numerical_faults, 0);
-    (s, rows)
 }
 
 /// Start (s) of the first segment of `stage`.
@@ -90,7 +82,7 @@ fn capacity_matches_its_closed_forms_at_the_rated_clamp_force() {
 #[test]
 fn overloaded_open_loop_dual_lift_slips_and_drops_the_box() {
     let sc = case("case3-dual-open-loop", false, OVERLOADED_KG);
-    let (s, rows) = go(&sc);
+    let (s, rows) = run_rows(&sc);
     assert_eq!(s.grasp_model, "finite");
     let c_start = stage_start(&sc, "C");
     let first_slip = s.first_slip_s.expect("the overloaded jaws slip");
@@ -115,7 +107,7 @@ fn overloaded_open_loop_dual_lift_slips_and_drops_the_box() {
         "a jaw took the box again"
     );
     // Deterministic: the same run again gives the same summary.
-    let (again, _) = go(&sc);
+    let (again, _) = run_rows(&sc);
     assert_eq!(format!("{s:?}"), format!("{again:?}"));
 }
 
@@ -124,7 +116,7 @@ fn rigid_grasp_switch_holds_the_overloaded_box() {
     // Lim's assumption (i): the same overloaded lift never slips; the load fraction the
     // rigid grasp demanded is still reported (far beyond the friction limits).
     let sc = case("case3-dual-open-loop", true, OVERLOADED_KG);
-    let (s, _) = go(&sc);
+    let (s, _) = run_rows(&sc);
     assert_eq!(s.grasp_model, "rigid");
     assert_eq!((s.slips, s.drops), (0, 0));
     assert!(s.first_slip_s.is_none());
@@ -144,7 +136,7 @@ fn nominal_closed_loop_lift_does_not_slip() {
         .rposition(|s| s.stage == "C")
         .expect("stage C");
     sc.segments.truncate(end + 1);
-    let (s, rows) = go(&sc);
+    let (s, rows) = run_rows(&sc);
     println!("peak grip load (left, right): {:?}", s.peak_grip_load);
     assert_eq!((s.slips, s.drops), (0, 0), "{s:?}");
     assert!(rows.iter().all(|r| r.slipping == [0.0, 0.0]));

@@ -307,7 +307,7 @@ impl Constraint {
 /// from where the handle (`handle_m`, object frame) was taken, and lets go when it exceeds
 /// the travel; an episode is reported ([`GripState::slipping`], counted in `slips`) once it
 /// has slid [`SLIP_NOTICE_M`] or turned [`SLIP_NOTICE_RAD`]. `tool`, `object`:
-/// world poses after the step. Returns whether the grasp was lost in this step.
+/// world poses after the step.
 pub(super) fn slip_stage(
     a: &mut ArmState,
     out: &GripOut,
@@ -315,13 +315,13 @@ pub(super) fn slip_stage(
     handle_m: &Vector3<f64>,
     tool: &Isometry3<f64>,
     object: &Isometry3<f64>,
-) -> bool {
+) {
     a.grip.load_fraction = if a.holding { out.load_fraction } else { 0.0 };
     a.grip.sliding = a.holding && out.slipping;
     if !a.grip.sliding {
         a.grip.slipping = false;
         a.grip.episode = [0.0; 2];
-        return false;
+        return;
     }
     // δ: the tool's pose in the desired (grasp) frame, jaw-frame coordinates.
     let delta = a.grasp_rel.inverse() * (object.inverse() * tool);
@@ -349,7 +349,5 @@ pub(super) fn slip_stage(
         a.grip.sliding = false;
         a.grip.lost = true;
         a.grip.drops += 1;
-        return true;
     }
-    false
 }

@@ -91,9 +91,11 @@ export function waterText(c) {
   return `${c.speed_m_s.toFixed(2)} m/s → ${Math.round(c.heading_deg)}°`;
 }
 
-/** `near_singularity:left` → "near singularity (left)"; `near_joint_limit:right:3` → "… joint 4". */
+/** `near_singularity:left` → "near singularity (left)"; `near_joint_limit:right:3` → "… joint 4";
+ *  `slip:left` → "load slipping in jaw (left)". */
 export function describeWarning(w) {
   const [kind, arm, joint] = w.split(':');
+  if (kind === 'slip') return `load slipping in jaw (${arm})`;
   const k = kind.replaceAll('_', ' ');
   if (joint !== undefined && /^\d+$/.test(joint)) return `${k} (${arm} joint ${+joint + 1})`;
   return arm ? `${k} (${arm})` : k;

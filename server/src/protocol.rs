@@ -447,6 +447,11 @@ pub struct ArmFrame {
     pub contact_torque_nm: [f64; 3],
     /// Relief valve open, per actuator.
     pub relief_open: [bool; 6],
+    /// The jaw's load fraction against its static friction limits (0 when not holding; ≥ 1
+    /// slips; see docs/physics.md "Grasp and the dynamic case studies").
+    pub grip_load: f64,
+    /// The bar is slipping in the jaw.
+    pub slipping: bool,
     /// What this jaw would grasp if it closed now (`handle-0`, `handle-1`, `valve`, `stab`),
     /// or `null`: the page's capture cue.
     pub capture: Option<&'static str>,
@@ -500,7 +505,8 @@ pub struct StateFrame {
     pub internal_torque_nm: [f64; 3],
     /// Relief-valve openings since reset (overload events).
     pub relief_events: u64,
-    /// Active warnings: `near_singularity:left`, `near_joint_limit:right:3`, `relief:left:2`, …
+    /// Active warnings: `near_singularity:left`, `near_joint_limit:right:3`, `relief:left:2`,
+    /// `slip:left`, …
     pub warnings: Vec<String>,
     /// Active faults, as instructors set them (labels, see [`fault_label`]); neither a fault
     /// drill's hidden fault nor a silent fault (`"silent": true` on injection) is listed.

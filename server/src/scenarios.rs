@@ -65,6 +65,16 @@ pub struct ScenarioSummary {
     pub numerical_faults: u64,
     /// CSV rows written (one per 10 ms).
     pub rows: usize,
+    /// The grasp model of the run: `rigid` (Lim's assumption (i), every case study) or
+    /// `finite` (the jaws' friction grip).
+    pub grasp_model: String,
+    /// Highest load fraction of each jaw (left, right) against its static friction limits
+    /// (> 1: a finite grip would have slipped).
+    pub peak_grip_load: [f64; 2],
+    /// Slips and grasps lost by slipping, both jaws (0 with the rigid grasp).
+    pub slips: u64,
+    /// Grasps lost by slipping.
+    pub drops: u64,
 }
 
 /// (name, description) of every scenario.
@@ -140,6 +150,10 @@ pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioErr
             },
             numerical_faults: s.numerical_faults,
             rows,
+            grasp_model: s.grasp_model.to_string(),
+            peak_grip_load: s.peak_grip_load,
+            slips: s.slips,
+            drops: s.drops,
         },
         text,
     ))

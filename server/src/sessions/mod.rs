@@ -186,6 +186,8 @@ pub struct Live {
     relief_recorded: u64,
     /// Grasp state at the last record row (events on change).
     last_grasp: GraspState,
+    /// Per arm: slip onsets and grasps lost by slipping already recorded (`slip`/`drop` events).
+    grip_recorded: [(u64, u64); 2],
     /// Both jaws are driven open until this simulated time (release/drop).
     release_until_s: f64,
     /// Redundancy resolvers for Cartesian mode, one per arm (preallocated).
@@ -337,6 +339,7 @@ impl Live {
             kin: [KinData::new(&models[0]), KinData::new(&models[1])],
             relief_recorded: 0,
             last_grasp: GraspState::Free,
+            grip_recorded: [(0, 0); 2],
             release_until_s: 0.0,
             redundancy: [
                 Redundancy::new(&models[0], RedundancyParams::default()),
@@ -621,6 +624,7 @@ impl Live {
         self.input.object_velocity = [0.0; 6];
         self.cartesian = [[0.0; 6]; 2];
         self.relief_recorded = 0;
+        self.grip_recorded = [(0, 0); 2];
         self.release_until_s = 0.0;
         self.start_attempt();
     }

@@ -156,6 +156,11 @@ pub struct Scene {
     /// or `"air"`.
     #[serde(default)]
     pub environment: crate::sim::Medium,
+    /// The jaws' grasp: `false` (the default), their finite friction grip, which slips and can
+    /// drop the box ([`crate::grasp::GripParams`]); `true`, Lim's rigid grasp (§3.5.2.1
+    /// assumption (i)). Fixed for the attempt (the replay rebuilds it from the exercise).
+    #[serde(default)]
+    pub rigid_grasp: bool,
 }
 
 /// A floating marker.
@@ -381,6 +386,7 @@ impl ExerciseSpec {
         if self.scene.panel {
             p = p.with_panel(crate::panel::PanelParams::standard());
         }
+        p.rigid_grasp = self.scene.rigid_grasp;
         Ok(p)
     }
 

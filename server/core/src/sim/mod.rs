@@ -35,7 +35,9 @@
 //!
 //! # Simplifications (not modelled)
 //! * The jaw is a flow-limited actuator (opening rate ∝ command, Table 1-1 speed) with a clamp
-//!   force, not a chamber model; the grasp is rigid whatever the clamp force (no slip).
+//!   force, not a chamber model; its grip on a handle is rigid up to the friction limits of
+//!   the clamp force and slips beyond them (`constraint.rs`, "Finite grip"), or rigid
+//!   whatever the load with [`SimParams::rigid_grasp`].
 //! * Contact is jaw–handle only (capture radius) and box–seabed (corner penalty springs with
 //!   friction); links do not collide with the object, the seabed or each other. With a panel
 //!   ([`SimParams::panel`]) the jaws also take its valve T-bar and hot stab, whose loads act
@@ -67,6 +69,7 @@ mod setup;
 pub mod water;
 
 pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
+pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
 pub use water::{Current, Environment, Medium, Water};
 
@@ -75,7 +78,7 @@ use nalgebra::{Isometry3, Matrix6, Vector3};
 use crate::Error;
 use crate::control::{self, ControlParams};
 use crate::dynamics::{self, DynData, Inertials};
-use crate::grasp::{GraspState, ObjectParams};
+use crate::grasp::{GraspState, GripParams, ObjectParams};
 use crate::hydraulics::{Faults, HydraulicParams, N_ACT};
 use crate::kinematics::{self, KinData};
 use crate::model::Model;
@@ -177,6 +180,12 @@ pub struct SimParams {
     /// The intervention panel (valve, hot stab): `None` (the default) leaves the simulation
     /// exactly as without it.
     pub panel: Option<PanelParams>,
+    /// Rigid grasp (Lim §3.5.2.1 assumption (i): no slip whatever the load): false in
+    /// [`SimParams::case_study`] (training: the jaws' grip is finite, [`GripParams`]); the
+    /// case-study scenarios set it true, the thesis's setting.
+    pub rigid_grasp: bool,
+    /// The jaws' friction grip on the handles (used unless `rigid_grasp`).
+    pub grip: GripParams,
 }
 
 /// Control method (Lim §4.1 "control mode").
@@ -261,6 +270,8 @@ pub struct ArmState {
     pub relief_open: [bool; N_ACT],
     /// Rising edges of relief opening, all actuators, since reset.
     pub relief_events: u64,
+    /// The jaw's grip on the handle: load fraction, slip, slip and drop counts.
+    pub grip: GripState,
     /// Joint-servo integrated reference (rad).
     servo_ref: [f64; N_ACT],
     servo_active: bool,
@@ -351,6 +362,7 @@ impl Simulation {
             contact_wrench: [0.0; 6],
             relief_open: [false; N_ACT],
             relief_events: 0,
+            grip: GripState::default(),
             servo_ref: [0.0; N_ACT],
             servo_active: false,
         };
@@ -406,6 +418,7 @@ impl Simulation {
             a.contact_wrench = [0.0; 6];
             a.relief_open = [false; N_ACT];
             a.relief_events = 0;
+            a.grip = GripState::default();
             a.servo_active = false;
             a.servo_ref = a.q;
             // Pressures that hold the arm still: A_I P_I − A_O P_O = G/Ĵ, mean half supply.

@@ -8,7 +8,7 @@ use super::{ArmParams, Environment, SimParams, StepParams};
 use crate::Error;
 use crate::control::ControlParams;
 use crate::dynamics::Inertials;
-use crate::grasp::ObjectParams;
+use crate::grasp::{GripParams, ObjectParams};
 use crate::hydraulics::{Faults, HydraulicParams, N_ACT};
 use crate::model::Model;
 use crate::panel::PanelParams;
@@ -106,7 +106,10 @@ impl SimParams {
 
     /// The case-study setup: two Magnum arms ([`HydraulicParams::magnum`], [`Inertials::magnum`]),
     /// bases per [`LEFT_BASE_Y_M`], the 50 kg box at [`OBJECT_XY_M`] on the seabed at
-    /// [`SEABED_Z_M`], default step and control parameters.
+    /// [`SEABED_Z_M`], default step and control parameters, the jaws' finite grip
+    /// ([`GripParams::default`]) and the closed loop's moment-free load share
+    /// ([`ControlParams::moment_free_share`]); the case-study scenarios switch both back to the
+    /// thesis's rigid grasp and equal share W⁺.
     pub fn case_study(left: &Model, right: &Model) -> Result<SimParams, Error> {
         let arm = |m: &Model, y: f64| -> Result<ArmParams, Error> {
             let inertials = Inertials::magnum(m)?;
@@ -123,8 +126,14 @@ impl SimParams {
             arms: [arm(left, LEFT_BASE_Y_M)?, arm(right, 0.0)?],
             object: ObjectParams::case_study_box(OBJECT_XY_M[0], OBJECT_XY_M[1], SEABED_Z_M),
             step: StepParams::default(),
-            control: ControlParams::default(),
+            // Training: the jaws' finite grip, and the closed loop's share that it can carry.
+            control: ControlParams {
+                moment_free_share: true,
+                ..ControlParams::default()
+            },
             panel: None,
+            rigid_grasp: false,
+            grip: GripParams::default(),
         })
     }
 

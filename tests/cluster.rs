@@ -495,7 +495,7 @@ async fn three_replicas_behind_haproxy() {
     // Their running attempts are interrupted too, in the shared records.
     let attempts = common::get_json(&format!("{}/api/attempts?group=cluster", direct[2])).await;
     let mut seen = 0;
-    for a in attempts.as_array().unwrap() {
+    for a in attempts["attempts"].as_array().unwrap() {
         if victim_ids.contains(a["session"].as_str().unwrap()) {
             seen += 1;
             assert_eq!(a["outcome"], "interrupted", "{a}");

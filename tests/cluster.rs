@@ -27,7 +27,7 @@ use std::time::{Duration, Instant};
 
 use common::{TEACHER, next_of};
 use futures_util::StreamExt;
-use records_common::{Binary, fresh_postgres_database, temp_dir};
+use records_common::{Binary, fresh_postgres_database, metric, temp_dir};
 use seaarms::cluster::{HEARTBEAT, HEARTBEAT_TIMEOUT};
 use serde_json::{Value, json};
 
@@ -367,31 +367,20 @@ async fn three_replicas_behind_haproxy() {
         .find(|n| n != holder)
         .unwrap();
     let other_addr = &addrs[&other];
-    let r = http
-        .get(format!(
-            "http://{other_addr}{}/api/sessions/{}",
-            c0["base"].as_str().unwrap(),
-            c0["id"].as_str().unwrap()
-        ))
-        .bearer_auth(TEACHER)
-        .send()
-        .await
-        .unwrap();
-    assert_eq!(r.status().as_u16(), 421);
-    let body: Value = r.json().await.unwrap();
+    let id0 = c0["id"].as_str().unwrap();
+    let misdirected = |path: String| {
+        let http = http.clone();
+        async move {
+            let r = http.get(path).bearer_auth(TEACHER).send().await.unwrap();
+            assert_eq!(r.status().as_u16(), 421);
+            r.json::<Value>().await.unwrap()
+        }
+    };
+    let base0 = c0["base"].as_str().unwrap();
+    let body = misdirected(format!("http://{other_addr}{base0}/api/sessions/{id0}")).await;
     assert_eq!(body["detail"]["replica"], holder, "{body}");
     // … and its bare id on a replica that does not hold it: 421 from the directory.
-    let r = http
-        .get(format!(
-            "http://{other_addr}/api/sessions/{}",
-            c0["id"].as_str().unwrap()
-        ))
-        .bearer_auth(TEACHER)
-        .send()
-        .await
-        .unwrap();
-    assert_eq!(r.status().as_u16(), 421);
-    let body: Value = r.json().await.unwrap();
+    let body = misdirected(format!("http://{other_addr}/api/sessions/{id0}")).await;
     assert_eq!(body["detail"]["base"], format!("/r/{holder}"), "{body}");
 
     // The instructor's list on any replica (and through the proxy) has all 60 live.
@@ -591,20 +580,7 @@ async fn sigterm_drains_then_interrupts() {
         .unwrap();
     next_of(&mut ws, "hello", Duration::from_secs(10)).await;
     let http = reqwest::Client::new();
-    let metric = |text: &str| {
-        text.lines()
-            .find_map(|l| l.strip_prefix("seaarms_draining "))
-            .map(|v| v.trim().to_string())
-    };
-    let m = http
-        .get(format!("{}/metrics", b.base))
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
-    assert_eq!(metric(&m).as_deref(), Some("0"));
+    assert_eq!(metric(&b.base, "seaarms_draining").await, 0);
 
     b.signal("-TERM");
     let signalled = Instant::now();
@@ -635,15 +611,7 @@ async fn sigterm_drains_then_interrupts() {
         body["error"].as_str().unwrap().contains("draining"),
         "{body}"
     );
-    let m = http
-        .get(format!("{}/metrics", b.base))
-        .send()
-        .await
-        .unwrap()
-        .text()
-        .await
-        .unwrap();
-    assert_eq!(metric(&m).as_deref(), Some("1"));
+    assert_eq!(metric(&b.base, "seaarms_draining").await, 1);
     // Frames queued before the signal come first: compare the first and the last of 1 s (a
     // debug build steps far slower than real time, so only "it advances" is asked).
     let state_t = |v: Value| v["t"].as_f64().unwrap();

@@ -55,18 +55,9 @@ pub struct LoadReport {
     pub observers: usize,
     /// Measurement time (s).
     pub seconds: f64,
-    /// Frames received in all.
-    pub frames: u64,
-    /// Frame interval percentiles (ms), all clients.
-    pub frame_interval_ms_p50: f64,
-    /// 99th percentile.
-    pub frame_interval_ms_p99: f64,
-    /// Input-to-state latency percentiles (ms), trainees.
-    pub latency_ms_p50: f64,
-    /// 99th percentile.
-    pub latency_ms_p99: f64,
-    /// Frames skipped (gaps in frame sequence numbers).
-    pub skipped_frames: u64,
+    /// What the clients saw of the frames (all clients; latencies: trainees).
+    #[serde(flatten)]
+    pub figures: FrameFigures,
     /// Errors (first few listed).
     pub errors: usize,
     /// Up to 10 error messages.
@@ -394,12 +385,6 @@ pub async fn run(args: LoadArgs, instructor_token: Option<String>) -> anyhow::Re
         sessions: args.sessions,
         observers: args.observers,
         seconds: args.seconds,
-        frames: all.frames,
-        frame_interval_ms_p50: all.frame_interval_ms_p50,
-        frame_interval_ms_p99: all.frame_interval_ms_p99,
-        latency_ms_p50: all.latency_ms_p50,
-        latency_ms_p99: all.latency_ms_p99,
-        skipped_frames: all.skipped_frames,
         errors: all.errors.len(),
         error_samples: all.errors.iter().take(10).cloned().collect(),
         step_overruns: overruns,
@@ -408,6 +393,7 @@ pub async fn run(args: LoadArgs, instructor_token: Option<String>) -> anyhow::Re
             && (args.sessions == 0 || all.latency_ms_p99 <= 20.0)
             && all.errors.is_empty()
             && overruns == 0,
+        figures: all,
     })
 }
 
@@ -426,7 +412,8 @@ pub struct FrameFigures {
     pub latency_ms_p99: f64,
     /// Frames a client skipped (latest state wins).
     pub skipped_frames: u64,
-    /// What went wrong (connects, receives, server errors, closes).
+    /// What went wrong (connects, receives, server errors, closes); the report counts them.
+    #[serde(skip)]
     pub errors: Vec<String>,
 }
 

@@ -1,7 +1,8 @@
 -- Several replicas sharing one database (issue 18; docs/api.md "Replicas"). Portable SQL, as
 -- 0001. A replica writes its own row and its own sessions' rows every heartbeat; any replica
 -- declares one whose heartbeat is older than the timeout lost (lost_unix), marks its sessions
--- and running attempts interrupted and deletes its directory rows. In single-machine (SQLite)
+-- and running attempts interrupted and deletes its directory rows; a replica that stops
+-- gracefully sets its own lost_unix (gone) and deletes its rows. In single-machine (SQLite)
 -- mode both tables stay empty.
 
 CREATE TABLE replicas (

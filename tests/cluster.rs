@@ -556,6 +556,23 @@ async fn three_replicas_behind_haproxy() {
     );
     let (st, c) = common::create_at(&proxy, json!({})).await;
     assert_eq!(st, 503, "every survivor is full: {c}");
+
+    // A graceful stop (SIGTERM, no drain): its sessions end recorded, it leaves the
+    // directory, and the other replica lists them ended at once (not live, not lost).
+    let on_2: HashSet<String> = list(&direct[2])
+        .await
+        .iter()
+        .filter(|s| s["status"] == "live" && s["replica"] == "seaarms-2")
+        .map(|s| s["id"].as_str().unwrap().to_string())
+        .collect();
+    assert_eq!(on_2.len(), CAPS[2]);
+    replicas[2].take().unwrap().stop();
+    let after_stop = list(&direct[0]).await;
+    for id in &on_2 {
+        let s = after_stop.iter().find(|s| s["id"] == id.as_str()).unwrap();
+        assert_eq!(s["status"], "ended", "{s}");
+        assert_eq!(s["end_reason"], "server shutdown", "{s}");
+    }
     drop(replicas);
     for d in dirs.iter().chain([&cfg_dir]) {
         let _ = std::fs::remove_dir_all(d);

@@ -63,6 +63,10 @@ pub async fn run(
         .cluster
         .multi
         .then(|| tokio::spawn(cluster::heartbeat_loop(state.clone())));
+    let leaving = state
+        .cluster
+        .multi
+        .then(|| (state.db.clone(), state.cluster.name.clone()));
     let expiry = tokio::spawn({
         let sessions = sessions.clone();
         async move {
@@ -88,5 +92,12 @@ pub async fn run(
         h.abort();
     }
     let _ = tokio::task::spawn_blocking(move || sessions.shutdown()).await;
+    // Every session has ended and is recorded: out of the directory now, not declared lost
+    // by the others later.
+    if let Some((db, name)) = leaving {
+        if let Err(e) = db.leave(&name, sessions::unix_now()).await {
+            tracing::warn!("leaving the session directory: {e:#}");
+        }
+    }
     result
 }

@@ -144,6 +144,27 @@ impl Db {
         .await
     }
 
+    /// A replica that stopped gracefully (its sessions ended and recorded): its directory
+    /// rows go and its row is marked gone (`lost_unix`), so no other replica declares it lost.
+    pub async fn leave(&self, me: &str, now_unix: f64) -> Result<()> {
+        let me = me.to_string();
+        self.run(move |pool| async move {
+            let mut tx = pool.begin().await?;
+            sqlx::query("DELETE FROM session_directory WHERE replica = $1")
+                .bind(me.as_str())
+                .execute(&mut *tx)
+                .await?;
+            sqlx::query("UPDATE replicas SET lost_unix = $1, live_sessions = 0 WHERE name = $2")
+                .bind(now_unix)
+                .bind(me.as_str())
+                .execute(&mut *tx)
+                .await?;
+            tx.commit().await?;
+            Ok(())
+        })
+        .await
+    }
+
     /// Start-up of replica `me`: whatever its previous run left in the directory (a crash,
     /// a restart quicker than the heartbeat timeout) is interrupted, as a single server's
     /// start-up marks its own ([`super::INTERRUPTED`]). Returns (sessions, attempts) marked.

@@ -18,6 +18,7 @@ const FAULT_DEFAULTS = { supply_drop: 3.0e6, stuck_valve: 0.5, leak: 5e-10, air:
 let token = sessionStorage.getItem(TOKEN_KEY) || '';
 let sessions = [];
 let observed = null; // session id
+let observedBase = ''; // path prefix of the observed session's replica ('' on a single server)
 let conn = null;
 let view = null;
 let status = null;
@@ -134,9 +135,11 @@ function observe(id) {
   const who = sessions.find((s) => s.id === id);
   const name = who?.trainee || who?.label;
   $('obs-title').textContent = name ? `${name}${who.group ? ` (${who.group})` : ''} · session ${id}` : `session ${id}`;
-  $('act-csv').href = `/api/sessions/${encodeURIComponent(id)}/log.csv?token=${encodeURIComponent(token)}`;
+  // another replica's session: its URLs carry that replica's prefix (docs/api.md "Replicas")
+  observedBase = who?.base || '';
+  $('act-csv').href = `${observedBase}/api/sessions/${encodeURIComponent(id)}/log.csv?token=${encodeURIComponent(token)}`;
   conn = new Connection({
-    role: 'observer', sessionId: id, token,
+    role: 'observer', sessionId: id, token, base: observedBase,
     onHello(h) { view.setHello(h); status.role(h.role); if (h.scenario) $('act-scenario').value = h.scenario; },
     onState(s) { view.setState(s); },
     onPong(ms) { status.latency(ms); },
@@ -150,7 +153,7 @@ function observe(id) {
 /** POST /api/sessions/{id}/actions; resolves {ok, error}. */
 async function postAction(id, body) {
   try {
-    const r = await fetch(`/api/sessions/${encodeURIComponent(id)}/actions`, {
+    const r = await fetch(`${observedBase}/api/sessions/${encodeURIComponent(id)}/actions`, {
       method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${token}` }, body: JSON.stringify(body),
     });
     let b = null;

@@ -258,6 +258,9 @@ pub struct Hello {
     pub exercise: Option<Arc<ExerciseSpec>>,
     /// What to draw besides the arms and the box.
     pub scene: SceneOut,
+    /// The replica serving this connection (live sessions; absent in replays).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replica: Option<String>,
 }
 
 /// What the page draws besides the arms and the box: the box's handles, the exercise's

@@ -117,10 +117,22 @@ fn single_arm_sweeps_reach_the_boundary() {
             .enumerate()
             .max_by(|a, b| a.1.1.total_cmp(&b.1.1))
             .expect("present");
-        println!("{x}: Z from {:.2} to {:.2} m, Yoshikawa maximum {:.4} at Z {:.2} m", w[0].0, w[w.len() - 1].0, peak.1, peak.0);
+        println!(
+            "{x}: Z from {:.2} to {:.2} m, Yoshikawa maximum {:.4} at Z {:.2} m",
+            w[0].0,
+            w[w.len() - 1].0,
+            peak.1,
+            peak.0
+        );
         if x == "x=1.40" || x == "x=1.20" {
-            assert!(ip > 0 && ip + 1 < w.len(), "{x}: maximum at an end of the sweep");
-            assert!(w[w.len() - 1].1 < 0.95 * peak.1, "{x}: no fall towards the boundary");
+            assert!(
+                ip > 0 && ip + 1 < w.len(),
+                "{x}: maximum at an end of the sweep"
+            );
+            assert!(
+                w[w.len() - 1].1 < 0.95 * peak.1,
+                "{x}: no fall towards the boundary"
+            );
         }
     }
 }
@@ -165,7 +177,10 @@ fn pitch_yaw_rows_are_consistent() {
         let (first, last) = (w[0], w[w.len() - 1]);
         assert!(last.0 >= 120.0, "{point}: {w:?}");
         assert!(at90 < last.1, "{point} pitch trend: {w:?}");
-        assert!(first.0 == 90.0 || first.1 < at90, "{point} pitch trend: {w:?}");
+        assert!(
+            first.0 == 90.0 || first.1 < at90,
+            "{point} pitch trend: {w:?}"
+        );
     }
     for r in single.iter().chain(&dual).filter(|r| !r.reachable) {
         assert!(r.q.is_none() && r.single.is_none() && r.dual.is_none());

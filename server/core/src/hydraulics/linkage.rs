@@ -17,9 +17,116 @@ pub enum Linkage {
         /// φ at q = 0 (rad).
         phi0_rad: f64,
     },
+    /// A cylinder driving the joint through a four-bar ("dog-bone") linkage, as excavator
+    /// buckets and heavy-duty manipulator wrists use to turn a joint through 120°–180° with a
+    /// nearly constant lever: a rocker pivoted on the parent link at `rocker_pivot_m` (length
+    /// `rocker_m`), a dog-bone link (`dogbone_m`) from the rocker's tip P to a crank pin on the
+    /// child link at radius `crank_m`, angle `crank_angle_rad` + q, and the cylinder from the
+    /// parent pin `cylinder_pin_m` to P. Coordinates are in the plane normal to the joint axis,
+    /// fixed to the parent link, origin on the axis (m). P is the intersection of the circle of
+    /// radius `rocker_m` about the pivot with the circle of radius `dogbone_m` about the crank
+    /// pin, on the side `branch` (±1) of the pivot-to-pin line. x = |P − C|, and Ĵ = dx/dq in
+    /// closed form by differentiating both circle constraints:
+    /// Ṗ = λ·(P − R)^⊥ with λ = ((P − B)·Ḃ) / ((P − B)·(P − R)^⊥), Ḃ = B^⊥, Ĵ = (P − C)·Ṗ / x.
+    /// The designs in [`crate::hydraulics::HydraulicParams::magnum`] keep both transmission
+    /// angles away from the toggle positions over the joint range, so the solve is regular
+    /// there; outside it (an end stop's few mrad) the circle intersection is clamped, never NaN.
+    FourBar {
+        /// Crank radius on the child link (m).
+        crank_m: f64,
+        /// Angle of the crank pin at q = 0 in the parent frame (rad).
+        crank_angle_rad: f64,
+        /// Rocker pivot on the parent link (m).
+        rocker_pivot_m: [f64; 2],
+        /// Rocker length, pivot to P (m).
+        rocker_m: f64,
+        /// Dog-bone length, P to the crank pin (m).
+        dogbone_m: f64,
+        /// Cylinder's parent-side pin (m).
+        cylinder_pin_m: [f64; 2],
+        /// Which intersection of the two circles P is (±1).
+        branch: f64,
+    },
     /// A rotary actuator (vane, rack-and-pinion or motor): x = q, Ĵ = 1; "area" is the
     /// volumetric displacement (m³/rad).
     Rotary,
+}
+
+/// The rotation of `v` by +90° in its plane.
+fn perp(v: [f64; 2]) -> [f64; 2] {
+    [-v[1], v[0]]
+}
+
+fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+
+fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+
+/// Smallest |denominator| of the four-bar's rate solve (m²), a guard against division by zero
+/// at a toggle position (never reached inside a design's range).
+const TOGGLE_GUARD_M2: f64 = 1e-12;
+
+/// Points of a [`Linkage::FourBar`] at joint angle `q`: crank pin B and rocker tip P (m).
+#[allow(clippy::too_many_arguments)]
+fn four_bar_points(
+    crank_m: f64,
+    crank_angle_rad: f64,
+    pivot: [f64; 2],
+    rocker_m: f64,
+    dogbone_m: f64,
+    branch: f64,
+    q: f64,
+) -> ([f64; 2], [f64; 2]) {
+    let (s, c) = (crank_angle_rad + q).sin_cos();
+    let b = [crank_m * c, crank_m * s];
+    let rb = sub(b, pivot);
+    let d = dot(rb, rb).sqrt().max(1e-12);
+    // Law of cosines in the triangle pivot–P–B for the angle at the pivot.
+    let cos_delta = ((rocker_m * rocker_m + d * d - dogbone_m * dogbone_m) / (2.0 * rocker_m * d))
+        .clamp(-1.0, 1.0);
+    let delta = branch.signum() * cos_delta.acos();
+    let theta = rb[1].atan2(rb[0]) + delta;
+    let p = [
+        pivot[0] + rocker_m * theta.cos(),
+        pivot[1] + rocker_m * theta.sin(),
+    ];
+    (b, p)
+}
+
+/// Rocker-side and crank-side transmission quality of a [`Linkage::FourBar`] at `q`: |sin|
+/// of the angle between the dog-bone and the rocker, and between the dog-bone and the crank's
+/// direction of motion's normal (1 = ideal, 0 = toggle). Used by the design checks.
+pub fn four_bar_transmission(link: &Linkage, q: f64) -> Option<(f64, f64)> {
+    match *link {
+        Linkage::FourBar {
+            crank_m,
+            crank_angle_rad,
+            rocker_pivot_m,
+            rocker_m,
+            dogbone_m,
+            branch,
+            ..
+        } => {
+            let (b, p) = four_bar_points(
+                crank_m,
+                crank_angle_rad,
+                rocker_pivot_m,
+                rocker_m,
+                dogbone_m,
+                branch,
+                q,
+            );
+            let (bp, rp) = (sub(p, b), sub(p, rocker_pivot_m));
+            let sin_between = |u: [f64; 2], v: [f64; 2]| {
+                (u[0] * v[1] - u[1] * v[0]).abs() / (dot(u, u) * dot(v, v)).sqrt().max(1e-24)
+            };
+            Some((sin_between(bp, rp), sin_between(bp, b)))
+        }
+        _ => None,
+    }
 }
 
 impl Linkage {
@@ -36,6 +143,37 @@ impl Linkage {
                     .max(1e-12)
                     .sqrt();
                 (l, r_a_m * r_b_m * s / l)
+            }
+            Linkage::FourBar {
+                crank_m,
+                crank_angle_rad,
+                rocker_pivot_m,
+                rocker_m,
+                dogbone_m,
+                cylinder_pin_m,
+                branch,
+            } => {
+                let (b, p) = four_bar_points(
+                    crank_m,
+                    crank_angle_rad,
+                    rocker_pivot_m,
+                    rocker_m,
+                    dogbone_m,
+                    branch,
+                    q,
+                );
+                let (pb, pr) = (sub(p, b), perp(sub(p, rocker_pivot_m)));
+                let den = dot(pb, pr);
+                let den = if den.abs() < TOGGLE_GUARD_M2 {
+                    TOGGLE_GUARD_M2.copysign(den)
+                } else {
+                    den
+                };
+                let lambda = dot(pb, perp(b)) / den;
+                let pdot = [lambda * pr[0], lambda * pr[1]];
+                let pc = sub(p, cylinder_pin_m);
+                let x = dot(pc, pc).sqrt().max(1e-12);
+                (x, dot(pc, pdot) / x)
             }
             Linkage::Rotary => (q, 1.0),
         }

@@ -24,7 +24,7 @@ use seaarms_core::sim::{Arm, Input, SimParams, Simulation};
 /// (the middles of their ranges), pitch, yaw, rotate 0.
 const NEUTRAL: [f64; 6] = [
     0.0,
-    0.785_398_163_397_448_3,
+    std::f64::consts::FRAC_PI_4,
     -1.134_464_013_796_314,
     0.0,
     0.0,

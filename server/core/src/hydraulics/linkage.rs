@@ -206,4 +206,57 @@ mod tests {
         assert!((jh - 0.35 * 0.10 / x).abs() < 1e-15);
         assert_eq!(Linkage::Rotary.coordinate(0.7), (0.7, 1.0));
     }
+
+    /// The Magnum four-bar linkages: P satisfies both circle constraints (rocker and dog-bone
+    /// lengths), Ĵ equals a central difference of x(q) over the range ± 0.05 rad (the closed
+    /// form differentiates the constraints; this checks it independently), Ĵ > 0 (extending
+    /// the cylinder raises q), Ĵ_max/Ĵ_min ≤ 1.05 and both transmission |sin| ≥ 0.35.
+    #[test]
+    fn four_bar_lever_is_the_derivative_of_the_length() {
+        use crate::hydraulics::{FOUR_BAR_DESIGNS, magnum_four_bar};
+        let spans_deg = [90.0f64, 130.0, 115.0];
+        for (k, span) in spans_deg.iter().enumerate() {
+            let (lo, hi) = (-0.3, -0.3 + span.to_radians());
+            let link = magnum_four_bar(k, lo, hi);
+            let Linkage::FourBar {
+                crank_m,
+                crank_angle_rad,
+                rocker_pivot_m,
+                rocker_m,
+                dogbone_m,
+                branch,
+                ..
+            } = link
+            else {
+                panic!("four-bar expected");
+            };
+            let (mut jmin, mut jmax) = (f64::INFINITY, 0.0f64);
+            for i in 0..=200 {
+                let q = lo - 0.05 + (hi - lo + 0.1) * i as f64 / 200.0;
+                let (b, p) = four_bar_points(
+                    crank_m,
+                    crank_angle_rad,
+                    rocker_pivot_m,
+                    rocker_m,
+                    dogbone_m,
+                    branch,
+                    q,
+                );
+                let dist = |u: [f64; 2], v: [f64; 2]| dot(sub(u, v), sub(u, v)).sqrt();
+                assert!((dist(p, rocker_pivot_m) - rocker_m).abs() < 1e-12);
+                assert!((dist(p, b) - dogbone_m).abs() < 1e-12, "{k} {q}");
+                let step = 1e-6;
+                let (x, jh) = link.coordinate(q);
+                let fd = (link.coordinate(q + step).0 - link.coordinate(q - step).0) / (2.0 * step);
+                assert!((jh - fd).abs() < 1e-8, "{k} q {q}: {jh} vs {fd}");
+                assert!(x > 0.0 && jh > 0.0);
+                let (t1, t2) = four_bar_transmission(&link, q).expect("four-bar");
+                assert!(t1 >= 0.35 && t2 >= 0.35, "{k} q {q}: {t1} {t2}");
+                jmin = jmin.min(jh);
+                jmax = jmax.max(jh);
+            }
+            assert!(jmax / jmin <= 1.05, "{k}: {jmin}..{jmax}");
+            assert!((FOUR_BAR_DESIGNS[k][0] - (crank_angle_rad + lo)).abs() < 1e-12);
+        }
+    }
 }

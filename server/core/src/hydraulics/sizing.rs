@@ -26,7 +26,7 @@ pub const MAGNUM_TORQUE_FLOOR_NM: [f64; N_ACT] = [2000.0, 0.0, 0.0, 0.0, 600.0, 
 /// elbow (130°) and pitch (115°) cylinders: [crank angle at the joint's lower limit (rad),
 /// rocker pivot x, y, rocker, dog-bone, cylinder pin x, y, branch]. Found by a random search
 /// and hill climb (`tests/four_bar_design.rs`, ignored test `search_four_bar_designs`)
-/// minimizing Ĵ_max/Ĵ_min over the range ± 3° subject to both transmission angles ≥ 20.5°
+/// minimizing Ĵ_max/Ĵ_min over the range ± 0.05 rad subject to both transmission angles ≥ 20.5°
 /// (|sin| ≥ 0.35) and an extended cylinder ≤ 1.75 × its retracted length (a cylinder's dead
 /// length makes longer strokes impractical). Ĵ_max/Ĵ_min = 1.025/1.042/1.024.
 pub const FOUR_BAR_DESIGNS: [[f64; 8]; 3] = [

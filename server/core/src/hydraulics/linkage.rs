@@ -69,64 +69,63 @@ fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
 /// at a toggle position (never reached inside a design's range).
 const TOGGLE_GUARD_M2: f64 = 1e-12;
 
-/// Points of a [`Linkage::FourBar`] at joint angle `q`: crank pin B and rocker tip P (m).
-#[allow(clippy::too_many_arguments)]
-fn four_bar_points(
-    crank_m: f64,
-    crank_angle_rad: f64,
+/// The moving points of a [`Linkage::FourBar`] at one joint angle, with its fixed pins (m).
+struct FourBarPoints {
+    /// Crank pin B on the child link.
+    b: [f64; 2],
+    /// Rocker tip P (cylinder rod pin).
+    p: [f64; 2],
+    /// Rocker pivot R.
     pivot: [f64; 2],
-    rocker_m: f64,
-    dogbone_m: f64,
-    branch: f64,
-    q: f64,
-) -> ([f64; 2], [f64; 2]) {
+    /// Cylinder's parent pin C.
+    cylinder_pin: [f64; 2],
+}
+
+/// The points of `link` at joint angle `q` if it is a [`Linkage::FourBar`]: B on its circle
+/// about the axis, P where the rocker's and dog-bone's circles meet (law of cosines at the
+/// pivot, clamped so a pose just outside the linkage's reach stays finite).
+fn four_bar_points(link: &Linkage, q: f64) -> Option<FourBarPoints> {
+    let Linkage::FourBar {
+        crank_m,
+        crank_angle_rad,
+        rocker_pivot_m: pivot,
+        rocker_m,
+        dogbone_m,
+        cylinder_pin_m,
+        branch,
+    } = *link
+    else {
+        return None;
+    };
     let (s, c) = (crank_angle_rad + q).sin_cos();
     let b = [crank_m * c, crank_m * s];
     let rb = sub(b, pivot);
     let d = dot(rb, rb).sqrt().max(1e-12);
-    // Law of cosines in the triangle pivot–P–B for the angle at the pivot.
     let cos_delta = ((rocker_m * rocker_m + d * d - dogbone_m * dogbone_m) / (2.0 * rocker_m * d))
         .clamp(-1.0, 1.0);
-    let delta = branch.signum() * cos_delta.acos();
-    let theta = rb[1].atan2(rb[0]) + delta;
+    let theta = rb[1].atan2(rb[0]) + branch.signum() * cos_delta.acos();
     let p = [
         pivot[0] + rocker_m * theta.cos(),
         pivot[1] + rocker_m * theta.sin(),
     ];
-    (b, p)
+    Some(FourBarPoints {
+        b,
+        p,
+        pivot,
+        cylinder_pin: cylinder_pin_m,
+    })
 }
 
 /// Rocker-side and crank-side transmission quality of a [`Linkage::FourBar`] at `q`: |sin|
-/// of the angle between the dog-bone and the rocker, and between the dog-bone and the crank's
-/// direction of motion's normal (1 = ideal, 0 = toggle). Used by the design checks.
+/// of the angle between the dog-bone and the rocker, and between the dog-bone and the crank
+/// (1 = ideal, 0 = toggle); `None` for other linkages. Used by the design checks.
 pub fn four_bar_transmission(link: &Linkage, q: f64) -> Option<(f64, f64)> {
-    match *link {
-        Linkage::FourBar {
-            crank_m,
-            crank_angle_rad,
-            rocker_pivot_m,
-            rocker_m,
-            dogbone_m,
-            branch,
-            ..
-        } => {
-            let (b, p) = four_bar_points(
-                crank_m,
-                crank_angle_rad,
-                rocker_pivot_m,
-                rocker_m,
-                dogbone_m,
-                branch,
-                q,
-            );
-            let (bp, rp) = (sub(p, b), sub(p, rocker_pivot_m));
-            let sin_between = |u: [f64; 2], v: [f64; 2]| {
-                (u[0] * v[1] - u[1] * v[0]).abs() / (dot(u, u) * dot(v, v)).sqrt().max(1e-24)
-            };
-            Some((sin_between(bp, rp), sin_between(bp, b)))
-        }
-        _ => None,
-    }
+    let pts = four_bar_points(link, q)?;
+    let (bp, rp) = (sub(pts.p, pts.b), sub(pts.p, pts.pivot));
+    let sin_between = |u: [f64; 2], v: [f64; 2]| {
+        (u[0] * v[1] - u[1] * v[0]).abs() / (dot(u, u) * dot(v, v)).sqrt().max(1e-24)
+    };
+    Some((sin_between(bp, rp), sin_between(bp, pts.b)))
 }
 
 impl Linkage {
@@ -144,25 +143,17 @@ impl Linkage {
                     .sqrt();
                 (l, r_a_m * r_b_m * s / l)
             }
-            Linkage::FourBar {
-                crank_m,
-                crank_angle_rad,
-                rocker_pivot_m,
-                rocker_m,
-                dogbone_m,
-                cylinder_pin_m,
-                branch,
-            } => {
-                let (b, p) = four_bar_points(
-                    crank_m,
-                    crank_angle_rad,
-                    rocker_pivot_m,
-                    rocker_m,
-                    dogbone_m,
-                    branch,
-                    q,
-                );
-                let (pb, pr) = (sub(p, b), perp(sub(p, rocker_pivot_m)));
+            Linkage::FourBar { .. } => {
+                let Some(FourBarPoints {
+                    b,
+                    p,
+                    pivot,
+                    cylinder_pin,
+                }) = four_bar_points(self, q)
+                else {
+                    return (0.0, 0.0);
+                };
+                let (pb, pr) = (sub(p, b), perp(sub(p, pivot)));
                 let den = dot(pb, pr);
                 let den = if den.abs() < TOGGLE_GUARD_M2 {
                     TOGGLE_GUARD_M2.copysign(den)
@@ -171,7 +162,7 @@ impl Linkage {
                 };
                 let lambda = dot(pb, perp(b)) / den;
                 let pdot = [lambda * pr[0], lambda * pr[1]];
-                let pc = sub(p, cylinder_pin_m);
+                let pc = sub(p, cylinder_pin);
                 let x = dot(pc, pc).sqrt().max(1e-12);
                 (x, dot(pc, pdot) / x)
             }
@@ -219,12 +210,9 @@ mod tests {
             let (lo, hi) = (-0.3, -0.3 + span.to_radians());
             let link = magnum_four_bar(k, lo, hi);
             let Linkage::FourBar {
-                crank_m,
                 crank_angle_rad,
-                rocker_pivot_m,
                 rocker_m,
                 dogbone_m,
-                branch,
                 ..
             } = link
             else {
@@ -233,15 +221,8 @@ mod tests {
             let (mut jmin, mut jmax) = (f64::INFINITY, 0.0f64);
             for i in 0..=200 {
                 let q = lo - 0.05 + (hi - lo + 0.1) * i as f64 / 200.0;
-                let (b, p) = four_bar_points(
-                    crank_m,
-                    crank_angle_rad,
-                    rocker_pivot_m,
-                    rocker_m,
-                    dogbone_m,
-                    branch,
-                    q,
-                );
+                let pts = four_bar_points(&link, q).expect("four-bar");
+                let (b, p, rocker_pivot_m) = (pts.b, pts.p, pts.pivot);
                 let dist = |u: [f64; 2], v: [f64; 2]| dot(sub(u, v), sub(u, v)).sqrt();
                 assert!((dist(p, rocker_pivot_m) - rocker_m).abs() < 1e-12);
                 assert!((dist(p, b) - dogbone_m).abs() < 1e-12, "{k} {q}");

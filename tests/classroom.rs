@@ -20,18 +20,6 @@ async fn send(ws: &mut Ws, v: Value) {
     ws.send(Message::Text(v.to_string().into())).await.unwrap();
 }
 
-/// `POST /api/sessions/{id}/actions` with `token`; the status and the body text.
-async fn act(s: &Server, id: &str, token: &str, body: Value) -> (u16, String) {
-    let r = reqwest::Client::new()
-        .post(format!("{}/api/sessions/{id}/actions", s.base))
-        .bearer_auth(token)
-        .json(&body)
-        .send()
-        .await
-        .unwrap();
-    (r.status().as_u16(), r.text().await.unwrap())
-}
-
 /// GET `url` with `token`, as JSON.
 async fn get_as(url: String, token: &str) -> Value {
     reqwest::Client::new()

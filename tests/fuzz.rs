@@ -1068,6 +1068,15 @@ fn action_body() -> BoxedStrategy<J> {
                 ("value", Some(num(value))),
                 ("silent", silent.map(|b| J::Raw(b.to_string()))),
             ])),
+        (
+            prop_oneof![-1.0..3.0f64, -1.0e6..1.0e6f64],
+            prop_oneof![-400.0..400.0f64, -1.0e9..1.0e9f64],
+        )
+            .prop_map(move |(speed, heading)| obj(vec![
+                ("type", ty("set_current")),
+                ("speed_m_s", Some(num(speed))),
+                ("heading_deg", Some(num(heading))),
+            ])),
         "\\PC{0,600}"
             .prop_map(move |t| obj(vec![("type", ty("message")), ("text", Some(J::Str(t)))])),
     ]

@@ -4,13 +4,19 @@
 //! pose and velocity), seeking forward and back; and the input log stays under 50 KB per
 //! simulated minute. The reference is the recorded run itself (an independent run of the
 //! same `Live` driven by the autopilot), not the replay code.
+//!
+//! Issue 17's water current: a current the instructor sets mid-attempt is logged and
+//! replayed at the same step, and an attempt that starts with a current set (after a reset)
+//! carries it in its `init`; both re-simulate bit for bit.
 
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
 use seaarms::exercises::{Driver, EXERCISES, run_recorded};
-use seaarms::replay::{Replay, log};
-use seaarms::sessions::Live;
+use seaarms::replay::{Init, Replay, log};
+use seaarms::sessions::command::{ArmSticks, Command, StickInput};
+use seaarms::sessions::record::RecordMsg;
+use seaarms::sessions::{Live, Scenario};
 use seaarms_core::sim::Arm;
 
 fn magnum() -> [Arc<seaarms_core::Model>; 2] {
@@ -91,4 +97,89 @@ fn every_exercise_replays_bit_for_bit_at_20_random_times() {
             spec.id
         );
     }
+}
+
+/// Steps `n` times with both arms' swing and shoulder sticks at `stick`, recording states.
+fn drive(live: &mut Live, seq: &mut u64, stick: f64, n: u64, states: &mut BTreeMap<u64, Vec<u64>>) {
+    *seq += 1;
+    let mut axes = [0.0; 6];
+    axes[0] = stick;
+    axes[1] = -stick;
+    let input = StickInput {
+        seq: *seq,
+        arms: [ArmSticks { axes, grip: 0.0 }; 2],
+        ..StickInput::default()
+    };
+    live.apply(&Command::Input(input)).expect("input");
+    for _ in 0..n {
+        live.advance();
+        states.insert(live.sim().steps(), state_bits(live));
+    }
+}
+
+/// The running attempt's init and input log after `end_attempt`.
+fn records(live: &mut Live) -> (Init, Vec<u8>) {
+    let (mut init, mut inputs) = (None, Vec::new());
+    for msg in live.take_records(false) {
+        match msg {
+            RecordMsg::AttemptStarted(a) => {
+                init = Some(serde_json::from_value(a.init).expect("init"))
+            }
+            RecordMsg::AttemptInputs { bytes, .. } => inputs.extend(bytes),
+            _ => {}
+        }
+    }
+    (init.expect("an attempt started"), inputs)
+}
+
+fn check_replay(init: Init, inputs: &[u8], states: &BTreeMap<u64, Vec<u64>>, what: &str) {
+    let models = magnum();
+    let entries = log::decode(inputs).expect("log decodes");
+    let last = *states.keys().next_back().expect("steps");
+    let mut replay = Replay::new(&models, init, entries, last as f64 / 1000.0).expect("replayable");
+    // Forward, then back across the current changes (a fresh start from the init).
+    for step in [1, 700, 1201, 1999, last, 300, 1500] {
+        let step = step.min(last);
+        replay.seek_step(step).expect("seek");
+        assert!(
+            state_bits(replay.live()) == states[&step],
+            "{what}: the replayed state at step {step} differs from the recorded one"
+        );
+    }
+}
+
+#[test]
+fn a_current_set_mid_attempt_and_at_an_attempts_start_replays_bit_for_bit() {
+    let models = magnum();
+    let scenario = Scenario::resolve("reach-targets").expect("exercise");
+    let mut live = Live::new("t", &models, &scenario, None, None, 3).expect("live");
+    assert!(
+        live.sim().environment().water().is_some(),
+        "exercises run in water"
+    );
+    let (mut seq, mut states) = (0, BTreeMap::new());
+    // Attempt 1: still water, then a current mid-attempt, then another.
+    drive(&mut live, &mut seq, 0.6, 700, &mut states);
+    live.apply(&Command::current(0.8, 45.0).expect("current"))
+        .expect("set");
+    drive(&mut live, &mut seq, -0.4, 500, &mut states);
+    live.apply(&Command::current(1.5, -160.0).expect("current"))
+        .expect("set");
+    drive(&mut live, &mut seq, 0.3, 800, &mut states);
+    let moved = live.sim().environment().water().expect("water").current;
+    assert_eq!((moved.speed_m_s, moved.heading_deg), (1.5, 200.0));
+    live.end_attempt("abandoned");
+    let (init, inputs) = records(&mut live);
+    assert_eq!(init.current, None, "attempt 1 started in still water");
+    check_replay(init, &inputs, &states, "current set mid-attempt");
+
+    // Attempt 2 starts after a reset with the 1.5 m/s current still set: it is in the init.
+    live.reset();
+    let mut states = BTreeMap::new();
+    drive(&mut live, &mut seq, 0.5, 2000, &mut states);
+    live.end_attempt("abandoned");
+    let (init, inputs) = records(&mut live);
+    let c = init.current.expect("the init carries the current");
+    assert_eq!((c.speed_m_s, c.heading_deg), (1.5, 200.0));
+    check_replay(init, &inputs, &states, "current at the attempt's start");
 }

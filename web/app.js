@@ -77,7 +77,7 @@ const conn = new Connection({
     setExercise(h);
     settings = { ...h.settings };
     syncControls();
-    plots.setSession(h.session, conn.session?.control_token);
+    plots.setSession(h.session, conn.session?.control_token, conn.session?.base);
     status.role(h.role);
     input.setServerLimit(h.max_messages_per_second);
     setScenarios(h.scenarios, h.scenario);

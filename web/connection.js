@@ -88,17 +88,21 @@ export class Connection {
       this.session = { id: this.opts.sessionId, ws_url: this.opts.replay.path };
     } else {
       this.session = { id: this.opts.sessionId, control_token: this.opts.token,
-        ws_url: `/ws/sessions/${encodeURIComponent(this.opts.sessionId)}?token=${encodeURIComponent(this.opts.token)}&role=observer` };
+        base: this.opts.base || '',
+        ws_url: `${this.opts.base || ''}/ws/sessions/${encodeURIComponent(this.opts.sessionId)}?token=${encodeURIComponent(this.opts.token)}&role=observer` };
     }
     this.open();
   }
 
   /** GET /api/sessions/{id} with the control token: is the stored session still live? One
-   * that ended while this page was away (e.g. abandoned) is reported through `onEnded`. */
+   * that ended while this page was away (e.g. abandoned, or interrupted when its replica
+   * stopped) is reported through `onEnded`. Asked without the replica prefix, so any replica
+   * answers: 421 means another replica holds it, live (docs/api.md "Replicas"). */
   async stillLive(stored) {
     try {
       const r = await fetch(`/api/sessions/${encodeURIComponent(stored.id)}`, {
         headers: { authorization: `Bearer ${stored.control_token}` }, cache: 'no-store' });
+      if (r.status === 421) return true;
       if (!r.ok) return false;
       const s = await r.json();
       const live = s.status === undefined || s.status === 'live';
@@ -146,7 +150,7 @@ export class Connection {
       return false;
     }
     const s = await resp.json();
-    this.session = { id: s.id, control_token: s.control_token, ws_url: s.ws_url };
+    this.session = { id: s.id, control_token: s.control_token, ws_url: s.ws_url, base: s.base || '' };
     this.resuming = false;
     this.observing = false; // a new session is this tab's to drive
     localStorage.setItem(STORE_KEY, JSON.stringify(this.session));
@@ -167,7 +171,7 @@ export class Connection {
     this.hello = null;
     if (old?.control_token && !watched) {
       try {
-        await fetch(`/api/sessions/${encodeURIComponent(old.id)}`, {
+        await fetch(`${old.base || ''}/api/sessions/${encodeURIComponent(old.id)}`, {
           method: 'DELETE', headers: { authorization: `Bearer ${old.control_token}` } });
       } catch { /* unreachable: the server ends it after its grace period */ }
     }
@@ -252,6 +256,14 @@ export class Connection {
       const up = await fetch('/healthz', { cache: 'no-store' }).then((r) => r.ok).catch(() => false);
       if (!up) {
         this.status('error', 'Server unreachable; reconnecting…');
+        this.scheduleRetry(() => this.open());
+        return;
+      }
+      if (this.role === 'trainee' && this.resuming && this.session?.control_token
+          && this.endedReported !== this.session.id && await this.stillLive(this.session)) {
+        // still live on a replica the proxy cannot reach now: keep trying; once the others
+        // declare it lost, stillLive reports it ended (interrupted) and a new one starts
+        this.status('error', `Connection lost${why ? ' (' + why + ')' : ''}; reconnecting…`);
         this.scheduleRetry(() => this.open());
         return;
       }

@@ -18,6 +18,7 @@ const FAULT_DEFAULTS = { supply_drop: 3.0e6, stuck_valve: 0.5, leak: 5e-10, air:
 let token = sessionStorage.getItem(TOKEN_KEY) || '';
 let sessions = [];
 let observed = null; // session id
+let observedBase = ''; // path prefix of the observed session's replica ('' on a single server)
 let conn = null;
 let view = null;
 let status = null;
@@ -134,9 +135,11 @@ function observe(id) {
   const who = sessions.find((s) => s.id === id);
   const name = who?.trainee || who?.label;
   $('obs-title').textContent = name ? `${name}${who.group ? ` (${who.group})` : ''} · session ${id}` : `session ${id}`;
-  $('act-csv').href = `/api/sessions/${encodeURIComponent(id)}/log.csv?token=${encodeURIComponent(token)}`;
+  // another replica's session: its URLs carry that replica's prefix (docs/api.md "Replicas")
+  observedBase = who?.base || '';
+  $('act-csv').href = `${observedBase}/api/sessions/${encodeURIComponent(id)}/log.csv?token=${encodeURIComponent(token)}`;
   conn = new Connection({
-    role: 'observer', sessionId: id, token,
+    role: 'observer', sessionId: id, token, base: observedBase,
     onHello(h) { view.setHello(h); status.role(h.role); if (h.scenario) $('act-scenario').value = h.scenario; },
     onState(s) { view.setState(s); },
     onPong(ms) { status.latency(ms); },
@@ -150,7 +153,7 @@ function observe(id) {
 /** POST /api/sessions/{id}/actions; resolves {ok, error}. */
 async function postAction(id, body) {
   try {
-    const r = await fetch(`/api/sessions/${encodeURIComponent(id)}/actions`, {
+    const r = await fetch(`${observedBase}/api/sessions/${encodeURIComponent(id)}/actions`, {
       method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${token}` }, body: JSON.stringify(body),
     });
     let b = null;
@@ -175,6 +178,12 @@ async function act(type) {
     if ($('act-silent').checked) body.silent = true; // a diagnosis drill: the trainee is not told
   }
   if (type === 'message') body.text = $('act-text').value;
+  if (type === 'set_current') {
+    // Empty boxes mean 0; anything else goes as typed and the server checks it.
+    const num = (id) => { const v = $(id).value.trim(); return v === '' ? 0 : Number(v); };
+    body.speed_m_s = num('act-cur-speed');
+    body.heading_deg = num('act-cur-heading');
+  }
   const out = $('act-result');
   const r = await postAction(observed, body);
   out.textContent = r.ok ? `${type}${body.silent ? ' (silent)' : ''}: ok` : `${type}: ${r.error}`;

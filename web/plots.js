@@ -82,8 +82,9 @@ export class Plots {
     }).observe(el);
   }
 
-  setSession(id, token) {
-    this.csv.href = `/api/sessions/${encodeURIComponent(id)}/log.csv${token ? `?token=${encodeURIComponent(token)}` : ''}`;
+  /** The CSV link of session `id` (`base`: its replica's path prefix, docs/api.md). */
+  setSession(id, token, base = '') {
+    this.csv.href = `${base}/api/sessions/${encodeURIComponent(id)}/log.csv${token ? `?token=${encodeURIComponent(token)}` : ''}`;
   }
 
   clearSelected() { this.pressure.s.clear(); }

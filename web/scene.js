@@ -67,6 +67,12 @@ export class World {
     this.object = null;
     this.objectMaterial = new THREE.MeshLambertMaterial({ color: GRASP_COLOURS.free });
     this.grasp = 'free';
+    // The water current: an arrow above the work area, pointing where the water flows,
+    // 0.5 m long per m/s (hidden in still water and in air).
+    this.current = new THREE.ArrowHelper(new THREE.Vector3(1, 0, 0), new THREE.Vector3(), 1, 0x5fd0ff, 0.12, 0.07);
+    this.current.visible = false;
+    this.currentKey = '';
+    this.root.add(this.current);
   }
 
   /** (Re)builds the static parts from a hello message. */
@@ -89,11 +95,24 @@ export class World {
     const edges = new THREE.LineSegments(new THREE.EdgesGeometry(this.object.geometry),
       new THREE.LineBasicMaterial({ color: 0x222222 }));
     this.object.add(edges);
+    const c = World.workCentre(hello);
+    this.current.position.set(c.x, c.y, c.z + 0.6);
   }
 
-  /** Object pose and grasp colour from a state frame. */
+  /** Object pose and grasp colour from a state frame; the current's arrow. */
   update(state) {
     if (!this.object) return;
+    const cur = state.current;
+    const key = cur ? `${cur.speed_m_s}/${cur.heading_deg}` : '';
+    if (key !== this.currentKey) {
+      this.currentKey = key;
+      this.current.visible = !!cur && cur.speed_m_s > 0;
+      if (this.current.visible) {
+        const a = (cur.heading_deg * Math.PI) / 180;
+        this.current.setDirection(new THREE.Vector3(Math.cos(a), Math.sin(a), 0));
+        this.current.setLength(0.5 * cur.speed_m_s, 0.12, 0.07);
+      }
+    }
     poseToMatrix(state.object.pose, this.object.matrix);
     this.object.matrixWorldNeedsUpdate = true;
     if (state.grasp !== this.grasp) {

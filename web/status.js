@@ -31,6 +31,7 @@ export class StatusBar {
       <span class="grp"><span class="k">mode</span> <b data-f="mode"></b>/<b data-f="method"></b> <span class="k">arm</span> <b data-f="arm"></b>
         <span class="k">speed</span> <b data-f="speed"></b></span>
       <span class="grp"><span class="k">t</span> <b data-f="t"></b> s <b data-f="paused"></b></span>
+      <span class="grp"><span class="k">water</span> <b data-f="water"></b></span>
       <span class="grp"><span class="k">latency</span> <b data-f="latency">—</b> ms <span class="k">relief</span> <b data-f="relief">0</b></span>
       <span class="grp"><span class="k">role</span> <b data-f="role"></b> <b data-f="pad"></b></span>
       <span class="grp warn" data-f="warnings"></span>
@@ -71,6 +72,7 @@ export class StatusBar {
     this.set('t', state.t.toFixed(2));
     this.set('paused', state.paused ? (state.paused_by === 'instructor' ? 'PAUSED by the instructor' : 'PAUSED') : '');
     this.set('relief', String(state.relief_events));
+    this.set('water', waterText(state.current));
     this.set('warnings', state.warnings.length ? '⚠ ' + state.warnings.map(describeWarning).join(', ') : '');
     this.set('faults', state.faults.length ? 'faults: ' + state.faults.join(', ') : '');
   }
@@ -81,9 +83,19 @@ export class StatusBar {
   message(text) { this.set('message', text); }
 }
 
-/** `near_singularity:left` → "near singularity (left)"; `near_joint_limit:right:3` → "… joint 4". */
+/** The frame's `current` ({speed_m_s, heading_deg}, or null in air) as status text: where the
+ * water flows, e.g. "0.50 m/s → 30°" (degrees from +x, ahead of the arms, towards +y). */
+export function waterText(c) {
+  if (!c) return 'in air';
+  if (!(c.speed_m_s > 0)) return 'still';
+  return `${c.speed_m_s.toFixed(2)} m/s → ${Math.round(c.heading_deg)}°`;
+}
+
+/** `near_singularity:left` → "near singularity (left)"; `near_joint_limit:right:3` → "… joint 4";
+ *  `slip:left` → "load slipping in jaw (left)". */
 export function describeWarning(w) {
   const [kind, arm, joint] = w.split(':');
+  if (kind === 'slip') return `load slipping in jaw (${arm})`;
   const k = kind.replaceAll('_', ' ');
   if (joint !== undefined && /^\d+$/.test(joint)) return `${k} (${arm} joint ${+joint + 1})`;
   return arm ? `${k} (${arm})` : k;

@@ -110,7 +110,7 @@ export class TaskPanel {
     const auth = { headers: { authorization: `Bearer ${s.control_token}` }, cache: 'no-store' };
     let a = null;
     try {
-      const r = await fetch(`/api/sessions/${encodeURIComponent(s.id)}/assessment`, auth);
+      const r = await fetch(`${s.base || ''}/api/sessions/${encodeURIComponent(s.id)}/assessment`, auth);
       if (r.ok) a = await r.json();
     } catch { /* shown from the frame below */ }
     const next = this.ui.nextTitle?.();
@@ -130,7 +130,7 @@ export class TaskPanel {
     // the finished attempt: the session's newest (GET /api/sessions/{id} names its attempts,
     // newest first; a new one starts only with "try again")
     try {
-      const r = await fetch(`/api/sessions/${encodeURIComponent(s.id)}`, auth);
+      const r = await fetch(`${s.base || ''}/api/sessions/${encodeURIComponent(s.id)}`, auth);
       const sum = r.ok ? await r.json() : null;
       const id = sum?.attempts?.[0] ?? sum?.attempt;
       const link = this.card.querySelector('[data-act="debrief"]');

@@ -46,6 +46,8 @@ pub struct AppState {
     pub compute: Arc<ComputePool>,
     /// The training records database.
     pub db: crate::db::Db,
+    /// This replica (name, multi-replica mode, drain).
+    pub cluster: Arc<crate::cluster::Cluster>,
 }
 
 /// Checks an operator-supplied secret (instructor token, join code): it must travel intact
@@ -68,6 +70,22 @@ impl AppState {
         let robots = Arc::new(Robots::load()?);
         let metrics = Arc::new(Metrics::default());
         let db = crate::db::Db::open(&config.database_url())?;
+        let cluster = Arc::new(crate::cluster::Cluster::new(
+            config.replica_name.as_deref(),
+            db.backend(),
+            Duration::from_secs(config.drain_seconds),
+        )?);
+        if cluster.multi {
+            // Before the recorder's start-up repair: this replica's previous run is over.
+            let (s, a) = db.block_on(db.forget_replica(&cluster.name))?;
+            if s + a > 0 {
+                tracing::info!(
+                    sessions = s,
+                    attempts = a,
+                    "previous run's sessions marked interrupted"
+                );
+            }
+        }
         let recorder = Recorder::open(
             &config.data_dir,
             db.clone(),
@@ -143,6 +161,7 @@ impl AppState {
             join_code,
             compute,
             db,
+            cluster,
         })
     }
 }
@@ -194,25 +213,54 @@ async fn count_requests(State(metrics): State<Arc<Metrics>>, req: Request, next:
 }
 
 async fn metrics_text(State(state): State<AppState>) -> Response {
+    let mut text = state.metrics.render();
+    text.push_str(&format!(
+        "# HELP seaarms_replica_info This replica's name\n# TYPE seaarms_replica_info gauge\nseaarms_replica_info{{replica=\"{}\"}} 1\n",
+        state.cluster.name
+    ));
     (
         [(
             axum::http::header::CONTENT_TYPE,
             "text/plain; version=0.0.4",
         )],
-        state.metrics.render(),
+        text,
     )
         .into_response()
 }
 
-/// Every route of the server.
+/// `GET /healthz`: `ok`; while draining 503 (readiness: the proxy and Kubernetes send no new
+/// sessions), except `?probe=live` (liveness: the process still serves its live sessions).
+async fn healthz(
+    State(state): State<AppState>,
+    axum::extract::RawQuery(query): axum::extract::RawQuery,
+) -> Response {
+    let liveness = query.as_deref() == Some("probe=live");
+    if state.cluster.draining() && !liveness {
+        return (axum::http::StatusCode::SERVICE_UNAVAILABLE, "draining").into_response();
+    }
+    "ok".into_response()
+}
+
+/// Every route of the server, behind the replica prefix (`/r/<this replica>/…` is served
+/// as `/…`; [`crate::cluster::route_prefix`] rewrites the path before routing).
 pub fn app(state: AppState) -> Router {
+    let cluster = state.cluster.clone();
+    Router::new()
+        .fallback_service(routes(state))
+        .layer(middleware::from_fn_with_state(
+            cluster,
+            crate::cluster::route_prefix,
+        ))
+}
+
+fn routes(state: AppState) -> Router {
     Router::new()
         .route("/", get(assets::index))
         .route("/instructor", get(assets::instructor))
         .route("/replay/{attempt}", get(assets::replay))
         .route("/web/{*path}", get(assets::web))
         .route("/static/{*path}", get(assets::vendored))
-        .route("/healthz", get(|| async { "ok" }))
+        .route("/healthz", get(healthz))
         .route("/metrics", get(metrics_text))
         .route("/api/openapi.json", get(api::openapi::spec))
         .route("/api/robots", get(api::robots::list))

@@ -275,6 +275,22 @@ pub struct ServeConfig {
         global = true
     )]
     pub compute_priority: crate::compute::ComputePriority,
+
+    // --- Several replicas behind a proxy (docs/api.md "Replicas", docs/operations.md) ---
+    /// This replica's name (a DNS label: lowercase letters, digits, `-`; at most 63): session
+    /// URLs carry it as `/r/<name>/…` when the database is shared (PostgreSQL). Default: the
+    /// host name (a Kubernetes StatefulSet pod's name).
+    #[arg(long, env = "SEAARMS_REPLICA_NAME", global = true)]
+    pub replica_name: Option<String>,
+    /// On SIGTERM, keep serving live sessions for up to this many seconds (new ones get 503,
+    /// `/healthz` 503) before ending them as interrupted; 0 (the default) stops at once.
+    #[arg(
+        long,
+        env = "SEAARMS_DRAIN_SECONDS",
+        default_value_t = 0,
+        global = true
+    )]
+    pub drain_seconds: u64,
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {
@@ -335,6 +351,8 @@ impl Default for ServeConfig {
             compute_queue: 4,
             compute_deadline_secs: 20,
             compute_priority: crate::compute::ComputePriority::Idle,
+            replica_name: None,
+            drain_seconds: 0,
         }
     }
 }

@@ -20,10 +20,13 @@
 //! * [`scenarios`]: the headless runner of Lim's dynamic case studies (CSV + summary).
 //! * [`db`]: the training records database (SQLite or PostgreSQL).
 //! * [`csv_out`]: the one CSV writer (one number format) for every CSV the server writes.
+//! * [`cluster`]: several replicas behind a proxy: replica name, URL prefix, heartbeats,
+//!   session directory, drain.
 
 pub mod api;
 pub mod app;
 pub mod assets;
+pub mod cluster;
 pub mod compute;
 pub mod config;
 pub mod csv_out;
@@ -56,6 +59,14 @@ pub async fn run(
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
     let sessions = state.sessions.clone();
+    let heartbeat = state
+        .cluster
+        .multi
+        .then(|| tokio::spawn(cluster::heartbeat_loop(state.clone())));
+    let leaving = state
+        .cluster
+        .multi
+        .then(|| (state.db.clone(), state.cluster.name.clone()));
     let expiry = tokio::spawn({
         let sessions = sessions.clone();
         async move {
@@ -77,6 +88,16 @@ pub async fn run(
         .with_graceful_shutdown(shutdown)
         .await;
     expiry.abort();
+    if let Some(h) = heartbeat {
+        h.abort();
+    }
     let _ = tokio::task::spawn_blocking(move || sessions.shutdown()).await;
+    // Every session has ended and is recorded: out of the directory now, not declared lost
+    // by the others later.
+    if let Some((db, name)) = leaving {
+        if let Err(e) = db.leave(&name, sessions::unix_now()).await {
+            tracing::warn!("leaving the session directory: {e:#}");
+        }
+    }
     result
 }

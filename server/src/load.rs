@@ -55,18 +55,9 @@ pub struct LoadReport {
     pub observers: usize,
     /// Measurement time (s).
     pub seconds: f64,
-    /// Frames received in all.
-    pub frames: u64,
-    /// Frame interval percentiles (ms), all clients.
-    pub frame_interval_ms_p50: f64,
-    /// 99th percentile.
-    pub frame_interval_ms_p99: f64,
-    /// Input-to-state latency percentiles (ms), trainees.
-    pub latency_ms_p50: f64,
-    /// 99th percentile.
-    pub latency_ms_p99: f64,
-    /// Frames skipped (gaps in frame sequence numbers).
-    pub skipped_frames: u64,
+    /// What the clients saw of the frames (all clients; latencies: trainees).
+    #[serde(flatten)]
+    pub figures: FrameFigures,
     /// Errors (first few listed).
     pub errors: usize,
     /// Up to 10 error messages.
@@ -277,6 +268,9 @@ async fn heavy_client(
 struct Created {
     id: String,
     control_token: String,
+    /// Path prefix of the session's URLs (`/r/<replica>` behind a proxy of replicas).
+    #[serde(default)]
+    base: String,
 }
 
 #[derive(Deserialize)]
@@ -341,46 +335,35 @@ pub async fn run(args: LoadArgs, instructor_token: Option<String>) -> anyhow::Re
             ))
         })
         .collect();
-    let mut tasks = Vec::new();
-    for (i, c) in created.iter().enumerate() {
-        let url = format!(
-            "{}/ws/sessions/{}?token={}",
-            ws_base(&args.url),
-            c.id,
-            c.control_token
-        );
-        tasks.push(tokio::spawn(client(
-            url,
-            true,
-            args.input_hz,
-            deadline,
-            i as u64 + 1,
-        )));
-    }
+    let trainees: Vec<String> = created
+        .iter()
+        .map(|c| {
+            format!(
+                "{}{}/ws/sessions/{}?token={}",
+                ws_base(&args.url),
+                c.base,
+                c.id,
+                c.control_token
+            )
+        })
+        .collect();
+    let mut observers = Vec::new();
     if args.observers > 0 {
         let token = instructor_token.ok_or_else(|| {
             anyhow::anyhow!("observers need --instructor-token / SEAARMS_INSTRUCTOR_TOKEN")
         })?;
         for k in 0..args.observers {
             let c = &created[k % created.len().max(1)];
-            let url = format!(
-                "{}/ws/sessions/{}?token={}&role=observer",
+            observers.push(format!(
+                "{}{}/ws/sessions/{}?token={}&role=observer",
                 ws_base(&args.url),
+                c.base,
                 c.id,
                 token
-            );
-            tasks.push(tokio::spawn(client(url, false, 0.0, deadline, 0)));
+            ));
         }
     }
-    let mut all = ClientStats::default();
-    for t in tasks {
-        let s = t.await?;
-        all.frame_intervals_ms.extend(s.frame_intervals_ms);
-        all.latencies_ms.extend(s.latencies_ms);
-        all.frames += s.frames;
-        all.skipped += s.skipped;
-        all.errors.extend(s.errors);
-    }
+    let all = measure(&trainees, &observers, args.input_hz, deadline).await?;
     let mut heavy = HeavyStats {
         clients: args.heavy_clients,
         ..HeavyStats::default()
@@ -393,33 +376,86 @@ pub async fn run(args: LoadArgs, instructor_token: Option<String>) -> anyhow::Re
         .saturating_sub(overruns_before);
     for c in &created {
         let _ = http
-            .delete(format!("{}/api/sessions/{}", args.url, c.id))
+            .delete(format!("{}{}/api/sessions/{}", args.url, c.base, c.id))
             .bearer_auth(&c.control_token)
             .send()
             .await;
     }
-    let fi50 = percentile(&mut all.frame_intervals_ms, 0.5);
-    let fi99 = percentile(&mut all.frame_intervals_ms, 0.99);
-    let l50 = percentile(&mut all.latencies_ms, 0.5);
-    let l99 = percentile(&mut all.latencies_ms, 0.99);
     Ok(LoadReport {
         sessions: args.sessions,
         observers: args.observers,
         seconds: args.seconds,
-        frames: all.frames,
-        frame_interval_ms_p50: fi50,
-        frame_interval_ms_p99: fi99,
-        latency_ms_p50: l50,
-        latency_ms_p99: l99,
-        skipped_frames: all.skipped,
         errors: all.errors.len(),
         error_samples: all.errors.iter().take(10).cloned().collect(),
         step_overruns: overruns,
         heavy,
-        meets_target: fi99 <= 25.0
-            && (args.sessions == 0 || l99 <= 20.0)
+        meets_target: all.frame_interval_ms_p99 <= 25.0
+            && (args.sessions == 0 || all.latency_ms_p99 <= 20.0)
             && all.errors.is_empty()
             && overruns == 0,
+        figures: all,
+    })
+}
+
+/// What WebSocket clients saw of the state frames: the figures `seaarms load` reports.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct FrameFigures {
+    /// State frames received.
+    pub frames: u64,
+    /// Median interval between a client's frames (ms).
+    pub frame_interval_ms_p50: f64,
+    /// 99th percentile of the interval between a client's frames (ms).
+    pub frame_interval_ms_p99: f64,
+    /// Median time from an input sent to the first frame that applied it (ms).
+    pub latency_ms_p50: f64,
+    /// 99th percentile of that latency (ms).
+    pub latency_ms_p99: f64,
+    /// Frames a client skipped (latest state wins).
+    pub skipped_frames: u64,
+    /// What went wrong (connects, receives, server errors, closes); the report counts them.
+    #[serde(skip)]
+    pub errors: Vec<String>,
+}
+
+/// Connects every `trainees` URL (a trainee sending random sticks at `input_hz`) and every
+/// `observers` URL (read-only) until `deadline`, and measures their frames: the one frame
+/// measurement of `seaarms load`, also used by the multi-replica test (`tests/cluster.rs`).
+pub async fn measure(
+    trainees: &[String],
+    observers: &[String],
+    input_hz: f64,
+    deadline: Instant,
+) -> anyhow::Result<FrameFigures> {
+    let mut tasks = Vec::new();
+    for (i, url) in trainees.iter().enumerate() {
+        tasks.push(tokio::spawn(client(
+            url.clone(),
+            true,
+            input_hz,
+            deadline,
+            i as u64 + 1,
+        )));
+    }
+    for url in observers {
+        tasks.push(tokio::spawn(client(url.clone(), false, 0.0, deadline, 0)));
+    }
+    let mut all = ClientStats::default();
+    for t in tasks {
+        let s = t.await?;
+        all.frame_intervals_ms.extend(s.frame_intervals_ms);
+        all.latencies_ms.extend(s.latencies_ms);
+        all.frames += s.frames;
+        all.skipped += s.skipped;
+        all.errors.extend(s.errors);
+    }
+    Ok(FrameFigures {
+        frames: all.frames,
+        frame_interval_ms_p50: percentile(&mut all.frame_intervals_ms, 0.5),
+        frame_interval_ms_p99: percentile(&mut all.frame_intervals_ms, 0.99),
+        latency_ms_p50: percentile(&mut all.latencies_ms, 0.5),
+        latency_ms_p99: percentile(&mut all.latencies_ms, 0.99),
+        skipped_frames: all.skipped,
+        errors: all.errors,
     })
 }
 

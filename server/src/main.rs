@@ -139,7 +139,17 @@ async fn serve(config: seaarms::config::ServeConfig) -> anyhow::Result<()> {
     println!("seaarms serving on http://{addr}");
     println!("instructor dashboard: http://{addr}/instructor");
     tracing::info!(%addr, data_dir = %config.data_dir.display(), "listening");
-    seaarms::run(listener, state, shutdown_signal()).await?;
+    // SIGTERM/Ctrl-C: drain first (--drain-seconds; none by default), a second signal
+    // stops at once.
+    let drained = state.clone();
+    let shutdown = async move {
+        shutdown_signal().await;
+        tokio::select! {
+            _ = seaarms::cluster::drain(&drained) => {},
+            _ = shutdown_signal() => {},
+        }
+    };
+    seaarms::run(listener, state, shutdown).await?;
     tracing::info!("stopped; records flushed");
     Ok(())
 }

@@ -44,13 +44,15 @@ pub struct Metrics {
     pub compute_busy: AtomicU64,
     /// Compute requests answered 504 (deadline passed).
     pub compute_deadline_exceeded: AtomicU64,
+    /// 1 while this replica drains (SIGTERM: no new sessions), else 0.
+    pub draining: AtomicU64,
 }
 
 impl Metrics {
     /// The Prometheus text exposition.
     pub fn render(&self) -> String {
         let mut out = String::new();
-        let rows: [(&str, &str, &str, &AtomicU64); 18] = [
+        let rows: [(&str, &str, &str, &AtomicU64); 19] = [
             (
                 "seaarms_http_requests_total",
                 "counter",
@@ -158,6 +160,12 @@ impl Metrics {
                 "counter",
                 "Compute requests past their deadline (504)",
                 &self.compute_deadline_exceeded,
+            ),
+            (
+                "seaarms_draining",
+                "gauge",
+                "1 while the replica drains (SIGTERM: no new sessions)",
+                &self.draining,
             ),
         ];
         for (name, kind, help, v) in rows {

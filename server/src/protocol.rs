@@ -258,6 +258,9 @@ pub struct Hello {
     pub exercise: Option<Arc<ExerciseSpec>>,
     /// What to draw besides the arms and the box.
     pub scene: SceneOut,
+    /// The replica serving this connection (live sessions; absent in replays).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replica: Option<String>,
 }
 
 /// What the page draws besides the arms and the box: the box's handles, the exercise's
@@ -447,6 +450,11 @@ pub struct ArmFrame {
     pub contact_torque_nm: [f64; 3],
     /// Relief valve open, per actuator.
     pub relief_open: [bool; 6],
+    /// The jaw's load fraction against its static friction limits (0 when not holding; ≥ 1
+    /// slips; see docs/physics.md "Grasp and the dynamic case studies").
+    pub grip_load: f64,
+    /// The bar is slipping in the jaw.
+    pub slipping: bool,
     /// What this jaw would grasp if it closed now (`handle-0`, `handle-1`, `valve`, `stab`),
     /// or `null`: the page's capture cue.
     pub capture: Option<&'static str>,
@@ -500,7 +508,8 @@ pub struct StateFrame {
     pub internal_torque_nm: [f64; 3],
     /// Relief-valve openings since reset (overload events).
     pub relief_events: u64,
-    /// Active warnings: `near_singularity:left`, `near_joint_limit:right:3`, `relief:left:2`, …
+    /// Active warnings: `near_singularity:left`, `near_joint_limit:right:3`, `relief:left:2`,
+    /// `slip:left`, …
     pub warnings: Vec<String>,
     /// Active faults, as instructors set them (labels, see [`fault_label`]); neither a fault
     /// drill's hidden fault nor a silent fault (`"silent": true` on injection) is listed.
@@ -511,6 +520,9 @@ pub struct StateFrame {
     pub exercise: Option<seaarms_core::exercise::Status>,
     /// The panel's moving parts (`null` without a panel).
     pub panel: Option<PanelFrame>,
+    /// The water's current `{speed_m_s, heading_deg}` (heading: the direction it flows
+    /// towards, degrees from +x towards +y) in a subsea session; `null` in air.
+    pub current: Option<seaarms_core::sim::Current>,
 }
 
 /// Left and right arm frames.

@@ -32,6 +32,8 @@ pub enum ScenarioError {
 pub struct ScenarioSummary {
     /// Scenario name.
     pub scenario: String,
+    /// The medium: `air` (the thesis's setting; every case study runs in air).
+    pub environment: String,
     /// Highest line pressure of any actuator (Pa).
     pub peak_line_pressure_pa: f64,
     /// Relief valve setting (Pa).
@@ -63,6 +65,16 @@ pub struct ScenarioSummary {
     pub numerical_faults: u64,
     /// CSV rows written (one per 10 ms).
     pub rows: usize,
+    /// The grasp model of the run: `rigid` (Lim's assumption (i), every case study) or
+    /// `finite` (the jaws' friction grip).
+    pub grasp_model: String,
+    /// Highest load fraction of each jaw (left, right) against its static friction limits
+    /// (> 1: a finite grip would have slipped).
+    pub peak_grip_load: [f64; 2],
+    /// Slips and grasps lost by slipping, both jaws (0 with the rigid grasp).
+    pub slips: u64,
+    /// Grasps lost by slipping.
+    pub drops: u64,
 }
 
 /// (name, description) of every scenario.
@@ -118,6 +130,7 @@ pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioErr
     Ok((
         ScenarioSummary {
             scenario: s.scenario.to_string(),
+            environment: s.environment.to_string(),
             peak_line_pressure_pa: s.peak_line_pressure_pa,
             relief_setting_pa: s.relief_setting_pa,
             peak_internal_force_n: s.peak_internal_force_n,
@@ -137,6 +150,10 @@ pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioErr
             },
             numerical_faults: s.numerical_faults,
             rows,
+            grasp_model: s.grasp_model.to_string(),
+            peak_grip_load: s.peak_grip_load,
+            slips: s.slips,
+            drops: s.drops,
         },
         text,
     ))

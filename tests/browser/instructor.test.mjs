@@ -64,9 +64,19 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     await trainee.page.waitForFunction(() => /supply_drop/.test(window.__seaarms.statusText()));
     await instr.page.click('#instr-actions button[data-act="clear_faults"]');
     await trainee.page.waitForFunction(() => !/supply_drop/.test(window.__seaarms.statusText()));
+    // the water current: still in free play; set from the dashboard, it shows on the trainee's
+    // status bar; a bad value gets the server's error next to the controls
+    assert.match(await trainee.page.evaluate(() => window.__seaarms.statusText()), /water\s*still/);
+    await instr.page.fill('#act-cur-speed', '0.5');
+    await instr.page.fill('#act-cur-heading', '30');
+    await instr.page.click('#instr-actions button[data-act="set_current"]');
+    await trainee.page.waitForFunction(() => /0\.50 m\/s → 30°/.test(window.__seaarms.statusText()));
+    await instr.page.fill('#act-cur-speed', '9');
+    await instr.page.click('#instr-actions button[data-act="set_current"]');
+    await instr.page.waitForFunction(() => /set_current: .*speed_m_s/.test(document.querySelector('#act-result').textContent));
     await instr.page.screenshot({ path: join(ARTIFACTS, 'instructor.png') });
     assert.deepEqual(trainee.errors, []);
-    assert.deepEqual(instr.errors.filter((e) => !/403/.test(e)), [], 'only the deliberate wrong-token 403');
+    assert.deepEqual(instr.errors.filter((e) => !/403|400/.test(e)), [], 'only the deliberate wrong-token 403 and bad-current 400');
     assert.deepEqual([...trainee.offsite, ...instr.offsite], []);
   } finally {
     await trainee.close();

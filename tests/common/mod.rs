@@ -104,6 +104,18 @@ pub async fn create_at(base: &str, body: Value) -> (u16, Value) {
     (st, r.json().await.unwrap())
 }
 
+/// `POST /api/sessions/{id}/actions` with `token`; the status and the body text.
+pub async fn act(s: &Server, id: &str, token: &str, body: Value) -> (u16, String) {
+    let r = reqwest::Client::new()
+        .post(format!("{}/api/sessions/{id}/actions", s.base))
+        .bearer_auth(token)
+        .json(&body)
+        .send()
+        .await
+        .unwrap();
+    (r.status().as_u16(), r.text().await.unwrap())
+}
+
 /// Creates a default session; its id and control token.
 pub async fn new_session(s: &Server) -> (String, String) {
     let (st, c) = create(s, serde_json::json!({})).await;
@@ -414,7 +426,8 @@ pub async fn send(
 
 /// JSON paths (object keys) whose value may be `null` in a state frame: no dual ellipsoid
 /// unless both jaws hold, no condition number at a singularity, no capture cue, exercise,
-/// event or panel when there is none, no `paused_by` while the clock runs (protocol.rs).
+/// event or panel when there is none, no `paused_by` while the clock runs, no water `current`
+/// in air (protocol.rs).
 const NULLABLE_STATE_KEYS: &[&str] = &[
     "dual",
     "paused_by",
@@ -423,6 +436,7 @@ const NULLABLE_STATE_KEYS: &[&str] = &[
     "exercise",
     "last_event",
     "panel",
+    "current",
 ];
 
 /// Checks a state frame: every number finite (serde_json writes NaN and ±∞ as `null`, so a

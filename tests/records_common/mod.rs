@@ -77,6 +77,17 @@ impl Binary {
         panic!("the server did not stop within 20 s of SIGTERM");
     }
 
+    /// Sends `signal` (e.g. `-TERM`) and returns at once.
+    pub(crate) fn signal(&self, signal: &str) {
+        let pid = self.child.id().to_string();
+        let _ = Command::new("kill").args([signal, &pid]).status();
+    }
+
+    /// The exit status once the process has exited, None while it runs.
+    pub(crate) fn exited(&mut self) -> Option<std::process::ExitStatus> {
+        self.child.try_wait().ok().flatten()
+    }
+
     /// SIGKILL: no shutdown code runs.
     pub(crate) fn kill9(mut self) {
         self.child.kill().unwrap();
@@ -197,7 +208,7 @@ pub(crate) async fn database_urls() -> Vec<Option<String>> {
 
 /// Creates an empty database beside the one `base` names (so tests running at once do not
 /// see each other's records, e.g. under retention) and returns its URL.
-async fn fresh_postgres_database(base: &str) -> String {
+pub(crate) async fn fresh_postgres_database(base: &str) -> String {
     use sqlx::{Connection, Executor};
     sqlx::any::install_default_drivers();
     let name = format!("seaarms_{}", seaarms::sessions::random_hex(6));

@@ -18,7 +18,7 @@
 mod common;
 
 use seaarms_core::hydraulics::MAGNUM_SPEEDS_DEG_S;
-use seaarms_core::sim::{Arm, Input, SimParams, Simulation};
+use seaarms_core::sim::{Arm, Environment, Input, SimParams, Simulation};
 
 /// Neutral posture of the joints not under test (rad): swing 0, shoulder 45° and elbow −65°
 /// (the middles of their ranges), pitch, yaw, rotate 0.
@@ -56,7 +56,7 @@ struct Sweep {
 fn sweep(j: usize, dir: f64) -> Sweep {
     let m = common::builtin("magnum");
     let mut p = SimParams::case_study(&m, &m).expect("params");
-    p.step.buoyancy = false;
+    p.step.environment = Environment::Air;
     let left = Arm::Left.index();
     let joint = &m.joints[j];
     let (start, end) = if joint.is_limited() {

@@ -10,6 +10,7 @@
 //! flush ([`Db::write_batch`]); everything here is queries with `$1, $2, …` placeholders,
 //! which both back ends take (SQLite reads `$N` as parameter N).
 
+mod directory;
 mod write;
 
 use std::future::Future;
@@ -22,6 +23,7 @@ use serde::Serialize;
 use sqlx::any::{AnyPoolOptions, AnyRow};
 use sqlx::{AnyPool, Executor, Row};
 
+pub use directory::{LostReplica, ReplicaBeat, lost_reason};
 pub use write::Write;
 
 /// Which server the URL names.

@@ -274,29 +274,39 @@ impl Db {
 
     /// Ids of sessions stored without an end (cut off by a crash, or live elsewhere).
     pub async fn unfinished_sessions(&self) -> Result<Vec<String>> {
-        let rows = sqlx::query("SELECT id FROM sessions WHERE end_reason IS NULL ORDER BY id")
-            .fetch_all(&self.inner.pool)
-            .await?;
+        // Sessions other replicas hold (the directory) are theirs, not cut off.
+        let rows = sqlx::query(
+            "SELECT id FROM sessions WHERE end_reason IS NULL \
+             AND id NOT IN (SELECT id FROM session_directory) ORDER BY id",
+        )
+        .fetch_all(&self.inner.pool)
+        .await?;
         rows.iter()
             .map(|r| Ok(r.try_get("id")?))
             .collect::<Result<Vec<String>>>()
     }
 
     /// Start-up, nothing live yet: every session without an end is `interrupted (server
-    /// stopped)`, every attempt without an outcome `interrupted` (one transaction). Returns
-    /// (sessions, attempts) marked.
+    /// stopped)`, every attempt without an outcome `interrupted` (one transaction) — except
+    /// sessions other replicas hold (listed in `session_directory`; this replica's own rows
+    /// were cleared first by [`Db::forget_replica`]). Returns (sessions, attempts) marked.
     pub async fn mark_interrupted(&self) -> Result<(u64, u64)> {
         let mut tx = self.inner.pool.begin().await?;
-        let sessions = sqlx::query("UPDATE sessions SET end_reason = $1 WHERE end_reason IS NULL")
-            .bind(INTERRUPTED)
-            .execute(&mut *tx)
-            .await?
-            .rows_affected();
-        let attempts =
-            sqlx::query("UPDATE attempts SET outcome = 'interrupted' WHERE outcome IS NULL")
-                .execute(&mut *tx)
-                .await?
-                .rows_affected();
+        let sessions = sqlx::query(
+            "UPDATE sessions SET end_reason = $1 WHERE end_reason IS NULL \
+             AND id NOT IN (SELECT id FROM session_directory)",
+        )
+        .bind(INTERRUPTED)
+        .execute(&mut *tx)
+        .await?
+        .rows_affected();
+        let attempts = sqlx::query(
+            "UPDATE attempts SET outcome = 'interrupted' WHERE outcome IS NULL \
+                 AND session_id NOT IN (SELECT id FROM session_directory)",
+        )
+        .execute(&mut *tx)
+        .await?
+        .rows_affected();
         tx.commit().await?;
         Ok((sessions, attempts))
     }

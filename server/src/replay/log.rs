@@ -3,7 +3,8 @@
 //!
 //! * **What is logged** is what changes the simulation: stick input (quantized to
 //!   [`INPUT_QUANTUM`] at the edge, so the logged integers give back the applied values
-//!   bit for bit), settings, release, diagnosis, faults, and instructor interventions
+//!   bit for bit), settings, release, diagnosis, faults, the instructor's water current, and instructor
+//!   interventions
 //!   (they count in an exercise's score). Pause and resume are not: a paused session takes no
 //!   steps, so the step stamps already account for them.
 //! * **On disk** each entry is a JSON line. Stick input, the bulk of it, is written as
@@ -87,6 +88,13 @@ pub enum Applied {
     },
     /// Every fault removed.
     ClearFaults,
+    /// The water's current set by the instructor.
+    Current {
+        /// Speed (m/s).
+        speed_m_s: f64,
+        /// Direction it flows towards (degrees from +x towards +y).
+        heading_deg: f64,
+    },
     /// An instructor's command counted as an intervention.
     Intervention,
 }

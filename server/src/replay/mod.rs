@@ -16,7 +16,7 @@ use seaarms_core::hydraulics::Faults;
 use serde::{Deserialize, Serialize};
 
 use crate::protocol::{Settings, StateFrame};
-use crate::sessions::command::{ActiveFault, Arm, Command, Fault, FaultKind};
+use crate::sessions::command::{ActiveFault, Arm, Command, Current, Fault, FaultKind};
 use crate::sessions::snapshot::build_frame;
 use crate::sessions::{Live, Scenario};
 use log::{Applied, Entry, FaultEntry};
@@ -43,6 +43,10 @@ pub struct Init {
     pub sim_faults: [Faults; 2],
     /// Seed of the attempt's random draws.
     pub seed: u64,
+    /// The water's current at the start (a subsea scenario with a current set; absent:
+    /// still water or air).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub current: Option<Current>,
 }
 
 /// Why an attempt cannot be replayed.
@@ -151,7 +155,7 @@ impl Replay {
             .map(active_fault)
             .collect::<Result<Vec<_>, _>>()
             .map_err(ReplayError::Record)?;
-        Live::replaying(
+        let mut live = Live::replaying(
             models,
             &scenario,
             init.settings,
@@ -159,7 +163,12 @@ impl Replay {
             init.sim_faults,
             init.seed,
         )
-        .map_err(|e| ReplayError::Record(e.to_string()))
+        .map_err(|e| ReplayError::Record(e.to_string()))?;
+        if let Some(c) = init.current {
+            live.apply(&Command::SetCurrent(c))
+                .map_err(|e| ReplayError::Record(e.to_string()))?;
+        }
+        Ok(live)
     }
 
     /// Length (s).
@@ -237,6 +246,11 @@ fn apply_entry(live: &mut Live, e: &Entry) -> Result<(), ReplayError> {
             Command::InjectFault(active_fault(fault).map_err(ReplayError::Record)?)
         }
         Applied::ClearFaults => Command::ClearFaults,
+        Applied::Current {
+            speed_m_s,
+            heading_deg,
+        } => Command::current(*speed_m_s, *heading_deg)
+            .map_err(|e| ReplayError::Record(e.to_string()))?,
         Applied::Intervention => {
             live.intervene();
             return Ok(());

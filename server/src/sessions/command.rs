@@ -28,6 +28,7 @@ pub use seaarms_core::hydraulics::{
     AIR_SCALE_RANGE, Fault, FaultKind, LEAK_RANGE_M3_S_PA, STUCK_SPOOL_RANGE, SUPPLY_DROP_RANGE_PA,
 };
 pub use seaarms_core::sim::Arm;
+pub use seaarms_core::sim::water::{Current, MAX_CURRENT_M_S};
 
 /// A fault active on one arm (shown to users through [`crate::protocol`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -137,6 +138,8 @@ pub enum Command {
     InjectFault(ActiveFault),
     /// Remove every fault.
     ClearFaults,
+    /// Set the water's current (instructor only; a subsea session).
+    SetCurrent(Current),
     /// Show an instructor's message on every client of the session.
     Message(String),
     /// End the session.
@@ -213,6 +216,14 @@ impl Command {
             .ok_or_else(|| CommandError::Invalid(format!("unknown scenario or exercise `{name}`")))
     }
 
+    /// Builds a current change, checking speed ∈ [0, [`MAX_CURRENT_M_S`]] m/s and a finite
+    /// heading within ±360° ([`Current::new`]).
+    pub fn current(speed_m_s: f64, heading_deg: f64) -> Result<Command, CommandError> {
+        Current::new(speed_m_s, heading_deg)
+            .map(Command::SetCurrent)
+            .map_err(|e| CommandError::Invalid(e.to_string()))
+    }
+
     /// Builds an instructor message, checking its length.
     pub fn message(text: &str) -> Result<Command, CommandError> {
         if text.chars().count() > MAX_MESSAGE_CHARS {
@@ -236,6 +247,7 @@ impl Command {
             Command::Diagnose(_) => "diagnose",
             Command::InjectFault(_) => "fault",
             Command::ClearFaults => "clear_faults",
+            Command::SetCurrent(_) => "set_current",
             Command::Message(_) => "message",
             Command::End => "end",
         }
@@ -419,6 +431,16 @@ impl Live {
                 self.clear_faults();
                 json!({})
             }
+            Command::SetCurrent(c) => {
+                self.sim
+                    .set_current(*c)
+                    .map_err(|e| CommandError::Invalid(e.to_string()))?;
+                self.log(Applied::Current {
+                    speed_m_s: c.speed_m_s,
+                    heading_deg: c.heading_deg,
+                });
+                json!({"current": c})
+            }
             Command::Message(_) | Command::End => json!({}),
         })
     }
@@ -453,7 +475,8 @@ impl Live {
         if !silent
             && !matches!(
                 command,
-                Command::Input(_) | Command::Message(_) | Command::End
+                // The current is the exercise's conditions, not help given to the trainee.
+                Command::Input(_) | Command::Message(_) | Command::End | Command::SetCurrent(_)
             )
         {
             self.intervene();

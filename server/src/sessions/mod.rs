@@ -30,7 +30,7 @@ use seaarms_core::exercise::{ExerciseRun, ExerciseSpec};
 use seaarms_core::grasp::GraspState;
 use seaarms_core::kinematics::KinData;
 use seaarms_core::redundancy::{Redundancy, RedundancyParams};
-use seaarms_core::sim::{Input, SimParams, Simulation};
+use seaarms_core::sim::{Input, Medium, SimParams, Simulation};
 use tokio::sync::watch;
 
 use crate::metrics::Metrics;
@@ -45,25 +45,35 @@ use snapshot::{CARTESIAN_MAX_ANGULAR_RAD_S, CARTESIAN_MAX_LINEAR_M_S};
 pub const LIVE_SCENARIOS: &[(&str, &str)] = &[
     (
         "training",
-        "Free play: both arms at the initial position, the 50 kg box on the seabed",
+        "Free play: both arms at the initial position, the 50 kg box on the seabed, in sea water",
     ),
     (
         "case1-single-arm",
-        "Lim case study 1 set-up: move the left arm joint by joint, no object",
+        "Lim case study 1 set-up: move the left arm joint by joint, no object (in air, as the thesis)",
     ),
     (
         "case2-single-arm-load",
-        "Lim case study 2 set-up: grab, lift and release the box with the left arm",
+        "Lim case study 2 set-up: grab, lift and release the box with the left arm (in air, as the thesis)",
     ),
     (
         "case3-dual-open-loop",
-        "Lim case study 3 set-up: both arms grab and carry the box in open loop",
+        "Lim case study 3 set-up: both arms grab and carry the box in open loop (in air, as the thesis)",
     ),
     (
         "case4-dual-closed-loop",
-        "Lim case study 4 set-up: both arms grab the box, switch to closed loop, carry it",
+        "Lim case study 4 set-up: both arms grab the box, switch to closed loop, carry it (in air, as the thesis)",
     ),
 ];
+
+/// The medium of a live scenario: free play (`training`) is subsea, like the exercises; the
+/// case-study set-ups stay in air, the thesis's setting (Lim §4.2), so their figures compare.
+pub fn free_medium(name: &str) -> Medium {
+    if name == "training" {
+        Medium::Subsea
+    } else {
+        Medium::Air
+    }
+}
 
 /// Session settings and limits (from [`crate::config::ServeConfig`]).
 #[derive(Debug, Clone)]
@@ -176,6 +186,8 @@ pub struct Live {
     relief_recorded: u64,
     /// Grasp state at the last record row (events on change).
     last_grasp: GraspState,
+    /// Per arm: slip onsets and grasps lost by slipping already recorded (`slip`/`drop` events).
+    grip_recorded: [(u64, u64); 2],
     /// Both jaws are driven open until this simulated time (release/drop).
     release_until_s: f64,
     /// Redundancy resolvers for Cartesian mode, one per arm (preallocated).
@@ -240,7 +252,8 @@ impl Scenario {
     /// A fresh simulation for it.
     fn build_sim(&self, models: &[Arc<Model>; 2]) -> Result<Simulation, seaarms_core::Error> {
         let params = match self {
-            Scenario::Free(_) => SimParams::case_study(&models[0], &models[1])?,
+            Scenario::Free(n) => SimParams::case_study(&models[0], &models[1])?
+                .with_environment(free_medium(n).environment()),
             Scenario::Exercise(e) => e.sim_params(&models[0], &models[1])?,
         };
         Simulation::new((*models[0]).clone(), (*models[1]).clone(), params)
@@ -326,6 +339,7 @@ impl Live {
             kin: [KinData::new(&models[0]), KinData::new(&models[1])],
             relief_recorded: 0,
             last_grasp: GraspState::Free,
+            grip_recorded: [(0, 0); 2],
             release_until_s: 0.0,
             redundancy: [
                 Redundancy::new(&models[0], RedundancyParams::default()),
@@ -367,6 +381,12 @@ impl Live {
                 faults: self.faults.iter().map(crate::replay::fault_entry).collect(),
                 sim_faults: command::Arm::BOTH.map(|a| self.sim.params().arms[a.index()].faults),
                 seed,
+                current: self
+                    .sim
+                    .environment()
+                    .water()
+                    .map(|w| w.current)
+                    .filter(|c| c.speed_m_s > 0.0),
             };
             let exercise = self.scenario.exercise();
             self.pending
@@ -604,6 +624,7 @@ impl Live {
         self.input.object_velocity = [0.0; 6];
         self.cartesian = [[0.0; 6]; 2];
         self.relief_recorded = 0;
+        self.grip_recorded = [(0, 0); 2];
         self.release_until_s = 0.0;
         self.start_attempt();
     }

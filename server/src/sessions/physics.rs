@@ -20,7 +20,7 @@ use super::record::{EventRecord, RecordMsg, RecordSender, SessionRow};
 use super::snapshot::build_frame;
 use super::{Frame, Live, Session};
 use crate::metrics::Metrics;
-use crate::protocol::{ControlMethod, ControlMode, ServerMessage, grasp_name};
+use crate::protocol::{ControlMethod, ControlMode, ServerMessage, arm_name, grasp_name};
 
 /// Most 1 ms steps one session may run in one wake-up to catch up (50 ms of simulated time).
 pub const MAX_CATCH_UP_STEPS: u64 = 50;
@@ -239,6 +239,7 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
         ));
     }
     live.relief_recorded = relief;
+    grip_events(live, recorder);
     if let Some(run) = live.exercise.as_mut() {
         for e in run.take_events() {
             recorder.send(RecordMsg::Event(Box::new(EventRecord {
@@ -269,5 +270,27 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
             live.event("grasp", serde_json::json!({"state": grasp_name(grasp)})),
         ));
         live.last_grasp = grasp;
+    }
+}
+
+/// `slip` events (a jaw's bar started slipping: `{"arm", "load_fraction"}`) and `drop` events
+/// (the bar slid out of the jaw: `{"arm"}`), from the simulation's per-jaw counts.
+fn grip_events(live: &mut Live, recorder: &RecordSender) {
+    for arm in Arm::BOTH {
+        let i = arm.index();
+        let g = live.sim.arm(arm).grip;
+        let (slips, drops) = live.grip_recorded[i];
+        if g.slips > slips {
+            recorder.send(RecordMsg::Event(live.event(
+                "slip",
+                serde_json::json!({"arm": arm_name(arm), "load_fraction": g.load_fraction}),
+            )));
+        }
+        if g.drops > drops {
+            recorder.send(RecordMsg::Event(
+                live.event("drop", serde_json::json!({"arm": arm_name(arm)})),
+            ));
+        }
+        live.grip_recorded[i] = (g.slips, g.drops);
     }
 }

@@ -118,6 +118,11 @@ pub struct Created {
     pub control_token: String,
     /// WebSocket URL (token included).
     pub ws_url: String,
+    /// The replica that holds it (docs/api.md "Replicas").
+    pub replica: String,
+    /// Path prefix of its URLs (`/r/<replica>` with several replicas, else empty): the REST
+    /// routes of this session are `{base}/api/sessions/{id}/…`.
+    pub base: String,
 }
 
 /// `POST /api/sessions`: 201; 403 without the class join code (when one is configured);
@@ -172,6 +177,15 @@ pub async fn create(
     if req.trainee.is_some() && req.label.is_some() {
         return Err(ApiError::bad_request("give `trainee` or `label`, not both"));
     }
+    if state.cluster.draining() {
+        return Err(ApiError::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!(
+                "replica `{}` is draining (shutting down); try again",
+                state.cluster.name
+            ),
+        ));
+    }
     let scenario = req.exercise.or(req.scenario);
     let label = req.trainee.or(req.label);
     let base = ws_base(&state.policy, &headers, peer.as_ref())
@@ -203,14 +217,30 @@ pub async fn create(
         }
         CreateError::Sim(_) => ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
     })?;
+    let prefix = state.cluster.base();
     let ws_url = format!(
-        "{base}/ws/sessions/{}?token={}",
+        "{base}{prefix}/ws/sessions/{}?token={}",
         session.id, session.control_token
     );
+    if state.cluster.multi {
+        // Other replicas learn where it lives now, not at the next heartbeat.
+        let summary = directory_summary(&state, &session).to_string();
+        let put = state.db.directory_put(
+            session.id.clone(),
+            state.cluster.name.clone(),
+            super::unix_now(),
+            summary,
+        );
+        if let Err(e) = put.await {
+            tracing::warn!(id = %session.id, "session directory: {e:#}");
+        }
+    }
     let body = Created {
         id: session.id.clone(),
         control_token: session.control_token.clone(),
         ws_url,
+        replica: state.cluster.name.clone(),
+        base: prefix,
     };
     Ok((StatusCode::CREATED, Json(body)).into_response())
 }
@@ -288,6 +318,12 @@ pub struct SessionSummary {
     /// What the instructor's roster shows of a live session (absent for ended ones).
     #[serde(flatten, skip_serializing_if = "Option::is_none")]
     pub roster: Option<Roster>,
+    /// The replica holding it (live only; docs/api.md "Replicas").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replica: Option<String>,
+    /// Path prefix of its URLs (live only; `/r/<replica>` with several replicas, else empty).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub base: Option<String>,
 }
 
 /// The roster fields of a live session's summary.
@@ -406,7 +442,27 @@ fn live_summary(
             warnings: super::snapshot::warnings(&live),
             attempt: live.attempt_id().to_string(),
         }),
+        replica: None,
+        base: None,
     }
+}
+
+/// `summary` placed on this replica (its `replica` and `base`).
+fn placed(state: &AppState, mut summary: SessionSummary) -> SessionSummary {
+    summary.replica = Some(state.cluster.name.clone());
+    summary.base = Some(state.cluster.base());
+    summary
+}
+
+/// A live session's summary as the instructor sees it, for the session directory (other
+/// replicas list it from there; attempts are read from the records there).
+pub(crate) fn directory_summary(state: &AppState, s: &Session) -> serde_json::Value {
+    let recording = state.sessions.recorder.recording(&s.id);
+    serde_json::to_value(placed(
+        state,
+        live_summary(s, recording, Vec::new(), Caller::Instructor),
+    ))
+    .unwrap_or_default()
 }
 
 fn ended_summary(
@@ -441,6 +497,8 @@ fn ended_summary(
             "ok"
         },
         roster: None,
+        replica: None,
+        base: None,
     }
 }
 
@@ -473,7 +531,7 @@ async fn flush_records(state: &AppState) {
 pub async fn list(
     State(state): State<AppState>,
     headers: HeaderMap,
-) -> Result<Json<Vec<SessionSummary>>, ApiError> {
+) -> Result<Json<Vec<serde_json::Value>>, ApiError> {
     require_instructor(&state, &headers)?;
     flush_records(&state).await;
     let live: Vec<Arc<Session>> = state.sessions.all();
@@ -484,22 +542,43 @@ pub async fn list(
         attempts.entry(session).or_default().push(attempt);
     }
     let recorder = &state.sessions.recorder;
-    let mut out: Vec<SessionSummary> = live
+    let value = |s: SessionSummary| serde_json::to_value(s).unwrap_or_default();
+    let mut out: Vec<serde_json::Value> = live
         .iter()
         .map(|s| {
             let a = attempts.remove(&s.id).unwrap_or_default();
-            live_summary(s, recorder.recording(&s.id), a, Caller::Instructor)
+            value(placed(
+                &state,
+                live_summary(s, recorder.recording(&s.id), a, Caller::Instructor),
+            ))
         })
         .collect();
-    let live_ids: std::collections::HashSet<&str> = live.iter().map(|s| s.id.as_str()).collect();
+    let mut live_ids: std::collections::HashSet<String> =
+        live.iter().map(|s| s.id.clone()).collect();
+    // Other replicas' live sessions, as their last heartbeat summarised them.
+    if state.cluster.multi {
+        let others = state
+            .db
+            .directory_others(&state.cluster.name)
+            .await
+            .map_err(db_error)?;
+        for (id, _, summary) in others {
+            let Ok(mut v) = serde_json::from_str::<serde_json::Value>(&summary) else {
+                continue;
+            };
+            v["attempts"] = serde_json::json!(attempts.remove(&id).unwrap_or_default());
+            live_ids.insert(id);
+            out.push(v);
+        }
+    }
     out.extend(
         stored
             .into_iter()
-            .filter(|r| !live_ids.contains(r.id.as_str()))
+            .filter(|r| !live_ids.contains(&r.id))
             .map(|r| {
                 let failed = recorder.recording(&r.id) == "failed";
                 let a = attempts.remove(&r.id).unwrap_or_default();
-                ended_summary(r, failed, a)
+                value(ended_summary(r, failed, a))
             }),
     );
     Ok(Json(out))
@@ -517,12 +596,18 @@ pub async fn get_one(
         let viewer = caller(&state, bearer(&headers), Some(&s))?;
         flush_records(&state).await;
         let attempts = ids(state.db.attempt_ids(Some(&id)).await.map_err(db_error)?);
-        return Ok(Json(live_summary(
-            &s,
-            state.sessions.recorder.recording(&s.id),
-            attempts,
-            viewer,
+        return Ok(Json(placed(
+            &state,
+            live_summary(
+                &s,
+                state.sessions.recorder.recording(&s.id),
+                attempts,
+                viewer,
+            ),
         )));
+    }
+    if let Some(e) = crate::cluster::elsewhere(&state, &id).await {
+        return Err(e);
     }
     ended_caller(&state, bearer(&headers), &id).await?;
     flush_records(&state).await;
@@ -544,7 +629,7 @@ pub async fn end(
     headers: HeaderMap,
     Path(id): Path<String>,
 ) -> Result<StatusCode, ApiError> {
-    let s = live_session(&state, &id)?;
+    let s = live_session(&state, &id).await?;
     let actor = actor(&state, &headers, &s)?;
     let sessions = state.sessions.clone();
     tokio::task::spawn_blocking(move || command::apply(&sessions, &s, actor, Command::End))
@@ -553,11 +638,13 @@ pub async fn end(
     Ok(StatusCode::NO_CONTENT)
 }
 
-fn live_session(state: &AppState, id: &str) -> Result<Arc<Session>, ApiError> {
-    state
-        .sessions
-        .get(id)
-        .ok_or_else(|| ApiError::not_found(format!("no live session `{id}`")))
+async fn live_session(state: &AppState, id: &str) -> Result<Arc<Session>, ApiError> {
+    if let Some(s) = state.sessions.get(id) {
+        return Ok(s);
+    }
+    Err(crate::cluster::elsewhere(state, id)
+        .await
+        .unwrap_or_else(|| ApiError::not_found(format!("no live session `{id}`"))))
 }
 
 fn actor(state: &AppState, headers: &HeaderMap, s: &Session) -> Result<Actor, ApiError> {
@@ -605,6 +692,14 @@ pub enum Action {
     },
     /// Remove every fault.
     ClearFaults,
+    /// Set the water's current (a subsea session): speed in [0, 2.5] m/s, heading (the
+    /// direction it flows towards, degrees from +x towards +y) within ±360°.
+    SetCurrent {
+        /// Speed (m/s).
+        speed_m_s: f64,
+        /// Heading (degrees).
+        heading_deg: f64,
+    },
     /// Show a message on the trainee's page.
     Message {
         /// Up to 500 characters.
@@ -643,6 +738,10 @@ impl TryFrom<Action> for Command {
                 Command::InjectFault(ActiveFault { arm, fault, silent })
             }
             Action::ClearFaults => Command::ClearFaults,
+            Action::SetCurrent {
+                speed_m_s,
+                heading_deg,
+            } => Command::current(speed_m_s, heading_deg)?,
             Action::Message { text } => Command::message(&text)?,
         })
     }
@@ -655,7 +754,7 @@ pub async fn act(
     Path(id): Path<String>,
     ApiJson(action): ApiJson<Action>,
 ) -> Result<StatusCode, ApiError> {
-    let s = live_session(&state, &id)?;
+    let s = live_session(&state, &id).await?;
     let actor = actor(&state, &headers, &s)?;
     let command = Command::try_from(action)?;
     command::apply(&state.sessions, &s, actor, command)?;

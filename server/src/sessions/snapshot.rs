@@ -48,8 +48,8 @@ fn measures_frame(m: &Measures, jlm: Option<f64>) -> MeasuresFrame {
 }
 
 /// One arm's warnings: near a singularity (translational `isotropy` below
-/// [`NEAR_SINGULAR_ISOTROPY`]), joints near a limit, relief valves open. The one rule behind
-/// the frames' and the summaries' `warnings`.
+/// [`NEAR_SINGULAR_ISOTROPY`]), joints near a limit, relief valves open, the jaw's bar
+/// slipping (`slip:left`). The one rule behind the frames' and the summaries' `warnings`.
 fn arm_warnings(live: &Live, arm: Arm, isotropy: f64, warnings: &mut Vec<String>) {
     let name = arm_name(arm);
     let state = live.sim.arm(arm);
@@ -68,6 +68,9 @@ fn arm_warnings(live: &Live, arm: Arm, isotropy: f64, warnings: &mut Vec<String>
         if *open {
             warnings.push(format!("relief:{name}:{i}"));
         }
+    }
+    if state.grip.slipping {
+        warnings.push(format!("slip:{name}"));
     }
 }
 
@@ -115,6 +118,8 @@ fn arm_frame(live: &mut Live, arm: Arm, warnings: &mut Vec<String>) -> (ArmFrame
         contact_force_n: [w[0], w[1], w[2]],
         contact_torque_nm: [w[3], w[4], w[5]],
         relief_open: state.relief_open,
+        grip_load: state.grip.load_fraction,
+        slipping: state.grip.slipping,
         capture: if state.holding {
             None
         } else {
@@ -170,5 +175,6 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
             stab_depth_m: p.stab_depth_m,
             side_load_n: p.side_load_n,
         }),
+        current: sim.environment().water().map(|w| w.current),
     }
 }

@@ -74,7 +74,10 @@ pub async fn upgrade(
     ws: WebSocketUpgrade,
 ) -> Response {
     let Some(session) = state.sessions.get(&id) else {
-        return ApiError::not_found(format!("no live session `{id}`")).into_response();
+        return crate::cluster::elsewhere(&state, &id)
+            .await
+            .unwrap_or_else(|| ApiError::not_found(format!("no live session `{id}`")))
+            .into_response();
     };
     let token = q.token.unwrap_or_default();
     let wants_observer = q.role.as_deref() == Some("observer");
@@ -114,7 +117,8 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
         Role::Trainee => "trainee",
         Role::Observer => "observer",
     };
-    let hello = hello_for(&session.id, role, &session.live(), &state.sessions.config);
+    let mut hello = hello_for(&session.id, role, &session.live(), &state.sessions.config);
+    hello.replica = Some(state.cluster.name.clone());
     serde_json::to_string(&ServerMessage::Hello(Box::new(hello)))
         .unwrap_or_default()
         .into()
@@ -153,6 +157,7 @@ pub fn hello_for(
             .collect(),
         exercise: live.scenario().exercise().cloned(),
         scene: SceneOut::new(params, live.scenario().exercise().map(|e| &**e)),
+        replica: None,
     }
 }
 

@@ -16,7 +16,7 @@ pub mod teleop;
 
 use nalgebra::{Isometry3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
-use crate::grasp::{grasp_point_twist, wrench_at_com};
+use crate::grasp::{grasp_point_twist, moment_free_share, wrench_at_com};
 use crate::hydraulics::N_ACT;
 use crate::linalg::{Ldlt, gram_lower};
 
@@ -40,6 +40,13 @@ pub struct ControlParams {
     pub max_object_speed_m_s: f64,
     /// Largest commanded object angular speed (rad/s): 0.5.
     pub max_object_rate_rad_s: f64,
+    /// The load share the cooperative controller drives the contact wrenches to: false (the
+    /// default), Lim's equal share W⁺ (eq. 3.46), which gives each jaw a moment
+    /// −rⁱ × F/2 about the object's handles; true, the moment-free share
+    /// ([`crate::grasp::moment_free_share`]), which carries the load by forces wherever the
+    /// two grasp points can — what a friction grip on a round handle needs
+    /// (docs/physics.md, "Grasp and the dynamic case studies").
+    pub moment_free_share: bool,
 }
 
 impl Default for ControlParams {
@@ -53,6 +60,7 @@ impl Default for ControlParams {
             dls_damping: 0.02,
             max_object_speed_m_s: 0.2,
             max_object_rate_rad_s: 0.5,
+            moment_free_share: false,
         }
     }
 }
@@ -163,10 +171,22 @@ pub fn cooperative(
     // (eq. 3.40), each Wⁱ applied in closed form ([f; m + rⁱ×f]) instead of as a 6×6 product.
     let fext =
         wrench_at_com(&inp.r[0], &inp.contact[0]) + wrench_at_com(&inp.r[1], &inp.contact[1]);
+    let moment_free = p.moment_free_share.then(|| moment_free_share(inp.r, &fext));
     let xd: [Vector6<f64>; 2] = core::array::from_fn(|i| {
-        // W⁺ⁱ·F_ext = ½[I 0; −Rⁱ I]F_ext.
-        let f = Vector3::new(fext[0], fext[1], fext[2]) * 0.5;
-        let m = Vector3::new(fext[3], fext[4], fext[5]) * 0.5 - inp.r[i].cross(&f);
+        // W⁺ⁱ·F_ext = ½[I 0; −Rⁱ I]F_ext, or the moment-free share.
+        let (f, m) = match &moment_free {
+            Some(s) => (
+                Vector3::new(s[i][0], s[i][1], s[i][2]),
+                Vector3::new(s[i][3], s[i][4], s[i][5]),
+            ),
+            None => {
+                let f = Vector3::new(fext[0], fext[1], fext[2]) * 0.5;
+                (
+                    f,
+                    Vector3::new(fext[3], fext[4], fext[5]) * 0.5 - inp.r[i].cross(&f),
+                )
+            }
+        };
         let c = inp.contact[i];
         let excess = Vector6::new(
             c[0] - f.x,

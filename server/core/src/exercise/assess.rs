@@ -9,7 +9,9 @@
 //!
 //! > score = 100 × (steps completed / steps) × Σ wₖ·sₖ / Σ wₖ
 //!
-//! (100 × the completed fraction when there are no terms). An attempt **passes** when every
+//! (100 × the completed fraction when there are no terms), less [`SLIP_PENALTY_POINTS`] per
+//! slip of a jaw's load (at most [`SLIP_PENALTY_MAX_POINTS`]), never below 0. An attempt
+//! **passes** when every
 //! step is completed within the time limit, the score is at least `pass.min_score`, every
 //! `pass.limits` entry holds, and, in a fault drill, the named fault is the injected one.
 
@@ -26,6 +28,13 @@ use crate::sim::{Arm, Simulation};
 pub const SAMPLE_INTERVAL_S: f64 = 0.01;
 /// A box let go with its lowest corner higher than this above the seabed is dropped (m): 0.02.
 pub const DROP_HEIGHT_M: f64 = 0.02;
+/// Score points taken off per slip of a jaw's load (a rising edge of a jaw slipping, sampled
+/// at 100 Hz): 5. A slip is the trainee's loss of control of the load (docs/exercises.md);
+/// five of them cost a grade band, as five seabed strikes would in a term weighted 1 of 5.
+pub const SLIP_PENALTY_POINTS: f64 = 5.0;
+/// The most the slips can take off the score (points): 20, so that the score still ranks
+/// attempts that slipped (a drop fails them by the `drops` limit anyway).
+pub const SLIP_PENALTY_MAX_POINTS: f64 = 20.0;
 /// Interval of the tool positions the jerk is computed from (s): 0.05. The third difference
 /// over 50 ms passes the operator's motion (well under 5 Hz) and suppresses the hydraulic
 /// resonances (≳ 20 Hz) that no operator causes or can feel through the sticks; over 10 ms
@@ -46,6 +55,12 @@ pub struct Metrics {
     pub obstacle_strikes: f64,
     /// Times the last jaw let go of the box with its lowest corner over 2 cm above the seabed.
     pub drops: f64,
+    /// Times a jaw's load started slipping (rising edges, 100 Hz samples).
+    pub slips: f64,
+    /// Time a jaw's load spent slipping (s).
+    pub slip_s: f64,
+    /// Highest load fraction of a jaw against its static friction limits (1 = at the limit).
+    pub peak_grip_load: f64,
     /// Highest jaw contact force (N).
     pub peak_contact_force_n: f64,
     /// Highest internal force magnitude (N).
@@ -85,6 +100,9 @@ impl Metrics {
             "seabed_strikes" => self.seabed_strikes,
             "obstacle_strikes" => self.obstacle_strikes,
             "drops" => self.drops,
+            "slips" => self.slips,
+            "slip_s" => self.slip_s,
+            "peak_grip_load" => self.peak_grip_load,
             "peak_contact_force_n" => self.peak_contact_force_n,
             "peak_internal_force_n" => self.peak_internal_force_n,
             "overloads" => self.overloads,
@@ -204,7 +222,7 @@ fn inside(o: &Obstacle, p: &Vector3<f64>) -> bool {
 /// A counted event, for banners and the record.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct Event {
-    /// `strike`, `obstacle`, `drop`, `overload`, `relief`, `limit`, `fault` or `step`.
+    /// `strike`, `obstacle`, `drop`, `slip`, `overload`, `relief`, `limit`, `fault` or `step`.
     pub kind: &'static str,
     /// Simulated time (s).
     pub t: f64,
@@ -223,6 +241,7 @@ pub struct Assessor {
     in_seabed: [bool; 2],
     in_obstacle: [bool; 2],
     overloaded: [bool; 2],
+    slipping: [bool; 2],
     at_limit: [[bool; 6]; 2],
     was_holding: bool,
     relief_at_start: u64,
@@ -251,6 +270,7 @@ impl Assessor {
             in_seabed: [false; 2],
             in_obstacle: [false; 2],
             overloaded: [false; 2],
+            slipping: [false; 2],
             // A joint that starts at a limit (the scene's posture) has not hit it.
             at_limit: Arm::BOTH
                 .map(|a| at_limits(sim.model(a), &sim.arm(a).q, spec.thresholds.limit_hit_deg)),
@@ -318,6 +338,24 @@ impl Assessor {
                 });
             }
             self.overloaded[i] = over;
+            m.peak_grip_load = m.peak_grip_load.max(st.grip.load_fraction);
+            let slipping = st.grip.slipping;
+            if slipping && !self.slipping[i] {
+                m.slips += 1.0;
+                events.push(Event {
+                    kind: "slip",
+                    t,
+                    text: format!(
+                        "{} jaw: the load is slipping (grip load {:.0} %)",
+                        side(arm),
+                        100.0 * st.grip.load_fraction
+                    ),
+                });
+            }
+            if slipping {
+                m.slip_s += dt;
+            }
+            self.slipping[i] = slipping;
             let model = sim.model(arm);
             let at = at_limits(model, &st.q, th.limit_hit_deg);
             for (k, &hit_now) in at.iter().enumerate() {
@@ -482,7 +520,11 @@ pub fn score(spec: &ExerciseSpec, metrics: &Metrics) -> (f64, Vec<TermScore>) {
         1.0
     };
     let completed = metrics.steps_completed / spec.steps.len().max(1) as f64;
-    (100.0 * completed.clamp(0.0, 1.0) * weighted, terms)
+    let penalty = (SLIP_PENALTY_POINTS * metrics.slips).min(SLIP_PENALTY_MAX_POINTS);
+    (
+        (100.0 * completed.clamp(0.0, 1.0) * weighted - penalty).max(0.0),
+        terms,
+    )
 }
 
 /// The pass limits of `spec` checked against `metrics`.

@@ -55,6 +55,8 @@ pub struct Counters {
     pub relief: f64,
     /// Joint-limit hits.
     pub limit_hits: f64,
+    /// Slips of a jaw's load.
+    pub slips: f64,
 }
 
 /// The attempt's state for the task panel (the state frame's `exercise`).
@@ -347,6 +349,7 @@ impl ExerciseRun {
                 overloads: m.overloads,
                 relief: m.relief_events,
                 limit_hits: m.joint_limit_hits,
+                slips: m.slips,
             },
             last_event: self.last_event.clone(),
         }

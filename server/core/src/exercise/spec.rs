@@ -152,6 +152,15 @@ pub struct Scene {
     /// The intervention panel (valve, hot stab; [`crate::panel::PanelParams::standard`]).
     #[serde(default)]
     pub panel: bool,
+    /// The medium: `"subsea"` (the default: sea water, [`crate::sim::Environment::subsea`])
+    /// or `"air"`.
+    #[serde(default)]
+    pub environment: crate::sim::Medium,
+    /// The jaws' grasp: `false` (the default), their finite friction grip, which slips and can
+    /// drop the box ([`crate::grasp::GripParams`]); `true`, Lim's rigid grasp (§3.5.2.1
+    /// assumption (i)). Fixed for the attempt (the replay rebuilds it from the exercise).
+    #[serde(default)]
+    pub rigid_grasp: bool,
 }
 
 /// A floating marker.
@@ -356,13 +365,15 @@ impl ExerciseSpec {
         Ok(())
     }
 
-    /// Simulation parameters for this exercise's scene, from the case-study set-up.
+    /// Simulation parameters for this exercise's scene, from the case-study set-up in the
+    /// scene's medium.
     pub fn sim_params(
         &self,
         left: &crate::Model,
         right: &crate::Model,
     ) -> Result<crate::sim::SimParams, Error> {
-        let mut p = crate::sim::SimParams::case_study(left, right)?;
+        let mut p = crate::sim::SimParams::case_study(left, right)?
+            .with_environment(self.scene.environment.environment());
         if let Some(q) = self.scene.initial_q_deg {
             for (arm, q) in p.arms.iter_mut().zip(q) {
                 arm.initial_q = q.map(f64::to_radians);
@@ -375,6 +386,7 @@ impl ExerciseSpec {
         if self.scene.panel {
             p = p.with_panel(crate::panel::PanelParams::standard());
         }
+        p.rigid_grasp = self.scene.rigid_grasp;
         Ok(p)
     }
 

@@ -34,6 +34,34 @@ pub fn wrench_at_com(r: &Vector3<f64>, f: &Vector6<f64>) -> Vector6<f64> {
     Vector6::new(fl.x, fl.y, fl.z, m.x, m.y, m.z)
 }
 
+/// The moment-free share of an object wrench `fext` = [F; M] (at the COM, world) between
+/// grasp points `r` (from the COM): contact wrenches [fⁱ; mⁱ] with W¹F¹ + W²F² = F_ext
+/// (eq. 3.40) that carry the load by forces wherever two points can. With the midpoint
+/// c = (r¹ + r²)/2, d = r¹ − r², M′ = M − c × F: fⁱ = F/2 ± g with g = (M′ × d)/|d|² (so
+/// d × g is M′'s part across d), and mⁱ = ½·(M′·d)·d/|d|², the part about the line through
+/// the grasp points, which forces there cannot make. Lim's equal share W⁺ (eq. 3.46) instead
+/// gives mⁱ = M/2 − rⁱ × F/2: for a 50 kg box held by handles 0.3 m apart, ±37 N·m each
+/// about the handles' line, an internal moment the jaws must hold against each other (the
+/// "virtual linkage" of Williams & Khatib 1993 makes the same point about internal loads).
+/// Coincident grasp points (|d| ≈ 0) split F and M′ equally.
+pub fn moment_free_share(r: &[Vector3<f64>; 2], fext: &Vector6<f64>) -> [Vector6<f64>; 2] {
+    let f = Vector3::new(fext[0], fext[1], fext[2]);
+    let c = 0.5 * (r[0] + r[1]);
+    let d = r[0] - r[1];
+    let mp = Vector3::new(fext[3], fext[4], fext[5]) - c.cross(&f);
+    let dd = d.norm_squared();
+    let (g, m) = if dd > 1e-12 {
+        (mp.cross(&d) / dd, d * (0.5 * mp.dot(&d) / dd))
+    } else {
+        (Vector3::zeros(), 0.5 * mp)
+    };
+    let one = |s: f64| {
+        let fi = 0.5 * f + s * g;
+        Vector6::new(fi.x, fi.y, fi.z, m.x, m.y, m.z)
+    };
+    [one(1.0), one(-1.0)]
+}
+
 /// Wⁱᵀ·M⁻¹·Wᵏ (6×6) for the object mobility M⁻¹ = diag(1/m·I, Q) (Q = world inverse inertia,
 /// symmetric),
 /// in 3×3 blocks with Sⁱ = \[rⁱ\]×: [[1/m·I − SⁱQSᵏ, −SⁱQ], [QSᵏ, Q]].
@@ -210,4 +238,44 @@ pub fn internal_wrench(r: &[Vector3<f64>; 2], fc: &[Vector6<f64>; 2]) -> Vector6
         out += Vector6::new(rho_f.x, rho_f.y, rho_f.z, b_inv_m.x, b_inv_m.y, b_inv_m.z) * sign;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The moment-free share reproduces the object wrench through W (eq. 3.40), leaves the
+    /// jaws only the moment about the grasp points' line, and carries a weight hung midway
+    /// between two handles by equal vertical forces alone (where Lim's W⁺, eq. 3.46, puts
+    /// ∓r × F/2 on each jaw).
+    #[test]
+    fn moment_free_share_balances_and_keeps_moments_on_the_line() {
+        let r = [
+            Vector3::new(0.02, 0.15, 0.13),
+            Vector3::new(-0.01, -0.15, 0.12),
+        ];
+        let fext = Vector6::new(30.0, -20.0, 490.0, 12.0, -7.0, 5.0);
+        let s = moment_free_share(&r, &fext);
+        let back = wrench_at_com(&r[0], &s[0]) + wrench_at_com(&r[1], &s[1]);
+        assert!((back - fext).norm() < 1e-9, "{back} vs {fext}");
+        let d = r[0] - r[1];
+        for si in &s {
+            let m = Vector3::new(si[3], si[4], si[5]);
+            assert!(
+                m.cross(&d).norm() < 1e-9 * (1.0 + m.norm()),
+                "moment off the line: {m}"
+            );
+        }
+        // A weight midway below two handles: 245 N up each, no moments.
+        let r = [
+            Vector3::new(0.0, 0.15, 0.13),
+            Vector3::new(0.0, -0.15, 0.13),
+        ];
+        let s = moment_free_share(&r, &Vector6::new(0.0, 0.0, 490.0, 0.0, 0.0, 0.0));
+        for si in &s {
+            assert!((si - Vector6::new(0.0, 0.0, 245.0, 0.0, 0.0, 0.0)).norm() < 1e-9);
+        }
+        let w = grasp_pinv_equal_share(&r) * Vector6::new(0.0, 0.0, 490.0, 0.0, 0.0, 0.0);
+        assert!((w[3].abs() - 0.15 * 245.0).abs() < 1e-9, "W⁺ gives {w}");
+    }
 }

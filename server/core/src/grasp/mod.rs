@@ -12,17 +12,23 @@
 //! * `matrices`: [`grasp_block`], [`grasp_matrix`], [`grasp_pinv_equal_share`],
 //!   [`internal_basis`]: W = [W¹ W²] (eq. 3.40), the equal-load-sharing W⁺ (eq. 3.46) and V
 //!   (eq. 3.47); the object mobility at the grasp points ([`mobility_block`]); [`decompose`]
-//!   and [`internal_wrench`]: external and internal force/torque of a pair of contact wrenches.
+//!   and [`internal_wrench`]: external and internal force/torque of a pair of contact wrenches;
+//!   [`moment_free_share`]: a share of the object wrench that the jaws carry by forces.
+//! * `grip`: [`GripParams`], [`GripCapacity`]: the finite grip of a jaw on a handle bar —
+//!   friction limits from the clamp force, the limit-surface load fraction, the kinetic
+//!   wrench of a slipping jaw.
 //! * here: [`GraspState`], the colour code of Lim §4.1.
 
+mod grip;
 mod matrices;
 mod object;
 mod seabed;
 
+pub use grip::{GripCapacity, GripParams, from_jaw, kinetic_wrench, mean_radius, to_jaw};
 pub use matrices::{
     decompose, grasp_block, grasp_matrix, grasp_pinv_equal_share, grasp_point_twist,
     internal_basis, internal_wrench, mobility_block, mobility_block_general,
-    mobility_block_general_lower, wrench_at_com,
+    mobility_block_general_lower, moment_free_share, wrench_at_com,
 };
 pub use object::ObjectParams;
 pub use seabed::{SeabedContact, seabed_contact, seabed_wrench};

@@ -2,9 +2,9 @@
 //! jaw, the operator's valve commands, the rigid-body terms held over the step, and within a
 //! sub-step the chamber pressures, the free joint acceleration and the integration.
 
-use nalgebra::{Isometry3, Matrix6, Vector6};
+use nalgebra::{Isometry3, Matrix6, Point3, Vector3, Vector6};
 
-use super::{ArmInput, ArmParams, ArmState, ArmWork, StepParams};
+use super::{ArmInput, ArmParams, ArmState, ArmWork, StepParams, water};
 use crate::control::{self, ControlParams};
 use crate::dynamics;
 use crate::finite_or;
@@ -26,9 +26,9 @@ pub(super) struct ArmTerms {
     /// mass matrix with the implicit damping and end stops; `None` if not positive definite
     /// (then the arm's joints do not accelerate).
     pub(super) factor: Option<Ldlt<N_ACT>>,
-    /// C(q, q̇)q̇ + G(q) (buoyancy included) plus the explicit part of the quadratic drag.
+    /// C(q, q̇)q̇ + G(q) (buoyancy included) less the links' drag torques at the step's q̇.
     pub(super) bias: Vector6<f64>,
-    /// Viscous joint damping D, treated implicitly: K_damp·Ĵ² plus the linearized drag.
+    /// Viscous actuator damping D (K_damp·Ĵ²), treated implicitly.
     pub(super) damp: [f64; N_ACT],
     /// Actuator coordinate x, lever Ĵ and joint angle q at the start of the step; within the
     /// step x = x₀ + Ĵ·(q − q₀) (the linkage curvature changes x by < 1 µm over 1 ms).
@@ -56,18 +56,24 @@ pub(super) struct ArmTerms {
 /// Stage 1 (per arm): the jaw opens or closes at its rated speed (`cmd` ∈ [−1, 1], already
 /// speed-scaled), stops on the handle when it closes on it, and the grasp is taken (closing
 /// on the handle) or released (opened 2 mm past the handle). `contact`: the tool point is
-/// within the capture radius of this arm's handle; `tool`, `object`: world poses.
+/// within the capture radius of this arm's handle (`handle_m`, object frame); `tool`,
+/// `object`: world poses. A jaw that lost the handle by slipping takes it again only after
+/// opening past it.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn update_jaw(
     a: &mut ArmState,
     jaw: &JawParams,
     op: &ObjectParams,
+    handle_m: &Vector3<f64>,
     contact: bool,
     cmd: f64,
     tool: &Isometry3<f64>,
     object: &Isometry3<f64>,
     dt: f64,
 ) {
+    // A holding jaw is closed on its bar whether or not the tool point is still within the
+    // capture radius of the handle's centre (a slipping bar slides along the jaw).
+    let contact = contact || a.holding;
     let was_open_enough = a.jaw_opening_m >= op.handle_width_m - 1e-9;
     let stop = if contact && was_open_enough {
         op.handle_width_m
@@ -78,9 +84,14 @@ pub(super) fn update_jaw(
     let closed_on_handle =
         contact && was_open_enough && a.jaw_opening_m <= op.handle_width_m + 1e-9;
     a.clamp_force_n = clamp_force(a.clamp_force_n, jaw, closed_on_handle, cmd);
-    if !a.holding && closed_on_handle && cmd < 0.0 {
+    if a.grip.lost && a.jaw_opening_m > op.handle_width_m + RELEASE_GAP_M {
+        a.grip.lost = false;
+    }
+    if !a.holding && !a.grip.lost && closed_on_handle && cmd < 0.0 {
         a.holding = true;
         a.grasp_rel = object.inverse() * tool;
+        a.grip
+            .grasped((a.grasp_rel.inverse() * Point3::from(*handle_m)).coords);
     } else if a.holding && a.jaw_opening_m > op.handle_width_m + RELEASE_GAP_M {
         a.holding = false;
         a.contact_wrench = [0.0; 6];
@@ -146,11 +157,7 @@ pub(super) fn arm_terms(
     h: f64,
     load: Option<&ToolLoad>,
 ) -> ArmTerms {
-    let rho = if sp.buoyancy {
-        sp.water_density_kgm3
-    } else {
-        0.0
-    };
+    let rho = sp.environment.density_kgm3();
     let terms =
         dynamics::step_terms::<N_ACT>(model, &ap.inertials, &work.kin, &a.qd, &sp.gravity, rho);
     let hp = &ap.hydraulics;
@@ -170,21 +177,25 @@ pub(super) fn arm_terms(
     };
     // H̃ = H + h·(damping, end stops) on the diagonal.
     let mut m = terms.mass_matrix;
-    let drag = sp.joint_drag;
     for r in 0..N_ACT {
         let act = &hp.actuators[r];
         let (x, jh) = act.linkage.coordinate(a.q[r]);
         out.x0[r] = x;
         out.jhat[r] = jh;
-        out.damp[r] = act.damping * jh * jh + 2.0 * drag * a.qd[r].abs();
+        out.damp[r] = act.damping * jh * jh;
         m[(r, r)] += h * out.damp[r];
         if end_stop_penetration(a.q[r], model.joints[r].limits) != 0.0 {
             // End stop engaged at the start of the step: implicit spring-damper.
             m[(r, r)] += h * sp.stop_damping + h * h * sp.stop_stiffness;
         }
-        // Quadratic drag −c·q̇|q̇|, linearized: its implicit part −2c|q̇|·q̇ is in D.
-        out.bias[r] =
-            terms.bias[r] + drag * a.qd[r] * a.qd[r].abs() - 2.0 * drag * a.qd[r].abs() * a.qd[r];
+        out.bias[r] = terms.bias[r];
+    }
+    if let Some(w) = sp.environment.water() {
+        // The links' added mass and the linearly implicit part of their drag into H̃, the
+        // drag at the current q̇ onto the right-hand side ([`water::arm_hydro`]).
+        let hydro = water::arm_hydro(model, &ap.inertials, &work.kin, &a.qd, w, h);
+        m += hydro.matrix;
+        out.bias -= hydro.torque;
     }
     if let Some(l) = load {
         let j = &work.jw;

@@ -2,14 +2,29 @@
 //! step ([`Constraint::new`]) and, per sub-step, the contact wrenches that keep each holding
 //! tool on its grasp point ([`Constraint::apply`]): an exact acceleration-level solve with
 //! Baumgarte position/velocity stabilization (critically damped, k_p = ω², k_d = 2ω).
+//!
+//! # Finite grip
+//! Lim's assumption (i) (§3.5.2.1: "the object is held rigidly by the grippers … slipping
+//! … is not considered") is kept while each jaw's share of the solve lies within its friction
+//! limits ([`crate::grasp::GripCapacity`]); a jaw whose required wrench leaves them slips: it
+//! transmits only the kinetic friction wrench in its friction-carried directions (the
+//! geometry-carried ones stay as solved), so the object and the jaw accelerate apart there.
+//! After the sub-steps, [`slip_stage`] moves the slipping jaw's grasp frame with the bar in
+//! those directions (so the Baumgarte terms do not pull the bar back) and lets go when the
+//! bar has slid [`GripParams::slip_travel_m`] out of the pads. The geometry-carried
+//! directions of a slipping jaw are solved together with the full rigid system and corrected
+//! by the Baumgarte terms in the next step. [`SimParams::rigid_grasp`] restores the rigid
+//! grasp (the load fraction is still reported).
 
-use nalgebra::{Isometry3, Matrix6, Vector3, Vector6};
+use nalgebra::{
+    Isometry3, Matrix6, Point3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6,
+};
 
 use super::arm::ArmTerms;
 use super::object::ObjectTerms;
-use super::{ArmState, ObjectState, StepParams};
+use super::{ArmState, ObjectState, SimParams, StepParams};
 use crate::control::rotation_error;
-use crate::grasp;
+use crate::grasp::{self, GripCapacity, GripParams};
 use crate::hydraulics::N_ACT;
 use crate::linalg::{BlockLdlt, Ldlt, gram_lower};
 
@@ -38,6 +53,123 @@ pub(super) struct Constraint {
     c_const: [Vector6<f64>; 2],
     /// Velocity gain k_d = 2ω (1/s).
     kd: f64,
+    /// Per active arm: the jaw's grip limits (`None` for a rigid grasp).
+    grip: [Option<JawGrip>; 2],
+}
+
+/// One holding jaw's grip for the step: its orientation and friction limits.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct JawGrip {
+    /// The jaw (tool) frame's orientation, world.
+    rot: Rotation3<f64>,
+    /// Static limits (λ is reported against these; a sticking jaw starts slipping beyond them).
+    stat: GripCapacity,
+    /// Kinetic limits (a slipping jaw transmits at most these).
+    kinetic: GripCapacity,
+    /// The jaw was slipping at the end of the last step.
+    slipping: bool,
+    /// Rigid grasp: report λ, never slip.
+    rigid: bool,
+    /// The jaw is opening (no clamp force): it lets go by the release gap of
+    /// [`super::arm::update_jaw`], held rigidly until then, neither loaded nor slipping.
+    releasing: bool,
+}
+
+impl JawGrip {
+    /// The grip of arm state `a` (its clamp force and slip state) with tool pose `tool`.
+    pub(super) fn new(p: &SimParams, a: &ArmState, tool: &Isometry3<f64>) -> JawGrip {
+        let (gp, op) = (&p.grip, &p.object);
+        JawGrip {
+            rot: tool.rotation.to_rotation_matrix(),
+            stat: GripCapacity::of(gp, op, a.clamp_force_n, false),
+            kinetic: GripCapacity::of(gp, op, a.clamp_force_n, true),
+            slipping: a.grip.sliding,
+            rigid: p.rigid_grasp,
+            releasing: a.clamp_force_n <= 0.0,
+        }
+    }
+
+    /// The wrench this jaw transmits when the rigid solve needs `f` (world), with the load
+    /// fraction λ of `f` against the static limits and whether the jaw slips.
+    fn limit(&self, f: &Vector6<f64>) -> (Vector6<f64>, GripOut) {
+        if self.releasing {
+            return (*f, GripOut::default());
+        }
+        let jaw = grasp::to_jaw(&self.rot, f);
+        let lambda = self.stat.load_fraction(&jaw);
+        let beyond = if self.slipping {
+            self.kinetic.load_fraction(&jaw) > 1.0
+        } else {
+            lambda > 1.0
+        };
+        let out = GripOut {
+            load_fraction: crate::finite_or(lambda, f64::MAX),
+            slipping: beyond && !self.rigid,
+        };
+        if out.slipping {
+            let k = grasp::kinetic_wrench(&self.kinetic, &jaw);
+            (grasp::from_jaw(&self.rot, &k), out)
+        } else {
+            (*f, out)
+        }
+    }
+}
+
+/// One jaw's grip in a sub-step: the load fraction λ of the wrench the rigid grasp required
+/// (against the static limits) and whether the jaw slipped.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct GripOut {
+    /// λ (finite; 0 when not holding).
+    pub(super) load_fraction: f64,
+    /// The jaw transmitted only the kinetic friction wrench.
+    pub(super) slipping: bool,
+}
+
+/// A sliding episode becomes a reported slip once the bar has slid this far in the jaw (m):
+/// 0.002 (assumed: about what a camera view of the jaw shows).
+pub const SLIP_NOTICE_M: f64 = 0.002;
+/// … or turned this far (rad): 2°.
+pub const SLIP_NOTICE_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
+
+/// One jaw's grip on its handle (plain data): how hard it is loaded, whether it slips, how
+/// far the bar has slid, and the counts since reset. Zeros while not holding (the counts
+/// excepted).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct GripState {
+    /// Load fraction λ of the wrench the rigid grasp needed in the last step against the
+    /// static friction limits (1 = at the limit; [`crate::grasp::GripCapacity::load_fraction`]).
+    pub load_fraction: f64,
+    /// The bar is slipping in the jaw: it slid in the last step and has slid at least
+    /// [`SLIP_NOTICE_M`] or turned [`SLIP_NOTICE_RAD`] since it started to (a slip the
+    /// operator sees; shorter episodes are creep, modelled but not reported).
+    pub slipping: bool,
+    /// The bar slid in the jaw in the last step (the kinetic limits applied).
+    pub sliding: bool,
+    /// Slide (m) and turn (rad) of the bar in the jaw since the current sliding began.
+    pub episode: [f64; 2],
+    /// Slip of the bar along the jaw's depth axis since the grasp (m, signed, jaw frame z).
+    pub depth_slip_m: f64,
+    /// Slip onsets since reset.
+    pub slips: u64,
+    /// Grasps lost by slipping since reset (the bar slid out of the pads).
+    pub drops: u64,
+    /// The grasp was lost by slipping and the jaw has not opened since: it cannot take the
+    /// handle again until it opens past it.
+    pub lost: bool,
+    /// The handle's grasp point in the jaw frame at the grasp (m).
+    handle0: Vector3<f64>,
+}
+
+impl GripState {
+    /// A new grasp: the slip measure restarts from the handle at `handle_jaw` (jaw frame).
+    pub(super) fn grasped(&mut self, handle_jaw: Vector3<f64>) {
+        self.load_fraction = 0.0;
+        self.slipping = false;
+        self.sliding = false;
+        self.episode = [0.0; 2];
+        self.depth_slip_m = 0.0;
+        self.handle0 = handle_jaw;
+    }
 }
 
 impl Constraint {
@@ -50,6 +182,7 @@ impl Constraint {
         tools: [&Isometry3<f64>; 2],
         r: &[Vector3<f64>; 2],
         sp: &StepParams,
+        grip: [Option<JawGrip>; 2],
     ) -> Constraint {
         let (o, ot) = object;
         let active = [0, 1].map(|i| arms[i].0.holding && arms[i].1.factor.is_some());
@@ -94,6 +227,7 @@ impl Constraint {
             r: *r,
             c_const,
             kd: 2.0 * sp.constraint_omega,
+            grip,
         }
     }
 
@@ -101,7 +235,8 @@ impl Constraint {
     /// make each active arm's tool acceleration match its grasp point's, with the arms' free
     /// accelerations `qdd` and the object's free acceleration `acc_o`; adds their effect to
     /// both (q̈ −= H̃⁻¹Jᵀf, a_o += M̃⁻¹Wf). `jw`, `qd`: the arms' world Jacobians and joint
-    /// rates; `vo`: the object's twist. Zero for an arm not holding.
+    /// rates; `vo`: the object's twist. Zero for an arm not holding. A jaw with a finite grip
+    /// transmits at most its friction limits ([`JawGrip`]); its [`GripOut`] says how it fared.
     #[allow(clippy::too_many_arguments)]
     pub(super) fn apply(
         &self,
@@ -112,9 +247,10 @@ impl Constraint {
         vo: &Vector6<f64>,
         qdd: &mut [Vector6<f64>; 2],
         acc_o: &mut Vector6<f64>,
-    ) -> [Vector6<f64>; 2] {
+    ) -> ([Vector6<f64>; 2], [GripOut; 2]) {
+        let mut grip = [GripOut::default(); 2];
         let Some(factor) = &self.factor else {
-            return [Vector6::zeros(); 2];
+            return ([Vector6::zeros(); 2], grip);
         };
         let mut b = [Vector6::zeros(); 2];
         for i in 0..2 {
@@ -125,7 +261,7 @@ impl Constraint {
                 b[i] = jw[i] * qdd[i] - grasp::grasp_point_twist(r, acc_o) - ci;
             }
         }
-        let f = match factor {
+        let mut f = match factor {
             Factor::One(i, f) => {
                 let mut out = [Vector6::zeros(); 2];
                 out[*i] = f.solve(&b[*i]);
@@ -137,6 +273,11 @@ impl Constraint {
             }
         };
         for i in 0..2 {
+            if let (true, Some(g)) = (self.active[i], &self.grip[i]) {
+                (f[i], grip[i]) = g.limit(&f[i]);
+            }
+        }
+        for i in 0..2 {
             if self.active[i] {
                 if let Some(h) = &arms[i].factor {
                     qdd[i] -= h.backward(&(arms[i].z * f[i]));
@@ -144,7 +285,7 @@ impl Constraint {
                 *acc_o += object.mobility_times(&grasp::wrench_at_com(&self.r[i], &f[i]));
             }
         }
-        f
+        (f, grip)
     }
 
     /// The internal wrench F_int (eq. 3.41) of contact wrenches `fc` while both arms hold;
@@ -155,5 +296,58 @@ impl Constraint {
         } else {
             Vector6::zeros()
         }
+    }
+}
+
+/// The slip stage (after the sub-steps, per holding arm with `out` from the last sub-step):
+/// records the load fraction; while the jaw slips, moves its grasp frame with the bar in the
+/// friction-carried directions (translation along the bar and the depth axis, rotation about
+/// the bar and closing axes; the closing-axis translation and the depth-axis rotation keep
+/// their constraint error for the Baumgarte terms), measures the slip along the depth axis
+/// from where the handle (`handle_m`, object frame) was taken, and lets go when it exceeds
+/// the travel; an episode is reported ([`GripState::slipping`], counted in `slips`) once it
+/// has slid [`SLIP_NOTICE_M`] or turned [`SLIP_NOTICE_RAD`]. `tool`, `object`:
+/// world poses after the step.
+pub(super) fn slip_stage(
+    a: &mut ArmState,
+    out: &GripOut,
+    gp: &GripParams,
+    handle_m: &Vector3<f64>,
+    tool: &Isometry3<f64>,
+    object: &Isometry3<f64>,
+) {
+    a.grip.load_fraction = if a.holding { out.load_fraction } else { 0.0 };
+    a.grip.sliding = a.holding && out.slipping;
+    if !a.grip.sliding {
+        a.grip.slipping = false;
+        a.grip.episode = [0.0; 2];
+        return;
+    }
+    // δ: the tool's pose in the desired (grasp) frame, jaw-frame coordinates.
+    let delta = a.grasp_rel.inverse() * (object.inverse() * tool);
+    let t = delta.translation.vector;
+    let rv = delta.rotation.scaled_axis();
+    let slide = Isometry3::from_parts(
+        Translation3::new(t.x, 0.0, t.z),
+        UnitQuaternion::from_scaled_axis(Vector3::new(rv.x, rv.y, 0.0)),
+    );
+    a.grasp_rel *= slide;
+    a.grip.episode[0] += t.x.hypot(t.z);
+    a.grip.episode[1] += rv.x.hypot(rv.y);
+    if !a.grip.slipping
+        && (a.grip.episode[0] >= SLIP_NOTICE_M || a.grip.episode[1] >= SLIP_NOTICE_RAD)
+    {
+        a.grip.slipping = true;
+        a.grip.slips += 1;
+    }
+    let handle_jaw = a.grasp_rel.inverse() * Point3::from(*handle_m);
+    a.grip.depth_slip_m = handle_jaw.z - a.grip.handle0.z;
+    if a.grip.depth_slip_m.abs() > gp.slip_travel_m {
+        a.holding = false;
+        a.contact_wrench = [0.0; 6];
+        a.grip.slipping = false;
+        a.grip.sliding = false;
+        a.grip.lost = true;
+        a.grip.drops += 1;
     }
 }

@@ -35,14 +35,18 @@
 //!
 //! # Simplifications (not modelled)
 //! * The jaw is a flow-limited actuator (opening rate ∝ command, Table 1-1 speed) with a clamp
-//!   force, not a chamber model; the grasp is rigid whatever the clamp force (no slip).
+//!   force, not a chamber model; its grip on a handle is rigid up to the friction limits of
+//!   the clamp force and slips beyond them (`constraint.rs`, "Finite grip"), or rigid
+//!   whatever the load with [`SimParams::rigid_grasp`].
 //! * Contact is jaw–handle only (capture radius) and box–seabed (corner penalty springs with
 //!   friction); links do not collide with the object, the seabed or each other. With a panel
 //!   ([`SimParams::panel`]) the jaws also take its valve T-bar and hot stab, whose loads act
 //!   on the arms as JᵀF (see [`crate::panel`]); links do not collide with the panel either.
 //! * Valves are ideal critically lapped spools with instantaneous response (Lim eq. 3.51);
 //!   no valve leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
-//! * Buoyancy (optional) uses the mean link density; drag is an optional quadratic joint term.
+//! * Water ([`StepParams::environment`], [`water`]): buoyancy from the links' mean density and
+//!   the box's size, Morison drag and added mass on link pieces and the box, a uniform steady
+//!   current; no wake, wall or free-surface effects, no rotational drag on the box.
 //!
 //! # Layout
 //! * here: parameters, inputs, state and the [`Simulation`] with its public API;
@@ -62,16 +66,19 @@ mod panel;
 mod pipeline;
 pub mod scenario;
 mod setup;
+pub mod water;
 
 pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
+pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
+pub use water::{Current, Environment, Medium, Water};
 
 use nalgebra::{Isometry3, Matrix6, Vector3};
 
 use crate::Error;
 use crate::control::{self, ControlParams};
 use crate::dynamics::{self, DynData, Inertials};
-use crate::grasp::{GraspState, ObjectParams};
+use crate::grasp::{GraspState, GripParams, ObjectParams};
 use crate::hydraulics::{Faults, HydraulicParams, N_ACT};
 use crate::kinematics::{self, KinData};
 use crate::model::Model;
@@ -112,13 +119,10 @@ pub struct StepParams {
     pub substeps: usize,
     /// Gravity, world frame (m/s²): (0, 0, −9.81).
     pub gravity: Vector3<f64>,
-    /// Buoyancy of links and object in sea water: false (the thesis simulates in air).
-    pub buoyancy: bool,
-    /// Sea-water density for buoyancy (kg/m³): 1 025.
-    pub water_density_kgm3: f64,
-    /// Quadratic joint drag coefficient (N·m·s²/rad²), τ = −c·q̇|q̇|: 0 (off). A crude stand-in
-    /// for hydrodynamic drag on the links.
-    pub joint_drag: f64,
+    /// The medium: [`Environment::Air`] (the thesis simulates in air) or sea water with
+    /// buoyancy, drag, added mass and a current ([`water`]). Training sessions and exercises
+    /// use [`Environment::subsea`] ([`SimParams::training`]).
+    pub environment: Environment,
     /// Grasp constraint stabilization natural frequency (rad/s): 40 (Baumgarte, critically
     /// damped: k_p = ω², k_d = 2ω).
     pub constraint_omega: f64,
@@ -138,9 +142,7 @@ impl Default for StepParams {
             dt_s: 1.0e-3,
             substeps: 1,
             gravity: Vector3::new(0.0, 0.0, -9.81),
-            buoyancy: false,
-            water_density_kgm3: 1025.0,
-            joint_drag: 0.0,
+            environment: Environment::Air,
             constraint_omega: 40.0,
             constraint_compliance: 1.0e-7,
             stop_stiffness: 1.0e6,
@@ -178,6 +180,12 @@ pub struct SimParams {
     /// The intervention panel (valve, hot stab): `None` (the default) leaves the simulation
     /// exactly as without it.
     pub panel: Option<PanelParams>,
+    /// Rigid grasp (Lim §3.5.2.1 assumption (i): no slip whatever the load): false in
+    /// [`SimParams::case_study`] (training: the jaws' grip is finite, [`GripParams`]); the
+    /// case-study scenarios set it true, the thesis's setting.
+    pub rigid_grasp: bool,
+    /// The jaws' friction grip on the handles (used unless `rigid_grasp`).
+    pub grip: GripParams,
 }
 
 /// Control method (Lim §4.1 "control mode").
@@ -262,6 +270,8 @@ pub struct ArmState {
     pub relief_open: [bool; N_ACT],
     /// Rising edges of relief opening, all actuators, since reset.
     pub relief_events: u64,
+    /// The jaw's grip on the handle: load fraction, slip, slip and drop counts.
+    pub grip: GripState,
     /// Joint-servo integrated reference (rad).
     servo_ref: [f64; N_ACT],
     servo_active: bool,
@@ -352,6 +362,7 @@ impl Simulation {
             contact_wrench: [0.0; 6],
             relief_open: [false; N_ACT],
             relief_events: 0,
+            grip: GripState::default(),
             servo_ref: [0.0; N_ACT],
             servo_active: false,
         };
@@ -407,17 +418,14 @@ impl Simulation {
             a.contact_wrench = [0.0; 6];
             a.relief_open = [false; N_ACT];
             a.relief_events = 0;
+            a.grip = GripState::default();
             a.servo_active = false;
             a.servo_ref = a.q;
             // Pressures that hold the arm still: A_I P_I − A_O P_O = G/Ĵ, mean half supply.
             let w = &mut self.work[i];
             kinematics::jacobian(model, &mut w.kin, &a.q);
             let mut tau = [0.0; N_ACT];
-            let rho = if self.params.step.buoyancy {
-                self.params.step.water_density_kgm3
-            } else {
-                0.0
-            };
+            let rho = self.params.step.environment.density_kgm3();
             dynamics::rnea(
                 model,
                 &ap.inertials,
@@ -441,15 +449,16 @@ impl Simulation {
             }
         }
         let op = &self.params.object;
-        // Settled on its corner springs: sunk by m·g/(4k).
-        let sink = op.mass_kg * g.norm() / (4.0 * op.contact_stiffness_n_m);
+        // Settled on its corner springs: sunk by (m − ρV)·g/(4k), its weight in the medium.
+        let wet_kg = object::wet_mass_kg(op, &self.params.step.environment);
+        let sink = wet_kg * g.norm() / (4.0 * op.contact_stiffness_n_m);
         let mut pose = op.initial_pose;
         pose.translation.vector.z -= sink;
         self.state.object = ObjectState {
             pose,
             velocity: Vector3::zeros(),
             angular_velocity: Vector3::zeros(),
-            seabed_force_n: op.mass_kg * g.norm(),
+            seabed_force_n: wet_kg * g.norm(),
         };
         self.state.time_s = 0.0;
         self.state.steps = 0;
@@ -521,6 +530,24 @@ impl Simulation {
     /// Relief events of both arms since reset.
     pub fn relief_events(&self) -> u64 {
         self.state.arms[0].relief_events + self.state.arms[1].relief_events
+    }
+    /// The medium the arms work in (with the current, when submerged).
+    pub fn environment(&self) -> &Environment {
+        &self.params.step.environment
+    }
+    /// Sets the water's current (applies from the next step). In air there is no water to
+    /// move: an error, and nothing changes.
+    pub fn set_current(&mut self, current: Current) -> Result<(), Error> {
+        match &mut self.params.step.environment {
+            Environment::Subsea(w) => {
+                w.current = current;
+                Ok(())
+            }
+            Environment::Air => Err(Error::InvalidParameter {
+                what: "current",
+                reason: "the simulation is in air: there is no water current to set".into(),
+            }),
+        }
     }
     /// Steps rolled back because a value went non-finite (a safety net; 0 in every test).
     pub fn numerical_faults(&self) -> u64 {

@@ -4,6 +4,7 @@
 
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
+use super::water::{BoxHydro, Environment};
 use super::{ObjectState, StepParams};
 use crate::grasp::{self, ObjectParams};
 use crate::linalg::Ldlt;
@@ -15,10 +16,14 @@ pub(super) struct ObjectTerms {
     iw: Matrix3<f64>,
     /// Its inverse.
     iw_inv: Matrix3<f64>,
-    /// 1 / mass (1/kg).
+    /// 1 / (mass + added mass) (1/kg).
     inv_mass: f64,
     /// Weight less buoyancy (N), world frame.
     weight: Vector3<f64>,
+    /// Object rotation (body to world) at the start of the step, for the drag's body axes.
+    rot: Matrix3<f64>,
+    /// Drag and current in water (`None` in air).
+    hydro: Option<BoxHydro>,
     /// Seabed wrench and normal force at the start of the step (the first sub-step's).
     seabed0: (Vector6<f64>, f64),
     /// Factor of M̃ = M_o + h·C (C the seabed contact's damping matrix) while anything
@@ -63,10 +68,13 @@ impl ObjectTerms {
         };
         let iw = world(&d);
         let contact = grasp::seabed_contact(op, &o.pose, &o.velocity, &o.angular_velocity);
+        let hydro = sp.environment.water().map(|w| BoxHydro::new(&op.size_m, w));
+        // Effective translational mass: the body's and its added mass (isotropic).
+        let mass = op.mass_kg + hydro.map_or(0.0, |b| b.added_mass_kg);
         let factor = contact.damping.and_then(|c| {
             let mut m = c * h;
             for k in 0..3 {
-                m[(k, k)] += op.mass_kg;
+                m[(k, k)] += mass;
             }
             let mut rot_block = m.fixed_view_mut::<3, 3>(3, 3);
             rot_block += iw;
@@ -78,16 +86,13 @@ impl ObjectTerms {
             Some(f) if held => Some(f.inverse()),
             _ => None,
         };
-        let buoyant_kg = if sp.buoyancy {
-            sp.water_density_kgm3 * op.size_m.x * op.size_m.y * op.size_m.z
-        } else {
-            0.0
-        };
         ObjectTerms {
             iw,
             iw_inv: world(&d_inv),
-            inv_mass: 1.0 / op.mass_kg,
-            weight: sp.gravity * (op.mass_kg - buoyant_kg),
+            inv_mass: 1.0 / mass,
+            weight: sp.gravity * wet_mass_kg(op, &sp.environment),
+            rot: *rot.matrix(),
+            hydro,
             seabed0: (contact.wrench, contact.normal_n),
             factor,
             mobility,
@@ -141,16 +146,26 @@ impl ObjectTerms {
             grasp::seabed_wrench(op, &o.pose, &o.velocity, &o.angular_velocity)
         };
         let gyro = o.angular_velocity.cross(&(self.iw * o.angular_velocity));
+        // Drag on the velocity relative to the current, explicit (h·λ ≪ 2: see
+        // [`super::water`]), through the COM (no moment: the box is symmetric).
+        let drag = self
+            .hydro
+            .map_or(Vector3::zeros(), |b| b.drag(&self.rot, &o.velocity));
         let wrench = Vector6::new(
-            self.weight.x + sea[0],
-            self.weight.y + sea[1],
-            self.weight.z + sea[2],
+            self.weight.x + sea[0] + drag.x,
+            self.weight.y + sea[1] + drag.y,
+            self.weight.z + sea[2] + drag.z,
             sea[3] - gyro.x,
             sea[4] - gyro.y,
             sea[5] - gyro.z,
         );
         (self.mobility_times(&wrench), normal)
     }
+}
+
+/// The object's mass less the water it displaces (kg): its weight in the medium over g.
+pub(super) fn wet_mass_kg(op: &ObjectParams, env: &Environment) -> f64 {
+    op.mass_kg - env.density_kgm3() * op.size_m.x * op.size_m.y * op.size_m.z
 }
 
 /// The object's twist [v; ω] (world).

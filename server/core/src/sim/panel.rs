@@ -137,11 +137,7 @@ impl Simulation {
         let w = &self.work[i];
         let twist = w.jw * Vector6::from(self.state.arms[i].qd);
         let sp = &self.params.step;
-        let rho = if sp.buoyancy {
-            sp.water_density_kgm3
-        } else {
-            0.0
-        };
+        let rho = sp.environment.density_kgm3();
         tool_load(p, s, arm, &w.tool, &twist, &sp.gravity, rho)
     }
 

@@ -10,11 +10,13 @@
 //! 4. arm terms, per arm: H, C q̇ + G, J̇q̇, linkage levers and the factor of H̃, with the
 //!    panel load linearly implicit ([`arm::arm_terms`]);
 //! 5. object terms: inertia, weight, implicit seabed damping ([`ObjectTerms::new`]);
-//! 6. the grasp constraint system ([`Constraint::new`]);
+//! 6. the grasp constraint system ([`Constraint::new`]) with each holding jaw's grip limits
+//!    ([`JawGrip::new`]);
 //! 7. the sub-steps ([`Simulation::substep`]): chamber pressures, free accelerations,
-//!    contact wrenches, integration;
-//! 8. outputs: relief events, contact and internal wrenches, time, kinematics
-//!    ([`Simulation::finish_step`]);
+//!    contact wrenches (a slipping jaw's capped at its kinetic friction limits), integration;
+//! 8. outputs: relief events, contact and internal wrenches, time, kinematics, then the slip
+//!    stage: a slipping jaw's grasp frame follows the bar, and the grasp is lost when the bar
+//!    has slid out ([`Simulation::finish_step`], [`constraint::slip_stage`]);
 //! 9. panel items: the valve's 1-DOF step, the stab's pose, phase, depth and side load
 //!    ([`Simulation::panel_update`]; only with a panel).
 //!
@@ -23,7 +25,7 @@
 use nalgebra::{Point3, Vector3, Vector6};
 
 use super::arm::{self, ArmTerms};
-use super::constraint::Constraint;
+use super::constraint::{self, Constraint, GripOut, JawGrip};
 use super::object::{self, ObjectTerms};
 use super::{ControlMethod, Input, Simulation};
 use crate::control::{self, ControlParams, CoopInputs};
@@ -53,6 +55,8 @@ struct SubstepOutput {
     relief: [[bool; N_ACT]; 2],
     /// Contact wrench of each arm on the object (zero when not holding).
     contact: [Vector6<f64>; 2],
+    /// Each jaw's grip.
+    grip: [GripOut; 2],
 }
 
 impl Simulation {
@@ -68,6 +72,7 @@ impl Simulation {
                 &mut self.state.arms[i],
                 &self.params.arms[i].hydraulics.jaw,
                 &self.params.object,
+                &self.params.object.handles_m[i],
                 contact,
                 cmd,
                 &self.work[i].tool,
@@ -153,12 +158,18 @@ impl Simulation {
         });
         let held = st.arms.iter().any(|a| a.holding);
         let object = ObjectTerms::new(&self.params.object, sp, &st.object, held, h);
+        let grip = core::array::from_fn(|i| {
+            st.arms[i]
+                .holding
+                .then(|| JawGrip::new(&self.params, &st.arms[i], &self.work[i].tool))
+        });
         let constraint = Constraint::new(
             [(&st.arms[0], &arms[0]), (&st.arms[1], &arms[1])],
             (&st.object, &object),
             [&self.work[0].tool, &self.work[1].tool],
             r,
             sp,
+            grip,
         );
         StepScratch {
             h,
@@ -184,7 +195,7 @@ impl Simulation {
         let (mut acc_o, seabed_normal_n) =
             s.object.free_acceleration(&self.params.object, o, first);
         let arms = &self.state.arms;
-        out.contact = s.constraint.apply(
+        (out.contact, out.grip) = s.constraint.apply(
             [&s.arms[0], &s.arms[1]],
             &s.object,
             [&self.work[0].jw, &self.work[1].jw],
@@ -221,6 +232,14 @@ impl Simulation {
         self.state.steps += 1;
         self.update_kinematics();
         for i in 0..2 {
+            constraint::slip_stage(
+                &mut self.state.arms[i],
+                &out.grip[i],
+                &self.params.grip,
+                &self.params.object.handles_m[i],
+                &self.work[i].tool,
+                &self.state.object.pose,
+            );
             let c = self.in_contact(i);
             self.state.arms[i].contact = c || self.state.arms[i].holding;
         }

@@ -193,9 +193,14 @@ const CLOSE: f64 = -1.0;
 /// Both valves and jaw at rest.
 const REST: ArmCommand = ArmCommand::jaw(0.0);
 
-/// Builds scenario `name` for the two models.
+/// Builds scenario `name` for the two models, in the thesis's setting: in air, rigid grasp
+/// (Lim §3.5.2.1 assumption (i)) and the closed loop's equal share W⁺ (eq. 3.46). Set
+/// [`SimParams::rigid_grasp`] false on the result for the jaws' finite grip (and
+/// [`crate::control::ControlParams::moment_free_share`] true for the share it can carry).
 pub fn scenario(name: &str, left: &Model, right: &Model) -> Result<Scenario, Error> {
-    let params = SimParams::case_study(left, right)?;
+    let mut params = SimParams::case_study(left, right)?;
+    params.rigid_grasp = true;
+    params.control.moment_free_share = false;
     let Some(idx) = SCENARIOS.iter().position(|(n, _)| *n == name) else {
         return Err(Error::InvalidParameter {
             what: "scenario",
@@ -369,6 +374,8 @@ impl Scenario {
 pub struct Summary {
     /// Scenario name.
     pub scenario: &'static str,
+    /// The medium it ran in: `"air"` (the thesis's setting, every case study) or `"subsea"`.
+    pub environment: &'static str,
     /// Highest line pressure of any actuator (Pa).
     pub peak_line_pressure_pa: f64,
     /// Relief valve setting (Pa), for reference.
@@ -395,6 +402,20 @@ pub struct Summary {
     pub sim_seconds: f64,
     /// Steps rolled back for non-finite values (0 expected).
     pub numerical_faults: u64,
+    /// The grasp model the run used: `rigid` (Lim's assumption (i), the case studies'
+    /// default) or `finite` (the jaws' friction grip, [`crate::grasp::GripParams`]).
+    pub grasp_model: &'static str,
+    /// Highest load fraction λ of each jaw (left, right) against its static friction limits
+    /// (> 1: a finite grip would slip there; [`crate::grasp::GripCapacity::load_fraction`]).
+    pub peak_grip_load: [f64; 2],
+    /// Slip onsets of both jaws (0 with the rigid grasp).
+    pub slips: u64,
+    /// Grasps lost by slipping, both jaws.
+    pub drops: u64,
+    /// Time of the first slip (s), if any.
+    pub first_slip_s: Option<f64>,
+    /// Time of the first grasp lost by slipping (s), if any.
+    pub first_drop_s: Option<f64>,
 }
 
 /// Rows are recorded every this many steps (10 ms, 100 Hz) to keep the CSV small.
@@ -418,6 +439,7 @@ pub fn run(
     let z0 = sim.object().pose.translation.z;
     let mut s = Summary {
         scenario: sc.name,
+        environment: sc.params.step.environment.name(),
         peak_line_pressure_pa: 0.0,
         relief_setting_pa: relief,
         peak_internal_force_n: 0.0,
@@ -431,6 +453,16 @@ pub fn run(
         final_max_joint_speed_rad_s: 0.0,
         sim_seconds: 0.0,
         numerical_faults: 0,
+        grasp_model: if sc.params.rigid_grasp {
+            "rigid"
+        } else {
+            "finite"
+        },
+        peak_grip_load: [0.0; 2],
+        slips: 0,
+        drops: 0,
+        first_slip_s: None,
+        first_drop_s: None,
     };
     on_row(&row(
         &sim,
@@ -455,6 +487,14 @@ pub fn run(
                         s.peak_line_pressure_pa.max(arm.p_in[j]).max(arm.p_out[j]);
                 }
                 s.peak_grasp_error_m = s.peak_grasp_error_m.max(sim.grasp_position_error(a));
+                let g = &arm.grip;
+                s.peak_grip_load[a.index()] = s.peak_grip_load[a.index()].max(g.load_fraction);
+                if g.slipping && s.first_slip_s.is_none() {
+                    s.first_slip_s = Some(sim.time_s());
+                }
+                if g.drops > 0 && s.first_drop_s.is_none() {
+                    s.first_drop_s = Some(sim.time_s());
+                }
                 if sim.time_s() > total - 1.0 {
                     for j in 0..N_ACT {
                         s.final_max_joint_speed_rad_s =
@@ -482,6 +522,8 @@ pub fn run(
         s.closed_loop_lift_m = Some(b - a);
     }
     s.relief_events = sim.relief_events();
+    s.slips = Arm::BOTH.iter().map(|&a| sim.arm(a).grip.slips).sum();
+    s.drops = Arm::BOTH.iter().map(|&a| sim.arm(a).grip.drops).sum();
     s.final_grasp_state = sim.grasp_state();
     s.sim_seconds = sim.time_s();
     s.numerical_faults = sim.numerical_faults();

@@ -4,11 +4,11 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
-use super::{ArmParams, SimParams, StepParams};
+use super::{ArmParams, Environment, SimParams, StepParams};
 use crate::Error;
 use crate::control::ControlParams;
 use crate::dynamics::Inertials;
-use crate::grasp::ObjectParams;
+use crate::grasp::{GripParams, ObjectParams};
 use crate::hydraulics::{Faults, HydraulicParams, N_ACT};
 use crate::model::Model;
 use crate::panel::PanelParams;
@@ -30,7 +30,8 @@ impl SimParams {
     /// What [`super::Simulation::new`] requires of `left`, `right` and these parameters:
     /// 6-joint arms with 6 links of finite positive mass, finite initial angles, a step in
     /// (0, 10 ms] with 1..=1000 sub-steps, a positive object mass, and a panel (if any) that
-    /// passes [`PanelParams::check`] with grips the jaws can open around.
+    /// passes [`PanelParams::check`] with grips the jaws can open around, and water (if any)
+    /// of positive finite density with a current within [`super::Current::new`]'s bounds.
     pub fn check(&self, left: &Model, right: &Model) -> Result<(), Error> {
         for m in [&left, &right] {
             if m.dof() != N_ACT {
@@ -80,6 +81,18 @@ impl SimParams {
                 reason: "mass must be > 0".into(),
             });
         }
+        if let Some(w) = s.environment.water() {
+            let c = &w.current;
+            if !(w.density_kgm3.is_finite() && w.density_kgm3 > 0.0)
+                || super::Current::new(c.speed_m_s, c.heading_deg).is_err()
+            {
+                return Err(Error::InvalidParameter {
+                    what: "environment",
+                    reason: "water density must be finite and > 0, the current within bounds"
+                        .into(),
+                });
+            }
+        }
         if let Some(p) = &self.panel {
             let jaw = self.arms[0]
                 .hydraulics
@@ -93,7 +106,10 @@ impl SimParams {
 
     /// The case-study setup: two Magnum arms ([`HydraulicParams::magnum`], [`Inertials::magnum`]),
     /// bases per [`LEFT_BASE_Y_M`], the 50 kg box at [`OBJECT_XY_M`] on the seabed at
-    /// [`SEABED_Z_M`], default step and control parameters.
+    /// [`SEABED_Z_M`], default step and control parameters, the jaws' finite grip
+    /// ([`GripParams::default`]) and the closed loop's moment-free load share
+    /// ([`ControlParams::moment_free_share`]); the case-study scenarios switch both back to the
+    /// thesis's rigid grasp and equal share W⁺.
     pub fn case_study(left: &Model, right: &Model) -> Result<SimParams, Error> {
         let arm = |m: &Model, y: f64| -> Result<ArmParams, Error> {
             let inertials = Inertials::magnum(m)?;
@@ -110,9 +126,27 @@ impl SimParams {
             arms: [arm(left, LEFT_BASE_Y_M)?, arm(right, 0.0)?],
             object: ObjectParams::case_study_box(OBJECT_XY_M[0], OBJECT_XY_M[1], SEABED_Z_M),
             step: StepParams::default(),
-            control: ControlParams::default(),
+            // Training: the jaws' finite grip, and the closed loop's share that it can carry.
+            control: ControlParams {
+                moment_free_share: true,
+                ..ControlParams::default()
+            },
             panel: None,
+            rigid_grasp: false,
+            grip: GripParams::default(),
         })
+    }
+
+    /// The training set-up: [`SimParams::case_study`] submerged in still sea water
+    /// ([`Environment::subsea`]) — what sessions and exercises run unless they ask for air.
+    pub fn training(left: &Model, right: &Model) -> Result<SimParams, Error> {
+        Ok(Self::case_study(left, right)?.with_environment(Environment::subsea()))
+    }
+
+    /// These parameters in `environment`.
+    pub fn with_environment(mut self, environment: Environment) -> SimParams {
+        self.step.environment = environment;
+        self
     }
 
     /// These parameters with the intervention panel `panel` (e.g. [`PanelParams::standard`],

@@ -31,3 +31,19 @@ pub(crate) fn run_while(
     }
     sc.segments.len()
 }
+
+/// Runs `sc` with two Magnum arms from reset, collecting every post-processing row; checks
+/// that no step went non-finite.
+pub(crate) fn run_rows(
+    sc: &Scenario,
+) -> (
+    seaarms_core::sim::scenario::Summary,
+    Vec<seaarms_core::sim::scenario::Row>,
+) {
+    let m = super::builtin("magnum");
+    let mut rows = Vec::new();
+    let s = seaarms_core::sim::scenario::run(sc, &m, &m, |r| rows.push(r.clone())).expect("run");
+    println!("{}: {s:?}", sc.name);
+    assert_eq!(s.numerical_faults, 0);
+    (s, rows)
+}

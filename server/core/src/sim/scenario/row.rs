@@ -55,6 +55,10 @@ pub struct Row {
     pub dual_yoshikawa: f64,
     /// Dual-arm translational isotropy.
     pub dual_isotropy: f64,
+    /// Each jaw's load fraction λ against its static friction limits (0 when not holding).
+    pub grip_load: [f64; 2],
+    /// Each jaw slipping (1) or not (0).
+    pub slipping: [f64; 2],
 }
 
 impl Row {
@@ -94,6 +98,10 @@ impl Row {
             "right_isotropy",
             "dual_yoshikawa",
             "dual_isotropy",
+            "left_grip_load",
+            "right_grip_load",
+            "left_slipping",
+            "right_slipping",
         ] {
             h.push(c.into());
         }
@@ -134,6 +142,10 @@ impl Row {
             self.isotropy[1],
             self.dual_yoshikawa,
             self.dual_isotropy,
+            self.grip_load[0],
+            self.grip_load[1],
+            self.slipping[0],
+            self.slipping[1],
         ] {
             f(Cell::Num(x));
         }
@@ -154,6 +166,8 @@ pub fn row(sim: &Simulation, stage: &'static str) -> Row {
     let mut p_out = q;
     let mut contact = [[0.0; 6]; 2];
     let mut jaw_m = [0.0; 2];
+    let mut grip_load = [0.0; 2];
+    let mut slipping = [0.0; 2];
     let mut yoshikawa = [0.0; 2];
     let mut isotropy = [0.0; 2];
     let mut jt: Vec<DMatrix<f64>> = Vec::with_capacity(2);
@@ -167,6 +181,8 @@ pub fn row(sim: &Simulation, stage: &'static str) -> Row {
         p_out[i] = a.p_out;
         contact[i] = a.contact_wrench;
         jaw_m[i] = a.jaw_opening_m;
+        grip_load[i] = a.grip.load_fraction;
+        slipping[i] = if a.grip.slipping { 1.0 } else { 0.0 };
         let j = sim.jacobian_world(arm);
         let jtr = DMatrix::from_fn(3, N_ACT, |r, c| j[(r, c)]);
         if let Ok(m) = measures(&jtr) {
@@ -199,5 +215,7 @@ pub fn row(sim: &Simulation, stage: &'static str) -> Row {
         isotropy,
         dual_yoshikawa,
         dual_isotropy,
+        grip_load,
+        slipping,
     }
 }

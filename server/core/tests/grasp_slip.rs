@@ -1,0 +1,148 @@
+//! The jaws' finite grip (issue 17 item 2): friction from the Table 1-1 clamp force bounds
+//! what each jaw transmits (closed forms checked here), a box loaded beyond the two jaws'
+//! capacity slips out of them in the open-loop dual lift of Lim's case study 3 (§4.2.3) and
+//! falls back onto the seabed, the nominal 50 kg box lifted in closed loop (case study 4's
+//! lift, §4.2.4) does not slip, and the rigid-grasp switch restores Lim's assumption (i)
+//! (§3.5.2.1: no slip whatever the load).
+
+mod common;
+
+use common::scenario_util::run_rows;
+use seaarms_core::grasp::{GraspState, GripCapacity, GripParams, ObjectParams};
+use seaarms_core::sim::Environment;
+use seaarms_core::sim::scenario::{Scenario, scenario};
+
+/// Lim Table 1-1: "Clamp force 150 kg" = 150 kgf.
+const CLAMP_N: f64 = 150.0 * 9.80665;
+
+/// The overloaded box (kg): its weight, 2 452 N, is 1.39× the two jaws' static tangential
+/// capacity (2 × 2μN = 1 765 N at μ = 0.3) and 2.1× their kinetic one (1 177 N).
+const OVERLOADED_KG: f64 = 250.0;
+
+fn case(name: &str, rigid: bool, mass_kg: f64) -> Scenario {
+    let m = common::builtin("magnum");
+    let mut sc = scenario(name, &m, &m).expect("scenario");
+    assert!(
+        sc.params.rigid_grasp,
+        "case studies default to Lim's rigid grasp"
+    );
+    sc.params.rigid_grasp = rigid;
+    sc.params.object.mass_kg = mass_kg;
+    // The environment these figures assume: in air (the thesis's case-study setting).
+    sc.params.step.environment = Environment::Air;
+    sc
+}
+
+/// Start (s) of the first segment of `stage`.
+fn stage_start(sc: &Scenario, stage: &str) -> f64 {
+    let mut t = 0.0;
+    for seg in &sc.segments {
+        if seg.stage == stage {
+            return t;
+        }
+        t += seg.duration_s;
+    }
+    panic!("no stage {stage}");
+}
+
+#[test]
+fn capacity_matches_its_closed_forms_at_the_rated_clamp_force() {
+    let gp = GripParams::default();
+    let op = ObjectParams::case_study_box(1.0, 0.5, -0.45);
+    let c = GripCapacity::of(&gp, &op, CLAMP_N, false);
+    // Coulomb at two pads: F = 2 μ_s N = 2 × 0.3 × 1 471 = 882.6 N.
+    assert!((c.force_n - 2.0 * 0.3 * CLAMP_N).abs() < 1e-9, "{c:?}");
+    assert!((c.force_n - 882.6).abs() < 0.1);
+    // Roll: the flats' tipping moment N·s = 1 471 × 0.04 = 58.8 N·m.
+    assert!((c.roll_nm - CLAMP_N * 0.04).abs() < 1e-9);
+    // Torsion: 2 μ N ρ̄ with ρ̄ the mean distance over the 5 × 4 cm pad patch, here by a
+    // midpoint sum (independent of the closed form the code uses).
+    let n = 300;
+    let mut sum = 0.0;
+    for i in 0..n {
+        for j in 0..n {
+            let x = (i as f64 + 0.5) / n as f64 * 0.05 - 0.025;
+            let y = (j as f64 + 0.5) / n as f64 * 0.04 - 0.02;
+            sum += x.hypot(y);
+        }
+    }
+    let rho = sum / (n * n) as f64;
+    assert!(
+        (c.torsion_nm - 2.0 * 0.3 * CLAMP_N * rho).abs() < 1e-3,
+        "{c:?}"
+    );
+    // Kinetic: μ_k = 0.2 for the friction limits; the roll limit is geometric.
+    let k = GripCapacity::of(&gp, &op, CLAMP_N, true);
+    assert!((k.force_n - 2.0 * 0.2 * CLAMP_N).abs() < 1e-9);
+    assert_eq!(k.roll_nm, c.roll_nm);
+    // Half the clamp force, half the friction.
+    let h = GripCapacity::of(&gp, &op, 0.5 * CLAMP_N, false);
+    assert!((h.force_n - 0.5 * c.force_n).abs() < 1e-9);
+}
+
+#[test]
+fn overloaded_open_loop_dual_lift_slips_and_drops_the_box() {
+    let sc = case("case3-dual-open-loop", false, OVERLOADED_KG);
+    let (s, rows) = run_rows(&sc);
+    assert_eq!(s.grasp_model, "finite");
+    let c_start = stage_start(&sc, "C");
+    let first_slip = s.first_slip_s.expect("the overloaded jaws slip");
+    let first_drop = s.first_drop_s.expect("and lose the box");
+    println!("slip at {first_slip:.3} s, drop at {first_drop:.3} s (stage C from {c_start} s)");
+    assert!(first_slip >= c_start && first_drop > first_slip);
+    assert!(s.slips >= 1 && s.drops >= 1, "{s:?}");
+    assert!(s.peak_grip_load.iter().any(|&l| l > 1.0));
+    // Once both jaws have lost it, the box falls back onto the seabed (its resting height)
+    // and stays there; the jaws do not take it again while closed.
+    let rest_z = rows[0].object_xyz[2];
+    let last = rows.last().expect("rows");
+    assert!(
+        (last.object_xyz[2] - rest_z).abs() < 0.01,
+        "box at {} m, rests at {rest_z} m",
+        last.object_xyz[2]
+    );
+    assert!(
+        rows.iter()
+            .filter(|r| r.t_s > first_drop + 1.0)
+            .all(|r| r.grasp != GraspState::BothHolding),
+        "a jaw took the box again"
+    );
+    // Deterministic: the same run again gives the same summary.
+    let (again, _) = run_rows(&sc);
+    assert_eq!(format!("{s:?}"), format!("{again:?}"));
+}
+
+#[test]
+fn rigid_grasp_switch_holds_the_overloaded_box() {
+    // Lim's assumption (i): the same overloaded lift never slips; the load fraction the
+    // rigid grasp demanded is still reported (far beyond the friction limits).
+    let sc = case("case3-dual-open-loop", true, OVERLOADED_KG);
+    let (s, _) = run_rows(&sc);
+    assert_eq!(s.grasp_model, "rigid");
+    assert_eq!((s.slips, s.drops), (0, 0));
+    assert!(s.first_slip_s.is_none());
+    assert!(s.peak_grip_load.iter().all(|&l| l > 1.0), "{s:?}");
+}
+
+#[test]
+fn nominal_closed_loop_lift_does_not_slip() {
+    // Case study 4 up to the end of its lift stage C (A–C: grasp, switch to the cooperative
+    // closed loop, lift 0.2 m, hold), the nominal 50 kg box, the jaws' finite grip and the
+    // closed loop's moment-free load share (the training setting).
+    let mut sc = case("case4-dual-closed-loop", false, 50.0);
+    sc.params.control.moment_free_share = true;
+    let end = sc
+        .segments
+        .iter()
+        .rposition(|s| s.stage == "C")
+        .expect("stage C");
+    sc.segments.truncate(end + 1);
+    let (s, rows) = run_rows(&sc);
+    println!("peak grip load (left, right): {:?}", s.peak_grip_load);
+    assert_eq!((s.slips, s.drops), (0, 0), "{s:?}");
+    assert!(rows.iter().all(|r| r.slipping == [0.0, 0.0]));
+    assert_eq!(s.final_grasp_state, GraspState::BothHolding);
+    let lift = s.closed_loop_lift_m.expect("lift stage");
+    let want = s.commanded_lift_m.expect("commanded");
+    assert!((lift - want).abs() <= 0.01, "lifted {lift} m for {want} m");
+}

@@ -525,7 +525,8 @@ enum Output {
 }
 
 const NOTES: &str = "Translational measures (rows vx vy vz). Fixed orientation = the posture at q = 0 \
-     (approach axis horizontal along +X), pitch 90 deg / yaw 90 deg. Targets in each arm's base \
+     (approach axis horizontal along +X), pitch 90 deg / yaw 90 deg; pitch > 90 deg tilts the jaw \
+     down, yaw > 90 deg turns it towards +Y. Targets in each arm's base \
      frame; left arm base at Y = left_base_y_m. Unreachable rows have null measures; the first \
      unreachable row of a sweep marks the workspace boundary.";
 

@@ -18,13 +18,13 @@ models = {
   "dh": "standard",
   "joints": [
     j(a=L["l1"], alpha=90, lim=(-25, 25), vel=20, name="swing"),
-    j(a=L["l2"], alpha=0, lim=(-5, 85), vel=20, name="shoulder"),
+    j(a=L["l2"], alpha=0, lim=(0, 90), vel=20, name="shoulder"),
     j(a=L["l3"], alpha=0, lim=(-130, 0), vel=30, name="elbow"),
-    j(a=L["l4"], alpha=-90, lim=(-57.5, 57.5), vel=30, name="pitch"),
+    j(a=L["l4"], alpha=-90, lim=(-55, 60), vel=30, name="pitch"),
     j(a=L["l5"], alpha=90, twist="y", lim=(-60, 60), vel=30, name="yaw"),
     j(d=L["l6"], vel=150, name="rotate"),
   ],
-  "notes": "The thesis prints no link lengths. Chosen: l1=0.10 (swing axis to shoulder), l2=0.56 (shoulder to elbow, cf. the comparable Oberon 7 arm's 0.556 m), l3=0.50 (elbow to pitch), l4=0.12 (pitch to yaw), l5=0.10 (yaw to rotate), l6=0.12 (rotate to jaw centre) m: total 1.50 m = the Table 1-1 reach. Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg) placed so that every point of the case-study workspace (X 0.9-1.4 m, Z 0-0.5 m, Y 0) is reachable within them (grid search; checked by tests/magnum_kinematics.rs) and the Table 1-1 full-extension posture q = 0 is inside: swing -25..25, shoulder -5..85, elbow -130..0 (straight at its upper limit: the full-extension posture of Table 1-1 lies on the boundary), pitch -57.5..57.5 (symmetric), yaw -60..60 deg; rotate is continuous (no limits).",
+  "notes": "The thesis prints no link lengths. Chosen: l1=0.10 (swing axis to shoulder), l2=0.56 (shoulder to elbow, cf. the comparable Oberon 7 arm's 0.556 m), l3=0.50 (elbow to pitch), l4=0.12 (pitch to yaw), l5=0.10 (yaw to rotate), l6=0.12 (rotate to jaw centre) m: total 1.50 m = the Table 1-1 reach. Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg), placed by a grid search (5 deg steps, docs/physics.md 'Arm geometry and joint speeds') so that (a) the Table 1-1 full-extension posture q = 0 is inside, (b) all six Lim 4.3.1.3 points A-F are reachable at the 90/90 start pose and the most rows of the pitch (75-135 deg) and yaw (60-120 deg) studies are (10-13 of 13 pitch rows per point), (c) the case-study workspace (X 0.9-1.4 m, Z 0-0.5 m) stays reachable: swing -25..25, shoulder 0..90 (horizontal to vertical; the straight arm lies on its lower limit), elbow -130..0 (straight at its upper limit), pitch -55..60 (the case studies 3 and 4 tilt the wrist to -48 deg), yaw -60..60 deg; rotate is continuous (no limits). Lengths were searched too (docs/physics.md): with the translational Yoshikawa measure the thesis's X-sweep maximum near 1.3 m and Z-sweep maximum near Z = 0.42 m at X = 1.4 m need a pitch-axis-to-jaw distance of 0.5 m or more with a short upper arm, which puts the case-study points out of reach within a 90 deg shoulder range; these lengths keep the maxima at X 1.16-1.23 m (inside the thesis's summary range 'between 1.1 m and 1.3 m', Lim 4.3.3)",
  },
  "orion": {
   "name": "orion",

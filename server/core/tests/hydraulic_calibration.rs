@@ -20,8 +20,8 @@ fn sim_with(q: [f64; 6], payload_kg: f64) -> Simulation {
     Simulation::new(m.clone(), m, p).expect("sim")
 }
 
-/// Mid-range posture (elbow and shoulder at the middle of their ranges).
-const MID: [f64; 6] = [0.0, 0.2618, -1.1345, 0.0, 0.0, 0.0];
+/// Mid-range posture (shoulder 45° and elbow −65°: the middles of their ranges).
+const MID: [f64; 6] = [0.0, std::f64::consts::FRAC_PI_4, -1.1345, 0.0, 0.0, 0.0];
 
 #[test]
 fn full_command_gives_nominal_speed_within_15_percent() {

@@ -64,6 +64,20 @@ fn single_arm_sweeps_reach_the_boundary() {
                 .expect("present")
                 .parameter
         );
+        // Lim §4.3.1.1 puts the maximum "at approximately 1.3m" and the summary (§4.3.3)
+        // "between 1.1m and 1.3m": with these link lengths it lies at 1.16–1.23 m (1.23 at
+        // Z = 0 and 0.2). A maximum at 1.3 ± 0.05 at every Z level needs a long wrist and a
+        // short upper arm that leave the §4.3.1.3 points out of reach (docs/physics.md).
+        let peak_x = s
+            .iter()
+            .filter(|r| r.reachable)
+            .max_by(|a, b| {
+                let w = |r: &StudyRow| r.single.expect("present").yoshikawa;
+                w(a).total_cmp(&w(b))
+            })
+            .expect("present")
+            .parameter;
+        assert!((1.1..=1.3).contains(&peak_x), "{z}: peak at X {peak_x}");
         // Table 1-1: reach 1.5 m (the straight arm at z = 0 is on the elbow's limit).
         assert!(
             boundary > 1.25 && boundary <= 1.5 + 1e-9,
@@ -89,6 +103,37 @@ fn single_arm_sweeps_reach_the_boundary() {
             s.iter().any(|r| r.reachable) && !s.last().expect("rows").reachable,
             "{x}"
         );
+        // Lim §4.3.1.2 (Fig. 4-48): the Yoshikawa measure "increased and decreased as the Z
+        // coordinate increased": an interior maximum, then a fall towards the boundary. The
+        // thesis's maximum at X = 1.4 is near Z = 0.42 m (§4.3.3); ours is lower (printed;
+        // docs/physics.md says why the lengths do not move it there).
+        let w: Vec<(f64, f64)> = s
+            .iter()
+            .filter(|r| r.reachable)
+            .map(|r| (r.parameter, r.single.expect("present").yoshikawa))
+            .collect();
+        let (ip, peak) = w
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.1.total_cmp(&b.1.1))
+            .expect("present");
+        println!(
+            "{x}: Z from {:.2} to {:.2} m, Yoshikawa maximum {:.4} at Z {:.2} m",
+            w[0].0,
+            w[w.len() - 1].0,
+            peak.1,
+            peak.0
+        );
+        if x == "x=1.40" || x == "x=1.20" {
+            assert!(
+                ip > 0 && ip + 1 < w.len(),
+                "{x}: maximum at an end of the sweep"
+            );
+            assert!(
+                w[w.len() - 1].1 < 0.95 * peak.1,
+                "{x}: no fall towards the boundary"
+            );
+        }
     }
 }
 
@@ -101,9 +146,45 @@ fn pitch_yaw_rows_are_consistent() {
     let single = single_pitch_yaw(&model, &spec).expect("single");
     check_rows_hit_targets(&model, &single);
     assert_eq!(single.len(), 6 * (13 + 13));
-    assert!(single.iter().filter(|r| r.reachable).count() >= single.len() / 2);
     let dual = dual_pitch_yaw(&model, &spec, &DualSetup::default()).expect("dual");
     check_rows_hit_targets(&model, &dual);
+    // Issue 17 acceptance: every point's 90°/90° start pose is reachable (single and dual),
+    // and at least 10 of the 13 pitch rows and 13 yaw rows at every point (the joint-range
+    // placement in magnum.json was chosen for this; docs/physics.md).
+    for point in ["A", "B", "C", "D", "E", "F"] {
+        for rows in [&single, &dual] {
+            for kind in ["pitch", "yaw"] {
+                let series = format!("{point} {kind}");
+                let s: Vec<&StudyRow> = rows.iter().filter(|r| r.series == series).collect();
+                let start = s.iter().find(|r| r.parameter == 90.0).expect("90° row");
+                assert!(start.reachable, "{series}: 90°/90° start pose unreachable");
+                let n = s.iter().filter(|r| r.reachable).count();
+                println!("{series}: {n}/13 reachable");
+                assert!(n >= if kind == "pitch" { 10 } else { 13 }, "{series}: {n}");
+            }
+        }
+        // Pitch sign (studies module doc): Lim §4.3.1.3 / §4.3.3, Figs 4-53 to 4-58:
+        // "changing pitch increased the manipulability based on Yoshikawa's method" over
+        // 75°–135°: the Yoshikawa at the largest reachable pitch (≥ 120°) exceeds the start
+        // pose's, which exceeds the smallest reachable pitch's (at A the rows below 90° are
+        // beyond the pitch joint's range).
+        let w: Vec<(f64, f64)> = single
+            .iter()
+            .filter(|r| r.series == format!("{point} pitch") && r.reachable)
+            .map(|r| (r.parameter, r.single.expect("measures").yoshikawa))
+            .collect();
+        let at90 = w.iter().find(|p| p.0 == 90.0).expect("90°").1;
+        let (first, last) = (w[0], w[w.len() - 1]);
+        assert!(last.0 >= 120.0, "{point}: {w:?}");
+        assert!(at90 < last.1, "{point} pitch trend: {w:?}");
+        assert!(
+            first.0 == 90.0 || first.1 < at90,
+            "{point} pitch trend: {w:?}"
+        );
+    }
+    for r in single.iter().chain(&dual).filter(|r| !r.reachable) {
+        assert!(r.q.is_none() && r.single.is_none() && r.dual.is_none());
+    }
     for (s, d) in single.iter().zip(&dual) {
         if let (Some(a), Some(b)) = (s.single, d.single) {
             assert!(

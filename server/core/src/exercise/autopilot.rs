@@ -252,9 +252,14 @@ const COAST_S: f64 = 0.5;
 /// Supply read from the spinning rotate motor below this fraction of the nameplate supply is
 /// a supply drop: 0.8.
 const SUPPLY_FRACTION: f64 = 0.8;
-/// The rotate motor's speed 20 ms into a full-stick spin over its steady speed below this is
-/// air in the oil: 0.7 (healthy oil ≈ 0.98).
-const LAG_RATIO: f64 = 0.7;
+/// The rotate motor's speed [`LAG_READ_S`] into a full-stick spin over its steady speed below
+/// this is air in the oil: 0.65 (healthy oil ≈ 0.81, bulk modulus × 0.03 ≈ 0.48: about their
+/// geometric mean).
+const LAG_RATIO: f64 = 0.65;
+/// When the spin-up speed is read (s): 0.04, two slots. The valve's spool opens with a 25 ms
+/// time constant (`hydraulics::SPOOL_TIME_CONSTANT_S`), so a healthy motor is then at ≈ 80 %
+/// of its speed, while with soft (aerated) oil the pressure is still building.
+const LAG_READ_S: f64 = 0.04;
 /// Leak test: the loaded joints jogged (shoulder, elbow, wrist pitch), each 0.3 s out and back.
 const LEAK_JOINTS: [usize; 3] = [1, 2, 3];
 const LEAK_JOG_S: f64 = 0.3;
@@ -284,7 +289,7 @@ const AIR: &str = FaultKind::NAMES[3];
 /// 2. **Spin** the wrist rotate motor at full stick for [`SPIN_S`] (unloaded, equal-area
 ///    motor: in steady motion the two orifice drops are equal, so P_I + P_O = P_s, eq. 3.48):
 ///    a supply read below [`SUPPLY_FRACTION`] of the nameplate is a **supply drop**; a speed
-///    20 ms in below [`LAG_RATIO`] of the steady speed is **air** (the pressure rate β/V of
+///    [`LAG_READ_S`] in below [`LAG_RATIO`] of the steady speed is **air** (the pressure rate β/V of
 ///    eq. 3.56 falls with β, so the pressure builds late).
 /// 3. **Leak test**: jog the loaded joints out and back, let them settle, watch the gauges with
 ///    the sticks centred: line pressures that keep drifting ([`LEAK_DRIFT_PA`]) as the two
@@ -487,8 +492,8 @@ impl Diagnosis {
             Phase::Jog { joint, dir, .. } => axes[joint] = dir,
             Phase::Spin => {
                 axes[5] = 1.0;
-                // The first reading after one slot at full stick, then the supply read.
-                if self.spin_first.is_none() && elapsed > 0.5 * PILOT_INTERVAL_S {
+                // The spin-up reading after [`LAG_READ_S`] at full stick, then the supply read.
+                if self.spin_first.is_none() && elapsed + 1e-9 >= LAG_READ_S {
                     self.spin_first = Some(st.qd[5]);
                 }
                 if elapsed + 1e-9 >= SPIN_S - SPIN_READ_S {
@@ -776,7 +781,7 @@ mod tests {
         let (_, d) = diagnose_with(|_| {});
         assert_eq!(d.phase, Phase::LeakWatch, "went the whole way");
         assert!((d.supply_ratio - 1.0).abs() < 0.02, "{}", d.supply_ratio);
-        assert!(d.lag_ratio > 0.9, "{}", d.lag_ratio);
+        assert!(d.lag_ratio > 0.75, "{}", d.lag_ratio);
         assert!(
             d.leak_drift_pa < 0.25 * LEAK_DRIFT_PA,
             "{}",
@@ -827,7 +832,7 @@ mod tests {
         );
         let (a, _) = diagnose_with(|f| f.leak_m3_s_pa[1] = 5e-11);
         assert_eq!(a, LEAK);
-        let (a, d) = diagnose_with(|f| f.bulk_modulus_scale = 0.025);
+        let (a, d) = diagnose_with(|f| f.bulk_modulus_scale = 0.03);
         assert_eq!(a, AIR, "{d:?}");
     }
 }

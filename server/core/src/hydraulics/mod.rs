@@ -29,12 +29,12 @@ pub use faults::{
     AIR_SCALE_RANGE, Fault, FaultKind, Faults, LEAK_RANGE_M3_S_PA, STUCK_SPOOL_RANGE,
     SUPPLY_DROP_RANGE_PA,
 };
-pub use linkage::Linkage;
+pub use linkage::{Linkage, four_bar_transmission};
 pub use sizing::{
-    AREA_RATIO, HOLD_MARGIN, MAGNUM_FULL_EXTENSION, MAGNUM_LIFT_KG, MAGNUM_SPEEDS_DEG_S,
-    MAGNUM_TORQUE_FLOOR_NM,
+    AREA_RATIO, FOUR_BAR_DESIGNS, HOLD_MARGIN, MAGNUM_FULL_EXTENSION, MAGNUM_LIFT_KG,
+    MAGNUM_SPEEDS_DEG_S, MAGNUM_TORQUE_FLOOR_NM, MEAN_LEVER_M, magnum_four_bar,
 };
-pub use valve::valve_flow;
+pub use valve::{SPOOL_TIME_CONSTANT_S, spool_response, valve_flow};
 
 /// Number of joint actuators per arm.
 pub const N_ACT: usize = 6;

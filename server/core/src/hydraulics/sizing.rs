@@ -22,6 +22,55 @@ pub const MAGNUM_SPEEDS_DEG_S: [f64; N_ACT] = [20.0, 20.0, 30.0, 30.0, 30.0, 150
 /// subsea arms; assumed).
 pub const MAGNUM_TORQUE_FLOOR_NM: [f64; N_ACT] = [2000.0, 0.0, 0.0, 0.0, 600.0, 150.0];
 
+/// Dimensionless four-bar designs ([`Linkage::FourBar`], crank radius 1) for the shoulder (90°),
+/// elbow (130°) and pitch (115°) cylinders: [crank angle at the joint's lower limit (rad),
+/// rocker pivot x, y, rocker, dog-bone, cylinder pin x, y, branch]. Found by a random search
+/// and hill climb (`tests/four_bar_design.rs`, ignored test `search_four_bar_designs`)
+/// minimizing Ĵ_max/Ĵ_min over the range ± 0.05 rad subject to both transmission angles ≥ 20.5°
+/// (|sin| ≥ 0.35) and an extended cylinder ≤ 1.75 × its retracted length (a cylinder's dead
+/// length makes longer strokes impractical). Ĵ_max/Ĵ_min = 1.025/1.042/1.024.
+pub const FOUR_BAR_DESIGNS: [[f64; 8]; 3] = [
+    [2.0149, 1.4008, 0.1452, 2.7022, 1.8401, -1.9127, 1.7397, 1.0],
+    [
+        2.8196, 0.0588, 1.2709, 2.7916, 1.6933, -5.0698, -5.0849, 1.0,
+    ],
+    [2.9106, 0.0604, 1.2165, 2.7854, 1.698, -5.1526, -5.1035, 1.0],
+];
+
+/// Mean lever Ĵ of the shoulder, elbow and pitch linkages over their ranges (m): 0.096, 0.086,
+/// 0.058 — the mid-range levers of the slider-cranks these linkages replace (pins 0.35/0.10,
+/// 0.30/0.09, 0.25/0.06 m at 90°), so cylinder bores and pressures stay as before.
+pub const MEAN_LEVER_M: [f64; 3] = [0.096, 0.086, 0.058];
+
+/// The four-bar linkage of cylinder `k` (0 shoulder, 1 elbow, 2 pitch) for a joint whose
+/// lower limit is `q_lo` (rad): [`FOUR_BAR_DESIGNS`]`[k]` scaled to mean lever
+/// [`MEAN_LEVER_M`]`[k]` over `[q_lo, q_hi]`.
+pub fn magnum_four_bar(k: usize, q_lo: f64, q_hi: f64) -> Linkage {
+    let at = |scale: f64| {
+        let d = FOUR_BAR_DESIGNS[k];
+        Linkage::FourBar {
+            crank_m: scale,
+            crank_angle_rad: d[0] - q_lo,
+            rocker_pivot_m: [scale * d[1], scale * d[2]],
+            rocker_m: scale * d[3],
+            dogbone_m: scale * d[4],
+            cylinder_pin_m: [scale * d[5], scale * d[6]],
+            branch: d[7],
+        }
+    };
+    // Ĵ scales with the linkage: the mean over the range at unit scale sets the scale.
+    let unit = at(1.0);
+    const N: usize = 64;
+    let mean = (0..=N)
+        .map(|i| {
+            unit.coordinate(q_lo + (q_hi - q_lo) * i as f64 / N as f64)
+                .1
+        })
+        .sum::<f64>()
+        / (N + 1) as f64;
+    at(MEAN_LEVER_M[k] / mean)
+}
+
 /// The "full extension" posture of the Magnum model used for sizing and for the holding test:
 /// all joints at 0 — upper arm, forearm and wrist in line and horizontal, reach 1.5 m.
 pub const MAGNUM_FULL_EXTENSION: [f64; N_ACT] = [0.0; N_ACT];
@@ -39,8 +88,11 @@ impl HydraulicParams {
     /// * Flow gain so that full command moves the unloaded joint at its Table 1-1 speed at
     ///   mid-range: extend and retract speeds of a cylinder with area ratio α differ by √α,
     ///   so the gain puts their geometric mean on the nominal speed.
-    /// * Cylinder pins (shoulder, elbow, pitch): r_a = 0.35/0.30/0.25 m, r_b = 0.10/0.09/0.06 m,
-    ///   φ = 90° at mid-range (largest lever where the arm works most). Assumed; Lim prints none.
+    /// * Cylinder linkages (shoulder, elbow, pitch): four-bar "dog-bone" linkages
+    ///   ([`FOUR_BAR_DESIGNS`], scaled so the mean lever is [`MEAN_LEVER_M`]) whose lever Ĵ
+    ///   varies by 2.5/4.2/2.4 % over the 90/130/115° ranges, so the full-command speed is
+    ///   nearly constant over the whole range (issue 17; a plain slider-crank's lever falls to
+    ///   sin 25° ≈ 0.42 of its peak at the ends of a 130° range). Assumed; Lim prints none.
     /// * Dead volume 0.15 L per side (≈ 3 m of 3/8" hose); damping 5·10⁴ N·s/m for cylinders
     ///   (README range 10³–10⁵; the upper half, because a closed-centre valve adds no damping and
     ///   the cooperative loop needs the oil-column resonance damped), 200/50/5 N·m·s/rad for
@@ -75,14 +127,8 @@ impl HydraulicParams {
             let col = kin.jacobian.column(j);
             *gj -= col[2] * (-9.81 * MAGNUM_LIFT_KG);
         }
-        let pins: [Option<(f64, f64)>; N_ACT] = [
-            None,
-            Some((0.35, 0.10)),
-            Some((0.30, 0.09)),
-            Some((0.25, 0.06)),
-            None,
-            None,
-        ];
+        // Cylinder joints and their four-bar designs (shoulder, elbow, pitch); the rest rotary.
+        let cylinders: [Option<usize>; N_ACT] = [None, Some(0), Some(1), Some(2), None, None];
         let damping = [200.0, 5.0e4, 5.0e4, 5.0e4, 50.0, 5.0];
         let mut actuators = [ActuatorParams {
             linkage: Linkage::Rotary,
@@ -112,13 +158,9 @@ impl HydraulicParams {
             a.damping = damping[j];
             a.nominal_speed_rad_s = omega;
             a.design_torque_nm = torque;
-            match pins[j] {
-                Some((ra, rb)) => {
-                    let link = Linkage::Linear {
-                        r_a_m: ra,
-                        r_b_m: rb,
-                        phi0_rad: std::f64::consts::FRAC_PI_2 - mid,
-                    };
+            match cylinders[j] {
+                Some(k) => {
+                    let link = magnum_four_bar(k, lo, hi);
                     let (x_lo, _) = link.coordinate(lo);
                     let (x_hi, _) = link.coordinate(hi);
                     let (_, jh_q) = link.coordinate(q[j]);

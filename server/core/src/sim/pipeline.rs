@@ -132,7 +132,11 @@ impl Simulation {
         };
         for (i, a) in self.state.arms.iter_mut().enumerate() {
             let faults = &self.params.arms[i].faults;
-            a.spool = core::array::from_fn(|j| faults.spool(j, spools[i][j]));
+            // The spool follows its command (or a stuck valve's position) with the valve's
+            // first-order lag (hydraulics::SPOOL_TIME_CONSTANT_S).
+            a.spool = core::array::from_fn(|j| {
+                crate::hydraulics::spool_response(a.spool[j], faults.spool(j, spools[i][j]), dt)
+            });
         }
     }
 

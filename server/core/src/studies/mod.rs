@@ -11,8 +11,18 @@
 //! frame; we take pitch 90° / yaw 90° to be the posture at q = 0 of the Magnum model: approach
 //! axis (tool z) horizontal along +X, away from the vehicle, tool x pointing down
 //! ([`nominal_orientation`]). A pitch p and yaw y rotate it in the base frame:
-//! R = Rz(y − 90°)·Ry(−(p − 90°))·R₀, so pitch > 90° tilts the approach axis up and
-//! yaw > 90° turns it towards +Y.
+//! R = Rz(y − 90°)·Ry(p − 90°)·R₀, so pitch > 90° tilts the approach axis **down** (towards
+//! the seabed) and yaw > 90° turns it towards +Y.
+//!
+//! **Pitch sign.** The thesis prints no frame for pitch, only "pitch (90°)" for the start pose
+//! and a study from 75° to 135° (§4.3.1.3). We read pitch as the polar angle of the approach
+//! axis from the upward vertical (0° up, 90° horizontal, 180° down): it is the convention in
+//! which 90° means horizontal, and the asymmetric range 75°–135° then reaches 45° below the
+//! horizontal — the direction a subsea arm turns its jaw to work on the seabed — but only 15°
+//! above. The thesis's result decides it (§4.3.1.3 and §4.3.3: "changing pitch increased the
+//! manipulability based on Yoshikawa's method", Figs 4-53 to 4-58): with this convention the
+//! Yoshikawa measure of the Magnum model grows from 75° to 135° at every point A–F; with the
+//! opposite sign it falls (tested in `tests/manipulability_studies.rs`).
 //!
 //! **Placement and boundary.** Postures come from the closed-form Magnum IK
 //! ([`crate::ik::magnum_ik`]), the branch closest to the previous row (the first row: closest
@@ -134,7 +144,7 @@ pub fn nominal_orientation(model: &Model) -> UnitQuaternion<f64> {
 pub fn orientation(model: &Model, pitch_deg: f64, yaw_deg: f64) -> UnitQuaternion<f64> {
     let r0 = nominal_orientation(model);
     UnitQuaternion::from_axis_angle(&Vector3::z_axis(), (yaw_deg - 90.0).to_radians())
-        * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), -(pitch_deg - 90.0).to_radians())
+        * UnitQuaternion::from_axis_angle(&Vector3::y_axis(), (pitch_deg - 90.0).to_radians())
         * r0
 }
 

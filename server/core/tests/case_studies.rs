@@ -14,8 +14,8 @@ mod common;
 
 use common::scenario_util::run_rows;
 use seaarms_core::grasp::GraspState;
-use seaarms_core::sim::{Arm, Environment};
 use seaarms_core::sim::scenario::{Row, Scenario, Summary, scenario};
+use seaarms_core::sim::{Arm, Environment};
 
 fn build(name: &str) -> Scenario {
     let m = common::builtin("magnum");

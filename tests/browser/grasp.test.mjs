@@ -16,7 +16,9 @@ test('scripted grasp: object turns black, light blue, yellow as drawn', { timeou
   const page = b.page;
   const seen = [];
   const snap = async (name) => {
-    const st = await page.evaluate(() => ({ grasp: window.__seaarms.lastState.grasp, colour: window.__seaarms.drawnObjectColour(), at: window.__seaarms.project('persp', window.__seaarms.lastState.object.pose.position) }));
+    // One frame: its grasp state, drawn colour, dual measures and status text together (in open
+    // loop the arms fight through the box, and the friction grip may drop it moments later).
+    const st = await page.evaluate(() => { const s = window.__seaarms.lastState; return { grasp: s.grasp, dual: s.dual, text: window.__seaarms.statusText(), colour: window.__seaarms.drawnObjectColour(), at: window.__seaarms.project('persp', s.object.pose.position) }; });
     const png = await page.screenshot({ path: join(ARTIFACTS, `grasp-${name}.png`) });
     const img = await decodePng(page, png);
     const votes = {};
@@ -63,7 +65,7 @@ test('scripted grasp: object turns black, light blue, yellow as drawn', { timeou
     await page.waitForTimeout(500);
     await page.screenshot({ path: join(ARTIFACTS, 'showcase.png') });
     await page.evaluate(() => { window.__setButton(7, 0); });
-    const dual = await page.evaluate(() => ({ dual: window.__seaarms.lastState.dual, text: window.__seaarms.statusText() }));
+    const dual = yellow; // the frame in which both jaws held
     console.log(`grasp states seen: ${seen.join(' → ')}`);
     for (const s of [black, blue, yellow]) {
       assert.equal(s.colour, { one_on_surface: 0x000000, one_lifted: 0x7fd4ff, both_holding: 0xffd700 }[s.grasp], `${s.grasp} material colour`);

@@ -116,6 +116,14 @@ document.querySelector('#sessions tbody').addEventListener('click', (e) => {
   if (id) observe(id);
 });
 
+/** The observed session's water current as the current fields' placeholders (the values to type
+ * over), or "in air". */
+function showCurrent(c) {
+  const [speed, heading] = c ? [c.speed_m_s.toFixed(2), String(Math.round(c.heading_deg))] : ['in air', '—'];
+  if ($('act-cur-speed').placeholder !== speed) $('act-cur-speed').placeholder = speed;
+  if ($('act-cur-heading').placeholder !== heading) $('act-cur-heading').placeholder = heading;
+}
+
 function observe(id) {
   if (conn) conn.close();
   observed = id;
@@ -141,7 +149,7 @@ function observe(id) {
   conn = new Connection({
     role: 'observer', sessionId: id, token, base: observedBase,
     onHello(h) { view.setHello(h); status.role(h.role); if (h.scenario) $('act-scenario').value = h.scenario; },
-    onState(s) { view.setState(s); },
+    onState(s) { view.setState(s); showCurrent(s.current); },
     onPong(ms) { status.latency(ms); },
     onMessage(m) { status.message(`✉ ${m.from}: ${m.text}`); },
     onError(msg) { banner('error', msg); },

@@ -552,12 +552,15 @@ fn check_answer(
     } else if reads_body && body.len() > MAX_BODY_BYTES {
         // Refused; by the body limit unless the query string was refused first or the path
         // (a `..` segment, say) matched no route at all (the fallback reads no body).
-        let unrouted = r.status == 404
-            && r.json().is_some_and(|v| {
-                v["error"]
-                    .as_str()
-                    .is_some_and(|e| e.starts_with("no route for"))
-            });
+        // No route, or a route without this method: an id of `.` or `%2E` is a dot segment
+        // the client's URL parser removes (WHATWG URL), so `/api/sessions/%2E/actions` arrives
+        // as `/api/sessions/actions` (GET/DELETE only), refused before its body is read.
+        let unrouted = r.json().is_some_and(|v| {
+            v["error"].as_str().is_some_and(|e| {
+                (r.status == 404 && e.starts_with("no route for"))
+                    || (r.status == 405 && e.contains(" is not allowed on "))
+            })
+        });
         let expected: &[u16] = if path.contains('?') {
             &[400, 413]
         } else {

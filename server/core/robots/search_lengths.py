@@ -123,11 +123,17 @@ for l1 in (0.05, 0.10, 0.15):
                     if abs(zm - 0.42) <= 0.05 + 1e-9:
                         meets.append((reach, arm, xs, zm))
                     break
-if best1:
+if best1 is None:
+    print("1. reach from the shoulder 1.5 m: no arm has every X-sweep maximum in 1.3 ± 0.05 m")
+else:
     zm, arm, xs = best1
     print(f"1. reach from the shoulder 1.5 m: best Z-sweep maximum {zm:.2f} m "
           f"(l1 {arm[0]:.3f}, l2 {arm[1]:.3f}, l3 {arm[2]:.3f}, lw {arm[3]:.3f}; X maxima {fmt(xs)})")
 print(f"2. arms meeting both figures: {len(meets)}")
+if meets:
+    span = lambda k: f"{min(m[1][k] for m in meets):.3f}–{max(m[1][k] for m in meets):.3f}"
+    print(f"   l1 {span(0)}, l2 {span(1)}, l3 {span(2)}, lw {span(3)} m; "
+          f"swing axis to jaw centre ≥ {min(m[0] + m[1][0] for m in meets):.3f} m")
 for reach, arm, xs, zm in sorted(meets)[:8]:
     print(f"   reach {reach:.3f} m: l1 {arm[0]:.3f}, l2 {arm[1]:.3f}, l3 {arm[2]:.3f}, "
           f"lw {arm[3]:.3f}; X maxima {fmt(xs)}, Z maximum {zm:.2f}")

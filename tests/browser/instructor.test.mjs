@@ -35,9 +35,24 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     assert.ok(t2 > t1, `summary is live: sim time ${t1} → ${t2}`);
     assert.match(await instr.page.textContent(`${row} td:nth-child(8)`), /\d\.\d{3} \/ \d\.\d{3}/);
 
+    // no session observed yet: the session control bar is not shown, on either tab
+    const bar = () => instr.page.isVisible('#instr-actions');
+    assert.equal(await bar(), false, 'no control bar before a session is observed (Sessions tab)');
+    await instr.page.click('#instr-tabs [data-tab="classroom"]');
+    await instr.page.waitForSelector(`#roster tr[data-id="${id}"]`, { timeout: 10000 });
+    assert.equal(await bar(), false, 'no control bar before a session is observed (Classroom tab)');
+    await instr.page.click('#instr-tabs [data-tab="sessions"]');
+
     // observe it read-only in the 3D view
     await instr.page.click(`${row} button[data-open]`);
     await until(instr.page, () => window.__seaarms?.statesDrawn > 5);
+    assert.equal(await bar(), true, 'the control bar shows for the observed session');
+    assert.match(await instr.page.innerText('#obs-title'), new RegExp(`session ${id}$`), 'titled with the observed session');
+    // the Classroom roster marks the observed trainee's button as the Sessions list does
+    await instr.page.click('#instr-tabs [data-tab="classroom"]');
+    await instr.page.waitForFunction((sid) => document.querySelector(`#roster tr[data-id="${sid}"] [data-observe]`)?.textContent === 'Observing', id);
+    assert.equal(await bar(), true, 'the control bar stays under the Classroom tab while observing');
+    await instr.page.click('#instr-tabs [data-tab="sessions"]');
     const obs = await instr.page.evaluate(() => ({ role: window.__seaarms.hello.role, session: window.__seaarms.hello.session, n: window.__seaarms.viewports().length }));
     assert.equal(obs.role, 'observer');
     assert.equal(obs.session, id);

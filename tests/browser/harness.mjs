@@ -34,6 +34,14 @@ function webFile(pathname) {
   return existsSync(f) ? f : null;
 }
 
+/** A file of web/ as the server sends it: a page gets the shared head in place of its include
+ * line, as server/src/assets.rs does. */
+function fromDisk(file) {
+  if (extname(file) !== '.html') return readFileSync(file);
+  const head = readFileSync(join(ROOT, 'web', 'head.html'), 'utf8').trimEnd();
+  return readFileSync(file, 'utf8').replace('<!--#include head.html-->', () => head);
+}
+
 async function freePort() {
   return new Promise((resolve, reject) => {
     const s = net.createServer();
@@ -101,7 +109,7 @@ export async function openBrowser({ viewport = { width: 1280, height: 800 }, ini
         const response = await route.fetch(); // the server's headers (a file new since the build: 404)
         const type = { '.js': 'text/javascript', '.css': 'text/css', '.html': 'text/html' }[extname(file)];
         const headers = { ...response.headers(), ...(type ? { 'content-type': type } : {}) };
-        return route.fulfill({ status: 200, headers, body: readFileSync(file) });
+        return route.fulfill({ status: 200, headers, body: fromDisk(file) });
       }
     }
     if (u.protocol === 'data:' || u.hostname === '127.0.0.1' || u.hostname === 'localhost') return route.continue();

@@ -16,6 +16,9 @@ export const GRASP_COLOURS = {
 };
 
 export const BACKGROUND = 0x0d2438;
+/** The water current's arrow: its colour, and its length per m/s of current speed. */
+export const CURRENT_COLOUR = 0x5fd0ff;
+export const CURRENT_ARROW_M_PER_M_S = 0.5;
 const SOFTWARE_PIXEL_RATIO = 0.6;
 
 /** Sets a Matrix4 from a server pose {position:[3], rotation: 3×3 rows}. */
@@ -68,8 +71,8 @@ export class World {
     this.objectMaterial = new THREE.MeshLambertMaterial({ color: GRASP_COLOURS.free });
     this.grasp = 'free';
     // The water current: an arrow above the work area, pointing where the water flows,
-    // 0.5 m long per m/s (hidden in still water and in air).
-    this.current = new THREE.ArrowHelper(new THREE.Vector3(1, 0, 0), new THREE.Vector3(), 1, 0x5fd0ff, 0.12, 0.07);
+    // CURRENT_ARROW_M_PER_M_S long per m/s (hidden in still water and in air).
+    this.current = new THREE.ArrowHelper(new THREE.Vector3(1, 0, 0), new THREE.Vector3(), 1, CURRENT_COLOUR, 0.12, 0.07);
     this.current.visible = false;
     this.currentKey = '';
     this.root.add(this.current);
@@ -110,7 +113,7 @@ export class World {
       if (this.current.visible) {
         const a = (cur.heading_deg * Math.PI) / 180;
         this.current.setDirection(new THREE.Vector3(Math.cos(a), Math.sin(a), 0));
-        this.current.setLength(0.5 * cur.speed_m_s, 0.12, 0.07);
+        this.current.setLength(CURRENT_ARROW_M_PER_M_S * cur.speed_m_s, 0.12, 0.07);
       }
     }
     poseToMatrix(state.object.pose, this.object.matrix);

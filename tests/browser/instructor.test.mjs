@@ -82,10 +82,14 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     // the water current: still in free play; set from the dashboard, it shows on the trainee's
     // status bar; a bad value gets the server's error next to the controls
     assert.match(await trainee.page.evaluate(() => window.__seaarms.statusText()), /water\s*still/);
+    assert.doesNotMatch(await trainee.page.innerText('#legend'), /current/, 'no current, no legend entry');
     await instr.page.fill('#act-cur-speed', '0.5');
     await instr.page.fill('#act-cur-heading', '30');
     await instr.page.click('#instr-actions button[data-act="set_current"]');
     await trainee.page.waitForFunction(() => /0\.50 m\/s → 30°/.test(window.__seaarms.statusText()));
+    // the arrow in the views is named in the legend, with its speed, heading and scale
+    await trainee.page.waitForFunction(() => /water current\s*arrow: 0\.50 m\/s → 30° \(0\.5 m per m\/s\)/.test(document.querySelector('#legend').innerText));
+    assert.match(await instr.page.innerText('#legend'), /water current\s*arrow: 0\.50 m\/s → 30°/, 'the observer\'s legend too');
     await instr.page.fill('#act-cur-speed', '9');
     await instr.page.click('#instr-actions button[data-act="set_current"]');
     await instr.page.waitForFunction(() => /set_current: .*speed_m_s/.test(document.querySelector('#act-result').textContent));

@@ -6,7 +6,7 @@
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { server, openBrowser, until } from './harness.mjs';
+import { server, openBrowser, until, UNNAMED_CONTROLS } from './harness.mjs';
 
 /** Records every CSP violation the page reports (set before any page script runs). */
 const WATCH_CSP = () => {
@@ -43,6 +43,7 @@ test('the pages work under the CSP, which blocks injected inline script', { time
       await until(b.page, ready, undefined, 60000);
       assert.deepEqual(await b.page.evaluate(() => window.__csp), [], `${path}: no violation while working`);
       assert.deepEqual(b.errors, [], `${path}: console errors`);
+      assert.deepEqual(await b.page.evaluate(UNNAMED_CONTROLS), [], `${path}: every control is named`);
       if (!path.startsWith('/web/')) {
         // the simulator's pages carry the one shared head (web/head.html, put in by the server):
         // one import map, the shared stylesheet and the shared module preloads, each once

@@ -42,6 +42,13 @@ function fromDisk(file) {
   return readFileSync(file, 'utf8').replace('<!--#include head.html-->', () => head);
 }
 
+/** In a page: the form controls (shown or not) with no accessible name (no label, aria-label,
+ * title, placeholder or button text), as the start of their HTML. */
+export const UNNAMED_CONTROLS = () => [...document.querySelectorAll('input, select, button, textarea')]
+  .filter((e) => !([...(e.labels || [])].some((l) => l.textContent.trim()) || e.getAttribute('aria-label')
+    || e.title || e.placeholder || (e.tagName === 'BUTTON' && e.textContent.trim())))
+  .map((e) => e.outerHTML.slice(0, 80));
+
 async function freePort() {
   return new Promise((resolve, reject) => {
     const s = net.createServer();

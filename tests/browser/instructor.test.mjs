@@ -38,6 +38,7 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     // no session observed yet: the session control bar is not shown, on either tab
     const bar = () => instr.page.isVisible('#instr-actions');
     assert.equal(await bar(), false, 'no control bar before a session is observed (Sessions tab)');
+    assert.match(await instr.page.innerText('#view-hint'), /observe/, 'the empty view says how to fill it');
     await instr.page.click('#instr-tabs [data-tab="classroom"]');
     await instr.page.waitForSelector(`#roster tr[data-id="${id}"]`, { timeout: 10000 });
     assert.equal(await bar(), false, 'no control bar before a session is observed (Classroom tab)');
@@ -47,6 +48,7 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     await instr.page.click(`${row} button[data-open]`);
     await until(instr.page, () => window.__seaarms?.statesDrawn > 5);
     assert.equal(await bar(), true, 'the control bar shows for the observed session');
+    assert.equal(await instr.page.isVisible('#view-hint'), false, 'no hint over the observed session');
     assert.match(await instr.page.innerText('#obs-title'), new RegExp(`session ${id}$`), 'titled with the observed session');
     // the Classroom roster marks the observed trainee's button as the Sessions list does
     await instr.page.click('#instr-tabs [data-tab="classroom"]');

@@ -42,15 +42,17 @@ export class View {
   legend() {
     if (!this.legendEl) return;
     // Swatch colours are set through the CSSOM below: the page's CSP refuses style="" attributes.
-    const sw = (c) => `<span class="sw" data-colour="#${c.toString(16).padStart(6, '0')}"></span>`;
+    // Each entry (swatch and words) stays on one line where the legend wraps.
+    const sw = (c, text) => `<span class="li"><span class="sw" data-colour="#${c.toString(16).padStart(6, '0')}"></span>${text}</span>`;
     // the water current's arrow (scene.js), named while there is one to see
     const cur = this.current?.speed_m_s > 0
-      ? `<br><span class="legend-current">water current ${sw(CURRENT_COLOUR)}arrow: ${waterText(this.current)}` +
-        ` (${CURRENT_ARROW_M_PER_M_S} m per m/s)</span>` : '';
+      ? `<br><span class="legend-current">water current ${sw(CURRENT_COLOUR, `arrow: ${waterText(this.current)}`)}` +
+        ` <span class="li">(${CURRENT_ARROW_M_PER_M_S} m per m/s)</span></span>` : '';
     this.legendEl.innerHTML =
-      `ellipsoids ${sw(ELLIPSOID_COLOURS.left)}left ${sw(ELLIPSOID_COLOURS.right)}right ${sw(ELLIPSOID_COLOURS.dual)}dual` +
-      ` — 1 m/s drawn as ${this.ellipsoids.scale} m<br>object ${sw(GRASP_COLOURS.free)}free ${sw(GRASP_COLOURS.one_on_surface)}one holding, on surface` +
-      ` ${sw(GRASP_COLOURS.one_lifted)}one lifted ${sw(GRASP_COLOURS.one_holding_other_contact)}one holds, other touches ${sw(GRASP_COLOURS.both_holding)}both holding${cur}`;
+      `ellipsoids ${sw(ELLIPSOID_COLOURS.left, 'left')} ${sw(ELLIPSOID_COLOURS.right, 'right')} ${sw(ELLIPSOID_COLOURS.dual, 'dual')}` +
+      ` <span class="li">— 1 m/s drawn as ${this.ellipsoids.scale} m</span><br>object ${sw(GRASP_COLOURS.free, 'free')}` +
+      ` ${sw(GRASP_COLOURS.one_on_surface, 'one holding, on surface')} ${sw(GRASP_COLOURS.one_lifted, 'one lifted')}` +
+      ` ${sw(GRASP_COLOURS.one_holding_other_contact, 'one holds, other touches')} ${sw(GRASP_COLOURS.both_holding, 'both holding')}${cur}`;
     for (const el of this.legendEl.querySelectorAll('.sw')) el.style.background = el.dataset.colour;
   }
 

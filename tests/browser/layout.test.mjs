@@ -1,0 +1,58 @@
+//! The pages leave the 3D views room on a 1024×768 screen (a small laptop or a tablet) and at
+//! 1280×800: with the side panels open (the trainee's plots; the debrief's card, events and
+//! plots) the view is at least 400 px wide, and the legend stays inside the perspective view's
+//! corner with its entries inside its box (nothing cut off or spilling over another view); no
+//! view's title runs under its ⤢ button.
+
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { join } from 'node:path';
+import { server, openBrowser, until, ARTIFACTS } from './harness.mjs';
+
+const PAGES = [
+  ['trainee', '/?scenario=training', () => window.__seaarms?.statesDrawn > 2 && !document.getElementById('plots').hidden],
+  // the debrief page lays out its panels and views before any attempt is loaded
+  ['debrief', '/replay/no-such-attempt', () => window.__seaarms?.replay && document.querySelector('#plots .uplot')],
+];
+
+for (const [width, height] of [[1024, 768], [1280, 800]]) {
+  for (const [name, path, ready] of PAGES) {
+    test(`${name} page at ${width}×${height}: the views keep room, the legend fits its corner`, { timeout: 60000 }, async () => {
+      const url = await server();
+      const b = await openBrowser({ viewport: { width, height } });
+      try {
+        await b.page.goto(`${url}${path}`);
+        await until(b.page, ready, undefined, 30000);
+        await b.page.waitForTimeout(300);
+        await b.page.screenshot({ path: join(ARTIFACTS, `layout-${name}-${width}.png`) });
+        const m = await b.page.evaluate(() => {
+          const r = (sel) => document.querySelector(sel).getBoundingClientRect().toJSON();
+          const legend = document.getElementById('legend');
+          return {
+            view: r('#view'), persp: r('.vp[data-view="persp"]'), legend: r('#legend'),
+            legendShown: getComputedStyle(legend).display !== 'none',
+            overflow: legend.scrollWidth - legend.clientWidth,
+            // each view's title against its own "one large view" button
+            titles: [...document.querySelectorAll('.vp')].map((v) => {
+              const t = v.querySelector('.vp-title').getBoundingClientRect(), bt = v.querySelector('.vp-max').getBoundingClientRect();
+              const range = document.createRange();
+              range.selectNodeContents(v.querySelector('.vp-title'));
+              const text = range.getBoundingClientRect(); // the words themselves, however they wrap
+              return { view: v.dataset.view, clash: text.right > bt.left && text.top < bt.bottom && t.top < bt.bottom };
+            }),
+          };
+        });
+        for (const t of m.titles) assert.equal(t.clash, false, `${name}: the ${t.view} view's title runs under its ⤢ button`);
+        assert.ok(m.view.width >= 400, `${name}: the 3D view is ${m.view.width} px wide`);
+        assert.ok(m.legendShown, `${name}: legend shown`);
+        const { legend: l, persp: d } = m;
+        assert.ok(l.left >= d.left && l.right <= d.right && l.top >= d.top && l.bottom <= d.bottom,
+          `${name}: legend ${JSON.stringify(l)} outside the perspective view ${JSON.stringify(d)}`);
+        assert.ok(m.overflow <= 1, `${name}: the legend's entries spill ${m.overflow} px out of its box`);
+        assert.deepEqual(b.errors, []);
+      } finally {
+        await b.close();
+      }
+    });
+  }
+}

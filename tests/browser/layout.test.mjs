@@ -56,3 +56,29 @@ for (const [width, height] of [[1024, 768], [1280, 800]]) {
     });
   }
 }
+
+test('start screen: the name and group boxes show their whole placeholder, on a laptop and a phone', { timeout: 60000 }, async () => {
+  const url = await server();
+  for (const viewport of [{ width: 1024, height: 768 }, { width: 390, height: 844 }]) {
+    const b = await openBrowser({ viewport });
+    try {
+      await b.page.goto(`${url}/`);
+      await b.page.waitForSelector('#start-name', { timeout: 15000 });
+      const boxes = await b.page.evaluate(() => ['start-name', 'start-group'].map((id) => {
+        const el = document.getElementById(id);
+        const cs = getComputedStyle(el);
+        const ctx = document.createElement('canvas').getContext('2d');
+        ctx.font = `${cs.fontSize} ${cs.fontFamily}`;
+        const room = el.clientWidth - parseFloat(cs.paddingLeft) - parseFloat(cs.paddingRight);
+        return { id, placeholder: el.placeholder, text: ctx.measureText(el.placeholder).width, room, right: el.getBoundingClientRect().right };
+      }));
+      for (const x of boxes) {
+        assert.ok(x.text <= x.room, `${viewport.width} px: "${x.placeholder}" needs ${x.text.toFixed(0)} px, ${x.id} has ${x.room.toFixed(0)}`);
+        assert.ok(x.right <= viewport.width, `${viewport.width} px: ${x.id} runs off the screen`);
+      }
+      assert.deepEqual(b.errors, []);
+    } finally {
+      await b.close();
+    }
+  }
+});

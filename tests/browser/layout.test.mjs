@@ -7,7 +7,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, ARTIFACTS } from './harness.mjs';
+import { server, openBrowser, until, ARTIFACTS, INSTRUCTOR_TOKEN } from './harness.mjs';
 
 const PAGES = [
   ['trainee', '/?scenario=training', () => window.__seaarms?.statesDrawn > 2 && !document.getElementById('plots').hidden],
@@ -80,5 +80,35 @@ test('start screen: the name and group boxes show their whole placeholder, on a 
     } finally {
       await b.close();
     }
+  }
+});
+
+test('a banner shown with the completion card is not hidden behind it', { timeout: 60000 }, async () => {
+  const url = await server();
+  const b = await openBrowser();
+  try {
+    await b.page.goto(`${url}/?scenario=training`);
+    const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
+    // the card as the page shows it at the end of an exercise (its real content needs a whole
+    // attempt: exercise.test.mjs), and a two-line banner (an instructor's message) over it
+    await b.page.evaluate(() => {
+      const card = document.getElementById('card');
+      card.innerHTML = '<div class="card-head"><span class="card-verdict">Passed</span><span class="card-score">98<small>/100</small></span></div><table><tr><td>time (s)</td></tr></table>';
+      card.hidden = false;
+    });
+    const text = 'Hold it at 20 cm for 5 s with the internal force under 500 N, then let go of the box gently on the seabed';
+    const r = await fetch(`${url}/api/sessions/${id}/actions`, {
+      method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${INSTRUCTOR_TOKEN}` },
+      body: JSON.stringify({ type: 'message', text }),
+    });
+    assert.ok(r.ok, `message: ${r.status}`);
+    await b.page.waitForFunction((t) => document.getElementById('banner').textContent.includes(t), text);
+    const [banner, card] = await Promise.all(['#banner', '#card'].map((s) => b.page.$eval(s, (e) => e.getBoundingClientRect().toJSON())));
+    await b.page.screenshot({ path: join(ARTIFACTS, 'banner-with-card.png') });
+    const overlap = banner.left < card.right && card.left < banner.right && banner.top < card.bottom && card.top < banner.bottom;
+    assert.equal(overlap, false, `banner ${JSON.stringify(banner)} overlaps the card ${JSON.stringify(card)}`);
+    assert.deepEqual(b.errors, []);
+  } finally {
+    await b.close();
   }
 });

@@ -157,6 +157,8 @@ export class View {
       drawnJawCentres() { return v.arms ? v.arms.map((a) => a.drawnJawCentre()) : null; },
       drawnJawGaps() { return v.arms ? v.arms.map((a) => a.drawnJawGap()) : null; },
       drawnObjectColour() { return v.world.objectMaterial.color.getHex(); },
+      /** The water current's arrow: shown, and its tail and tip (world, m). */
+      drawnCurrent() { const a = v.world.current; return { visible: a.visible, ends: a.ends() }; },
       drawnObjectPosition() { return v.world.object ? [...v.world.object.matrix.elements.slice(12, 15)] : null; },
       drawnEllipsoidRadii(which) { return v.ellipsoids.drawnRadii(which); },
       project(view, p) { return v.viewports.project(view, p); },

@@ -7,7 +7,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, ARTIFACTS, INSTRUCTOR_TOKEN } from './harness.mjs';
+import { server, openBrowser, until, decodePng, ARTIFACTS, INSTRUCTOR_TOKEN } from './harness.mjs';
 
 const PAGES = [
   ['trainee', '/?scenario=training', () => window.__seaarms?.statesDrawn > 2 && !document.getElementById('plots').hidden],
@@ -107,6 +107,43 @@ test('a banner shown with the completion card is not hidden behind it', { timeou
     await b.page.screenshot({ path: join(ARTIFACTS, 'banner-with-card.png') });
     const overlap = banner.left < card.right && card.left < banner.right && banner.top < card.bottom && card.top < banner.bottom;
     assert.equal(overlap, false, `banner ${JSON.stringify(banner)} overlaps the card ${JSON.stringify(card)}`);
+    assert.deepEqual(b.errors, []);
+  } finally {
+    await b.close();
+  }
+});
+
+test('the water current\'s arrow is drawn solid: its shaft stands out several pixels wide in the top view', { timeout: 60000 }, async () => {
+  const url = await server();
+  const b = await openBrowser();
+  try {
+    await b.page.goto(`${url}/?scenario=training`);
+    const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
+    const r = await fetch(`${url}/api/sessions/${id}/actions`, {
+      method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${INSTRUCTOR_TOKEN}` },
+      body: JSON.stringify({ type: 'set_current', speed_m_s: 0.8, heading_deg: 30 }),
+    });
+    assert.ok(r.ok, `set_current: ${r.status}`);
+    await until(b.page, () => window.__seaarms.drawnCurrent().visible);
+    await b.page.click('.vp[data-view="top"] .vp-max');
+    await b.page.waitForTimeout(500);
+    const [tail, tip] = await b.page.evaluate(() => window.__seaarms.drawnCurrent().ends.map((p) => window.__seaarms.project('top', p)));
+    const png = await b.page.screenshot({ path: join(ARTIFACTS, 'current-arrow-top.png') });
+    const img = await decodePng(b.page, png);
+    // across the shaft at 40 % of its length: the pixels of the arrow's colour (scene.js
+    // CURRENT_COLOUR #5fd0ff, drawn unlit), within ±12 px of the axis
+    const len = Math.hypot(tip.x - tail.x, tip.y - tail.y);
+    assert.ok(len > 40, `the arrow is ${len} px long in the top view`);
+    const [ux, uy] = [(tip.x - tail.x) / len, (tip.y - tail.y) / len];
+    const [cx, cy] = [tail.x + 0.4 * (tip.x - tail.x), tail.y + 0.4 * (tip.y - tail.y)];
+    let wide = 0;
+    for (let k = -12; k <= 12; k++) {
+      const x = Math.round(cx - uy * k), y = Math.round(cy + ux * k);
+      const i = 4 * (y * img.width + x);
+      const [R, G, B] = img.data.slice(i, i + 3);
+      if (Math.hypot(R - 0x5f, G - 0xd0, B - 0xff) < 60) wide++;
+    }
+    assert.ok(wide >= 5, `the shaft is ${wide} px wide`);
     assert.deepEqual(b.errors, []);
   } finally {
     await b.close();

@@ -190,6 +190,15 @@ export async function createSession(url, body = {}) {
   return r.json();
 }
 
+/** An instructor's action on session `id` (POST /api/sessions/{id}/actions with the instructor
+ * token); throws with the server's answer unless it succeeds. */
+export async function instructorAction(url, id, body) {
+  const r = await fetch(`${url}/api/sessions/${id}/actions`, {
+    method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${INSTRUCTOR_TOKEN}` }, body: JSON.stringify(body),
+  });
+  if (!r.ok) throw new Error(`action ${JSON.stringify(body)}: ${r.status} ${await r.text()}`);
+}
+
 /**
  * Init script: a fake standard-mapping gamepad. `navigator.getGamepads()` returns it once
  * `window.__connectPad()` has dispatched `gamepadconnected`; tests set `window.__pad.axes[i]`

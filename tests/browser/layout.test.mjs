@@ -7,7 +7,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, decodePng, ARTIFACTS, INSTRUCTOR_TOKEN } from './harness.mjs';
+import { server, openBrowser, until, decodePng, instructorAction, ARTIFACTS } from './harness.mjs';
 
 const PAGES = [
   ['trainee', '/?scenario=training', () => window.__seaarms?.statesDrawn > 2 && !document.getElementById('plots').hidden],
@@ -97,11 +97,7 @@ test('a banner shown with the completion card is not hidden behind it', { timeou
       card.hidden = false;
     });
     const text = 'Hold it at 20 cm for 5 s with the internal force under 500 N, then let go of the box gently on the seabed';
-    const r = await fetch(`${url}/api/sessions/${id}/actions`, {
-      method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${INSTRUCTOR_TOKEN}` },
-      body: JSON.stringify({ type: 'message', text }),
-    });
-    assert.ok(r.ok, `message: ${r.status}`);
+    await instructorAction(url, id, { type: 'message', text });
     await b.page.waitForFunction((t) => document.getElementById('banner').textContent.includes(t), text);
     const [banner, card] = await Promise.all(['#banner', '#card'].map((s) => b.page.$eval(s, (e) => e.getBoundingClientRect().toJSON())));
     await b.page.screenshot({ path: join(ARTIFACTS, 'banner-with-card.png') });
@@ -119,11 +115,7 @@ test('the water current\'s arrow is drawn solid: its shaft stands out several pi
   try {
     await b.page.goto(`${url}/?scenario=training`);
     const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
-    const r = await fetch(`${url}/api/sessions/${id}/actions`, {
-      method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${INSTRUCTOR_TOKEN}` },
-      body: JSON.stringify({ type: 'set_current', speed_m_s: 0.8, heading_deg: 30 }),
-    });
-    assert.ok(r.ok, `set_current: ${r.status}`);
+    await instructorAction(url, id, { type: 'set_current', speed_m_s: 0.8, heading_deg: 30 });
     await until(b.page, () => window.__seaarms.drawnCurrent().visible);
     await b.page.click('.vp[data-view="top"] .vp-max');
     await b.page.waitForTimeout(500);

@@ -195,7 +195,7 @@ export class Classroom {
       <td class="warn">${esc(warn.join(', '))}</td>
       <td class="${byInstructor ? 'paused-instr' : ''}">${esc(paused)}</td>
       <td class="cls-acts"><button type="button" data-act="${byInstructor ? 'resume' : 'pause'}">${byInstructor ? 'Resume' : 'Pause'}</button>
-        <button type="button" data-observe="${esc(s.id)}">Observe</button></td>`;
+        <button type="button" data-observe="${esc(s.id)}">${s.id === this.ui.observed() ? 'Observing' : 'Observe'}</button></td>`;
   }
 
   async onRosterClick(e) {

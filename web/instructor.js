@@ -140,6 +140,7 @@ function observe(id) {
     });
   }
   $('instr-actions').hidden = false;
+  $('view-hint').hidden = true;
   const who = sessions.find((s) => s.id === id);
   const name = who?.trainee || who?.label;
   $('obs-title').textContent = name ? `${name}${who.group ? ` (${who.group})` : ''} · session ${id}` : `session ${id}`;

@@ -59,7 +59,7 @@ export class Plots {
     const w = Math.max(300, (el.clientWidth || 420) - 12);
     const ctl = document.createElement('div');
     ctl.innerHTML = `<label>actuator <select id="plot-arm"><option>left</option><option>right</option></select>
-      <select id="plot-joint">${JOINT_NAMES.map((n, i) => `<option value="${i}">${i + 1} ${n}</option>`).join('')}</select></label>
+      <select id="plot-joint" aria-label="actuator joint">${JOINT_NAMES.map((n, i) => `<option value="${i}">${i + 1} ${n}</option>`).join('')}</select></label>
       <a id="csv-link" href="#" download>session CSV</a>`;
     el.appendChild(ctl);
     this.armSel = ctl.querySelector('#plot-arm');

@@ -16,6 +16,9 @@ export const GRASP_COLOURS = {
 };
 
 export const BACKGROUND = 0x0d2438;
+/** The water current's arrow: its colour, and its length per m/s of current speed. */
+export const CURRENT_COLOUR = 0x5fd0ff;
+export const CURRENT_ARROW_M_PER_M_S = 0.5;
 const SOFTWARE_PIXEL_RATIO = 0.6;
 
 /** Sets a Matrix4 from a server pose {position:[3], rotation: 3×3 rows}. */
@@ -41,6 +44,38 @@ function softwareRenderer() {
     return false;
   }
 }
+
+/** The water current's arrow: a solid shaft and head (a line one pixel wide is lost over the
+ * box in the top view), tail at its position, pointing along `setDirection`, `setLength` long. */
+class CurrentArrow extends THREE.Group {
+  constructor() {
+    super();
+    const material = new THREE.MeshBasicMaterial({ color: CURRENT_COLOUR });
+    // unit cylinder and cone along +y from the origin, scaled in `setLength`
+    this.shaft = new THREE.Mesh(new THREE.CylinderGeometry(1, 1, 1, 12).translate(0, 0.5, 0), material);
+    this.head = new THREE.Mesh(new THREE.ConeGeometry(1, 1, 16).translate(0, 0.5, 0), material);
+    this.add(this.shaft, this.head);
+  }
+
+  /** World points of the tail and the tip, for tests. */
+  ends() {
+    this.updateWorldMatrix(true, false);
+    return [this.localToWorld(new THREE.Vector3()).toArray(), this.localToWorld(new THREE.Vector3(0, this.length_m ?? 0, 0)).toArray()];
+  }
+
+  /** `dir`: a unit vector (world frame). */
+  setDirection(dir) { this.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), dir); }
+
+  setLength(length_m) {
+    this.length_m = length_m;
+    const head = Math.min(CURRENT_HEAD_M, 0.5 * length_m);
+    this.shaft.scale.set(CURRENT_SHAFT_RADIUS_M, length_m - head, CURRENT_SHAFT_RADIUS_M);
+    this.head.scale.set(2.5 * CURRENT_SHAFT_RADIUS_M, head, 2.5 * CURRENT_SHAFT_RADIUS_M);
+    this.head.position.set(0, length_m - head, 0);
+  }
+}
+const CURRENT_SHAFT_RADIUS_M = 0.015;
+const CURRENT_HEAD_M = 0.12;
 
 export class World {
   constructor(canvas) {
@@ -68,8 +103,8 @@ export class World {
     this.objectMaterial = new THREE.MeshLambertMaterial({ color: GRASP_COLOURS.free });
     this.grasp = 'free';
     // The water current: an arrow above the work area, pointing where the water flows,
-    // 0.5 m long per m/s (hidden in still water and in air).
-    this.current = new THREE.ArrowHelper(new THREE.Vector3(1, 0, 0), new THREE.Vector3(), 1, 0x5fd0ff, 0.12, 0.07);
+    // CURRENT_ARROW_M_PER_M_S long per m/s (hidden in still water and in air).
+    this.current = new CurrentArrow();
     this.current.visible = false;
     this.currentKey = '';
     this.root.add(this.current);
@@ -110,7 +145,7 @@ export class World {
       if (this.current.visible) {
         const a = (cur.heading_deg * Math.PI) / 180;
         this.current.setDirection(new THREE.Vector3(Math.cos(a), Math.sin(a), 0));
-        this.current.setLength(0.5 * cur.speed_m_s, 0.12, 0.07);
+        this.current.setLength(CURRENT_ARROW_M_PER_M_S * cur.speed_m_s);
       }
     }
     poseToMatrix(state.object.pose, this.object.matrix);

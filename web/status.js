@@ -79,8 +79,19 @@ export class StatusBar {
 
   latency(ms) { this.set('latency', ms.toFixed(1)); }
   role(r) { this.set('role', r); }
-  pad(id) { this.set('pad', id ? 'gamepad: ' + id.slice(0, 24) : ''); }
+  /** The connected gamepad by its name (a browser's id is "name (vendor, product…)"); the
+   * whole id in the tooltip. */
+  pad(id) {
+    this.set('pad', id ? `gamepad: ${padName(id)}` : '');
+    this.f.pad.title = id || '';
+  }
   message(text) { this.set('message', text); }
+}
+
+/** A gamepad id's name part, at most 32 characters (an ellipsis where it is cut). */
+export function padName(id) {
+  const name = id.replace(/\s*\(.*$/, '') || id;
+  return name.length > 32 ? `${name.slice(0, 31)}…` : name;
 }
 
 /** The frame's `current` ({speed_m_s, heading_deg}, or null in air) as status text: where the

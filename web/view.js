@@ -2,11 +2,12 @@
 // ellipsoids, four viewports, the draw loop (latest state wins: each animation frame draws the
 // newest state once), the optional polytope fetcher, and read-only debug hooks for tests.
 
-import { World, GRASP_COLOURS } from './scene.js';
+import { World, GRASP_COLOURS, CURRENT_COLOUR, CURRENT_ARROW_M_PER_M_S } from './scene.js';
 import { Arm, ARM_COLOUR } from './arms.js';
 import { Ellipsoids, ELLIPSOID_COLOURS } from './ellipsoids.js';
 import { Viewports } from './viewports.js';
 import { Markers } from './markers.js';
+import { waterText } from './status.js';
 
 const SIDES = ['left', 'right'];
 const POLYTOPE_PERIOD_MS = 1000;
@@ -41,11 +42,17 @@ export class View {
   legend() {
     if (!this.legendEl) return;
     // Swatch colours are set through the CSSOM below: the page's CSP refuses style="" attributes.
-    const sw = (c) => `<span class="sw" data-colour="#${c.toString(16).padStart(6, '0')}"></span>`;
+    // Each entry (swatch and words) stays on one line where the legend wraps.
+    const sw = (c, text) => `<span class="li"><span class="sw" data-colour="#${c.toString(16).padStart(6, '0')}"></span>${text}</span>`;
+    // the water current's arrow (scene.js), named while there is one to see
+    const cur = this.current?.speed_m_s > 0
+      ? `<br><span class="legend-current">water current ${sw(CURRENT_COLOUR, `arrow: ${waterText(this.current)}`)}` +
+        ` <span class="li">(${CURRENT_ARROW_M_PER_M_S} m per m/s)</span></span>` : '';
     this.legendEl.innerHTML =
-      `ellipsoids ${sw(ELLIPSOID_COLOURS.left)}left ${sw(ELLIPSOID_COLOURS.right)}right ${sw(ELLIPSOID_COLOURS.dual)}dual` +
-      ` — 1 m/s drawn as ${this.ellipsoids.scale} m<br>object ${sw(GRASP_COLOURS.free)}free ${sw(GRASP_COLOURS.one_on_surface)}one holding, on surface` +
-      ` ${sw(GRASP_COLOURS.one_lifted)}one lifted ${sw(GRASP_COLOURS.one_holding_other_contact)}one holds, other touches ${sw(GRASP_COLOURS.both_holding)}both holding`;
+      `ellipsoids ${sw(ELLIPSOID_COLOURS.left, 'left')} ${sw(ELLIPSOID_COLOURS.right, 'right')} ${sw(ELLIPSOID_COLOURS.dual, 'dual')}` +
+      ` <span class="li">— 1 m/s drawn as ${this.ellipsoids.scale} m</span><br>object ${sw(GRASP_COLOURS.free, 'free')}` +
+      ` ${sw(GRASP_COLOURS.one_on_surface, 'one holding, on surface')} ${sw(GRASP_COLOURS.one_lifted, 'one lifted')}` +
+      ` ${sw(GRASP_COLOURS.one_holding_other_contact, 'one holds, other touches')} ${sw(GRASP_COLOURS.both_holding, 'both holding')}${cur}`;
     for (const el of this.legendEl.querySelectorAll('.sw')) el.style.background = el.dataset.colour;
   }
 
@@ -123,6 +130,7 @@ export class View {
       this.arms[0].update(s.arms.left);
       this.arms[1].update(s.arms.right);
       this.world.update(s);
+      if (waterText(s.current) !== waterText(this.current)) { this.current = s.current; this.legend(); }
       this.ellipsoids.update(s);
       this.markers.update(s);
       this.drawn = s;
@@ -149,6 +157,8 @@ export class View {
       drawnJawCentres() { return v.arms ? v.arms.map((a) => a.drawnJawCentre()) : null; },
       drawnJawGaps() { return v.arms ? v.arms.map((a) => a.drawnJawGap()) : null; },
       drawnObjectColour() { return v.world.objectMaterial.color.getHex(); },
+      /** The water current's arrow: shown, and its tail and tip (world, m). */
+      drawnCurrent() { const a = v.world.current; return { visible: a.visible, ends: a.ends() }; },
       drawnObjectPosition() { return v.world.object ? [...v.world.object.matrix.elements.slice(12, 15)] : null; },
       drawnEllipsoidRadii(which) { return v.ellipsoids.drawnRadii(which); },
       project(view, p) { return v.viewports.project(view, p); },

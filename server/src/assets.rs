@@ -23,33 +23,57 @@ pub struct Static;
 
 fn serve<E: RustEmbed>(path: &str, cache: &'static str) -> Response {
     match E::get(path) {
-        Some(file) => {
-            let mime = mime_guess::from_path(path).first_or_octet_stream();
-            let mut resp = (StatusCode::OK, file.data.into_owned()).into_response();
-            let headers = resp.headers_mut();
-            if let Ok(v) = HeaderValue::from_str(mime.as_ref()) {
-                headers.insert(header::CONTENT_TYPE, v);
-            }
-            headers.insert(header::CACHE_CONTROL, HeaderValue::from_static(cache));
-            resp
-        }
+        Some(file) => respond(path, file.data.into_owned(), cache),
         None => ApiError::not_found(format!("no such file: {path}")).into_response(),
+    }
+}
+
+/// `body` as `path`'s type (by its extension), with the given `Cache-Control`.
+fn respond(path: &str, body: Vec<u8>, cache: &'static str) -> Response {
+    let mime = mime_guess::from_path(path).first_or_octet_stream();
+    let mut resp = (StatusCode::OK, body).into_response();
+    let headers = resp.headers_mut();
+    if let Ok(v) = HeaderValue::from_str(mime.as_ref()) {
+        headers.insert(header::CONTENT_TYPE, v);
+    }
+    headers.insert(header::CACHE_CONTROL, HeaderValue::from_static(cache));
+    resp
+}
+
+/// The line in a page's `<head>` that stands for the head every page shares
+/// (`web/head.html`: charset, viewport, stylesheets, the import map, the modules every page
+/// preloads); each page keeps only its title and its own preloads.
+const SHARED_HEAD: &str = "<!--#include head.html-->";
+
+/// A page (`web/NAME.html`) as served: its [`SHARED_HEAD`] line replaced by `web/head.html`.
+fn page_html(name: &str) -> Option<String> {
+    let page = Web::get(name)?;
+    let head = Web::get("head.html")?;
+    let head = String::from_utf8_lossy(&head.data);
+    Some(String::from_utf8_lossy(&page.data).replacen(SHARED_HEAD, head.trim_end(), 1))
+}
+
+/// A page with the shared head in place, revalidated on every load.
+fn page(name: &str) -> Response {
+    match page_html(name) {
+        Some(html) => respond(name, html.into_bytes(), "no-cache"),
+        None => ApiError::not_found(format!("no such page: {name}")).into_response(),
     }
 }
 
 /// `GET /`: the trainee page.
 pub async fn index() -> Response {
-    serve::<Web>("index.html", "no-cache")
+    page("index.html")
 }
 
 /// `GET /instructor`: the instructor dashboard.
 pub async fn instructor() -> Response {
-    serve::<Web>("instructor.html", "no-cache")
+    page("instructor.html")
 }
 
 /// `GET /replay/{attempt}`: the debrief page (it reads the attempt id from its URL).
 pub async fn replay(Path(_attempt): Path<String>) -> Response {
-    serve::<Web>("replay.html", "no-cache")
+    page("replay.html")
 }
 
 /// `GET /web/{*path}`: our own modules; revalidated on every load so a new build is seen at once.
@@ -136,7 +160,7 @@ mod tests {
             "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad"
         );
         let csp = content_security_policy();
-        let index = String::from_utf8(Web::get("index.html").unwrap().data.into_owned()).unwrap();
+        let index = page_html("index.html").unwrap();
         let map = index
             .split("<script type=\"importmap\">")
             .nth(1)
@@ -157,6 +181,48 @@ mod tests {
             assert_eq!(scripts, external + maps, "{name} has an inline script");
             assert!(!html.contains("<style"), "{name} has an inline <style>");
             assert!(!html.contains("style=\""), "{name} has a style attribute");
+        }
+    }
+
+    /// The head every page shares is written once (`web/head.html`) and served inside each
+    /// page: no page file carries its own import map or charset, each served page has exactly
+    /// one of each (the charset within the first 1024 bytes, where the HTML standard's encoding
+    /// sniffing looks), the whole shared head, and its own title.
+    #[test]
+    fn every_page_is_served_with_the_one_shared_head() {
+        let head = String::from_utf8(Web::get("head.html").unwrap().data.into_owned()).unwrap();
+        for (name, title) in [
+            ("index.html", "trainee"),
+            ("instructor.html", "instructor"),
+            ("replay.html", "debrief"),
+        ] {
+            let raw = String::from_utf8(Web::get(name).unwrap().data.into_owned()).unwrap();
+            assert!(
+                !raw.contains("<script type=\"importmap\">"),
+                "{name} has its own import map"
+            );
+            assert!(!raw.contains("<meta charset"), "{name} has its own charset");
+            assert_eq!(raw.matches(SHARED_HEAD).count(), 1, "{name}");
+            let served = page_html(name).unwrap();
+            assert!(!served.contains(SHARED_HEAD), "{name}");
+            assert!(
+                served.contains(head.trim_end()),
+                "{name} lacks the shared head"
+            );
+            assert_eq!(
+                served.matches("<script type=\"importmap\">").count(),
+                1,
+                "{name}"
+            );
+            assert_eq!(served.matches("<meta charset=").count(), 1, "{name}");
+            assert!(
+                served.find("<meta charset=\"utf-8\">").unwrap() < 1024,
+                "{name}"
+            );
+            assert!(
+                served.contains(&format!("<title>seaarms — {title}</title>")),
+                "{name}"
+            );
         }
     }
 }

@@ -15,6 +15,9 @@ test('a gamepad stick moves a joint: streamed q changes and the drawn arm moves'
     await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
     await b.page.evaluate(() => window.__connectPad());
     await until(b.page, () => window.__seaarms.statusText().includes('Fake pad'));
+    // the status bar names the pad (not a cut-off id); the whole id is its tooltip
+    const padField = await b.page.$eval('#status [data-f="pad"]', (e) => ({ text: e.textContent, title: e.title }));
+    assert.deepEqual(padField, { text: 'gamepad: Fake pad', title: 'Fake pad (STANDARD GAMEPAD)' });
     const before = await b.page.evaluate(() => ({
       q: window.__seaarms.lastState.arms.left.q, drawnQ: window.__seaarms.drawnJointAngles()[0],
       jaw: window.__seaarms.drawnJawCentres()[0], limits: window.__seaarms.hello.arms[0].model.joints[0].limits,

@@ -6,7 +6,7 @@
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { server, openBrowser, until } from './harness.mjs';
+import { server, openBrowser, until, UNNAMED_CONTROLS } from './harness.mjs';
 
 /** Records every CSP violation the page reports (set before any page script runs). */
 const WATCH_CSP = () => {
@@ -43,6 +43,22 @@ test('the pages work under the CSP, which blocks injected inline script', { time
       await until(b.page, ready, undefined, 60000);
       assert.deepEqual(await b.page.evaluate(() => window.__csp), [], `${path}: no violation while working`);
       assert.deepEqual(b.errors, [], `${path}: console errors`);
+      assert.deepEqual(await b.page.evaluate(UNNAMED_CONTROLS), [], `${path}: every control is named`);
+      if (!path.startsWith('/web/')) {
+        // the simulator's pages carry the one shared head (web/head.html, put in by the server):
+        // one import map, the shared stylesheet and the shared module preloads, each once
+        const head = await b.page.evaluate(() => ({
+          maps: document.querySelectorAll('script[type="importmap"]').length,
+          preloads: [...document.querySelectorAll('link[rel="modulepreload"]')].map((l) => new URL(l.href).pathname),
+          sheets: [...document.styleSheets].map((s) => s.href && new URL(s.href).pathname),
+        }));
+        assert.equal(head.maps, 1, `${path}: import maps`);
+        assert.ok(head.sheets.includes('/web/style.css'), `${path}: the shared stylesheet is applied`);
+        for (const m of ['/static/three/three.module.js', '/web/view.js', '/web/connection.js', '/web/status.js']) {
+          assert.equal(head.preloads.filter((x) => x === m).length, 1, `${path}: ${m} preloaded once`);
+        }
+        assert.equal(new Set(head.preloads).size, head.preloads.length, `${path}: a module preloaded twice`);
+      }
       assert.equal(await inlineScriptRuns(b.page), false, `${path}: injected inline script must not run`);
       await until(b.page, () => window.__csp.length > 0, undefined, 5000);
       const v = await b.page.evaluate(() => window.__csp);

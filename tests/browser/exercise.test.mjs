@@ -6,7 +6,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, FAKE_GAMEPAD, workDualLift, ROOT, INSTRUCTOR_TOKEN } from './harness.mjs';
+import { server, openBrowser, until, FAKE_GAMEPAD, workDualLift, ROOT, INSTRUCTOR_TOKEN, instructorAction } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || join(ROOT, 'tests', 'browser', 'artifacts');
 
@@ -87,11 +87,7 @@ test('an instructor\'s scenario or exercise switch takes effect on the trainee\'
   const url = await server();
   const b = await openBrowser();
   const page = b.page;
-  const act = async (id, body) => {
-    const r = await fetch(`${url}/api/sessions/${id}/actions`, { method: 'POST',
-      headers: { 'content-type': 'application/json', authorization: `Bearer ${INSTRUCTOR_TOKEN}` }, body: JSON.stringify(body) });
-    assert.ok(r.ok, `action ${JSON.stringify(body)}: ${r.status} ${await r.text()}`);
-  };
+  const act = (id, body) => instructorAction(url, id, body);
   try {
     await page.goto(`${url}/?scenario=training`);
     await until(page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);

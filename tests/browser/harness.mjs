@@ -34,6 +34,21 @@ function webFile(pathname) {
   return existsSync(f) ? f : null;
 }
 
+/** A file of web/ as the server sends it: a page gets the shared head in place of its include
+ * line, as server/src/assets.rs does. */
+function fromDisk(file) {
+  if (extname(file) !== '.html') return readFileSync(file);
+  const head = readFileSync(join(ROOT, 'web', 'head.html'), 'utf8').trimEnd();
+  return readFileSync(file, 'utf8').replace('<!--#include head.html-->', () => head);
+}
+
+/** In a page: the form controls (shown or not) with no accessible name (no label, aria-label,
+ * title, placeholder or button text), as the start of their HTML. */
+export const UNNAMED_CONTROLS = () => [...document.querySelectorAll('input, select, button, textarea')]
+  .filter((e) => !([...(e.labels || [])].some((l) => l.textContent.trim()) || e.getAttribute('aria-label')
+    || e.title || e.placeholder || (e.tagName === 'BUTTON' && e.textContent.trim())))
+  .map((e) => e.outerHTML.slice(0, 80));
+
 async function freePort() {
   return new Promise((resolve, reject) => {
     const s = net.createServer();
@@ -101,7 +116,7 @@ export async function openBrowser({ viewport = { width: 1280, height: 800 }, ini
         const response = await route.fetch(); // the server's headers (a file new since the build: 404)
         const type = { '.js': 'text/javascript', '.css': 'text/css', '.html': 'text/html' }[extname(file)];
         const headers = { ...response.headers(), ...(type ? { 'content-type': type } : {}) };
-        return route.fulfill({ status: 200, headers, body: readFileSync(file) });
+        return route.fulfill({ status: 200, headers, body: fromDisk(file) });
       }
     }
     if (u.protocol === 'data:' || u.hostname === '127.0.0.1' || u.hostname === 'localhost') return route.continue();
@@ -173,6 +188,15 @@ export async function createSession(url, body = {}) {
   const r = await fetch(`${url}/api/sessions`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify(body) });
   if (!r.ok) throw new Error(`POST /api/sessions: ${r.status} ${await r.text()}`);
   return r.json();
+}
+
+/** An instructor's action on session `id` (POST /api/sessions/{id}/actions with the instructor
+ * token); throws with the server's answer unless it succeeds. */
+export async function instructorAction(url, id, body) {
+  const r = await fetch(`${url}/api/sessions/${id}/actions`, {
+    method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${INSTRUCTOR_TOKEN}` }, body: JSON.stringify(body),
+  });
+  if (!r.ok) throw new Error(`action ${JSON.stringify(body)}: ${r.status} ${await r.text()}`);
 }
 
 /**

@@ -35,9 +35,26 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     assert.ok(t2 > t1, `summary is live: sim time ${t1} → ${t2}`);
     assert.match(await instr.page.textContent(`${row} td:nth-child(8)`), /\d\.\d{3} \/ \d\.\d{3}/);
 
+    // no session observed yet: the session control bar is not shown, on either tab
+    const bar = () => instr.page.isVisible('#instr-actions');
+    assert.equal(await bar(), false, 'no control bar before a session is observed (Sessions tab)');
+    assert.match(await instr.page.innerText('#view-hint'), /observe/, 'the empty view says how to fill it');
+    await instr.page.click('#instr-tabs [data-tab="classroom"]');
+    await instr.page.waitForSelector(`#roster tr[data-id="${id}"]`, { timeout: 10000 });
+    assert.equal(await bar(), false, 'no control bar before a session is observed (Classroom tab)');
+    await instr.page.click('#instr-tabs [data-tab="sessions"]');
+
     // observe it read-only in the 3D view
     await instr.page.click(`${row} button[data-open]`);
     await until(instr.page, () => window.__seaarms?.statesDrawn > 5);
+    assert.equal(await bar(), true, 'the control bar shows for the observed session');
+    assert.equal(await instr.page.isVisible('#view-hint'), false, 'no hint over the observed session');
+    assert.match(await instr.page.innerText('#obs-title'), new RegExp(`session ${id}$`), 'titled with the observed session');
+    // the Classroom roster marks the observed trainee's button as the Sessions list does
+    await instr.page.click('#instr-tabs [data-tab="classroom"]');
+    await instr.page.waitForFunction((sid) => document.querySelector(`#roster tr[data-id="${sid}"] [data-observe]`)?.textContent === 'Observing', id);
+    assert.equal(await bar(), true, 'the control bar stays under the Classroom tab while observing');
+    await instr.page.click('#instr-tabs [data-tab="sessions"]');
     const obs = await instr.page.evaluate(() => ({ role: window.__seaarms.hello.role, session: window.__seaarms.hello.session, n: window.__seaarms.viewports().length }));
     assert.equal(obs.role, 'observer');
     assert.equal(obs.session, id);
@@ -67,10 +84,14 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     // the water current: still in free play; set from the dashboard, it shows on the trainee's
     // status bar; a bad value gets the server's error next to the controls
     assert.match(await trainee.page.evaluate(() => window.__seaarms.statusText()), /water\s*still/);
+    assert.doesNotMatch(await trainee.page.innerText('#legend'), /current/, 'no current, no legend entry');
     await instr.page.fill('#act-cur-speed', '0.5');
     await instr.page.fill('#act-cur-heading', '30');
     await instr.page.click('#instr-actions button[data-act="set_current"]');
     await trainee.page.waitForFunction(() => /0\.50 m\/s → 30°/.test(window.__seaarms.statusText()));
+    // the arrow in the views is named in the legend, with its speed, heading and scale
+    await trainee.page.waitForFunction(() => /water current\s*arrow: 0\.50 m\/s → 30° \(0\.5 m per m\/s\)/.test(document.querySelector('#legend').innerText));
+    assert.match(await instr.page.innerText('#legend'), /water current\s*arrow: 0\.50 m\/s → 30°/, 'the observer\'s legend too');
     await instr.page.fill('#act-cur-speed', '9');
     await instr.page.click('#instr-actions button[data-act="set_current"]');
     await instr.page.waitForFunction(() => /set_current: .*speed_m_s/.test(document.querySelector('#act-result').textContent));

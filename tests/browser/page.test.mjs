@@ -69,6 +69,17 @@ test('four viewports, switchable to one large view', COMMON, async () => {
     // the four quadrants do not overlap
     const [a, , , d] = four.map((v) => v.rect);
     assert.ok(a.right <= d.left + 3 && a.bottom <= d.top + 3);
+    // the legend stays inside the perspective view's corner, covering no other view (here the
+    // plots take 420 px, and the legend is wider than half of what is left)
+    assert.equal(await b.page.isVisible('#plots'), true);
+    const legend = await b.page.$eval('#legend', (e) => e.getBoundingClientRect().toJSON());
+    assert.ok(legend.left >= d.left && legend.top >= d.top && legend.right <= d.right && legend.bottom <= d.bottom,
+      `legend ${JSON.stringify(legend)} outside the perspective view ${JSON.stringify(d)}`);
+    // where it wraps, no entry is split from its swatch or across lines
+    const entries = await b.page.$$eval('#legend .li', (els) => els.map((e) => ({ text: e.textContent, lines: e.getClientRects().length, h: e.getBoundingClientRect().height })));
+    assert.ok(entries.length >= 8, `legend entries: ${entries.length}`);
+    const lineH = Math.min(...entries.map((e) => e.h));
+    for (const e of entries) assert.ok(e.lines === 1 && e.h < 1.5 * lineH, `"${e.text}" spans lines: ${JSON.stringify(e)}`);
     await b.page.click('.vp[data-view="persp"] .vp-max');
     await b.page.waitForTimeout(100);
     const one = await b.page.evaluate(() => window.__seaarms.viewports());

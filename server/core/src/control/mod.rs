@@ -95,6 +95,32 @@ pub fn joint_servo(
     u
 }
 
+/// [`joint_servo`], except that in a closed chain (`chain`: both jaws hold the object) a
+/// zero reference centres the valves and lets the reference follow the arm instead of holding
+/// it. Two position loops closed through one rigid object fight: the chain has one pose, the
+/// two references generally disagree with it by the arms' different sag under the shared load,
+/// and a proportional term on a flow-control valve integrates the remaining error into
+/// pressure (eqs 3.48–3.50: a steady opening s into a locked cylinder raises its pressure at
+/// β·K·s·√ΔP/V), so the internal load would grow without bound with the sticks at rest. The
+/// centred closed-centre valves trap the oil and lock the cylinders instead, as the Magnum's
+/// own rate control does with the stick released (docs/physics.md, "Holding a box in open
+/// loop"). A moving reference is servoed as usual (the operator is moving the pair).
+pub fn joint_servo_or_centre(
+    qd_ref: &[f64; N_ACT],
+    q: &[f64; N_ACT],
+    q_ref: &mut [f64; N_ACT],
+    nominal_speed: &[f64; N_ACT],
+    dt_s: f64,
+    p: &ControlParams,
+    chain: bool,
+) -> [f64; N_ACT] {
+    if chain && qd_ref.iter().all(|v| *v == 0.0) {
+        *q_ref = *q;
+        return [0.0; N_ACT];
+    }
+    joint_servo(qd_ref, q, q_ref, nominal_speed, dt_s, p)
+}
+
 /// Damped-least-squares solve q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ for a 6×6 Jacobian (zero if JJᵀ + λ²I is
 /// not numerically positive definite, e.g. for a non-finite J).
 pub fn dls(j: &Matrix6<f64>, xd: &Vector6<f64>, lambda: f64) -> Vector6<f64> {
@@ -256,6 +282,37 @@ mod tests {
         fn rotation(&mut self) -> UnitQuaternion<f64> {
             UnitQuaternion::from_scaled_axis(self.vector3(6.0))
         }
+    }
+
+    /// The servo's law by hand (u = (q̇_ref + k_p·e)/q̇_nominal with e = q_ref + q̇_ref·dt − q
+    /// clamped, eq. of [`joint_servo`]'s docs); in a closed chain a zero reference centres
+    /// the valves and moves the reference to the arm, a moving one is servoed the same; out
+    /// of a chain a zero reference still holds its reference.
+    #[test]
+    fn servo_centres_the_valves_in_a_closed_chain_at_rest() {
+        let p = ControlParams::default();
+        let nominal = [0.2; N_ACT];
+        let q = [0.1, -0.2, 0.3, 0.0, 0.05, -0.05];
+        let r0 = [0.1 + 1e-3, -0.2, 0.3 - 2e-3, 0.0, 0.05, -0.05];
+        // At rest in a chain: spools 0, reference = q.
+        let mut r = r0;
+        let u = joint_servo_or_centre(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, true);
+        assert_eq!(u, [0.0; N_ACT]);
+        assert_eq!(r, q);
+        // At rest alone: the position hold, k_p·e/q̇_nominal.
+        let mut r = r0;
+        let u = joint_servo_or_centre(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, false);
+        assert!((u[0] - 5.0 * 1e-3 / 0.2).abs() < 1e-12);
+        assert!((u[2] + 5.0 * 2e-3 / 0.2).abs() < 1e-12);
+        assert_eq!(r, r0);
+        // Moving in a chain: the servo as usual.
+        let qd = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let (mut a, mut b) = (r0, r0);
+        let u = joint_servo_or_centre(&qd, &q, &mut a, &nominal, 1e-3, &p, true);
+        let v = joint_servo(&qd, &q, &mut b, &nominal, 1e-3, &p);
+        assert_eq!((u, a), (v, b));
+        let e0 = r0[0] + 0.01 * 1e-3 - q[0];
+        assert!((u[0] - (0.01 + 5.0 * e0) / 0.2).abs() < 1e-12);
     }
 
     /// Reference DLS: Jᵀ(JJᵀ + λ²I)⁻¹ẋ formed with nalgebra's own matrix products and Cholesky

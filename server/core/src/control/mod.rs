@@ -30,9 +30,17 @@ pub struct ControlParams {
     /// Object pose gain of the cooperative controller (1/s): 1.5 (2 and above excite a slow limit
     /// cycle with the lightly damped oil-column resonance while holding).
     pub object_kp: f64,
-    /// Internal-force admittance, translation (m/s per N): 1·10⁻⁵ (1 kN → 1 cm/s back-off).
+    /// Internal-force admittance, translation (m/s per N): 1·10⁻⁴ (100 N → 1 cm/s back-off).
+    /// In a steady move the internal force settles where the back-off cancels the two grasp
+    /// points' velocity mismatch, F ≈ δv/k; at the former 1·10⁻⁵ a 1 cm/s mismatch cost 1 kN.
+    /// Chosen with the rotational gain by a sweep of case 4 with the finite grip
+    /// (docs/physics.md, "Case 4 stage D: the sideways move").
     pub internal_admittance_lin: f64,
-    /// Internal-torque admittance, rotation (rad/s per N·m): 1·10⁻⁴.
+    /// Internal-torque admittance, rotation (rad/s per N·m): 1·10⁻² (10 N·m → 0.1 rad/s).
+    /// The jaw's tightest friction limit is the torsion about its closing axis, 15.2 N·m at
+    /// the rated clamp (`grasp::grip`): at the former 1·10⁻⁴ a rotation-rate mismatch of
+    /// only 1.5 mrad/s between the grasp frames used all of it, and case 4's sideways move
+    /// slipped the box out of the jaws.
     pub internal_admittance_rot: f64,
     /// Damping of the damped-least-squares inverse Jacobian (m): 0.02.
     pub dls_damping: f64,
@@ -55,8 +63,8 @@ impl Default for ControlParams {
             servo_kp: 5.0,
             servo_max_error_rad: 0.2,
             object_kp: 1.5,
-            internal_admittance_lin: 1.0e-5,
-            internal_admittance_rot: 1.0e-4,
+            internal_admittance_lin: 1.0e-4,
+            internal_admittance_rot: 1.0e-2,
             dls_damping: 0.02,
             max_object_speed_m_s: 0.2,
             max_object_rate_rad_s: 0.5,

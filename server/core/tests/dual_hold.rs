@@ -235,31 +235,23 @@ fn lift_and_hold(env: Environment, mode: Mode) {
 }
 
 #[test]
-fn joint_mode_grasp_on_the_seabed_holds_in_air() {
+fn a_box_grasped_on_the_seabed_stays_held() {
     grasp_and_hold(Environment::Air, Mode::Joint);
-}
-
-#[test]
-fn cartesian_mode_grasp_on_the_seabed_holds_subsea() {
     grasp_and_hold(Environment::subsea(), Mode::Cartesian);
 }
 
 #[test]
-fn joint_mode_holds_a_lifted_box_in_air() {
-    lift_and_hold(Environment::Air, Mode::Joint);
+fn a_lifted_box_stays_held_in_joint_mode() {
+    for env in [Environment::Air, Environment::subsea()] {
+        lift_and_hold(env, Mode::Joint);
+    }
 }
 
 #[test]
-fn joint_mode_holds_a_lifted_box_subsea() {
-    lift_and_hold(Environment::subsea(), Mode::Joint);
-}
-
-#[test]
-fn cartesian_mode_holds_a_lifted_box_in_air() {
-    lift_and_hold(Environment::Air, Mode::Cartesian);
-}
-
-#[test]
-fn cartesian_mode_holds_a_lifted_box_subsea() {
-    lift_and_hold(Environment::subsea(), Mode::Cartesian);
+fn a_lifted_box_stays_held_in_cartesian_mode() {
+    // Failed before the servo centred the valves in a closed chain: the internal force grew
+    // from 11 N to 1.58 kN (air) and the box was dropped.
+    for env in [Environment::Air, Environment::subsea()] {
+        lift_and_hold(env, Mode::Cartesian);
+    }
 }

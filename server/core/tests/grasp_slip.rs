@@ -124,19 +124,26 @@ fn rigid_grasp_switch_holds_the_overloaded_box() {
     assert!(s.peak_grip_load.iter().all(|&l| l > 1.0), "{s:?}");
 }
 
-#[test]
-fn nominal_closed_loop_lift_does_not_slip() {
-    // Case study 4 up to the end of its lift stage C (A–C: grasp, switch to the cooperative
-    // closed loop, lift 0.2 m, hold), the nominal 50 kg box, the jaws' finite grip and the
-    // closed loop's moment-free load share (the training setting).
+/// Case study 4 up to the end of stage `last` with the nominal 50 kg box, the jaws' finite
+/// grip and the closed loop's moment-free load share (the training setting), in air.
+fn case4_until(last: &str) -> Scenario {
     let mut sc = case("case4-dual-closed-loop", false, 50.0);
     sc.params.control.moment_free_share = true;
     let end = sc
         .segments
         .iter()
-        .rposition(|s| s.stage == "C")
-        .expect("stage C");
+        .rposition(|s| s.stage == last)
+        .expect("stage");
     sc.segments.truncate(end + 1);
+    sc
+}
+
+#[test]
+fn nominal_closed_loop_lift_does_not_slip() {
+    // Case study 4 up to the end of its lift stage C (A–C: grasp, switch to the cooperative
+    // closed loop, lift 0.2 m, hold), the nominal 50 kg box, the jaws' finite grip and the
+    // closed loop's moment-free load share (the training setting).
+    let sc = case4_until("C");
     let (s, rows) = run_rows(&sc);
     println!("peak grip load (left, right): {:?}", s.peak_grip_load);
     assert_eq!((s.slips, s.drops), (0, 0), "{s:?}");
@@ -153,15 +160,8 @@ fn nominal_closed_loop_lift_does_not_slip() {
 /// them, the object's travel over D and the simulation at the end of D.
 fn case4_through_the_sideways_move(env: Environment) -> (f64, f64, [f64; 3], Simulation) {
     let m = common::builtin("magnum");
-    let mut sc = case("case4-dual-closed-loop", false, 50.0);
-    sc.params.control.moment_free_share = true;
+    let mut sc = case4_until("D");
     sc.params.step.environment = env;
-    let end = sc
-        .segments
-        .iter()
-        .rposition(|s| s.stage == "D")
-        .expect("stage D");
-    sc.segments.truncate(end + 1);
     let mut sim = Simulation::new(m.clone(), m, sc.params.clone()).expect("sim");
     let (mut peak_c, mut peak_d) = (0.0_f64, 0.0_f64);
     let mut at_d = None;

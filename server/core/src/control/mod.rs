@@ -85,35 +85,18 @@ pub fn open_loop(inputs: &[f64; N_ACT], speed_scale: f64) -> [f64; N_ACT] {
 
 /// Joint-velocity servo. `q_ref` is the servo's integrated reference (state), advanced by
 /// `qd_ref`·dt here; returns spool commands (q̇_ref + k_p(q_ref − q))/q̇_nominal, clamped to ±1.
+///
+/// In a closed chain (`chain`: both jaws hold the object) a zero reference instead centres the
+/// valves and lets the reference follow the arm. Two position loops closed through one rigid
+/// object fight: the chain has one pose, the two references generally disagree with it by the
+/// arms' different sag under the shared load, and a proportional term on a flow-control valve
+/// integrates the remaining error into pressure (eqs 3.48–3.50: a steady opening s into a
+/// locked cylinder raises its pressure at β·K·s·√ΔP/V), so the internal load would grow
+/// without bound with the sticks at rest. The centred closed-centre valves trap the oil and
+/// lock the cylinders instead, as the Magnum's own rate control does with the stick released
+/// (docs/physics.md, "Holding a box in open loop"). A moving reference is servoed as usual
+/// (the operator is moving the pair).
 pub fn joint_servo(
-    qd_ref: &[f64; N_ACT],
-    q: &[f64; N_ACT],
-    q_ref: &mut [f64; N_ACT],
-    nominal_speed: &[f64; N_ACT],
-    dt_s: f64,
-    p: &ControlParams,
-) -> [f64; N_ACT] {
-    let mut u = [0.0; N_ACT];
-    for j in 0..N_ACT {
-        q_ref[j] += qd_ref[j] * dt_s;
-        let e = (q_ref[j] - q[j]).clamp(-p.servo_max_error_rad, p.servo_max_error_rad);
-        q_ref[j] = q[j] + e;
-        u[j] = ((qd_ref[j] + p.servo_kp * e) / nominal_speed[j]).clamp(-1.0, 1.0);
-    }
-    u
-}
-
-/// [`joint_servo`], except that in a closed chain (`chain`: both jaws hold the object) a
-/// zero reference centres the valves and lets the reference follow the arm instead of holding
-/// it. Two position loops closed through one rigid object fight: the chain has one pose, the
-/// two references generally disagree with it by the arms' different sag under the shared load,
-/// and a proportional term on a flow-control valve integrates the remaining error into
-/// pressure (eqs 3.48–3.50: a steady opening s into a locked cylinder raises its pressure at
-/// β·K·s·√ΔP/V), so the internal load would grow without bound with the sticks at rest. The
-/// centred closed-centre valves trap the oil and lock the cylinders instead, as the Magnum's
-/// own rate control does with the stick released (docs/physics.md, "Holding a box in open
-/// loop"). A moving reference is servoed as usual (the operator is moving the pair).
-pub fn joint_servo_or_centre(
     qd_ref: &[f64; N_ACT],
     q: &[f64; N_ACT],
     q_ref: &mut [f64; N_ACT],
@@ -126,7 +109,14 @@ pub fn joint_servo_or_centre(
         *q_ref = *q;
         return [0.0; N_ACT];
     }
-    joint_servo(qd_ref, q, q_ref, nominal_speed, dt_s, p)
+    let mut u = [0.0; N_ACT];
+    for j in 0..N_ACT {
+        q_ref[j] += qd_ref[j] * dt_s;
+        let e = (q_ref[j] - q[j]).clamp(-p.servo_max_error_rad, p.servo_max_error_rad);
+        q_ref[j] = q[j] + e;
+        u[j] = ((qd_ref[j] + p.servo_kp * e) / nominal_speed[j]).clamp(-1.0, 1.0);
+    }
+    u
 }
 
 /// Damped-least-squares solve q̇ = Jᵀ(JJᵀ + λ²I)⁻¹ẋ for a 6×6 Jacobian (zero if JJᵀ + λ²I is
@@ -292,10 +282,10 @@ mod tests {
         }
     }
 
-    /// The servo's law by hand (u = (q̇_ref + k_p·e)/q̇_nominal with e = q_ref + q̇_ref·dt − q
-    /// clamped, eq. of [`joint_servo`]'s docs); in a closed chain a zero reference centres
-    /// the valves and moves the reference to the arm, a moving one is servoed the same; out
-    /// of a chain a zero reference still holds its reference.
+    /// The servo's law by hand (u = (q̇_ref + k_p·e)/q̇_nominal with e = q_ref + q̇_ref·dt − q,
+    /// [`joint_servo`]'s docs); in a closed chain a zero reference centres the valves and
+    /// moves the reference to the arm, a moving one is servoed the same as out of a chain;
+    /// out of a chain a zero reference still holds its reference.
     #[test]
     fn servo_centres_the_valves_in_a_closed_chain_at_rest() {
         let p = ControlParams::default();
@@ -304,20 +294,20 @@ mod tests {
         let r0 = [0.1 + 1e-3, -0.2, 0.3 - 2e-3, 0.0, 0.05, -0.05];
         // At rest in a chain: spools 0, reference = q.
         let mut r = r0;
-        let u = joint_servo_or_centre(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, true);
+        let u = joint_servo(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, true);
         assert_eq!(u, [0.0; N_ACT]);
         assert_eq!(r, q);
         // At rest alone: the position hold, k_p·e/q̇_nominal.
         let mut r = r0;
-        let u = joint_servo_or_centre(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, false);
+        let u = joint_servo(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, false);
         assert!((u[0] - 5.0 * 1e-3 / 0.2).abs() < 1e-12);
         assert!((u[2] + 5.0 * 2e-3 / 0.2).abs() < 1e-12);
         assert_eq!(r, r0);
         // Moving in a chain: the servo as usual.
         let qd = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0];
         let (mut a, mut b) = (r0, r0);
-        let u = joint_servo_or_centre(&qd, &q, &mut a, &nominal, 1e-3, &p, true);
-        let v = joint_servo(&qd, &q, &mut b, &nominal, 1e-3, &p);
+        let u = joint_servo(&qd, &q, &mut a, &nominal, 1e-3, &p, true);
+        let v = joint_servo(&qd, &q, &mut b, &nominal, 1e-3, &p, false);
         assert_eq!((u, a), (v, b));
         let e0 = r0[0] + 0.01 * 1e-3 - q[0];
         assert!((u[0] - (0.01 + 5.0 * e0) / 0.2).abs() < 1e-12);

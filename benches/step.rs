@@ -1,6 +1,8 @@
 //! One full 1 ms step of the whole system (two arms' rigid-body dynamics, 12 actuators with
 //! their valves and chambers, jaws, object, grasp constraint, control), in three situations:
-//! arms moving open loop, both jaws holding the object open loop, and closed-loop cooperative.
+//! arms moving open loop, both jaws holding the object open loop, and closed-loop cooperative
+//! (the thesis's in-air setting of the case studies); and the arms moving open loop in sea
+//! water, the training default (buoyancy, drag and added mass, docs/physics.md).
 
 use std::hint::black_box;
 
@@ -23,6 +25,20 @@ fn bench_step(c: &mut Criterion) {
                 free.reset();
             }
             free.step(black_box(&moving));
+        })
+    });
+    let mut wet = Simulation::new(
+        m.clone(),
+        m.clone(),
+        SimParams::training(&m, &m).expect("params"),
+    )
+    .expect("sim");
+    c.bench_function("step_free_open_loop_subsea", |b| {
+        b.iter(|| {
+            if wet.time_s() > 2.0 {
+                wet.reset();
+            }
+            wet.step(black_box(&moving));
         })
     });
     let base = holding_sim(&m);

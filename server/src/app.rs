@@ -213,11 +213,7 @@ async fn count_requests(State(metrics): State<Arc<Metrics>>, req: Request, next:
 }
 
 async fn metrics_text(State(state): State<AppState>) -> Response {
-    let mut text = state.metrics.render();
-    text.push_str(&format!(
-        "# HELP seaarms_replica_info This replica's name\n# TYPE seaarms_replica_info gauge\nseaarms_replica_info{{replica=\"{}\"}} 1\n",
-        state.cluster.name
-    ));
+    let text = state.metrics.render(&state.cluster.name);
     (
         [(
             axum::http::header::CONTENT_TYPE,

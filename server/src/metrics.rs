@@ -49,8 +49,8 @@ pub struct Metrics {
 }
 
 impl Metrics {
-    /// The Prometheus text exposition.
-    pub fn render(&self) -> String {
+    /// The Prometheus text exposition, with the info gauge naming this replica.
+    pub fn render(&self, replica: &str) -> String {
         let mut out = String::new();
         let rows: [(&str, &str, &str, &AtomicU64); 19] = [
             (
@@ -175,6 +175,10 @@ impl Metrics {
                 v.load(Ordering::Relaxed)
             );
         }
+        let _ = writeln!(
+            out,
+            "# HELP seaarms_replica_info This replica's name\n# TYPE seaarms_replica_info gauge\nseaarms_replica_info{{replica=\"{replica}\"}} 1"
+        );
         out
     }
 }

@@ -4,7 +4,7 @@
 
 use std::time::Instant;
 
-use seaarms_core::sim::scenario::{self, Row, SCENARIOS};
+use seaarms_core::sim::scenario::{self, Row, SCENARIOS, Summary};
 
 use crate::csv_out::CsvOut;
 use seaarms_core::{Model, ModelSpec, robots};
@@ -27,54 +27,19 @@ pub enum ScenarioError {
     Csv(#[from] std::io::Error),
 }
 
-/// Summary of a run (the core's summary plus wall-clock figures).
+/// Summary of a run: the core's [`Summary`] (its fields at the top level of the JSON) plus
+/// wall-clock figures.
 #[derive(Debug, Clone, Serialize)]
 pub struct ScenarioSummary {
-    /// Scenario name.
-    pub scenario: String,
-    /// The medium: `air` (the thesis's setting; every case study runs in air).
-    pub environment: String,
-    /// Highest line pressure of any actuator (Pa).
-    pub peak_line_pressure_pa: f64,
-    /// Relief valve setting (Pa).
-    pub relief_setting_pa: f64,
-    /// Largest |internal force| (N) (Lim eq. 3.41).
-    pub peak_internal_force_n: f64,
-    /// Largest |internal torque| (N·m).
-    pub peak_internal_torque_nm: f64,
-    /// Relief valve openings.
-    pub relief_events: u64,
-    /// Highest object lift above its resting height (m).
-    pub object_lift_m: f64,
-    /// Lift during the closed-loop lift stage (m), case 4 only.
-    pub closed_loop_lift_m: Option<f64>,
-    /// Commanded closed-loop lift (m), case 4 only.
-    pub commanded_lift_m: Option<f64>,
-    /// Grasp state at the end (`free`, `one_on_surface`, `one_lifted`,
-    /// `one_holding_other_contact`, `both_holding`).
-    pub final_grasp_state: String,
-    /// Largest grasp constraint error while holding (m).
-    pub peak_grasp_error_m: f64,
-    /// Simulated time (s).
-    pub sim_seconds: f64,
+    /// What the run did.
+    #[serde(flatten)]
+    pub run: Summary,
     /// Wall-clock time of the run, CSV formatting included (s).
     pub wall_seconds: f64,
     /// sim_seconds / wall_seconds.
     pub realtime_factor: f64,
-    /// Steps rolled back for non-finite values (0 expected).
-    pub numerical_faults: u64,
     /// CSV rows written (one per 10 ms).
     pub rows: usize,
-    /// The grasp model of the run: `rigid` (Lim's assumption (i), every case study) or
-    /// `finite` (the jaws' friction grip).
-    pub grasp_model: String,
-    /// Highest load fraction of each jaw (left, right) against its static friction limits
-    /// (> 1: a finite grip would have slipped).
-    pub peak_grip_load: [f64; 2],
-    /// Slips and grasps lost by slipping, both jaws (0 with the rigid grasp).
-    pub slips: u64,
-    /// Grasps lost by slipping.
-    pub drops: u64,
 }
 
 /// (name, description) of every scenario.
@@ -129,31 +94,14 @@ pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioErr
     let wall = t0.elapsed().as_secs_f64();
     Ok((
         ScenarioSummary {
-            scenario: s.scenario.to_string(),
-            environment: s.environment.to_string(),
-            peak_line_pressure_pa: s.peak_line_pressure_pa,
-            relief_setting_pa: s.relief_setting_pa,
-            peak_internal_force_n: s.peak_internal_force_n,
-            peak_internal_torque_nm: s.peak_internal_torque_nm,
-            relief_events: s.relief_events,
-            object_lift_m: s.object_lift_m,
-            closed_loop_lift_m: s.closed_loop_lift_m,
-            commanded_lift_m: s.commanded_lift_m,
-            final_grasp_state: s.final_grasp_state.as_str().to_string(),
-            peak_grasp_error_m: s.peak_grasp_error_m,
-            sim_seconds: s.sim_seconds,
             wall_seconds: wall,
             realtime_factor: if wall > 0.0 {
                 s.sim_seconds / wall
             } else {
                 f64::INFINITY
             },
-            numerical_faults: s.numerical_faults,
             rows,
-            grasp_model: s.grasp_model.to_string(),
-            peak_grip_load: s.peak_grip_load,
-            slips: s.slips,
-            drops: s.drops,
+            run: s,
         },
         text,
     ))

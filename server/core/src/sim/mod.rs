@@ -299,8 +299,43 @@ struct State {
     coop_active: bool,
     coop_ref: Isometry3<f64>,
     internal: [f64; 6],
+    /// Whether the object rests on the seabed, as the grasp state reports it.
+    surface: SurfaceLatch,
     /// The panel's state (when the parameters have a panel).
     panel: Option<PanelState>,
+}
+
+/// Seconds the seabed contact must persist, or stay lost, before the grasp state follows it:
+/// a box dragged or pivoted on one corner makes and breaks contact many times a second
+/// (measured: 35 grasp-state changes in the `pick-and-place` autopilot with the finite grip,
+/// gaps of 10–200 ms), and each change is an event the trainee sees and the record keeps.
+/// 0.3 s is longer than those gaps and short enough for the colour (Lim §4.1) to follow a
+/// deliberate lift or set-down at once to the eye.
+pub const SURFACE_DWELL_S: f64 = 0.3;
+
+/// The debounced "object on the seabed" flag of the grasp state ([`SURFACE_DWELL_S`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+struct SurfaceLatch {
+    /// The reported flag.
+    on: bool,
+    /// How long the raw contact has disagreed with `on` (s).
+    pending_s: f64,
+}
+
+impl SurfaceLatch {
+    /// One step of `dt_s` with the raw contact `touching`.
+    fn update(&mut self, touching: bool, dt_s: f64) {
+        if touching == self.on {
+            self.pending_s = 0.0;
+            return;
+        }
+        self.pending_s += dt_s;
+        // Half a step of tolerance: the dwell counts whole steps despite rounding.
+        if self.pending_s >= SURFACE_DWELL_S - 0.5 * dt_s {
+            self.on = touching;
+            self.pending_s = 0.0;
+        }
+    }
 }
 
 /// Per-arm workspace (Data): preallocated kinematics/dynamics results.
@@ -379,6 +414,7 @@ impl Simulation {
             coop_active: false,
             coop_ref: Isometry3::identity(),
             internal: [0.0; 6],
+            surface: SurfaceLatch::default(),
             panel: None,
         };
         // Bases composed into the models: kinematics and dynamics come out in the world frame.
@@ -465,6 +501,10 @@ impl Simulation {
         self.state.coop_active = false;
         self.state.coop_ref = pose;
         self.state.internal = [0.0; 6];
+        self.state.surface = SurfaceLatch {
+            on: self.state.object.seabed_force_n > 0.0,
+            pending_s: 0.0,
+        };
         self.state.panel = self.params.panel.as_ref().map(PanelState::initial);
         self.numerical_faults = 0;
         self.update_kinematics();
@@ -520,7 +560,7 @@ impl Simulation {
         GraspState::classify(
             [a[0].holding, a[1].holding],
             [a[0].contact, a[1].contact],
-            self.state.object.seabed_force_n > 0.0,
+            self.state.surface.on,
         )
     }
     /// Whether the cooperative closed loop is currently in control.
@@ -599,6 +639,8 @@ impl Simulation {
             self.numerical_faults += 1;
             self.update_kinematics();
         }
+        let touching = self.state.object.seabed_force_n > 0.0;
+        self.state.surface.update(touching, self.params.step.dt_s);
     }
 
     fn state_is_finite(&self) -> bool {

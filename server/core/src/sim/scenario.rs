@@ -369,8 +369,8 @@ impl Scenario {
     }
 }
 
-/// Outcome of a scenario run.
-#[derive(Debug, Clone, PartialEq)]
+/// Outcome of a scenario run (serialized as the `POST /api/scenarios/{name}/run` summary).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct Summary {
     /// Scenario name.
     pub scenario: &'static str,

@@ -9,8 +9,8 @@ mod common;
 
 use common::scenario_util::run_rows;
 use seaarms_core::grasp::{GraspState, GripCapacity, GripParams, ObjectParams};
-use seaarms_core::sim::Environment;
 use seaarms_core::sim::scenario::{Scenario, scenario};
+use seaarms_core::sim::{Arm, Environment, Simulation};
 
 /// Lim Table 1-1: "Clamp force 150 kg" = 150 kgf.
 const CLAMP_N: f64 = 150.0 * 9.80665;
@@ -124,19 +124,26 @@ fn rigid_grasp_switch_holds_the_overloaded_box() {
     assert!(s.peak_grip_load.iter().all(|&l| l > 1.0), "{s:?}");
 }
 
-#[test]
-fn nominal_closed_loop_lift_does_not_slip() {
-    // Case study 4 up to the end of its lift stage C (A–C: grasp, switch to the cooperative
-    // closed loop, lift 0.2 m, hold), the nominal 50 kg box, the jaws' finite grip and the
-    // closed loop's moment-free load share (the training setting).
+/// Case study 4 up to the end of stage `last` with the nominal 50 kg box, the jaws' finite
+/// grip and the closed loop's moment-free load share (the training setting), in air.
+fn case4_until(last: &str) -> Scenario {
     let mut sc = case("case4-dual-closed-loop", false, 50.0);
     sc.params.control.moment_free_share = true;
     let end = sc
         .segments
         .iter()
-        .rposition(|s| s.stage == "C")
-        .expect("stage C");
+        .rposition(|s| s.stage == last)
+        .expect("stage");
     sc.segments.truncate(end + 1);
+    sc
+}
+
+#[test]
+fn nominal_closed_loop_lift_does_not_slip() {
+    // Case study 4 up to the end of its lift stage C (A–C: grasp, switch to the cooperative
+    // closed loop, lift 0.2 m, hold), the nominal 50 kg box, the jaws' finite grip and the
+    // closed loop's moment-free load share (the training setting).
+    let sc = case4_until("C");
     let (s, rows) = run_rows(&sc);
     println!("peak grip load (left, right): {:?}", s.peak_grip_load);
     assert_eq!((s.slips, s.drops), (0, 0), "{s:?}");
@@ -145,4 +152,65 @@ fn nominal_closed_loop_lift_does_not_slip() {
     let lift = s.closed_loop_lift_m.expect("lift stage");
     let want = s.commanded_lift_m.expect("commanded");
     assert!((lift - want).abs() <= 0.01, "lifted {lift} m for {want} m");
+}
+
+/// Case study 4 through its sideways move with the finite grip, in `env`: A–C as above, then
+/// stage D (the object moved 0.05 m/s along the handles' line, world y, for 2 s, then held
+/// 2 s). Per step: the largest load fraction of either jaw in stage C and in stage D; returns
+/// them, the object's travel over D and the simulation at the end of D.
+fn case4_through_the_sideways_move(env: Environment) -> (f64, f64, [f64; 3], Simulation) {
+    let m = common::builtin("magnum");
+    let mut sc = case4_until("D");
+    sc.params.step.environment = env;
+    let mut sim = Simulation::new(m.clone(), m, sc.params.clone()).expect("sim");
+    let (mut peak_c, mut peak_d) = (0.0_f64, 0.0_f64);
+    let mut at_d = None;
+    for seg in &sc.segments {
+        if seg.stage == "D" && at_d.is_none() {
+            at_d = Some(sim.object().pose.translation.vector);
+        }
+        let n = (seg.duration_s / sc.params.step.dt_s).round() as usize;
+        for _ in 0..n {
+            let input = sc.input_at(&sim, seg, sim.time_s());
+            sim.step(&input);
+            let load = Arm::BOTH
+                .map(|a| sim.arm(a).grip.load_fraction)
+                .into_iter()
+                .fold(0.0, f64::max);
+            match seg.stage {
+                "C" => peak_c = peak_c.max(load),
+                "D" => peak_d = peak_d.max(load),
+                _ => {}
+            }
+        }
+    }
+    let moved = sim.object().pose.translation.vector - at_d.expect("stage D ran");
+    (peak_c, peak_d, [moved.x, moved.y, moved.z], sim)
+}
+
+#[test]
+fn nominal_closed_loop_sideways_move_keeps_the_box() {
+    // docs/physics.md "Left open" had it drop the box here (λ up to 16 at t ≈ 28.7 s) with
+    // the softer internal-load admittance (1·10⁻⁵ m/s per N, 1·10⁻⁴ rad/s per N·m).
+    for env in [Environment::Air, Environment::subsea()] {
+        let (peak_c, peak_d, moved, sim) = case4_through_the_sideways_move(env);
+        let slips = Arm::BOTH.map(|a| sim.arm(a).grip.slips);
+        println!(
+            "{env:?}: peak λ stage C {peak_c:.3}, stage D {peak_d:.3}; slips {slips:?}; \
+             object moved {moved:.4?} m over D"
+        );
+        assert_eq!(slips, [0, 0], "{env:?}");
+        assert_eq!(Arm::BOTH.map(|a| sim.arm(a).grip.drops), [0, 0]);
+        assert_eq!(sim.grasp_state(), GraspState::BothHolding);
+        assert_eq!(sim.numerical_faults(), 0);
+        // The move's closed form: 0.05 m/s × 2 s = 0.1 m along y, nothing else (the object
+        // pose loop, k_p = 1.5 s⁻¹, has had 2 s = 3 time constants of hold to settle).
+        assert!((moved[1] - 0.1).abs() < 0.005, "{env:?}: {moved:?}");
+        assert!(
+            moved[0].abs() < 0.005 && moved[2].abs() < 0.005,
+            "{moved:?}"
+        );
+        // A 20 % margin on the static friction ellipsoid through the move.
+        assert!(peak_d <= 0.8, "{env:?}: peak λ {peak_d} in stage D");
+    }
 }

@@ -30,9 +30,17 @@ pub struct ControlParams {
     /// Object pose gain of the cooperative controller (1/s): 1.5 (2 and above excite a slow limit
     /// cycle with the lightly damped oil-column resonance while holding).
     pub object_kp: f64,
-    /// Internal-force admittance, translation (m/s per N): 1·10⁻⁵ (1 kN → 1 cm/s back-off).
+    /// Internal-force admittance, translation (m/s per N): 1·10⁻⁴ (100 N → 1 cm/s back-off).
+    /// In a steady move the internal force settles where the back-off cancels the two grasp
+    /// points' velocity mismatch, F ≈ δv/k; at the former 1·10⁻⁵ a 1 cm/s mismatch cost 1 kN.
+    /// Chosen with the rotational gain by a sweep of case 4 with the finite grip
+    /// (docs/physics.md, "Case 4 stage D: the sideways move").
     pub internal_admittance_lin: f64,
-    /// Internal-torque admittance, rotation (rad/s per N·m): 1·10⁻⁴.
+    /// Internal-torque admittance, rotation (rad/s per N·m): 1·10⁻² (10 N·m → 0.1 rad/s).
+    /// The jaw's tightest friction limit is the torsion about its closing axis, 15.2 N·m at
+    /// the rated clamp (`grasp::grip`): at the former 1·10⁻⁴ a rotation-rate mismatch of
+    /// only 1.5 mrad/s between the grasp frames used all of it, and case 4's sideways move
+    /// slipped the box out of the jaws.
     pub internal_admittance_rot: f64,
     /// Damping of the damped-least-squares inverse Jacobian (m): 0.02.
     pub dls_damping: f64,
@@ -55,8 +63,8 @@ impl Default for ControlParams {
             servo_kp: 5.0,
             servo_max_error_rad: 0.2,
             object_kp: 1.5,
-            internal_admittance_lin: 1.0e-5,
-            internal_admittance_rot: 1.0e-4,
+            internal_admittance_lin: 1.0e-4,
+            internal_admittance_rot: 1.0e-2,
             dls_damping: 0.02,
             max_object_speed_m_s: 0.2,
             max_object_rate_rad_s: 0.5,
@@ -77,6 +85,17 @@ pub fn open_loop(inputs: &[f64; N_ACT], speed_scale: f64) -> [f64; N_ACT] {
 
 /// Joint-velocity servo. `q_ref` is the servo's integrated reference (state), advanced by
 /// `qd_ref`·dt here; returns spool commands (q̇_ref + k_p(q_ref − q))/q̇_nominal, clamped to ±1.
+///
+/// In a closed chain (`chain`: both jaws hold the object) a zero reference instead centres the
+/// valves and lets the reference follow the arm. Two position loops closed through one rigid
+/// object fight: the chain has one pose, the two references generally disagree with it by the
+/// arms' different sag under the shared load, and a proportional term on a flow-control valve
+/// integrates the remaining error into pressure (eqs 3.48–3.50: a steady opening s into a
+/// locked cylinder raises its pressure at β·K·s·√ΔP/V), so the internal load would grow
+/// without bound with the sticks at rest. The centred closed-centre valves trap the oil and
+/// lock the cylinders instead, as the Magnum's own rate control does with the stick released
+/// (docs/physics.md, "Holding a box in open loop"). A moving reference is servoed as usual
+/// (the operator is moving the pair).
 pub fn joint_servo(
     qd_ref: &[f64; N_ACT],
     q: &[f64; N_ACT],
@@ -84,7 +103,12 @@ pub fn joint_servo(
     nominal_speed: &[f64; N_ACT],
     dt_s: f64,
     p: &ControlParams,
+    chain: bool,
 ) -> [f64; N_ACT] {
+    if chain && qd_ref.iter().all(|v| *v == 0.0) {
+        *q_ref = *q;
+        return [0.0; N_ACT];
+    }
     let mut u = [0.0; N_ACT];
     for j in 0..N_ACT {
         q_ref[j] += qd_ref[j] * dt_s;
@@ -256,6 +280,37 @@ mod tests {
         fn rotation(&mut self) -> UnitQuaternion<f64> {
             UnitQuaternion::from_scaled_axis(self.vector3(6.0))
         }
+    }
+
+    /// The servo's law by hand (u = (q̇_ref + k_p·e)/q̇_nominal with e = q_ref + q̇_ref·dt − q,
+    /// [`joint_servo`]'s docs); in a closed chain a zero reference centres the valves and
+    /// moves the reference to the arm, a moving one is servoed the same as out of a chain;
+    /// out of a chain a zero reference still holds its reference.
+    #[test]
+    fn servo_centres_the_valves_in_a_closed_chain_at_rest() {
+        let p = ControlParams::default();
+        let nominal = [0.2; N_ACT];
+        let q = [0.1, -0.2, 0.3, 0.0, 0.05, -0.05];
+        let r0 = [0.1 + 1e-3, -0.2, 0.3 - 2e-3, 0.0, 0.05, -0.05];
+        // At rest in a chain: spools 0, reference = q.
+        let mut r = r0;
+        let u = joint_servo(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, true);
+        assert_eq!(u, [0.0; N_ACT]);
+        assert_eq!(r, q);
+        // At rest alone: the position hold, k_p·e/q̇_nominal.
+        let mut r = r0;
+        let u = joint_servo(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, false);
+        assert!((u[0] - 5.0 * 1e-3 / 0.2).abs() < 1e-12);
+        assert!((u[2] + 5.0 * 2e-3 / 0.2).abs() < 1e-12);
+        assert_eq!(r, r0);
+        // Moving in a chain: the servo as usual.
+        let qd = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let (mut a, mut b) = (r0, r0);
+        let u = joint_servo(&qd, &q, &mut a, &nominal, 1e-3, &p, true);
+        let v = joint_servo(&qd, &q, &mut b, &nominal, 1e-3, &p, false);
+        assert_eq!((u, a), (v, b));
+        let e0 = r0[0] + 0.01 * 1e-3 - q[0];
+        assert!((u[0] - (0.01 + 5.0 * e0) / 0.2).abs() < 1e-12);
     }
 
     /// Reference DLS: Jᵀ(JJᵀ + λ²I)⁻¹ẋ formed with nalgebra's own matrix products and Cholesky

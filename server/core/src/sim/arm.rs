@@ -114,7 +114,9 @@ pub(super) fn clamp_force(current: f64, jaw: &JawParams, closed_on: bool, cmd: f
 
 /// Stage 2 outside cooperative control (per arm): the operator's valve commands (open loop),
 /// or the joint servo's when the input carries a joint-velocity reference (clamped to ±2×
-/// the nominal speeds). `speed` is the validated speed scale.
+/// the nominal speeds). `speed` is the validated speed scale. `chain`: both jaws hold the
+/// object (the chain arms–object is closed); then a zero reference centres the valves
+/// instead of holding the servo's reference ([`control::joint_servo`]).
 pub(super) fn operator_spools(
     a: &mut ArmState,
     input: &ArmInput,
@@ -122,6 +124,7 @@ pub(super) fn operator_spools(
     speed: f64,
     dt: f64,
     cp: &ControlParams,
+    chain: bool,
 ) -> [f64; N_ACT] {
     match input.joint_velocity_ref {
         Some(r) => {
@@ -132,7 +135,7 @@ pub(super) fn operator_spools(
             let qd_ref: [f64; N_ACT] = core::array::from_fn(|j| {
                 (finite_or(r[j], 0.0) * speed).clamp(-2.0 * nominal[j], 2.0 * nominal[j])
             });
-            control::joint_servo(&qd_ref, &a.q, &mut a.servo_ref, nominal, dt, cp)
+            control::joint_servo(&qd_ref, &a.q, &mut a.servo_ref, nominal, dt, cp, chain)
         }
         None => {
             a.servo_active = false;

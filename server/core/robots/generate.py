@@ -10,7 +10,7 @@ def j(kind="revolute", a=0.0, alpha=0.0, d=0.0, theta=0.0, lim=None, vel=None, n
     if lim: o["limits"] = [r(lim[0]), r(lim[1])]
     if vel: o["max_velocity"] = r(vel)
     return o
-L = dict(l1=0.10, l2=0.56, l3=0.50, l4=0.12, l5=0.10, l6=0.12)
+L = dict(l1=0.10, l2=0.60, l3=0.40, l4=0.25, l5=0.10, l6=0.16)
 models = {
  "magnum": {
   "name": "magnum",

@@ -10,10 +10,13 @@ shoulder, elbow and pitch (lever vectors r_s, r_e, r_p from each axis to the too
     w² = (X² + (l5 + l6)²) · Σ_{i<j} (r_i × r_j)²      (Cauchy–Binet on the 2×3 block)
 
 with the elbow-up branch of the closed-form IK (Lim eqs 3.10–3.19 in the plane) and the joint
-ranges of Table 1-1 (spans 90° / 130° / 115°) placed as given. The first line printed checks
-this against the Rust studies (`cargo test -p seaarms-core --test manipulability_studies --
---nocapture`) for the shipped arm: X-sweep maxima 1.23 / 1.23 / 1.19 / 1.16 m, Z-sweep
-maximum at X = 1.4 m at Z = 0.14 m.
+ranges of Table 1-1 (spans 90° / 130° / 115°) placed as given. The first two lines printed
+check this against the Rust studies (`cargo test -p seaarms-core --test manipulability_studies
+-- --nocapture`): for the shipped arm (l2 0.60, l3 0.40, lw 0.51 m) the Rust gives X-sweep
+maxima 1.33 / 1.32 / 1.29 / 1.26 m and the Z-sweep maximum at X = 1.4 m at Z = 0.40 m (this
+script: the same but 1.27 m at Z = 0.5 m, a maximum that flat splits on the 1 cm grid); for
+the first arm we shipped (l2 0.56, l3 0.50, lw 0.34 m) both give 1.23 / 1.23 / 1.19 / 1.16 m
+and 0.14 m.
 
 Then two searches (X-sweep from 0.9 m, Z-sweep from 0 m, 1 cm steps; a sweep ends at the first
 unreachable row after a reachable one, as the Rust studies do):
@@ -97,10 +100,13 @@ def fmt(xs):
     return " / ".join(f"{x:.2f}" for x in xs)
 
 
-SHIPPED = (0.10, 0.56, 0.50, 0.34, 0.22)
+# (l1, l2, l3, lw = l4 + l5 + l6, l5 + l6) in m; the ranges as shipped.
+SHIPPED = (0.10, 0.60, 0.40, 0.51, 0.26)
+FIRST = (0.10, 0.56, 0.50, 0.34, 0.22)
 SHIPPED_LIM = [(0.0, R(90)), (R(-130), 0.0), (R(-55), R(60))]
-xs, zm = maxima(SHIPPED, SHIPPED_LIM)
-print(f"shipped arm: X-sweep maxima {fmt(xs)} m, Z-sweep maximum at X = 1.4: {zm:.2f} m")
+for name, arm in (("shipped arm", SHIPPED), ("first arm", FIRST)):
+    xs, zm = maxima(arm, SHIPPED_LIM)
+    print(f"{name}: X-sweep maxima {fmt(xs)} m, Z-sweep maximum at X = 1.4: {zm:.2f} m")
 
 best1, meets = None, []
 for l1 in (0.05, 0.10, 0.15):
@@ -110,6 +116,7 @@ for l1 in (0.05, 0.10, 0.15):
                 reach = l2 + l3 + lw
                 if not 1.40 - 1e-9 <= reach <= 1.70 + 1e-9:
                     continue
+                # l4 = 0.12 m here; the yaw lever l5 + l6 moves the maxima by ≤ 0.01 m.
                 arm = (l1, l2, l3, lw, lw - 0.12)
                 for lo2, lo4 in ((0, -50), (-10, -50), (0, -30)):
                     lim = [(R(lo2), R(lo2 + 90)), (R(-130), 0.0), (R(lo4), R(lo4 + 115))]

@@ -25,7 +25,9 @@ unreachable row after a reachable one, as the Rust studies do):
      centre): the best Z-sweep maximum at X = 1.4 m among arms whose X-sweep maxima are all in
      1.3 ± 0.05 m;
   2. the reach free (1.40–1.70 m): the arms meeting both figures (X maxima in 1.3 ± 0.05 m, Z
-     maximum at X = 1.4 m in 0.42 ± 0.05 m), and their shortest reach.
+     maximum at X = 1.4 m in 0.42 ± 0.05 m), and their shortest reach;
+  3. a 1 cm grid near the shortest (l1 0.10 m, reach from the shoulder 1.48–1.51 m): the arms
+     with the largest margin — the shipped arm's l2 0.60, l3 0.40, lw 0.51 m is among them.
 """
 import math
 
@@ -144,3 +146,25 @@ if meets:
 for reach, arm, xs, zm in sorted(meets)[:8]:
     print(f"   reach {reach:.3f} m: l1 {arm[0]:.3f}, l2 {arm[1]:.3f}, l3 {arm[2]:.3f}, "
           f"lw {arm[3]:.3f}; X maxima {fmt(xs)}, Z maximum {zm:.2f}")
+
+# 3. A 1 cm grid near the shortest arms (l1 = 0.10 m, reach from the shoulder 1.48–1.51 m,
+#    the ranges as shipped): the arms meeting both figures with the largest margin, i.e. the
+#    smallest worst-case distance from 1.3 m (X maxima) and 0.42 m (Z maximum).
+fine = []
+for l2 in frange(0.58, 0.78, 0.01):
+    for l3 in frange(0.26, 0.45, 0.01):
+        for reach in (1.48, 1.49, 1.50, 1.51):
+            lw = reach - l2 - l3
+            if not 0.35 <= lw <= 0.62:
+                continue
+            arm = (0.10, l2, l3, lw, 0.26)
+            xs, zm = maxima(arm, SHIPPED_LIM)
+            if any(math.isnan(x) for x in xs) or math.isnan(zm) or not workspace_ok(arm, SHIPPED_LIM):
+                continue
+            err = max(max(abs(x - 1.3) for x in xs), abs(zm - 0.42))
+            if err <= 0.05 + 1e-9:
+                fine.append((round(err, 3), reach, arm, xs, zm))
+print(f"3. 1 cm grid, l1 0.10, reach from the shoulder 1.48–1.51 m: {len(fine)} arms meet both")
+for err, reach, arm, xs, zm in sorted(fine, key=lambda f: (f[0], f[1]))[:6]:
+    print(f"   worst error {err:.3f} m, reach {reach:.2f}: l2 {arm[1]:.2f}, l3 {arm[2]:.2f}, "
+          f"lw {arm[3]:.2f}; X maxima {fmt(xs)}, Z maximum {zm:.2f}")

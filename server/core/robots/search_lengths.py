@@ -12,14 +12,12 @@ shoulder, elbow and pitch (lever vectors r_s, r_e, r_p from each axis to the too
 with the elbow-up branch of the closed-form IK (Lim eqs 3.10–3.19 in the plane) and the joint
 ranges of Table 1-1 (spans 90° / 130° / 115°) placed as given. The first two lines printed
 check this against the Rust studies (`cargo test -p seaarms-core --test manipulability_studies
--- --nocapture`): for the shipped arm (l2 0.60, l3 0.40, lw 0.51 m) the Rust gives X-sweep
-maxima 1.33 / 1.32 / 1.29 / 1.26 m and the Z-sweep maximum at X = 1.4 m at Z = 0.40 m (this
-script: the same but 1.27 m at Z = 0.5 m, a maximum that flat splits on the 1 cm grid); for
-the first arm we shipped (l2 0.56, l3 0.50, lw 0.34 m) both give 1.23 / 1.23 / 1.19 / 1.16 m
-and 0.14 m.
+-- --nocapture`): the shipped arm (l2 0.60, l3 0.40, lw 0.51 m) gives X-sweep maxima 1.33 /
+1.32 / 1.29 / 1.27 m and the Z-sweep maximum at X = 1.4 m at Z = 0.40 m; the first arm we
+shipped (l2 0.56, l3 0.50, lw 0.34 m) gave 1.23 / 1.23 / 1.19 / 1.16 m and 0.14 m.
 
-Then two searches (X-sweep from 0.9 m, Z-sweep from 0 m, 1 cm steps; a sweep ends at the first
-unreachable row after a reachable one, as the Rust studies do):
+Then three searches (X-sweep from 0.9 m, Z-sweep from 0 m, 1 cm steps; a sweep ends at the
+first unreachable row after a reachable one, as the Rust studies do):
 (only arms whose Z-sweeps at X = 0.9 … 1.3 m have rows count: the thesis sweeps them)
   1. reach from the shoulder l2 + l3 + lw = 1.5 m (lw = l4 + l5 + l6, pitch axis to jaw
      centre): the best Z-sweep maximum at X = 1.4 m among arms whose X-sweep maxima are all in

@@ -72,31 +72,46 @@ impl Operator {
     }
 
     /// The input the page would send: joint mode puts `valves` on both arms; Cartesian mode
-    /// resolves `stick` for each arm (zero stick gives a zero joint-velocity reference).
+    /// resolves `stick` for each arm (zero stick gives a zero joint-velocity reference), the
+    /// orientation held while both jaws hold, as the page's resolver does
+    /// (server/src/sessions/physics.rs).
     fn input(&mut self, sim: &Simulation, stick: [f64; 6], valves: [f64; 6]) -> Input {
+        match self.mode {
+            Mode::Joint => {
+                let mut input = Input {
+                    speed_scale: 1.0,
+                    ..Input::default()
+                };
+                for arm in Arm::BOTH {
+                    input.arms[arm.index()].valves = valves;
+                }
+                input
+            }
+            Mode::Cartesian => {
+                let chain = sim.grasp_state() == GraspState::BothHolding;
+                self.cartesian(sim, stick, chain)
+            }
+        }
+    }
+
+    /// Cartesian mode with `keep_orientation` given: all six rows with a zero angular rate
+    /// (`true`) or the translational rows only.
+    fn cartesian(&mut self, sim: &Simulation, stick: [f64; 6], keep_orientation: bool) -> Input {
         let mut input = Input {
             speed_scale: 1.0,
             ..Input::default()
         };
         for arm in Arm::BOTH {
             let i = arm.index();
-            match self.mode {
-                Mode::Joint => input.arms[i].valves = valves,
-                Mode::Cartesian => {
-                    // As the page's resolver (server/src/sessions/physics.rs): orientation
-                    // held while both jaws hold.
-                    let chain = sim.grasp_state() == GraspState::BothHolding;
-                    input.arms[i].joint_velocity_ref = Some(cartesian_to_joint_velocity(
-                        &mut self.resolvers[i],
-                        sim.model(arm),
-                        &sim.params().arms[i].base.rotation,
-                        &sim.arm(arm).q,
-                        &stick,
-                        chain,
-                        1e-3,
-                    ))
-                }
-            }
+            input.arms[i].joint_velocity_ref = Some(cartesian_to_joint_velocity(
+                &mut self.resolvers[i],
+                sim.model(arm),
+                &sim.params().arms[i].base.rotation,
+                &sim.arm(arm).q,
+                &stick,
+                keep_orientation,
+                1e-3,
+            ));
         }
         input
     }
@@ -271,11 +286,7 @@ fn cartesian_pair_lift(
     t_s: f64,
 ) -> (f64, u64, Option<f64>, f64) {
     let mut sim = dual_grasp(env);
-    let m = common::builtin("magnum");
-    let mut resolvers = [
-        Redundancy::new(&m, RedundancyParams::default()),
-        Redundancy::new(&m, RedundancyParams::default()),
-    ];
+    let mut op = Operator::new(Mode::Cartesian);
     let z0 = sim.object().pose.translation.vector.z;
     let slips0: u64 = Arm::BOTH.map(|a| sim.arm(a).grip.slips).iter().sum();
     let (mut first_slip, mut peak) = (None, 0.0f64);
@@ -283,22 +294,7 @@ fn cartesian_pair_lift(
     for k in 0..n {
         let t = k as f64 * 1e-3;
         let stick = [0.0, 0.0, 0.1 * (t / ramp_s).min(1.0), 0.0, 0.0, 0.0];
-        let mut input = Input {
-            speed_scale: 1.0,
-            ..Input::default()
-        };
-        for arm in Arm::BOTH {
-            let i = arm.index();
-            input.arms[i].joint_velocity_ref = Some(cartesian_to_joint_velocity(
-                &mut resolvers[i],
-                sim.model(arm),
-                &sim.params().arms[i].base.rotation,
-                &sim.arm(arm).q,
-                &stick,
-                chain,
-                1e-3,
-            ));
-        }
+        let input = op.cartesian(&sim, stick, chain);
         sim.step(&input);
         peak = peak.max(load(&sim));
         let slips: u64 = Arm::BOTH.map(|a| sim.arm(a).grip.slips).iter().sum();

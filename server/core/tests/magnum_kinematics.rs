@@ -122,17 +122,27 @@ fn case_study_workspace_is_reachable_within_limits() {
     let model = common::builtin("magnum");
     // Damped least squares is local: near the inner boundary it can stall on a joint limit
     // from one start, so each target gets two (elbow half and well folded).
-    let starts = [[0.0, 0.5, -1.2, 0.3, 0.0, 0.0], [0.0, 1.0, -1.9, 0.3, 0.0, 0.0]];
+    let starts = [
+        [0.0, 0.5, -1.2, 0.3, 0.0, 0.0],
+        [0.0, 1.0, -1.9, 0.3, 0.0, 0.0],
+    ];
     let mut worst: f64 = 0.0;
     for ix in 0..=5 {
         for iz in 0..=5 {
             let target = Vector3::new(0.9 + 0.1 * ix as f64, 0.0, 0.1 * iz as f64);
             let solve = |q0: &[f64; 6]| {
-                dls_ik(&model, &IkTarget::Position(target), q0, &IkOptions::default())
+                dls_ik(
+                    &model,
+                    &IkTarget::Position(target),
+                    q0,
+                    &IkOptions::default(),
+                )
             };
             let q = solve(&starts[0])
                 .or_else(|_| solve(&starts[1]))
-                .unwrap_or_else(|e| panic!("({:.2}, 0, {:.2}) unreachable: {e}", target.x, target.z));
+                .unwrap_or_else(|e| {
+                    panic!("({:.2}, 0, {:.2}) unreachable: {e}", target.x, target.z)
+                });
             let p = end_effector_pose(&model, &q).translation.vector;
             worst = worst.max((p - target).norm());
         }

@@ -137,7 +137,11 @@ fn single_arm_sweeps_reach_the_boundary() {
             );
         }
         if x == "x=1.40" {
-            assert!((peak.0 - 0.42).abs() <= 0.05 + 1e-9, "{x}: maximum at Z {}", peak.0);
+            assert!(
+                (peak.0 - 0.42).abs() <= 0.05 + 1e-9,
+                "{x}: maximum at Z {}",
+                peak.0
+            );
         }
     }
 }

@@ -200,6 +200,13 @@ export class Arm {
     return a.add(b).multiplyScalar(0.5).toArray();
   }
 
+  /** Drawn link polyline (joint origins, then the tool point) and each cylinder's rod end
+   * (world, m), the ends read back from the rod meshes: for tests. */
+  drawnRods() {
+    const rodEnds = this.rods.map((r) => { const e = r.matrix.elements; return [0, 1, 2].map((i) => e[12 + i] + 0.5 * e[4 + i]); });
+    return { links: this.origins.map((o) => o.toArray()), rodEnds };
+  }
+
   /** Drawn finger separation (m): for tests. */
   drawnJawGap() {
     const a = new THREE.Vector3().setFromMatrixPosition(this.fingers[0].matrix);

@@ -59,6 +59,11 @@ function planeDir(v, fallback) {
   return l < 0.03 ? fallback : [v.x / l, v.y / l];
 }
 
+/** Farthest a cylinder's rod end sits from its joint (m), along the driven link. */
+const ROD_REACH_M = 0.3;
+/** Share of the driven link's length (in the joint plane) the rod end may use at most. */
+const ROD_REACH_SHARE = 0.6;
+
 export class Arm {
   /**
    * @param spec hello.arms[i]: {model, base}
@@ -116,9 +121,16 @@ export class Arm {
       _inv.copy(_pre).invert();
       const back = planeDir(_a.copy(k > 0 ? o[k - 1] : this.basePos.clone().setZ(o[0].z - 0.3)).applyMatrix4(_inv), [-1, 0]);
       _inv.copy(this.frames[k]).invert();
-      const fwd = planeDir(_b.copy(o[k + 1]).applyMatrix4(_inv), [1, 0]);
+      // the rod end on the driven link: toward the first later origin off the joint axis (a
+      // wrist joint's own link may have zero length; o[n] is the tool point), within the
+      // link, so a short link (the pitch link, the yaw joint's) keeps its rod on the arm
+      let j = k + 1;
+      while (j < this.n && Math.hypot(..._b.copy(o[j]).applyMatrix4(_inv).toArray().slice(0, 2)) < 0.03) j++;
+      _b.copy(o[j]).applyMatrix4(_inv);
+      const fwd = planeDir(_b, [1, 0]);
+      const reach = Math.min(ROD_REACH_M, ROD_REACH_SHARE * Math.hypot(_b.x, _b.y));
       const side = 0.075;
-      this.anchors.push([anchor(back[0], back[1], 0.13, side), anchor(fwd[0], fwd[1], 0.3, -side)]);
+      this.anchors.push([anchor(back[0], back[1], 0.13, side), anchor(fwd[0], fwd[1], Math.max(reach, 0.05), -side)]);
     }
   }
 
@@ -186,6 +198,13 @@ export class Arm {
     const a = new THREE.Vector3().setFromMatrixPosition(this.fingers[0].matrix);
     const b = new THREE.Vector3().setFromMatrixPosition(this.fingers[1].matrix);
     return a.add(b).multiplyScalar(0.5).toArray();
+  }
+
+  /** Drawn link polyline (joint origins, then the tool point) and each cylinder's rod end
+   * (world, m), the ends read back from the rod meshes: for tests. */
+  drawnRods() {
+    const rodEnds = this.rods.map((r) => { const e = r.matrix.elements; return [0, 1, 2].map((i) => e[12 + i] + 0.5 * e[4 + i]); });
+    return { links: this.origins.map((o) => o.toArray()), rodEnds };
   }
 
   /** Drawn finger separation (m): for tests. */

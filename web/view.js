@@ -156,6 +156,7 @@ export class View {
       drawnJointAngles() { return v.arms ? v.arms.map((a) => a.q.slice()) : null; },
       drawnJawCentres() { return v.arms ? v.arms.map((a) => a.drawnJawCentre()) : null; },
       drawnJawGaps() { return v.arms ? v.arms.map((a) => a.drawnJawGap()) : null; },
+      drawnRods() { return v.arms ? v.arms.map((a) => a.drawnRods()) : null; },
       drawnObjectColour() { return v.world.objectMaterial.color.getHex(); },
       /** The water current's arrow: shown, and its tail and tip (world, m). */
       drawnCurrent() { const a = v.world.current; return { visible: a.visible, ends: a.ends() }; },

@@ -37,6 +37,19 @@ test('a gamepad stick moves a joint: streamed q changes and the drawn arm moves'
       inputSeq: window.__seaarms.lastState.input_seq,
     }));
     await b.page.screenshot({ path: join(ARTIFACTS, 'gamepad-moved.png') });
+    // every hydraulic cylinder's rod end is drawn on the arm: within the cylinder's sideways
+    // mounting offset (7.5 cm, web/arms.js) plus its rod radius of the link polyline, not
+    // beyond a short link's end (the 0.25 m pitch link) or past the jaw
+    const rods = await b.page.evaluate(() => window.__seaarms.drawnRods());
+    const toSegment = (p, a, c) => {
+      const d = c.map((v, i) => v - a[i]), w = p.map((v, i) => v - a[i]);
+      const t = Math.max(0, Math.min(1, (w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / Math.max(1e-12, d[0] ** 2 + d[1] ** 2 + d[2] ** 2)));
+      return Math.hypot(...w.map((v, i) => v - t * d[i]));
+    };
+    rods.forEach(({ links, rodEnds }, arm) => rodEnds.forEach((e, k) => {
+      const off = Math.min(...links.slice(1).map((c, i) => toSegment(e, links[i], c)));
+      assert.ok(off < 0.09, `arm ${arm} cylinder ${k + 1}: rod end ${off.toFixed(3)} m off the links`);
+    }));
     const dq = after.q[0] - before.q[0];
     assert.ok(dir * dq > 0.05, `swing moved ${dq} rad (wanted sign ${dir})`);
     for (let i = 1; i < 6; i++) assert.ok(Math.abs(after.q[i] - before.q[i]) < Math.abs(dq), `joint ${i + 1} moved less than the swing`);

@@ -45,7 +45,10 @@ test('scripted grasp: object turns black, light blue, yellow as drawn', { timeou
     await page.waitForTimeout(1000);
     await page.evaluate(() => { window.__setButton(4, 0); window.__setButton(6, 0); });
 
-    await grab('left');
+    // squared jaw: this one jaw lifts the box by its end handle (the grip's torsion limit
+    // would let the hanging box turn out of a jaw left as the Cartesian moves happened to
+    // leave it; padDriver's squareJaw)
+    await grab('left', { square: true });
     await until(page, () => window.__seaarms.lastState.grasp === 'one_on_surface', undefined, 20000);
     await page.waitForTimeout(300);
     const black = await snap('one_on_surface');

@@ -306,13 +306,42 @@ export function padDriver(page, onState = () => {}) {
     await until(page, (s) => window.__seaarms.selectedArm === s, side);
     await page.evaluate((i) => window.__setButton(i, 0), btn);
   };
-  /** Opens the jaw, brings the tool point onto its handle, closes (RT kept pressed); retries if it slips. */
-  const grab = async (side) => {
+  /**
+   * Turns the jaw about the world vertical (d-pad right/left = ±wz) until its closing axis
+   * (tool y, the rotation's second column) has no world-x part, within `tol` (rad). A box hung
+   * from one handle (y = ±0.15 m off its centre) pulls a moment about world x; squared so, the
+   * pads carry it as roll about the bar (limit N·s, 59 N·m) and not as torsion about the
+   * closing axis (limit 2μNρ̄, about 11 N·m; server/core/src/grasp/grip.rs), which alone
+   * would slip under the box's 37 N·m (249 N wet weight × 0.15 m).
+   */
+  const squareJaw = async (side, tol = 0.02, timeoutMs = 15000) => {
+    const t0 = Date.now();
+    let e = 1;
+    while (Date.now() - t0 < timeoutMs) {
+      const r = await page.evaluate((s) => window.__seaarms.lastState.arms[s].pose.rotation, side);
+      // angle of the closing axis's horizontal part from the nearer of ±y; +wz turns it toward −x
+      e = Math.atan2(r[0][1], r[1][1]);
+      if (e > Math.PI / 2) e -= Math.PI; else if (e < -Math.PI / 2) e += Math.PI;
+      if (Math.abs(e) < tol) break;
+      const v = Math.sign(e) * Math.max(0.25, Math.min(1, Math.abs(e) / 0.3));
+      await page.evaluate((x) => { window.__setButton(15, Math.max(0, x)); window.__setButton(14, Math.max(0, -x)); }, v);
+      await page.waitForTimeout(40);
+    }
+    await page.evaluate(() => { window.__setButton(15, 0); window.__setButton(14, 0); });
+    return Math.abs(e);
+  };
+  /**
+   * Opens the jaw, brings the tool point onto its handle, closes (RT kept pressed); retries if
+   * it slips. `square`: square the jaw (squareJaw) 10 cm above the handle first, for a lift by
+   * this one jaw.
+   */
+  const grab = async (side, { square = false } = {}) => {
     for (let attempt = 1; attempt <= 3; attempt++) {
       await page.evaluate(() => { window.__setButton(7, 0); window.__setButton(6, 1); }); // LT: open
       await page.waitForTimeout(900);
       await page.evaluate(() => { window.__setButton(6, 0); });
       await driveTo(side, above(side, 0.1), 0.03);
+      if (square) await squareJaw(side);
       const e = await driveTo(side, above(side, 0), 0.015);
       await page.waitForTimeout(400); // let the hydraulics settle
       const still = await page.evaluate((s) => window.__seaarms.lastState.arms[s].contact, side);
@@ -325,7 +354,7 @@ export function padDriver(page, onState = () => {}) {
     }
     throw new Error(`${side} jaw could not grab its handle`);
   };
-  return { setSticks, driveTo, selectArm, grab };
+  return { setSticks, driveTo, selectArm, grab, squareJaw };
 }
 
 /**

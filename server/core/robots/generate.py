@@ -10,7 +10,7 @@ def j(kind="revolute", a=0.0, alpha=0.0, d=0.0, theta=0.0, lim=None, vel=None, n
     if lim: o["limits"] = [r(lim[0]), r(lim[1])]
     if vel: o["max_velocity"] = r(vel)
     return o
-L = dict(l1=0.10, l2=0.56, l3=0.50, l4=0.12, l5=0.10, l6=0.12)
+L = dict(l1=0.10, l2=0.60, l3=0.40, l4=0.25, l5=0.10, l6=0.16)
 models = {
  "magnum": {
   "name": "magnum",
@@ -24,7 +24,7 @@ models = {
     j(a=L["l5"], alpha=90, twist="y", lim=(-60, 60), vel=30, name="yaw"),
     j(d=L["l6"], vel=150, name="rotate"),
   ],
-  "notes": "The thesis prints no link lengths. Chosen: l1=0.10 (swing axis to shoulder), l2=0.56 (shoulder to elbow, cf. the comparable Oberon 7 arm's 0.556 m), l3=0.50 (elbow to pitch), l4=0.12 (pitch to yaw), l5=0.10 (yaw to rotate), l6=0.12 (rotate to jaw centre) m: total 1.50 m = the Table 1-1 reach. Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg), placed by a grid search (5 deg steps, docs/physics.md 'Arm geometry and joint speeds') so that (a) the Table 1-1 full-extension posture q = 0 is inside, (b) all six Lim 4.3.1.3 points A-F are reachable at the 90/90 start pose and the most rows of the pitch (75-135 deg) and yaw (60-120 deg) studies are (10-13 of 13 pitch rows per point), (c) the case-study workspace (X 0.9-1.4 m, Z 0-0.5 m) stays reachable: swing -25..25, shoulder 0..90 (horizontal to vertical; the straight arm lies on its lower limit), elbow -130..0 (straight at its upper limit), pitch -55..60 (the case studies 3 and 4 tilt the wrist to -48 deg), yaw -60..60 deg; rotate is continuous (no limits). Lengths were searched too (docs/physics.md): with the translational Yoshikawa measure the thesis's X-sweep maximum near 1.3 m and Z-sweep maximum near Z = 0.42 m at X = 1.4 m need a pitch-axis-to-jaw distance of 0.5 m or more with a short upper arm, which puts the case-study points out of reach within a 90 deg shoulder range; these lengths keep the maxima at X 1.16-1.23 m (inside the thesis's summary range 'between 1.1 m and 1.3 m', Lim 4.3.3)",
+  "notes": "The thesis prints no link lengths. Chosen (docs/physics.md 'Link lengths', server/core/robots/search_lengths.py): l1=0.10 (swing axis to shoulder), l2=0.60 (shoulder to elbow, cf. the comparable Oberon 7 arm's 0.556 m), l3=0.40 (elbow to pitch), l4=0.25 (pitch to yaw), l5=0.10 (yaw to rotate), l6=0.16 (rotate to jaw centre) m: 1.51 m from the shoulder pivot to the jaw centre, our reading of the Table 1-1 reach of 1.5 m. With the translational Yoshikawa measure of Lim 4.3.1 these put the X-sweep maximum at 1.27-1.33 m at every Z level (thesis: approximately 1.3 m) and the Z-sweep maximum at X = 1.4 m at Z = 0.40 m (thesis: 0.42 m); l4 takes most of the pitch-to-jaw length so the jaw can face the intervention panel midway between the arms within the swing range. Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg), placed by a grid search (5 deg steps, docs/physics.md 'Joint-range placement') so that the Table 1-1 full-extension posture q = 0 is inside and the Lim 4.3.1.3 points are reachable at the 90/90 start pose with most rows of the pitch (75-135 deg) and yaw (60-120 deg) studies: swing -25..25, shoulder 0..90 (horizontal to vertical; the straight arm lies on its lower limit), elbow -130..0 (straight at its upper limit), pitch -55..60, yaw -60..60 deg; rotate is continuous (no limits)",
  },
  "orion": {
   "name": "orion",

@@ -10,19 +10,22 @@ shoulder, elbow and pitch (lever vectors r_s, r_e, r_p from each axis to the too
     w² = (X² + (l5 + l6)²) · Σ_{i<j} (r_i × r_j)²      (Cauchy–Binet on the 2×3 block)
 
 with the elbow-up branch of the closed-form IK (Lim eqs 3.10–3.19 in the plane) and the joint
-ranges of Table 1-1 (spans 90° / 130° / 115°) placed as given. The first line printed checks
-this against the Rust studies (`cargo test -p seaarms-core --test manipulability_studies --
---nocapture`) for the shipped arm: X-sweep maxima 1.23 / 1.23 / 1.19 / 1.16 m, Z-sweep
-maximum at X = 1.4 m at Z = 0.14 m.
+ranges of Table 1-1 (spans 90° / 130° / 115°) placed as given. The first two lines printed
+check this against the Rust studies (`cargo test -p seaarms-core --test manipulability_studies
+-- --nocapture`): the shipped arm (l2 0.60, l3 0.40, lw 0.51 m) gives X-sweep maxima 1.33 /
+1.32 / 1.29 / 1.27 m and the Z-sweep maximum at X = 1.4 m at Z = 0.40 m; the first arm we
+shipped (l2 0.56, l3 0.50, lw 0.34 m) gave 1.23 / 1.23 / 1.19 / 1.16 m and 0.14 m.
 
-Then two searches (X-sweep from 0.9 m, Z-sweep from 0 m, 1 cm steps; a sweep ends at the first
-unreachable row after a reachable one, as the Rust studies do):
+Then three searches (X-sweep from 0.9 m, Z-sweep from 0 m, 1 cm steps; a sweep ends at the
+first unreachable row after a reachable one, as the Rust studies do):
 (only arms whose Z-sweeps at X = 0.9 … 1.3 m have rows count: the thesis sweeps them)
   1. reach from the shoulder l2 + l3 + lw = 1.5 m (lw = l4 + l5 + l6, pitch axis to jaw
      centre): the best Z-sweep maximum at X = 1.4 m among arms whose X-sweep maxima are all in
      1.3 ± 0.05 m;
   2. the reach free (1.40–1.70 m): the arms meeting both figures (X maxima in 1.3 ± 0.05 m, Z
-     maximum at X = 1.4 m in 0.42 ± 0.05 m), and their shortest reach.
+     maximum at X = 1.4 m in 0.42 ± 0.05 m), and their shortest reach;
+  3. a 1 cm grid near the shortest (l1 0.10 m, reach from the shoulder 1.48–1.51 m): the arms
+     with the largest margin — the shipped arm's l2 0.60, l3 0.40, lw 0.51 m is among them.
 """
 import math
 
@@ -97,10 +100,13 @@ def fmt(xs):
     return " / ".join(f"{x:.2f}" for x in xs)
 
 
-SHIPPED = (0.10, 0.56, 0.50, 0.34, 0.22)
+# (l1, l2, l3, lw = l4 + l5 + l6, l5 + l6) in m; the ranges as shipped.
+SHIPPED = (0.10, 0.60, 0.40, 0.51, 0.26)
+FIRST = (0.10, 0.56, 0.50, 0.34, 0.22)
 SHIPPED_LIM = [(0.0, R(90)), (R(-130), 0.0), (R(-55), R(60))]
-xs, zm = maxima(SHIPPED, SHIPPED_LIM)
-print(f"shipped arm: X-sweep maxima {fmt(xs)} m, Z-sweep maximum at X = 1.4: {zm:.2f} m")
+for name, arm in (("shipped arm", SHIPPED), ("first arm", FIRST)):
+    xs, zm = maxima(arm, SHIPPED_LIM)
+    print(f"{name}: X-sweep maxima {fmt(xs)} m, Z-sweep maximum at X = 1.4: {zm:.2f} m")
 
 best1, meets = None, []
 for l1 in (0.05, 0.10, 0.15):
@@ -110,6 +116,7 @@ for l1 in (0.05, 0.10, 0.15):
                 reach = l2 + l3 + lw
                 if not 1.40 - 1e-9 <= reach <= 1.70 + 1e-9:
                     continue
+                # l4 = 0.12 m here; the yaw lever l5 + l6 moves the maxima by ≤ 0.01 m.
                 arm = (l1, l2, l3, lw, lw - 0.12)
                 for lo2, lo4 in ((0, -50), (-10, -50), (0, -30)):
                     lim = [(R(lo2), R(lo2 + 90)), (R(-130), 0.0), (R(lo4), R(lo4 + 115))]
@@ -137,3 +144,25 @@ if meets:
 for reach, arm, xs, zm in sorted(meets)[:8]:
     print(f"   reach {reach:.3f} m: l1 {arm[0]:.3f}, l2 {arm[1]:.3f}, l3 {arm[2]:.3f}, "
           f"lw {arm[3]:.3f}; X maxima {fmt(xs)}, Z maximum {zm:.2f}")
+
+# 3. A 1 cm grid near the shortest arms (l1 = 0.10 m, reach from the shoulder 1.48–1.51 m,
+#    the ranges as shipped): the arms meeting both figures with the largest margin, i.e. the
+#    smallest worst-case distance from 1.3 m (X maxima) and 0.42 m (Z maximum).
+fine = []
+for l2 in frange(0.58, 0.78, 0.01):
+    for l3 in frange(0.26, 0.45, 0.01):
+        for reach in (1.48, 1.49, 1.50, 1.51):
+            lw = reach - l2 - l3
+            if not 0.35 <= lw <= 0.62:
+                continue
+            arm = (0.10, l2, l3, lw, 0.26)
+            xs, zm = maxima(arm, SHIPPED_LIM)
+            if any(math.isnan(x) for x in xs) or math.isnan(zm) or not workspace_ok(arm, SHIPPED_LIM):
+                continue
+            err = max(max(abs(x - 1.3) for x in xs), abs(zm - 0.42))
+            if err <= 0.05 + 1e-9:
+                fine.append((round(err, 3), reach, arm, xs, zm))
+print(f"3. 1 cm grid, l1 0.10, reach from the shoulder 1.48–1.51 m: {len(fine)} arms meet both")
+for err, reach, arm, xs, zm in sorted(fine, key=lambda f: (f[0], f[1]))[:6]:
+    print(f"   worst error {err:.3f} m, reach {reach:.2f}: l2 {arm[1]:.2f}, l3 {arm[2]:.2f}, "
+          f"lw {arm[3]:.2f}; X maxima {fmt(xs)}, Z maximum {zm:.2f}")

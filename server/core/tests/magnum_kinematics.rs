@@ -79,8 +79,11 @@ proptest! {
         let r = pose.rotation.to_rotation_matrix().into_inner();
         let (a, p) = (r.column(2), pose.translation.vector);
         let lw = l.l5 + l.l6;
-        // Away from the shoulder axis, where θ1 is undefined.
+        // Away from the shoulder axis, where θ1 is undefined, and with the wrist centre in
+        // front of it (an arm raised past vertical with the wrist tilted back puts it behind,
+        // where both forms name the π twin).
         prop_assume!((p.x - lw * a.x).hypot(p.y - lw * a.y) > 1e-6);
+        prop_assume!((p.x - lw * a.x) * q[0].cos() + (p.y - lw * a.y) * q[0].sin() > 1e-6);
         let wrapped = |x: f64| {
             let d = x.rem_euclid(std::f64::consts::TAU);
             d.min(std::f64::consts::TAU - d)
@@ -117,18 +120,29 @@ proptest! {
 #[test]
 fn case_study_workspace_is_reachable_within_limits() {
     let model = common::builtin("magnum");
-    let q0 = [0.0, 0.5, -1.2, 0.3, 0.0, 0.0];
+    // Damped least squares is local: near the inner boundary it can stall on a joint limit
+    // from one start, so each target gets two (elbow half and well folded).
+    let starts = [
+        [0.0, 0.5, -1.2, 0.3, 0.0, 0.0],
+        [0.0, 1.0, -1.9, 0.3, 0.0, 0.0],
+    ];
     let mut worst: f64 = 0.0;
     for ix in 0..=5 {
         for iz in 0..=5 {
             let target = Vector3::new(0.9 + 0.1 * ix as f64, 0.0, 0.1 * iz as f64);
-            let q = dls_ik(
-                &model,
-                &IkTarget::Position(target),
-                &q0,
-                &IkOptions::default(),
-            )
-            .unwrap_or_else(|e| panic!("({:.2}, 0, {:.2}) unreachable: {e}", target.x, target.z));
+            let solve = |q0: &[f64; 6]| {
+                dls_ik(
+                    &model,
+                    &IkTarget::Position(target),
+                    q0,
+                    &IkOptions::default(),
+                )
+            };
+            let q = solve(&starts[0])
+                .or_else(|_| solve(&starts[1]))
+                .unwrap_or_else(|e| {
+                    panic!("({:.2}, 0, {:.2}) unreachable: {e}", target.x, target.z)
+                });
             let p = end_effector_pose(&model, &q).translation.vector;
             worst = worst.max((p - target).norm());
         }

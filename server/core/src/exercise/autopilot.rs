@@ -132,12 +132,16 @@ pub enum Action {
         #[serde(default = "default_timeout")]
         timeout_s: f64,
     },
-    /// Hold `arm`'s sticks at `axes` until `until`.
+    /// Hold `arm`'s sticks at `axes` until `until`; with `level`, the angular sticks keep the
+    /// carried box level instead (as `move`'s `level`).
     Sticks {
         /// Arm.
         arm: ArmName,
         /// Axes in [−1, 1].
         axes: [f64; 6],
+        /// Keep the box level with the angular sticks (overrides `axes[3..]`).
+        #[serde(default)]
+        level: bool,
         /// Stop when this holds.
         until: Condition,
         /// Give up after (s).
@@ -684,10 +688,14 @@ impl Autopilot {
             Action::Sticks {
                 arm,
                 axes,
+                level,
                 until,
                 timeout_s,
             } => {
                 out.axes[arm.index()] = *axes;
+                if *level {
+                    out.axes[arm.index()][3..].copy_from_slice(level_sticks(sim).as_slice());
+                }
                 until.evaluate(sim, facts).met || elapsed > *timeout_s
             }
             Action::Wait { s } => elapsed > *s,

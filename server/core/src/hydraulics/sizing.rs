@@ -72,7 +72,8 @@ pub fn magnum_four_bar(k: usize, q_lo: f64, q_hi: f64) -> Linkage {
 }
 
 /// The "full extension" posture of the Magnum model used for sizing and for the holding test:
-/// all joints at 0 — upper arm, forearm and wrist in line and horizontal, reach 1.5 m.
+/// all joints at 0 — upper arm, forearm and wrist in line and horizontal, 1.51 m from the
+/// shoulder pivot to the jaw centre (Table 1-1: reach 1.5 m).
 pub const MAGNUM_FULL_EXTENSION: [f64; N_ACT] = [0.0; N_ACT];
 
 impl HydraulicParams {

@@ -52,8 +52,9 @@ impl Default for SweepZ {
 #[derive(Debug, Clone, PartialEq)]
 pub struct PitchYaw {
     /// Named points (base frame, m). Default: Fig. 4-51's points are not printed; we use
-    /// A (0.9, 0, 0.1), B (1.1, 0, 0.1), C (1.3, 0, 0.1), D (0.9, 0, 0.3), E (1.1, 0, 0.3),
-    /// F (1.3, 0, 0.3), inside the case-study workspace.
+    /// A (1.1, 0, 0.2), B (1.2, 0, 0.2), C (1.3, 0, 0.2), D (1.1, 0, 0.3), E (1.2, 0, 0.3),
+    /// F (1.3, 0, 0.3): inside the case-study workspace, where the 90°/90° start pose and at
+    /// least 10 of the 13 pitch rows are reachable (docs/physics.md, "Joint-range placement").
     pub points: Vec<(String, [f64; 3])>,
     /// Pitch range (deg, default [75, 135], the thesis's range), yaw held at 90°.
     pub pitch_deg: [f64; 2],
@@ -68,11 +69,11 @@ impl Default for PitchYaw {
         let p = |n: &str, x: f64, z: f64| (n.to_string(), [x, 0.0, z]);
         PitchYaw {
             points: vec![
-                p("A", 0.9, 0.1),
-                p("B", 1.1, 0.1),
-                p("C", 1.3, 0.1),
-                p("D", 0.9, 0.3),
-                p("E", 1.1, 0.3),
+                p("A", 1.1, 0.2),
+                p("B", 1.2, 0.2),
+                p("C", 1.3, 0.2),
+                p("D", 1.1, 0.3),
+                p("E", 1.2, 0.3),
                 p("F", 1.3, 0.3),
             ],
             pitch_deg: [75.0, 135.0],
@@ -87,7 +88,8 @@ impl Default for PitchYaw {
 pub struct DistanceSweep {
     /// X levels (m, default [1.0, 1.2, 1.4]).
     pub x_levels: Vec<f64>,
-    /// Z of both end-effectors (m, default 0.2; not printed in the thesis).
+    /// Z of both end-effectors (m, default 0.3; not printed in the thesis; at 0.2 m the
+    /// horizontal approach leaves X = 1.0 m inside the arm's inner workspace boundary).
     pub z: f64,
     /// Largest swing δ (deg, default 25 = the Magnum swing limit). The right arm swings by +δ
     /// (towards the left arm), the left by −δ; δ runs from −max to +max, so the distance first
@@ -101,7 +103,7 @@ impl Default for DistanceSweep {
     fn default() -> Self {
         DistanceSweep {
             x_levels: vec![1.0, 1.2, 1.4],
-            z: 0.2,
+            z: 0.3,
             swing_max_deg: 25.0,
             step_deg: 1.0,
         }

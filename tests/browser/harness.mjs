@@ -311,8 +311,9 @@ export function padDriver(page, onState = () => {}) {
    * (tool y, the rotation's second column) has no world-x part, within `tol` (rad). A box hung
    * from one handle (y = ±0.15 m off its centre) pulls a moment about world x; squared so, the
    * pads carry it as roll about the bar (limit N·s, 59 N·m) and not as torsion about the
-   * closing axis (limit 2μNρ̄, about 11 N·m; server/core/src/grasp/grip.rs), which alone
-   * would slip under the box's 37 N·m (249 N wet weight × 0.15 m).
+   * closing axis (limit 2μNρ̄: 15.2 N·m static at the rated clamp, 10 N·m sliding;
+   * server/core/src/grasp/grip.rs), which alone would slip under the box's 37 N·m (249 N wet
+   * weight × 0.15 m).
    */
   const squareJaw = async (side, tol = 0.02, timeoutMs = 15000) => {
     const t0 = Date.now();

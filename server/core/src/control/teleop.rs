@@ -25,8 +25,8 @@ pub const MAX_ANGULAR_SPEED_RAD_S: f64 = 0.5;
 /// `keep_orientation` while both jaws hold the object: in that closed chain the tool's
 /// orientation is not spare — each arm's null-space motion would turn its own jaw against
 /// the other through the box (docs/physics.md, "Moving the pair in Cartesian mode") — so a
-/// translational command holds it (zero angular rate on rows 4–6). Damped near singularities and scaled to the joints'
-/// velocity limits by `resolver`'s settings. Zero for a zero command, and for a command the
+/// translational command holds it (zero angular rate on rows 4–6). Damped near singularities
+/// and scaled to the joints' velocity limits by `resolver`'s settings. Zero for a zero command, and for a command the
 /// resolver refuses (e.g. non-finite numbers); non-finite results become 0. `dt_s` is the
 /// control period (s) the resolver's q + q̇·dt refers to.
 pub fn cartesian_to_joint_velocity(

@@ -183,8 +183,8 @@ pub struct CouplingParams {
 /// holster mouth at (1.52, 0.50, −0.15), all axes along +x. The 50 kg box (x ≤ 1.15) is
 /// 0.37 m clear. With the jaw pointing along +x both Magnums reach tool points from
 /// x ≈ 1.34 to 1.48 m on the midplane y = 0.5 at z = −0.15…0.15 (Magnum closed-form IK; the
-/// swing joint's ±25° of Table 1-1 binds at the near end, the reach at the far end; `tests/panel.rs` checks the grip, pre-insert and
-/// seated points for both arms).
+/// swing joint's ±25° of Table 1-1 binds at the near end, the reach at the far end;
+/// `tests/panel.rs` checks the grip, pre-insert and seated points for both arms).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PanelParams {
     /// Pose of the panel frame in the world: origin at the centre of the face, x along the

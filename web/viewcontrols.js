@@ -3,7 +3,7 @@
 // pages carry the same elements (ids chk-ell, chk-plots, btn-layout; chk-poly and sel-ell-scale
 // where the page has them).
 
-const $ = (id) => document.getElementById(id);
+import { $ } from './page.js';
 
 /** Binds the controls to `view` (web/view.js) and `plots` (web/plots.js, its panel #plots);
  * returns {layout()} (the keyboard's V). */

@@ -1,25 +1,19 @@
 // Trainee page: creates or resumes a session, draws it, sends input. No physics here.
 
-import { View } from './view.js';
 import { Connection } from './connection.js';
 import { Input, DEAD_ZONE, mapping } from './input.js';
-import { StatusBar } from './status.js';
-import { Plots } from './plots.js';
 import { TouchPad, touchDevice } from './touch.js';
 import { TabGuard } from './tabs.js';
 import { StartScreen } from './start.js';
 import { TaskPanel } from './task.js';
-import { bindViewControls } from './viewcontrols.js';
+import { mountViews } from './viewcontrols.js';
 import { $, Banner, statusLoop } from './page.js';
 import { messages, exercises, jointNames } from './api.js';
 const SPEEDS = [0.25, 0.5, 0.75, 1];
 /** Screens this narrow stack the page (style.css has the same width). */
 const NARROW_SCREEN = '(max-width: 700px)';
 
-const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
-const status = new StatusBar($('status'));
-const plots = new Plots($('plots'));
-const viewControls = bindViewControls(view, plots);
+const { view, status, plots, controls: viewControls } = mountViews();
 const banner = new Banner($('banner'));
 const showBanner = (kind, text, ms = 0) => banner.show(kind, text, ms);
 let selectedArm = localStorage.getItem('seaarms.arm') === 'right' ? 'right' : 'left';
@@ -256,20 +250,9 @@ ${mapping(jointNames(view.hello)).map(([f, g, k]) => `<tr><td>${f}</td><td>${g}<
 /** The scenario menu from `hello.scenarios` ([{name, description}], the server's list). */
 function setScenarios(list, current) {
   const sel = $('sel-scenario');
-  sel.replaceChildren(...list.map(({ name, description }) => {
-    const o = document.createElement('option');
-    o.value = name;
-    o.textContent = name;
-    o.title = description;
-    return o;
-  }));
+  sel.replaceChildren(...list.map(({ name, description }) => Object.assign(new Option(name, name), { title: description })));
   // an exercise (or any scenario the menu does not list) is shown as the current one
-  if (!list.some((x) => x.name === current)) {
-    const o = document.createElement('option');
-    o.value = current;
-    o.textContent = current;
-    sel.append(o);
-  }
+  if (!list.some((x) => x.name === current)) sel.append(new Option(current, current));
   sel.value = current;
 }
 
@@ -329,11 +312,8 @@ if (matchMedia(NARROW_SCREEN).matches) {
 }
 start();
 
-window.__seaarms = view.debugHooks({
-  get connection() { return { session: conn.session?.id, framesReceived: conn.framesReceived, latencyMs: conn.latencyMs, open: !!conn.ws && conn.gotHello }; },
-  get lastReceived() { return conn.latest; },
+window.__seaarms = view.debugHooks(() => conn, {
   get lastInput() { return input.last; },
   get selectedArm() { return selectedArm; },
-  statusText() { return $('status').innerText; },
   get ended() { return lastEnded; },
 });

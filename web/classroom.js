@@ -7,7 +7,7 @@
 // assessments' metrics); and the class results export (GET /api/results.csv?group=).
 
 import { describeWarning } from './status.js';
-import { $, esc, fixed as f } from './page.js';
+import { $, esc, fixed as f, note } from './page.js';
 import * as api from './api.js';
 
 /** How often an open history and the comparison are refetched (ms). */
@@ -93,9 +93,7 @@ export class Classroom {
   }
 
   setStatus(text, bad = false) {
-    const el = $('cls-status');
-    el.textContent = text;
-    el.className = bad ? 'bad' : '';
+    note($('cls-status'), text, bad);
   }
 
   /** The tab was shown or hidden. */

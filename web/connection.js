@@ -87,6 +87,11 @@ export class Connection {
 
   status(kind, text) { this.opts.onStatus?.(kind, text); }
 
+  /** For the browser tests: the session, frames received, latency, and whether it is open. */
+  debugInfo() {
+    return { session: this.session?.id, framesReceived: this.framesReceived, latencyMs: this.latencyMs, open: !!this.ws && this.gotHello };
+  }
+
   /** Trainee: resume the stored session if the server still has it, else create one. */
   async start(createOpts = {}) {
     this.createOpts = createOpts;

@@ -8,7 +8,7 @@ import { View } from './view.js';
 import { Connection } from './connection.js';
 import { StatusBar } from './status.js';
 import { Classroom, faultText } from './classroom.js';
-import { $, esc, fmt, Banner, statusLoop } from './page.js';
+import { $, esc, fmt, note, Banner, statusLoop } from './page.js';
 import * as api from './api.js';
 const TOKEN_KEY = 'seaarms.instructor_token';
 const POLL_MS = 1000;
@@ -27,9 +27,7 @@ let pollTimer = null;
 $('token').value = token;
 
 function setListStatus(text, bad = false) {
-  const el = $('list-status');
-  el.textContent = text;
-  el.className = bad ? 'bad' : '';
+  note($('list-status'), text, bad);
 }
 
 const banner = new Banner($('banner'));
@@ -123,11 +121,8 @@ function observe(id) {
     view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
     status = new StatusBar($('status'));
     statusLoop(view, status, () => '—');
-    window.__seaarms = view.debugHooks({
+    window.__seaarms = view.debugHooks(() => conn, {
       get observed() { return observed; },
-      get connection() { return conn ? { session: observed, framesReceived: conn.framesReceived, open: !!conn.ws && conn.gotHello } : null; },
-      get lastReceived() { return conn?.latest; },
-      statusText() { return $('status').innerText; },
     });
   }
   $('instr-actions').hidden = false;

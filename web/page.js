@@ -32,6 +32,12 @@ export function num(v) {
   return Number.isInteger(v) ? String(v) : Number(v.toPrecision(3)).toString();
 }
 
+/** A one-line status note: `text` in `el`, marked bad (style.css `.bad`) or not. */
+export function note(el, text, bad = false) {
+  el.textContent = text;
+  el.className = bad ? 'bad' : '';
+}
+
 /** The banner over the view (#banner): errors, notices and messages, kept or timed. */
 export class Banner {
   constructor(el) {

@@ -5,13 +5,10 @@
 // attempt's assessment card. The token is the instructor's or the trainee session's control
 // token (a trainee sees its own attempts). No physics here: every frame is the server's.
 
-import { View } from './view.js';
 import { Connection } from './connection.js';
-import { StatusBar } from './status.js';
-import { Plots } from './plots.js';
 import { assessmentHtml } from './assessment.js';
 import { Timeline, clock } from './timeline.js';
-import { bindViewControls } from './viewcontrols.js';
+import { mountViews } from './viewcontrols.js';
 import { $, esc, Banner, statusLoop } from './page.js';
 import * as api from './api.js';
 const params = new URLSearchParams(location.search);
@@ -25,10 +22,7 @@ const OUTCOMES = {
   ended: 'Free play (ended)', interrupted: 'Interrupted (the server stopped)',
 };
 
-const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
-const status = new StatusBar($('status'));
-const plots = new Plots($('plots'));
-const viewControls = bindViewControls(view, plots);
+const { view, status, plots, controls: viewControls } = mountViews();
 const timeline = new Timeline($('timeline'), $('rp-events'), (t) => seek(t));
 let arm = 'left';
 let attempt = null;
@@ -187,10 +181,7 @@ statusLoop(view, status, () => arm);
   connect();
 })();
 
-window.__seaarms = view.debugHooks({
+window.__seaarms = view.debugHooks(() => conn, {
   get replay() { return { ...rp }; },
   get attempt() { return attempt; },
-  get connection() { return conn ? { session: attemptId, framesReceived: conn.framesReceived, open: !!conn.ws && conn.gotHello } : null; },
-  get lastReceived() { return conn?.latest; },
-  statusText() { return $('status').innerText; },
 });

@@ -139,10 +139,14 @@ export class View {
     }
   }
 
-  /** Read-only hooks for the browser tests. */
-  debugHooks(extra = {}) {
+  /** Read-only hooks for the browser tests; `conn()` is the page's current connection
+   * (web/connection.js) or null. */
+  debugHooks(conn, extra = {}) {
     const v = this;
     const hooks = {
+      get connection() { return conn()?.debugInfo() ?? null; },
+      get lastReceived() { return conn()?.latest; },
+      statusText() { return document.getElementById('status').innerText; },
       get hello() { return v.hello; },
       get lastState() { return v.drawn; },
       get statesDrawn() { return v.statesDrawn; },

@@ -64,6 +64,7 @@ const conn = new Connection({
     syncControls();
     plots.setSession(h.session, conn.session?.control_token, conn.session?.base);
     plots.setJoints(jointNames(h));
+    touch.setJoints(jointNames(h));
     status.role(h.role);
     input.setServerLimit(h.max_messages_per_second);
     setScenarios(h.scenarios, h.scenario);

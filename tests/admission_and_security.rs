@@ -85,7 +85,7 @@ async fn a_flood_from_one_client_does_not_block_another() {
 
     // Per-client cap of live sessions (rate limit out of the way), through a trusted proxy:
     // the proxy's own address is shared, X-Forwarded-For tells the clients apart.
-    let s = start_with(temp_dir(), |c| {
+    let s = start_with(temp_dir("admission"), |c| {
         c.session_burst = 1000;
         c.max_sessions_per_client = 3;
         c.trusted_proxies = vec![Ipv4Addr::LOCALHOST.into()];
@@ -115,7 +115,10 @@ async fn a_flood_from_one_client_does_not_block_another() {
 /// or the header → 201; the instructor token needs none.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_join_code_is_enforced() {
-    let s = start_with(temp_dir(), |c| c.join_code = Some("tide-42".into())).await;
+    let s = start_with(temp_dir("admission"), |c| {
+        c.join_code = Some("tide-42".into())
+    })
+    .await;
     let http = reqwest::Client::new();
     let url = format!("{}/api/sessions", s.base);
     for body in [
@@ -157,7 +160,7 @@ async fn status_of(s: &Server, id: &str) -> Value {
 /// trainee cannot end another trainee's session.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn unjoined_sessions_end_and_the_instructor_ends_any() {
-    let s = start_with(temp_dir(), |c| c.unjoined_grace_secs = 1).await;
+    let s = start_with(temp_dir("admission"), |c| c.unjoined_grace_secs = 1).await;
     let (_, lonely) = create(&s, json!({})).await;
     let (_, joined) = create(&s, json!({})).await;
     let (lid, jid) = (
@@ -274,7 +277,7 @@ async fn pages_carry_the_security_headers() {
 /// `Origin: null` does not.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn state_changes_need_json_and_an_allowed_origin() {
-    let s = start_with(temp_dir(), |c| {
+    let s = start_with(temp_dir("admission"), |c| {
         c.allowed_origins = vec!["https://sim.example.org".into()];
     })
     .await;
@@ -380,7 +383,7 @@ async fn ws_url_comes_from_the_public_url_or_a_checked_host() {
         "{v}"
     );
     s.stop().await;
-    let s = start_with(temp_dir(), |c| {
+    let s = start_with(temp_dir("admission"), |c| {
         c.public_url = Some("https://sim.example.org".into());
     })
     .await;
@@ -475,30 +478,16 @@ async fn a_seq_beyond_2_53_is_refused_and_the_session_streams_on() {
     let (id, tok) = (id.as_str(), tok.as_str());
     let mut ws = trainee(&s, id, tok).await;
     let too_big: u64 = (1 << 53) + 1;
-    ws.send(Message::Text(
-        json!({"type": "input", "seq": too_big}).to_string().into(),
-    ))
-    .await
-    .unwrap();
+    send(&mut ws, json!({"type": "input", "seq": too_big})).await;
     let e = next_of(&mut ws, "error", Duration::from_secs(5)).await;
     assert!(e["message"].as_str().unwrap().contains("seq"), "{e}");
-    ws.send(Message::Text(
-        json!({"type": "input", "seq": 7}).to_string().into(),
-    ))
-    .await
-    .unwrap();
+    send(&mut ws, json!({"type": "input", "seq": 7})).await;
     let first = next_of(&mut ws, "state", Duration::from_secs(5)).await;
     let t0 = first["t"].as_f64().unwrap();
     let later = state_after(&mut ws, t0 + 0.2).await;
     assert_eq!(later["input_seq"], 7, "{}", later["input_seq"]);
     // 2⁵³ − 1 itself is accepted (Number.MAX_SAFE_INTEGER).
-    ws.send(Message::Text(
-        json!({"type": "input", "seq": (1u64 << 53) - 1})
-            .to_string()
-            .into(),
-    ))
-    .await
-    .unwrap();
+    send(&mut ws, json!({"type": "input", "seq": (1u64 << 53) - 1})).await;
     let last = state_after(&mut ws, later["t"].as_f64().unwrap() + 0.2).await;
     assert_eq!(last["input_seq"].as_u64(), Some((1 << 53) - 1));
     s.stop().await;
@@ -574,7 +563,7 @@ fn list_status(base: &str, token: &str) -> u16 {
 fn run_binary(args: &[&str], probe: impl FnOnce(&str)) -> (String, String, String) {
     use std::io::{BufRead, BufReader, Read};
     use std::process::{Command, Stdio};
-    let dir = temp_dir();
+    let dir = temp_dir("admission");
     let mut child = Command::new(env!("CARGO_BIN_EXE_seaarms"))
         .args(["--bind", "127.0.0.1:0", "--data-dir"])
         .arg(&dir)

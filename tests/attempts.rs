@@ -13,13 +13,7 @@ mod records_common;
 use std::time::Duration;
 
 use common::*;
-use futures_util::SinkExt;
 use serde_json::{Value, json};
-use tokio_tungstenite::tungstenite::Message;
-
-async fn send(ws: &mut Ws, v: Value) {
-    ws.send(Message::Text(v.to_string().into())).await.unwrap();
-}
 
 async fn get_with(url: &str, token: &str) -> (u16, Value) {
     let r = reqwest::Client::new()
@@ -66,7 +60,7 @@ async fn attempts_are_recorded_listed_and_replay_the_recorded_rows_exactly() {
 }
 
 async fn recorded_listed_replayed(database_url: Option<String>) {
-    let s = start_with(temp_dir(), |c| c.database_url = database_url).await;
+    let s = start_with(temp_dir("attempts"), |c| c.database_url = database_url).await;
     let (st, c) = create(
         &s,
         json!({"trainee": "Ada Lovelace", "group": "Class A", "scenario": "training"}),
@@ -267,7 +261,7 @@ async fn recorded_listed_replayed(database_url: Option<String>) {
 async fn an_attempt_of_another_simulator_version_says_it_cannot_be_replayed() {
     use seaarms::db::{Db, Write};
     use seaarms::sessions::record::{AttemptEnd, AttemptStart};
-    let dir = temp_dir();
+    let dir = temp_dir("attempts");
     let db = Db::open(&seaarms::db::default_url(&dir)).unwrap();
     let (session, attempt) = ("00000000000000aa", "00000000000000bb");
     let old = "0.0.1+0123456789abcdef";

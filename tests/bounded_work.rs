@@ -11,25 +11,18 @@ use serde_json::{Value, json};
 use seaarms::config::ServeConfig;
 use seaarms::limits::{MAX_MAP_CELLS, MAX_POSTURE_START_JOINTS, MAX_STUDY_SERIES};
 
-struct Server {
-    base: String,
-    _stop: tokio::sync::oneshot::Sender<()>,
-}
+mod common;
+use common::{Server, start_with, temp_dir};
 
 /// A server on port 0 with `config` (its data directory replaced by a fresh temporary one).
 async fn serve(config: ServeConfig) -> Server {
-    let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
-    let base = format!("http://{}", listener.local_addr().unwrap());
-    let data_dir = std::env::temp_dir().join(format!(
-        "seaarms-bounded-{}",
-        seaarms::sessions::random_hex(6)
-    ));
-    let state = seaarms::app::AppState::new(&ServeConfig { data_dir, ..config }).unwrap();
-    let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
-    tokio::spawn(seaarms::run(listener, state, async {
-        let _ = stopped.await;
-    }));
-    Server { base, _stop: stop }
+    start_with(temp_dir("bounded"), |c| {
+        *c = ServeConfig {
+            data_dir: c.data_dir.clone(),
+            ..config
+        }
+    })
+    .await
 }
 
 /// POSTs `body` (or nothing) and returns status, `Retry-After` and the JSON answer.

@@ -9,16 +9,12 @@
 
 use std::time::{Duration, Instant};
 
-use futures_util::{SinkExt, StreamExt};
+use futures_util::StreamExt;
 use serde_json::{Value, json};
 use tokio_tungstenite::tungstenite::Message;
 
 mod common;
 use common::*;
-
-async fn send(ws: &mut Ws, v: Value) {
-    ws.send(Message::Text(v.to_string().into())).await.unwrap();
-}
 
 /// GET `url` with `token`, as JSON.
 async fn get_as(url: String, token: &str) -> Value {
@@ -53,10 +49,6 @@ async fn next_text(ws: &mut Ws) -> (String, Value) {
             other => panic!("socket ended or sent {other:?}"),
         }
     }
-}
-
-fn q(state: &Value, arm: &str, j: usize) -> f64 {
-    state["arms"][arm]["q"][j].as_f64().unwrap()
 }
 
 /// A silent stuck valve (left swing, spool 0.8) moves the joint with zero stick input, as an
@@ -286,7 +278,7 @@ async fn leave(s: &Server, id: &str, mut ws: Ws) {
 /// grace stays live past it, and ends the same way once the trainee leaves for good.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_session_the_trainee_left_ends_after_the_grace() {
-    let s = start_with(temp_dir(), |c| c.abandon_grace_seconds = 1).await;
+    let s = start_with(temp_dir("classroom"), |c| c.abandon_grace_seconds = 1).await;
     let (id, token) = new_session(&s).await;
     let ws = trainee(&s, &id, &token).await;
     let mut obs = connect(&s, &id, &format!("token={TEACHER}&role=observer"))
@@ -320,7 +312,7 @@ async fn a_session_the_trainee_left_ends_after_the_grace() {
 /// whose trainee keeps sending input stays live past it.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_connected_but_inactive_trainee_times_out() {
-    let s = start_with(temp_dir(), |c| c.idle_timeout_secs = 1).await;
+    let s = start_with(temp_dir("classroom"), |c| c.idle_timeout_secs = 1).await;
     let (quiet_id, quiet_token) = new_session(&s).await;
     let (busy_id, busy_token) = new_session(&s).await;
     let mut quiet = trainee(&s, &quiet_id, &quiet_token).await;

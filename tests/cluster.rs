@@ -25,9 +25,9 @@ use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use common::{TEACHER, next_of};
+use common::{TEACHER, next_of, temp_dir};
 use futures_util::StreamExt;
-use records_common::{Binary, fresh_postgres_database, metric, temp_dir};
+use records_common::{Binary, fresh_postgres_database, metric};
 use seaarms::cluster::{HEARTBEAT, HEARTBEAT_TIMEOUT};
 use serde_json::{Value, json};
 

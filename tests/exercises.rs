@@ -3,6 +3,9 @@
 //! commands) and failed by an idle trainee, with every metric present and finite; and the
 //! metrics on constructed cases with known answers.
 
+mod common;
+use common::magnum;
+
 use std::sync::Arc;
 
 use seaarms::exercises::{Driver, EXERCISES, run_headless};
@@ -39,12 +42,6 @@ const METRICS: [&str; 17] = [
     "idle_s",
     "interventions",
 ];
-
-fn magnum() -> [Arc<seaarms_core::Model>; 2] {
-    let robots = seaarms::robots::Robots::load().expect("built-in robots");
-    let m = robots.get("magnum").expect("magnum");
-    [m.clone(), m]
-}
 
 fn run(spec: Arc<ExerciseSpec>, driver: Driver) -> Value {
     let a = run_headless(spec, &magnum(), driver, 1).expect("headless run");

@@ -3,6 +3,9 @@
 //! the drawn fault for every seed, covering each fault kind at least twice, and passes; an idle
 //! attempt fails. Same seed, same assessment.
 
+mod common;
+use common::magnum;
+
 use std::collections::BTreeMap;
 
 use seaarms::exercises::{Driver, EXERCISES, run_headless};
@@ -18,9 +21,7 @@ fn attempt(driver: Driver, seed: u64) -> Assessment {
     let spec = EXERCISES
         .get("fault-diagnosis")
         .expect("fault-diagnosis exercise");
-    let robots = seaarms::robots::Robots::load().expect("robots");
-    let m = robots.get("magnum").expect("magnum");
-    run_headless(spec, &[m.clone(), m], driver, seed).expect("run")
+    run_headless(spec, &magnum(), driver, seed).expect("run")
 }
 
 #[test]

@@ -32,7 +32,7 @@ use proptest::test_runner::TestCaseError;
 use tokio_tungstenite::tungstenite::Message;
 
 mod common;
-use common::{Reply, SyncServer, TEACHER, Ws, keeps_streaming, send};
+use common::{Reply, SyncServer, TEACHER, Ws, keeps_streaming, send_request};
 
 /// Largest REST body (server/src/json.rs `MAX_BODY_BYTES`).
 const MAX_BODY_BYTES: usize = 64 * 1024;
@@ -592,7 +592,7 @@ fn request(
     let headers = h.list(&srv.server.base, control_token);
     let http = reqwest::Client::new();
     let b = (!body.is_empty()).then(|| body.clone());
-    let reply = srv.block_on(send(&http, method, &url, &headers, b));
+    let reply = srv.block_on(send_request(&http, method, &url, &headers, b));
     check_answer(srv, method, path, h, &body, &reply, reads_body)
 }
 

@@ -10,6 +10,9 @@
 //! only from free to on-surface and back. In both, whenever the raw contact has held for longer
 //! than the dwell, the reported state agrees with it.
 
+mod common;
+use common::magnum;
+
 use std::sync::Arc;
 
 use seaarms::exercises::{Driver, EXERCISES, run_recorded};
@@ -29,8 +32,6 @@ struct Observed {
 /// The shipped `pick-and-place` on the finite grip, its script changed by `edit`, checking at
 /// every step that a one-jaw state agrees with any raw contact held longer than the dwell.
 fn finite_grip_run(edit: impl Fn(&mut Action)) -> Observed {
-    let robots = seaarms::robots::Robots::load().expect("built-in robots");
-    let m = robots.get("magnum").expect("magnum");
     let mut spec: ExerciseSpec = (*EXERCISES.get("pick-and-place").expect("shipped")).clone();
     // The finite grip (the file keeps the rigid one for its pass mark; docs/physics.md).
     spec.scene.rigid_grasp = false;
@@ -43,7 +44,7 @@ fn finite_grip_run(edit: impl Fn(&mut Action)) -> Observed {
     let (mut raw, mut raw_since) = (true, 0.0);
     run_recorded(
         Arc::new(spec),
-        &[m.clone(), m],
+        &magnum(),
         Driver::Autopilot,
         1,
         &mut |live| {

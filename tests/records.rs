@@ -10,8 +10,8 @@ mod records_common;
 
 use std::time::Duration;
 
-use common::{TEACHER, create_at, get_json, get_text};
-use records_common::{Binary, Csv, database_urls, drive, temp_dir};
+use common::{TEACHER, create_at, get_json, get_text, temp_dir};
+use records_common::{Binary, Csv, database_urls, drive};
 use seaarms::db::{AttemptFilter, Db, Write};
 use seaarms::sessions::record::{AttemptEnd, AttemptStart};
 use serde_json::{Value, json};

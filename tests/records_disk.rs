@@ -12,8 +12,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Duration;
 
-use common::{TEACHER, create_at, get_json};
-use records_common::{Binary, Csv, eventually, metric, temp_dir};
+use common::{TEACHER, create_at, get_json, temp_dir};
+use records_common::{Binary, Csv, eventually, metric};
 use serde_json::{Value, json};
 
 /// Unmounts (lazily) when dropped, also when the test fails.

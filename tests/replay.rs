@@ -9,8 +9,8 @@
 //! replayed at the same step, and an attempt that starts with a current set (after a reset)
 //! carries it in its `init`; both re-simulate bit for bit.
 
-use std::collections::BTreeMap;
-use std::sync::Arc;
+mod common;
+use common::magnum;
 
 use seaarms::exercises::{Driver, EXERCISES, run_recorded};
 use seaarms::replay::{Init, Replay, log};
@@ -18,12 +18,7 @@ use seaarms::sessions::command::{ArmSticks, Command, StickInput};
 use seaarms::sessions::record::RecordMsg;
 use seaarms::sessions::{Live, Scenario};
 use seaarms_core::sim::Arm;
-
-fn magnum() -> [Arc<seaarms_core::Model>; 2] {
-    let robots = seaarms::robots::Robots::load().expect("built-in robots");
-    let m = robots.get("magnum").expect("magnum");
-    [m.clone(), m]
-}
+use std::collections::BTreeMap;
 
 /// Every number of the state the issue names, as bits.
 fn state_bits(live: &Live) -> Vec<u64> {

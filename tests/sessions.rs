@@ -14,17 +14,9 @@ use tokio_tungstenite::tungstenite::Message;
 mod common;
 use common::*;
 
-async fn send(ws: &mut Ws, v: Value) {
-    ws.send(Message::Text(v.to_string().into())).await.unwrap();
-}
-
-fn q(state: &Value, arm: &str, j: usize) -> f64 {
-    state["arms"][arm]["q"][j].as_f64().unwrap()
-}
-
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn stick_input_moves_the_joint_and_observers_see_it_read_only() {
-    let s = start_with(temp_dir(), |c| {
+    let s = start_with(temp_dir("sessions"), |c| {
         c.trusted_proxies = vec![std::net::Ipv4Addr::LOCALHOST.into()];
     })
     .await;
@@ -312,7 +304,7 @@ async fn tokens_are_enforced() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn bad_messages_get_errors_and_the_session_keeps_running() {
-    let s = start_with(temp_dir(), |c| c.max_messages_per_second = 50).await;
+    let s = start_with(temp_dir("sessions"), |c| c.max_messages_per_second = 50).await;
     let (_, c) = create(&s, json!({})).await;
     let (id, tok) = (
         c["id"].as_str().unwrap(),
@@ -441,7 +433,7 @@ async fn a_stalled_client_does_not_slow_another_session() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn records_survive_a_restart() {
-    let dir = temp_dir();
+    let dir = temp_dir("sessions");
     let s = start_with(dir.clone(), |_| {}).await;
     let (_, c) = create(
         &s,
@@ -473,7 +465,7 @@ async fn records_survive_a_restart() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_cap_answers_503_and_operations_routes_work() {
-    let s = start_with(temp_dir(), |c| c.max_sessions = 1).await;
+    let s = start_with(temp_dir("sessions"), |c| c.max_sessions = 1).await;
     let (st, _) = create(&s, json!({})).await;
     assert_eq!(st, 201);
     let (st, body) = create(&s, json!({})).await;

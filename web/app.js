@@ -1,38 +1,23 @@
 // Trainee page: creates or resumes a session, draws it, sends input. No physics here.
 
-import { View } from './view.js';
 import { Connection } from './connection.js';
-import { Input, MAPPING, DEAD_ZONE } from './input.js';
-import { StatusBar } from './status.js';
-import { Plots } from './plots.js';
+import { Input, DEAD_ZONE, mapping } from './input.js';
 import { TouchPad, touchDevice } from './touch.js';
 import { TabGuard } from './tabs.js';
-import { StartScreen, fetchExercises } from './start.js';
+import { StartScreen } from './start.js';
 import { TaskPanel } from './task.js';
-import { bindViewControls } from './viewcontrols.js';
-
-const $ = (id) => document.getElementById(id);
+import { mountViews } from './viewcontrols.js';
+import { $, Banner, statusLoop } from './page.js';
+import { messages, exercises, jointNames } from './api.js';
 const SPEEDS = [0.25, 0.5, 0.75, 1];
 /** Screens this narrow stack the page (style.css has the same width). */
 const NARROW_SCREEN = '(max-width: 700px)';
 
-const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
-const status = new StatusBar($('status'));
-const plots = new Plots($('plots'));
-const viewControls = bindViewControls(view, plots);
-const banner = $('banner');
-let bannerTimer = null;
+const { view, status, plots, controls: viewControls } = mountViews();
+const banner = new Banner($('banner'));
+const showBanner = (kind, text, ms = 0) => banner.show(kind, text, ms);
 let selectedArm = localStorage.getItem('seaarms.arm') === 'right' ? 'right' : 'left';
 let settings = { control_mode: 'joint', control_method: 'open', arm_speed: 1 };
-
-function showBanner(kind, text, ms = 0) {
-  clearTimeout(bannerTimer);
-  if (!text) { banner.hidden = true; return; }
-  banner.className = kind === 'error' ? '' : kind;
-  banner.textContent = text;
-  banner.hidden = false;
-  if (ms) bannerTimer = setTimeout(() => { banner.hidden = true; }, ms);
-}
 
 const params = new URLSearchParams(location.search);
 let lastEnded = null; // the last `ended` message ({reason, text}), for tests
@@ -78,6 +63,8 @@ const conn = new Connection({
     settings = { ...h.settings };
     syncControls();
     plots.setSession(h.session, conn.session?.control_token, conn.session?.base);
+    plots.setJoints(jointNames(h));
+    touch.setJoints(jointNames(h));
     status.role(h.role);
     input.setServerLimit(h.max_messages_per_second);
     setScenarios(h.scenarios, h.scenario);
@@ -105,18 +92,13 @@ const conn = new Connection({
   },
 });
 
-// status bar refresh at 10 Hz from the newest drawn state (text only changes when values do)
-setInterval(() => {
-  if (!view.drawn) return;
-  status.update(view.drawn, { arm: selectedArm });
-  task.update(view.drawn.exercise);
-}, 100);
+statusLoop(view, status, () => selectedArm, (s) => task.update(s.exercise));
 
 const startScreen = new StartScreen($('start'));
 const task = new TaskPanel($('task'), $('card'), {
   banner: showBanner,
-  tryAgain: () => conn.send({ type: 'reset' }), // a new attempt (docs/exercises.md)
-  diagnose: (answer) => conn.send({ type: 'diagnose', answer }), // fault drill
+  tryAgain: () => conn.send(messages.reset()), // a new attempt (docs/exercises.md)
+  diagnose: (answer) => conn.send(messages.diagnose(answer)), // fault drill
   nextTitle: () => startScreen.next(task.spec?.id)?.title,
   next: () => { const n = startScreen.next(task.spec?.id); if (n) newSession({ exercise: n.id }); },
   choose: () => chooseAndStart(),
@@ -131,7 +113,7 @@ function setExercise(h) {
   const was = task.active;
   task.setExercise(ex, conn.session);
   // the list behind "next exercise" (the start screen fills it when it was shown)
-  if (ex && !startScreen.exercises.length) fetchExercises().then((l) => { startScreen.exercises = l; });
+  if (ex && !startScreen.exercises.length) exercises().then((l) => { startScreen.exercises = l; });
   if (ex && (ex.control?.arm === 'left' || ex.control?.arm === 'right')) setArm(ex.control.arm);
   if (!!ex !== was) {
     $('chk-plots').checked = !ex && !matchMedia(NARROW_SCREEN).matches;
@@ -172,7 +154,7 @@ function syncControls() {
 
 function sendSettings(patch) {
   settings = { ...settings, ...patch };
-  conn.send({ type: 'settings', ...patch });
+  conn.send(messages.settings(patch));
   syncControls();
 }
 
@@ -192,11 +174,11 @@ const actions = {
     const i = SPEEDS.indexOf(+$('sel-speed').value);
     sendSettings({ arm_speed: SPEEDS[Math.max(0, Math.min(SPEEDS.length - 1, i + d))] });
   },
-  release: () => conn.send({ type: 'release' }),
-  reset: () => conn.send({ type: 'reset' }),
+  release: () => conn.send(messages.release()),
+  reset: () => conn.send(messages.reset()),
   pause() {
     paused = view.drawn ? !view.drawn.paused : !paused;
-    conn.send({ type: paused ? 'pause' : 'resume' });
+    conn.send(paused ? messages.pause() : messages.resume());
   },
   layout: () => viewControls.layout(),
   help(show) {
@@ -262,27 +244,16 @@ joint i's valve. Cartesian mode: the axes are the end-effector velocity [vx vy v
 Closed loop: the axes move the object; both jaws grip together. Dead zone ${Math.round(DEAD_ZONE * 100)} % on sticks and triggers;
 input is sent at ${input.sendHz} Hz.</p>
 <table><tr><th>Function</th><th>Gamepad (standard mapping)</th><th>Keyboard</th></tr>
-${MAPPING.map(([f, g, k]) => `<tr><td>${f}</td><td>${g}</td><td><kbd>${k}</kbd></td></tr>`).join('')}</table>
+${mapping(jointNames(view.hello)).map(([f, g, k]) => `<tr><td>${f}</td><td>${g}</td><td><kbd>${k}</kbd></td></tr>`).join('')}</table>
 <p>Views: drag the perspective view to orbit, wheel to zoom; ⤢ or double-click shows one large view. Press <kbd>?</kbd> to close.</p>`;
 }
 
 /** The scenario menu from `hello.scenarios` ([{name, description}], the server's list). */
 function setScenarios(list, current) {
   const sel = $('sel-scenario');
-  sel.replaceChildren(...list.map(({ name, description }) => {
-    const o = document.createElement('option');
-    o.value = name;
-    o.textContent = name;
-    o.title = description;
-    return o;
-  }));
+  sel.replaceChildren(...list.map(({ name, description }) => Object.assign(new Option(name, name), { title: description })));
   // an exercise (or any scenario the menu does not list) is shown as the current one
-  if (!list.some((x) => x.name === current)) {
-    const o = document.createElement('option');
-    o.value = current;
-    o.textContent = current;
-    sel.append(o);
-  }
+  if (!list.some((x) => x.name === current)) sel.append(new Option(current, current));
   sel.value = current;
 }
 
@@ -342,11 +313,8 @@ if (matchMedia(NARROW_SCREEN).matches) {
 }
 start();
 
-window.__seaarms = view.debugHooks({
-  get connection() { return { session: conn.session?.id, framesReceived: conn.framesReceived, latencyMs: conn.latencyMs, open: !!conn.ws && conn.gotHello }; },
-  get lastReceived() { return conn.latest; },
+window.__seaarms = view.debugHooks(() => conn, {
   get lastInput() { return input.last; },
   get selectedArm() { return selectedArm; },
-  statusText() { return $('status').innerText; },
   get ended() { return lastEnded; },
 });

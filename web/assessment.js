@@ -3,7 +3,7 @@
 // the attempt's value. Shared by the trainee's completion card (web/task.js) and the debrief
 // page (web/replay.js). Every number is the server's.
 
-import { esc } from './status.js';
+import { esc, num } from './page.js';
 
 /** "metric_name_unit" → "metric name (unit)". */
 export function metricLabel(m) {
@@ -12,13 +12,6 @@ export function metricLabel(m) {
     if (m.endsWith(suffix)) return `${m.slice(0, -suffix.length).replaceAll('_', ' ')} (${unit})`;
   }
   return m.replaceAll('_', ' ');
-}
-
-/** A number for the card: integers as such, others to 3 significant digits. */
-export function num(v) {
-  if (v === null || v === undefined) return '—';
-  if (!Number.isFinite(v)) return String(v);
-  return Number.isInteger(v) ? String(v) : Number(v.toPrecision(3)).toString();
 }
 
 /**

@@ -6,16 +6,15 @@
 // (GET /api/attempts?exercise=: best/last score, best time, strikes, posture from the
 // assessments' metrics); and the class results export (GET /api/results.csv?group=).
 
-import { esc, describeWarning } from './status.js';
+import { describeWarning } from './status.js';
+import { $, esc, fixed as f, note } from './page.js';
+import * as api from './api.js';
 
 /** How often an open history and the comparison are refetched (ms). */
 const REFRESH_MS = 5000;
 /** Most attempts asked for at once. */
 const LIMIT = 500;
 const OUTCOMES = { passed: 'passed', failed: 'not passed', abandoned: 'abandoned', ended: 'ended', interrupted: 'interrupted' };
-
-/** A number to `d` decimals, or — when absent. */
-const f = (v, d = 1) => (Number.isFinite(v) ? Number(v).toFixed(d) : '—');
 
 /** Seabed plus obstacle strikes of an attempt's assessment (null when it has none). */
 function strikes(a) {
@@ -63,11 +62,9 @@ export class Classroom {
    */
   constructor(ui) {
     this.ui = ui;
-    this.$ = (id) => document.getElementById(id);
     this.rows = new Map(); // session id → {tr, html}
     this.history = null; // {trainee, group}
     this.groups = new Set();
-    const $ = this.$;
     $('roster').tBodies[0].addEventListener('click', (e) => this.onRosterClick(e));
     $('compare').tBodies[0].addEventListener('click', (e) => {
       const n = e.target.closest('[data-trainee]');
@@ -82,18 +79,13 @@ export class Classroom {
     this.timer = setInterval(() => { if (this.visible) { this.refreshHistory(); this.refreshCompare(); } }, REFRESH_MS);
   }
 
-  get group() { return this.$('cls-group').value.trim(); }
+  get group() { return $('cls-group').value.trim(); }
 
   /** GET /api/attempts with `filter` (and `group`, when given); the list, or null
    * (the error shown) when the server refuses or cannot be reached. */
   async attempts(filter, group) {
-    const q = new URLSearchParams({ ...filter, limit: String(LIMIT) });
-    if (group) q.set('group', group);
     try {
-      const r = await fetch(`/api/attempts?${q}`, { headers: { authorization: `Bearer ${this.ui.token()}` }, cache: 'no-store' });
-      const b = await r.json().catch(() => null);
-      if (!r.ok) throw new Error(b?.error || `HTTP ${r.status}`);
-      return b.attempts || [];
+      return await api.attempts({ ...filter, limit: String(LIMIT), ...(group ? { group } : {}) }, this.ui.token());
     } catch (e) {
       this.setStatus(`attempts: ${e.message}`, true);
       return null;
@@ -101,41 +93,33 @@ export class Classroom {
   }
 
   setStatus(text, bad = false) {
-    const el = this.$('cls-status');
-    el.textContent = text;
-    el.className = bad ? 'bad' : '';
+    note($('cls-status'), text, bad);
   }
 
   /** The tab was shown or hidden. */
   show(v) {
     this.visible = v;
-    this.$('classroom').hidden = !v;
+    $('classroom').hidden = !v;
     if (v) { this.exportLink(); this.refreshCompare(); this.refreshHistory(); }
   }
 
   exportLink() {
-    const q = new URLSearchParams();
-    if (this.group) q.set('group', this.group);
-    q.set('token', this.ui.token());
-    this.$('cls-export').href = `/api/results.csv?${q}`;
+    $('cls-export').href = api.links.resultsCsv(this.group, this.ui.token());
   }
 
   async loadExercises() {
-    try {
-      const r = await fetch('/api/exercises');
-      const list = r.ok ? (await r.json()).exercises || [] : [];
-      this.$('cmp-exercise').innerHTML = list.map((e) => `<option value="${esc(e.id)}">${esc(e.title)}</option>`).join('');
-    } catch { /* no exercises: an empty comparison */ }
+    const list = await api.exercises(); // none: an empty comparison
+    $('cmp-exercise').innerHTML = list.map((e) => `<option value="${esc(e.id)}">${esc(e.title)}</option>`).join('');
   }
 
   /** The polled session summaries (GET /api/sessions). */
   render(sessions) {
     this.sessions = sessions;
-    const tb = this.$('roster').tBodies[0];
+    const tb = $('roster').tBodies[0];
     const group = this.group;
     const live = sessions.filter((s) => (s.status || 'live') === 'live' && (!group || s.group === group));
     for (const s of sessions) if (s.group) this.groups.add(s.group);
-    this.$('cls-groups').innerHTML = [...this.groups].sort().map((g) => `<option value="${esc(g)}">`).join('');
+    $('cls-groups').innerHTML = [...this.groups].sort().map((g) => `<option value="${esc(g)}">`).join('');
     const seen = new Set();
     let prev = null;
     for (const s of live.sort((a, b) => (a.trainee ?? a.label ?? '').localeCompare(b.trainee ?? b.label ?? ''))) {
@@ -160,7 +144,7 @@ export class Classroom {
       prev = row.tr;
     }
     for (const [id, row] of this.rows) if (!seen.has(id)) { row.tr.remove(); this.rows.delete(id); }
-    const sel = this.$('cmp-exercise');
+    const sel = $('cmp-exercise');
     const onEx = live.find((s) => s.exercise?.id && [...sel.options].some((o) => o.value === s.exercise.id));
     if (!this.cmpPicked && onEx && sel.value !== onEx.exercise.id) {
       sel.value = onEx.exercise.id;
@@ -215,9 +199,9 @@ export class Classroom {
 
   showHistory(trainee, group) {
     this.history = { trainee, group: group || '' };
-    this.$('hist-name').textContent = group ? `${trainee} (${group})` : trainee;
-    this.$('cls-history').hidden = false;
-    this.$('history').tBodies[0].innerHTML = '<tr><td colspan="7">loading…</td></tr>';
+    $('hist-name').textContent = group ? `${trainee} (${group})` : trainee;
+    $('cls-history').hidden = false;
+    $('history').tBodies[0].innerHTML = '<tr><td colspan="7">loading…</td></tr>';
     this.refreshHistory();
   }
 
@@ -226,28 +210,28 @@ export class Classroom {
     if (!h) return;
     const list = await this.attempts({ trainee: h.trainee }, h.group);
     if (!list || this.history !== h) return;
-    const tok = encodeURIComponent(this.ui.token());
-    this.$('history').tBodies[0].innerHTML = list.map((a) => {
+    const tok = this.ui.token();
+    $('history').tBodies[0].innerHTML = list.map((a) => {
       const when = a.started_unix ? new Date(a.started_unix * 1000).toLocaleString() : '';
-      const replay = a.links?.replay || `/replay/${encodeURIComponent(a.id)}`;
-      const csv = a.links?.csv;
+      const replay = a.links?.replay ? api.links.attemptLink(a.links.replay, tok) : api.links.debrief(a.id, tok);
+      const csv = a.links?.csv && api.links.attemptLink(a.links.csv, tok);
       return `<tr data-attempt="${esc(a.id)}" data-outcome="${esc(a.outcome ?? '')}"><td>${esc(when)}</td><td>${esc(a.exercise ?? a.scenario ?? '')}</td>
         <td class="out-${esc(a.outcome ?? 'running')}">${esc(OUTCOMES[a.outcome] ?? 'running')}</td>
         <td class="num">${a.score === null || a.score === undefined ? '' : Math.round(a.score)}</td><td class="num">${f(a.sim_seconds)}</td>
         <td class="num">${strikes(a) ?? ''}</td>
-        <td><a class="debrief" href="${esc(replay)}?token=${tok}" target="_blank" rel="noopener"${a.replayable === false ? ` title="${esc(a.replay_note ?? 'not replayable')}"` : ''}>debrief</a>
-          ${csv ? `<a href="${esc(csv)}?token=${tok}" download>CSV</a>` : ''}</td></tr>`;
+        <td><a class="debrief" href="${esc(replay)}" target="_blank" rel="noopener"${a.replayable === false ? ` title="${esc(a.replay_note ?? 'not replayable')}"` : ''}>debrief</a>
+          ${csv ? `<a href="${esc(csv)}" download>CSV</a>` : ''}</td></tr>`;
     }).join('') || '<tr><td colspan="7">no attempts yet</td></tr>';
   }
 
   async refreshCompare() {
-    const ex = this.$('cmp-exercise').value;
+    const ex = $('cmp-exercise').value;
     if (!ex || !this.ui.token()) return;
     const list = await this.attempts({ exercise: ex }, this.group);
-    if (!list || this.$('cmp-exercise').value !== ex) return;
+    if (!list || $('cmp-exercise').value !== ex) return;
     for (const a of list) if (a.group) this.groups.add(a.group);
     const rows = compareRows(list);
-    this.$('compare').tBodies[0].innerHTML = rows.map((r) => `<tr data-trainee="${esc(r.trainee)}" data-group="${esc(r.group)}">
+    $('compare').tBodies[0].innerHTML = rows.map((r) => `<tr data-trainee="${esc(r.trainee)}" data-group="${esc(r.group)}">
         <td><button type="button" class="link" data-trainee="${esc(r.trainee)}" data-group="${esc(r.group)}">${esc(r.trainee || '(no name)')}</button></td>
         <td>${esc(r.group)}</td><td class="num">${r.attempts}</td><td class="num">${r.passed}</td>
         <td class="num">${Math.round(r.best)}</td><td class="num">${r.last === null ? '—' : Math.round(r.last)}</td>

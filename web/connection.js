@@ -8,24 +8,13 @@
 // missing or wrong (asked for through `onJoinCode`), 429 = too many sessions from this client
 // (retried after `Retry-After`), 503 = the server is full or cannot record (retried).
 
+import * as api from './api.js';
+
 const STORE_KEY = 'seaarms.session';
 const BACKOFF_MS = [500, 1000, 2000, 4000, 8000];
 /** Retry delay after a 503 on session creation, or a 429 without `Retry-After` (ms). */
 const CREATE_RETRY_MS = 10000;
 
-/** Absolute WebSocket URL on this page's origin (only the path and query of the server's
- * `ws_url` are used, so the page also works behind a TLS proxy or another host name). */
-export function wsUrl(pathOrUrl) {
-  const u = new URL(pathOrUrl, location.href);
-  const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
-  return `${proto}//${location.host}${u.pathname}${u.search}`;
-}
-
-async function jsonOrError(resp) {
-  let body = null;
-  try { body = await resp.json(); } catch { /* not JSON */ }
-  return body;
-}
 
 export class Connection {
   /**
@@ -51,6 +40,32 @@ export class Connection {
     this.joinCode = opts.joinCode || null;
     this.ended = null; // the `ended` message of the current session, once received
     this.observing = false; // a trainee's tab watching its session read-only (web/tabs.js)
+    /** What each server message does (web/api.js `dispatch`). */
+    this.handlers = {
+      hello: (msg) => {
+        this.hello = msg;
+        this.gotHello = true;
+        this.attempt = 0;
+        this.status('ok', '');
+        this.opts.onHello?.(msg);
+      },
+      state: (msg) => {
+        this.latest = msg;
+        this.framesReceived++;
+        this.opts.onState?.(msg);
+      },
+      pong: (msg) => {
+        this.latencyMs = performance.now() - msg.t;
+        this.opts.onPong?.(this.latencyMs);
+      },
+      message: (msg) => this.opts.onMessage?.(msg),
+      error: (msg) => {
+        this.lastError = msg.message;
+        this.opts.onError?.(msg.message);
+      },
+      ended: (msg) => { this.ended = msg; },
+      replay: (msg) => this.opts.onReplay?.(msg),
+    };
   }
 
   /** The trainee session stored by this browser ({id, control_token, ws_url}), if any. */
@@ -72,6 +87,11 @@ export class Connection {
 
   status(kind, text) { this.opts.onStatus?.(kind, text); }
 
+  /** For the browser tests: the session, frames received, latency, and whether it is open. */
+  debugInfo() {
+    return { session: this.session?.id, framesReceived: this.framesReceived, latencyMs: this.latencyMs, open: !!this.ws && this.gotHello };
+  }
+
   /** Trainee: resume the stored session if the server still has it, else create one. */
   async start(createOpts = {}) {
     this.createOpts = createOpts;
@@ -87,9 +107,9 @@ export class Connection {
     } else if (this.role === 'replay') {
       this.session = { id: this.opts.sessionId, ws_url: this.opts.replay.path };
     } else {
-      this.session = { id: this.opts.sessionId, control_token: this.opts.token,
-        base: this.opts.base || '',
-        ws_url: `${this.opts.base || ''}/ws/sessions/${encodeURIComponent(this.opts.sessionId)}?token=${encodeURIComponent(this.opts.token)}&role=observer` };
+      const base = this.opts.base || '';
+      this.session = { id: this.opts.sessionId, control_token: this.opts.token, base,
+        ws_url: api.sockets.session(this.opts.sessionId, this.opts.token, { observer: true, base }) };
     }
     this.open();
   }
@@ -100,8 +120,7 @@ export class Connection {
    * answers: 421 means another replica holds it, live (docs/api.md "Replicas"). */
   async stillLive(stored) {
     try {
-      const r = await fetch(`/api/sessions/${encodeURIComponent(stored.id)}`, {
-        headers: { authorization: `Bearer ${stored.control_token}` }, cache: 'no-store' });
+      const r = await api.sessionSummary(stored.id, stored.control_token);
       if (r.status === 421) return true;
       if (!r.ok) return false;
       const s = await r.json();
@@ -123,7 +142,7 @@ export class Connection {
     if (this.joinCode) body.join_code = this.joinCode;
     let resp;
     try {
-      resp = await fetch('/api/sessions', { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify(body) });
+      resp = await api.createSession(body);
     } catch {
       this.status('error', 'Cannot reach the server; retrying…');
       this.scheduleRetry(() => this.start(this.createOpts));
@@ -135,7 +154,7 @@ export class Connection {
       return this.create(extra);
     }
     if (resp.status === 429 || resp.status === 503) {
-      const b = await jsonOrError(resp);
+      const b = await api.jsonOf(resp);
       const secs = Number(resp.headers.get('retry-after'));
       const ms = secs > 0 ? secs * 1000 : CREATE_RETRY_MS;
       const why = resp.status === 429 ? 'Too many new sessions from this computer' : 'The server cannot start a session now';
@@ -145,7 +164,7 @@ export class Connection {
       return false;
     }
     if (!resp.ok) {
-      const b = await jsonOrError(resp);
+      const b = await api.jsonOf(resp);
       this.status('error', `Could not create a session: ${b?.error || 'HTTP ' + resp.status}`);
       return false;
     }
@@ -171,8 +190,7 @@ export class Connection {
     this.hello = null;
     if (old?.control_token && !watched) {
       try {
-        await fetch(`${old.base || ''}/api/sessions/${encodeURIComponent(old.id)}`, {
-          method: 'DELETE', headers: { authorization: `Bearer ${old.control_token}` } });
+        await api.endSession(old.id, old.control_token, old.base || '');
       } catch { /* unreachable: the server ends it after its grace period */ }
     }
     if (await this.create()) this.open();
@@ -180,8 +198,7 @@ export class Connection {
 
   url() {
     const s = this.session;
-    const path = s.ws_url || `/ws/sessions/${encodeURIComponent(s.id)}?token=${encodeURIComponent(s.control_token)}`;
-    const u = new URL(wsUrl(path));
+    const u = new URL(api.wsUrl(s.ws_url || api.sockets.session(s.id, s.control_token)));
     if (this.observing) u.searchParams.set('role', 'observer');
     return u.href;
   }
@@ -201,50 +218,14 @@ export class Connection {
     this.status('info', this.attempt ? `Reconnecting (attempt ${this.attempt + 1})…` : 'Connecting…');
     ws.onopen = () => {
       // the replay socket has no ping (it is not a live link)
-      if (this.role !== 'replay') this.pingTimer = setInterval(() => this.send({ type: 'ping', t: performance.now() }), 1000);
+      if (this.role !== 'replay') this.pingTimer = setInterval(() => this.send(api.messages.ping(performance.now())), 1000);
     };
     ws.onmessage = (ev) => this.onMessage(ev.data);
     ws.onclose = (ev) => this.onClose(ev);
     ws.onerror = () => { /* onclose follows and handles it */ };
   }
 
-  onMessage(text) {
-    let msg;
-    try { msg = JSON.parse(text); } catch { return; }
-    switch (msg.type) {
-      case 'hello':
-        this.hello = msg;
-        this.gotHello = true;
-        this.attempt = 0;
-        this.status('ok', '');
-        this.opts.onHello?.(msg);
-        break;
-      case 'state':
-        this.latest = msg;
-        this.framesReceived++;
-        this.opts.onState?.(msg);
-        break;
-      case 'pong':
-        this.latencyMs = performance.now() - msg.t;
-        this.opts.onPong?.(this.latencyMs);
-        break;
-      case 'message':
-        this.opts.onMessage?.(msg);
-        break;
-      case 'error':
-        this.lastError = msg.message;
-        this.opts.onError?.(msg.message);
-        break;
-      case 'ended':
-        this.ended = msg;
-        break;
-      case 'replay':
-        this.opts.onReplay?.(msg);
-        break;
-      default:
-        break;
-    }
-  }
+  onMessage(text) { api.dispatch(text, this.handlers); }
 
   async onClose(ev) {
     clearInterval(this.pingTimer);
@@ -253,7 +234,7 @@ export class Connection {
     const why = this.lastError || ev.reason || '';
     if (!this.gotHello) {
       // Refused before hello: wrong token, ended session, or the server is down.
-      const up = await fetch('/healthz', { cache: 'no-store' }).then((r) => r.ok).catch(() => false);
+      const up = await api.healthy();
       if (!up) {
         this.status('error', 'Server unreachable; reconnecting…');
         this.scheduleRetry(() => this.open());

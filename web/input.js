@@ -6,6 +6,8 @@
 // Joint mode: axis i drives joint i of the selected arm. Cartesian mode: the same axes are
 // [vx, vy, vz, wx, wy, wz] of its end-effector. Closed loop: they drive the object instead.
 
+import { messages } from './api.js';
+
 /** Input messages per second (at most; lowered to stay under the server's message limit). */
 export const SEND_HZ = 50;
 /** Dead zone of sticks and triggers: |v| below it reads 0, above it is rescaled to [0, 1]. */
@@ -21,7 +23,6 @@ export const KEY_AXES = [
 const ACTION_KEYS = new Set(['Digit1', 'Digit2', 'KeyM', 'KeyL', 'Minus', 'Equal', 'KeyB', 'KeyI', 'KeyP', 'KeyV', 'KeyH']);
 /** Keys that change only this page's view. */
 const VIEW_KEYS = new Set(['KeyV', 'KeyH']);
-export const JOINT_NAMES = ['swing', 'shoulder', 'elbow', 'pitch', 'yaw', 'rotate'];
 export const CART_NAMES = ['vx', 'vy', 'vz', 'wx', 'wy', 'wz'];
 
 /** Gamepad (standard mapping) → axis i: [source, sign]. Sources: axes a0..a3, d-pad pairs. */
@@ -34,15 +35,16 @@ export const PAD_AXES = [
   { label: 'd-pad right / left', get: (p) => btn(p, 15) - btn(p, 14) },
 ];
 
-/** Documented mapping (also in README "Keyboard and gamepad" and the help overlay). */
-export const MAPPING = [
-  // [function, gamepad, keyboard]
-  ['Axis 1: swing (joint) / vx (Cartesian)', 'left stick X', 'Q / A'],
-  ['Axis 2: shoulder / vy', 'left stick Y (up = +)', 'W / S'],
-  ['Axis 3: elbow / vz', 'right stick Y (up = +)', 'E / D'],
-  ['Axis 4: pitch / wx', 'd-pad up / down', 'R / F'],
-  ['Axis 5: yaw / wy', 'right stick X', 'T / G'],
-  ['Axis 6: rotate / wz', 'd-pad right / left', 'U / J'],
+/** The documented mapping (also in README "Keyboard and gamepad"), as the help overlay shows
+ * it: [function, gamepad, keyboard] rows, the axes named by `joints` (web/api.js jointNames). */
+export function mapping(joints) {
+  const axes = PAD_AXES.map((pad, i) => [`Axis ${i + 1}: ${joints[i]}${i ? '' : ' (joint)'} / ${CART_NAMES[i]}${i ? '' : ' (Cartesian)'}`,
+    pad.label, KEY_AXES[i].map((k) => k.slice(3)).join(' / ')]);
+  return [...axes, ...MAPPING];
+}
+
+/** The rest of the mapping: [function, gamepad, keyboard]. */
+const MAPPING = [
   ['Grip: close / open', 'RT (close) / LT (open)', 'Z (close) / X (open)'],
   ['Select left / right arm', 'LB / RB', '1 / 2'],
   ['Control mode joint ↔ Cartesian', 'Y', 'M'],
@@ -206,13 +208,13 @@ export class Input {
     if (!this.enabled) return;
     const { axes, grip } = this.sample();
     const arm = this.ui.arm();
-    const zero = { axes: [0, 0, 0, 0, 0, 0], grip: 0 };
-    const msg = { type: 'input', seq: this.seq + 1, arms: { left: zero, right: zero } };
+    const still = [0, 0, 0, 0, 0, 0];
+    let msg;
     if (this.ui.method() === 'closed') {
-      msg.object = axes;
-      msg.arms = { left: { axes: zero.axes, grip }, right: { axes: zero.axes, grip } };
+      msg = messages.input(this.seq + 1, { left: { axes: still, grip }, right: { axes: still, grip } }, axes);
     } else {
-      msg.arms[arm] = { axes, grip };
+      const zero = { axes: still, grip: 0 };
+      msg = messages.input(this.seq + 1, { left: zero, right: zero, [arm]: { axes, grip } });
     }
     if (this.conn.send(msg)) {
       this.seq++;

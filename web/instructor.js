@@ -6,10 +6,10 @@
 
 import { View } from './view.js';
 import { Connection } from './connection.js';
-import { StatusBar, fmt } from './status.js';
+import { StatusBar } from './status.js';
 import { Classroom, faultText } from './classroom.js';
-
-const $ = (id) => document.getElementById(id);
+import { $, esc, fmt, note, Banner, statusLoop } from './page.js';
+import * as api from './api.js';
 const TOKEN_KEY = 'seaarms.instructor_token';
 const POLL_MS = 1000;
 /** Default size of each fault when the value box is empty (server ranges in README). */
@@ -27,20 +27,10 @@ let pollTimer = null;
 $('token').value = token;
 
 function setListStatus(text, bad = false) {
-  const el = $('list-status');
-  el.textContent = text;
-  el.className = bad ? 'bad' : '';
+  note($('list-status'), text, bad);
 }
 
-function banner(kind, text) {
-  const b = $('banner');
-  if (!text) { b.hidden = true; return; }
-  b.className = kind === 'error' ? '' : kind;
-  b.textContent = text;
-  b.hidden = false;
-}
-
-const esc = (s) => String(s ?? '').replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
+const banner = new Banner($('banner'));
 
 /** One row of GET /api/sessions: {id, status, label, scenario, sim_seconds, grasp?, paused?,
  * trainees?, measures?: [left, right], overload_count, faults?, recording: 'ok'|'failed'}. */
@@ -66,10 +56,9 @@ function renderList() {
   tb.innerHTML = sessions.map((s) => {
     const r = summary(s);
     // an ended session links its record: the newest attempts' debriefs and the CSV
-    const tok = encodeURIComponent(token);
     const btn = r.status === 'live' ? `<button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button>`
-      : `${(s.attempts || []).slice(0, 3).map((a, i) => `<a href="/replay/${esc(encodeURIComponent(a))}?token=${tok}" target="_blank" rel="noopener">debrief${i ? ` ${i + 1}` : ''}</a>`).join(' ')}
-        <a href="/api/sessions/${esc(encodeURIComponent(r.id))}/log.csv?token=${tok}" download>CSV</a>`;
+      : `${(s.attempts || []).slice(0, 3).map((a, i) => `<a href="${esc(api.links.debrief(a, token))}" target="_blank" rel="noopener">debrief${i ? ` ${i + 1}` : ''}</a>`).join(' ')}
+        <a href="${esc(api.links.sessionCsv(r.id, token))}" download>CSV</a>`;
     return `<tr data-id="${esc(r.id)}" data-status="${esc(r.status)}" class="${[r.id === observed ? 'open' : '', r.recordingFailed ? 'rec-failed' : ''].join(' ').trim()}"><td>${esc(r.id)}</td><td>${esc(r.status)}</td><td>${esc(r.label)}</td>
       <td>${esc(r.scenario)}</td><td>${esc(r.clients)}</td><td>${esc(r.t)}</td><td>${esc(r.grasp)}</td><td>${esc(r.w)}</td>
       <td class="warn">${esc(r.warn)}</td><td>${btn}</td></tr>`;
@@ -79,7 +68,7 @@ function renderList() {
 async function poll() {
   if (!token) return;
   try {
-    const r = await fetch('/api/sessions', { headers: { authorization: `Bearer ${token}` }, cache: 'no-store' });
+    const r = await api.listSessions(token);
     if (r.status === 401 || r.status === 403) {
       setListStatus('Wrong instructor token.', true);
       sessions = [];
@@ -131,12 +120,9 @@ function observe(id) {
   if (!view) {
     view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
     status = new StatusBar($('status'));
-    setInterval(() => { if (view.drawn) status.update(view.drawn, { arm: '—' }); }, 100);
-    window.__seaarms = view.debugHooks({
+    statusLoop(view, status, () => '—');
+    window.__seaarms = view.debugHooks(() => conn, {
       get observed() { return observed; },
-      get connection() { return conn ? { session: observed, framesReceived: conn.framesReceived, open: !!conn.ws && conn.gotHello } : null; },
-      get lastReceived() { return conn?.latest; },
-      statusText() { return $('status').innerText; },
     });
   }
   $('instr-actions').hidden = false;
@@ -146,31 +132,22 @@ function observe(id) {
   $('obs-title').textContent = name ? `${name}${who.group ? ` (${who.group})` : ''} · session ${id}` : `session ${id}`;
   // another replica's session: its URLs carry that replica's prefix (docs/api.md "Replicas")
   observedBase = who?.base || '';
-  $('act-csv').href = `${observedBase}/api/sessions/${encodeURIComponent(id)}/log.csv?token=${encodeURIComponent(token)}`;
+  $('act-csv').href = api.links.sessionCsv(id, token, observedBase);
   conn = new Connection({
     role: 'observer', sessionId: id, token, base: observedBase,
     onHello(h) { view.setHello(h); status.role(h.role); if (h.scenario) $('act-scenario').value = h.scenario; },
     onState(s) { view.setState(s); showCurrent(s.current); },
     onPong(ms) { status.latency(ms); },
     onMessage(m) { status.message(`✉ ${m.from}: ${m.text}`); },
-    onError(msg) { banner('error', msg); },
-    onStatus(kind, text) { banner(kind, kind === 'ok' ? '' : text); },
+    onError(msg) { banner.show('error', msg); },
+    onStatus(kind, text) { banner.show(kind, kind === 'ok' ? '' : text); },
   });
   conn.start();
 }
 
 /** POST /api/sessions/{id}/actions; resolves {ok, error}. */
-async function postAction(id, body) {
-  try {
-    const r = await fetch(`${observedBase}/api/sessions/${encodeURIComponent(id)}/actions`, {
-      method: 'POST', headers: { 'content-type': 'application/json', authorization: `Bearer ${token}` }, body: JSON.stringify(body),
-    });
-    let b = null;
-    try { b = await r.json(); } catch { /* empty body */ }
-    return { ok: r.ok, error: r.ok ? null : b?.error || `HTTP ${r.status}` };
-  } catch {
-    return { ok: false, error: 'server unreachable' };
-  }
+function postAction(id, body) {
+  return api.sessionAction(id, body, token, observedBase);
 }
 
 async function act(type) {
@@ -205,20 +182,15 @@ for (const b of document.querySelectorAll('#instr-actions button[data-act]')) {
 }
 
 (async () => {
-  try {
-    const r = await fetch('/api/scenarios');
-    if (!r.ok) throw new Error();
-    const body = await r.json();
-    const list = Array.isArray(body) ? body : body.scenarios || [];
-    if (!list.some((s) => (typeof s === 'string' ? s : s.name) === 'training')) list.unshift({ name: 'training' });
-    // Exercises are scenarios too (the trainee's page follows a switch to one).
-    const ex = await fetch('/api/exercises').then((e) => (e.ok ? e.json() : { exercises: [] })).catch(() => ({ exercises: [] }));
-    for (const e of ex.exercises || []) list.push({ name: e.id, title: `exercise: ${e.title}` });
-    $('act-scenario').innerHTML = list.map((s) => {
-      const name = typeof s === 'string' ? s : s.name || s.id;
-      return `<option value="${esc(name)}">${esc(s.title || name)}</option>`;
-    }).join('');
-  } catch { /* no scenarios endpoint */ }
+  const list = await api.scenarios();
+  if (!list) return; // no scenarios endpoint
+  if (!list.some((s) => (typeof s === 'string' ? s : s.name) === 'training')) list.unshift({ name: 'training' });
+  // Exercises are scenarios too (the trainee's page follows a switch to one).
+  for (const e of await api.exercises()) list.push({ name: e.id, title: `exercise: ${e.title}` });
+  $('act-scenario').innerHTML = list.map((s) => {
+    const name = typeof s === 'string' ? s : s.name || s.id;
+    return `<option value="${esc(name)}">${esc(s.title || name)}</option>`;
+  }).join('');
 })();
 
 const classroom = new Classroom({

@@ -7,6 +7,7 @@
 import * as THREE from 'three';
 import { poseToMatrix } from './scene.js';
 import { Arm } from './arms.js';
+import { analysis } from './api.js';
 
 const HANDLE_COLOUR = 0x19c3d6; // cyan: far in hue from the arms' orange and the grasp colours
 const CAPTURE_COLOUR = 0x3cff6e; // green: a closing jaw would grasp
@@ -152,13 +153,8 @@ export class Markers {
     if (i < 0) return;
     const spec = hello.arms[i];
     const q = ghost.q_deg.map((d) => d * Math.PI / 180);
-    let a;
-    try {
-      const r = await fetch('/api/analysis', { method: 'POST', headers: { 'content-type': 'application/json' },
-        body: JSON.stringify({ robot: spec.model, q }) });
-      if (!r.ok) return;
-      a = await r.json();
-    } catch { return; }
+    const a = await analysis({ robot: spec.model, q });
+    if (!a) return;
     if (id !== this.setupId) return; // a newer hello arrived meanwhile
     const base = poseToMatrix(spec.base);
     const world = (p) => matrixToPose(base.clone().multiply(poseToMatrix(p)));

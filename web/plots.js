@@ -3,7 +3,7 @@
 // Fixed-size ring buffers (no growth); sampled at 20 Hz from the latest state; redrawn at 5 Hz.
 
 import uPlot from 'uplot';
-import { JOINT_NAMES } from './input.js';
+import { jointNames, links } from './api.js';
 
 const WINDOW_S = 30;
 const SAMPLE_HZ = 20;
@@ -31,12 +31,19 @@ class Series {
   clear() { this.len = 0; }
 }
 
+/** A titled plot of `labels` appended to `el`: {plot, s (its Series), div, yLabel}. */
 function makePlot(el, title, labels, yLabel, width) {
   const h = document.createElement('h4');
   h.textContent = title;
   el.appendChild(h);
   const div = document.createElement('div');
   el.appendChild(div);
+  return chart(div, labels, yLabel, width);
+}
+
+/** A plot of `labels` drawn in `div` (emptied first). */
+function chart(div, labels, yLabel, width) {
+  div.replaceChildren();
   const opts = {
     width, height: 150,
     legend: { show: true, live: false },
@@ -50,7 +57,7 @@ function makePlot(el, title, labels, yLabel, width) {
   };
   const s = new Series(labels.length);
   const plot = new uPlot(opts, s.data(), div);
-  return { plot, s };
+  return { plot, s, div, yLabel, labels };
 }
 
 export class Plots {
@@ -59,7 +66,7 @@ export class Plots {
     const w = Math.max(300, (el.clientWidth || 420) - 12);
     const ctl = document.createElement('div');
     ctl.innerHTML = `<label>actuator <select id="plot-arm"><option>left</option><option>right</option></select>
-      <select id="plot-joint" aria-label="actuator joint">${JOINT_NAMES.map((n, i) => `<option value="${i}">${i + 1} ${n}</option>`).join('')}</select></label>
+      <select id="plot-joint" aria-label="actuator joint"></select></label>
       <a id="csv-link" href="#" download>session CSV</a>`;
     el.appendChild(ctl);
     this.armSel = ctl.querySelector('#plot-arm');
@@ -68,7 +75,9 @@ export class Plots {
     this.armSel.addEventListener('change', () => this.clearSelected());
     this.jointSel.addEventListener('change', () => this.clearSelected());
     this.pressure = makePlot(el, 'Line pressures (kPa) — Lim Figs 4-7, 4-30', ['P_in', 'P_out'], 'kPa', w);
-    this.angles = makePlot(el, 'Joint angles (deg), selected arm — Fig 4-6', JOINT_NAMES, 'deg', w);
+    this.joints = jointNames(null);
+    this.jointOptions();
+    this.angles = makePlot(el, 'Joint angles (deg), selected arm — Fig 4-6', this.joints, 'deg', w);
     this.forces = makePlot(el, 'Contact and internal forces (N) — Figs 4-34, 4-39', ['|F| left', '|F| right', 'Fint x', 'Fint y', 'Fint z'], 'N', w);
     this.manip = makePlot(el, 'Manipulability (Yoshikawa) — §4.3', ['left', 'right', 'dual'], 'w', w);
     this.all = [this.pressure, this.angles, this.forces, this.manip];
@@ -84,7 +93,26 @@ export class Plots {
 
   /** The CSV link of session `id` (`base`: its replica's path prefix, docs/api.md). */
   setSession(id, token, base = '') {
-    this.csv.href = `${base}/api/sessions/${encodeURIComponent(id)}/log.csv${token ? `?token=${encodeURIComponent(token)}` : ''}`;
+    this.csv.href = links.sessionCsv(id, token, base);
+  }
+
+  /** The joints' names (the hello's model, web/api.js jointNames): the actuator menu and the
+   * joint-angle plot's series. */
+  setJoints(names) {
+    if (names.join() === this.joints.join()) return;
+    this.joints = names;
+    this.jointOptions();
+    const a = this.angles;
+    a.plot.destroy();
+    const i = this.all.indexOf(a);
+    this.angles = chart(a.div, names, a.yLabel, a.plot.width);
+    this.all[i] = this.angles;
+  }
+
+  jointOptions() {
+    const j = this.jointSel.value;
+    this.jointSel.replaceChildren(...this.joints.map((n, i) => new Option(`${i + 1} ${n}`, String(i))));
+    if (j) this.jointSel.value = j;
   }
 
   clearSelected() { this.pressure.s.clear(); }

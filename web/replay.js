@@ -5,15 +5,12 @@
 // attempt's assessment card. The token is the instructor's or the trainee session's control
 // token (a trainee sees its own attempts). No physics here: every frame is the server's.
 
-import { View } from './view.js';
 import { Connection } from './connection.js';
-import { StatusBar, esc } from './status.js';
-import { Plots } from './plots.js';
 import { assessmentHtml } from './assessment.js';
 import { Timeline, clock } from './timeline.js';
-import { bindViewControls } from './viewcontrols.js';
-
-const $ = (id) => document.getElementById(id);
+import { mountViews } from './viewcontrols.js';
+import { $, esc, Banner, statusLoop } from './page.js';
+import * as api from './api.js';
 const params = new URLSearchParams(location.search);
 const attemptId = decodeURIComponent(location.pathname.split('/').filter(Boolean).pop() || '');
 const token = params.get('token') || '';
@@ -25,26 +22,14 @@ const OUTCOMES = {
   ended: 'Free play (ended)', interrupted: 'Interrupted (the server stopped)',
 };
 
-const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
-const status = new StatusBar($('status'));
-const plots = new Plots($('plots'));
-const viewControls = bindViewControls(view, plots);
+const { view, status, plots, controls: viewControls } = mountViews();
 const timeline = new Timeline($('timeline'), $('rp-events'), (t) => seek(t));
 let arm = 'left';
 let attempt = null;
 /** The replay's state as the server last reported it ({t, playing, speed, duration_s}). */
 const rp = { t: 0, playing: false, speed: 1, duration_s: 0, seeks: 0 };
 let conn = null;
-
-function banner(kind, text, ms = 0) {
-  const b = $('banner');
-  clearTimeout(banner.timer);
-  if (!text) { b.hidden = true; return; }
-  b.className = kind === 'error' ? '' : kind;
-  b.textContent = text;
-  b.hidden = false;
-  if (ms) banner.timer = setTimeout(() => { b.hidden = true; }, ms);
-}
+const banner = new Banner($('banner'));
 
 function note(text) {
   $('rp-note').textContent = text;
@@ -56,7 +41,7 @@ async function fetchAttempt() {
   for (let i = 0; i < FETCH_TRIES; i++) {
     let r;
     try {
-      r = await fetch(`/api/attempts/${encodeURIComponent(attemptId)}`, { headers: { authorization: `Bearer ${token}` }, cache: 'no-store' });
+      r = await api.attempt(attemptId, token);
     } catch {
       r = null;
     }
@@ -93,20 +78,20 @@ function renderTime() {
 }
 
 function send(msg) {
-  if (!conn?.send(msg)) banner('error', 'Not connected to the replay yet.', 3000);
+  if (!conn?.send(msg)) banner.show('error', 'Not connected to the replay yet.', 3000);
 }
 
 function seek(t) {
   if (!conn) return;
   rp.seeks++;
   plots.reset();
-  send({ type: 'seek', t: Math.max(0, Math.min(rp.duration_s, t)) });
+  send(api.messages.seek(Math.max(0, Math.min(rp.duration_s, t))));
 }
 
 function togglePlay() {
-  if (rp.playing) { send({ type: 'pause' }); return; }
+  if (rp.playing) { send(api.messages.pause()); return; }
   if (rp.duration_s > 0 && rp.t >= rp.duration_s - 1e-6) seek(0); // at the end: from the start
-  send({ type: 'play' });
+  send(api.messages.play());
 }
 
 function connect() {
@@ -114,7 +99,7 @@ function connect() {
   conn = new Connection({
     role: 'replay',
     sessionId: attemptId,
-    replay: { path: `/ws/replay/${encodeURIComponent(attemptId)}?token=${encodeURIComponent(token)}`,
+    replay: { path: api.sockets.replay(attemptId, token),
       refused: attempt?.outcome ? 'The replay was refused' : 'The attempt is still running; its replay opens when it ends' },
     onHello(h) {
       view.setHello(h);
@@ -123,8 +108,9 @@ function connect() {
       rp.duration_s = h.replay?.duration_s ?? rp.duration_s;
       timeline.set(attempt?.events || [], rp.duration_s);
       $('rp-play').disabled = false;
-      if (resumeAt !== null && resumeAt > 0) { send({ type: 'seek', t: resumeAt }); }
-      if (rp.speed !== 1) send({ type: 'speed', value: rp.speed });
+      plots.setJoints(api.jointNames(h));
+      if (resumeAt !== null && resumeAt > 0) { send(api.messages.seek(resumeAt)); }
+      if (rp.speed !== 1) send(api.messages.speed(rp.speed));
       renderTime();
     },
     onState(s) {
@@ -140,8 +126,8 @@ function connect() {
       $('rp-speed').value = String(m.speed);
       renderTime();
     },
-    onError(msg) { banner('error', msg, 6000); },
-    onStatus(kind, text) { banner(kind === 'ok' ? null : kind, kind === 'ok' ? '' : text); },
+    onError(msg) { banner.show('error', msg, 6000); },
+    onStatus(kind, text) { banner.show(kind === 'ok' ? null : kind, kind === 'ok' ? '' : text); },
   });
   conn.start();
 }
@@ -152,7 +138,7 @@ function setArm(side) {
 }
 
 $('rp-play').addEventListener('click', togglePlay);
-$('rp-speed').addEventListener('change', (e) => { send({ type: 'speed', value: +e.target.value }); e.target.blur(); });
+$('rp-speed').addEventListener('change', (e) => { send(api.messages.speed(+e.target.value)); e.target.blur(); });
 $('sel-arm').addEventListener('change', (e) => { setArm(e.target.value); plots.reset(); e.target.blur(); });
 document.addEventListener('keydown', (e) => {
   if (e.target.closest?.('input, select, textarea')) return;
@@ -160,7 +146,7 @@ document.addEventListener('keydown', (e) => {
   else if (e.key === 'ArrowLeft') seek(rp.t - (e.shiftKey ? 5 : 1));
   else if (e.key === 'v' || e.key === 'V') viewControls.layout();
 });
-setInterval(() => { if (view.drawn) status.update(view.drawn, { arm }); }, 100);
+statusLoop(view, status, () => arm);
 
 (async () => {
   if (!token) {
@@ -181,7 +167,7 @@ setInterval(() => { if (view.drawn) status.update(view.drawn, { arm }); }, 100);
   if (!attempt.outcome) note('This attempt is still running: the replay shows it up to the last recorded second.');
   let title = attempt.exercise || attempt.scenario || 'free play';
   if (attempt.exercise) {
-    const ex = await fetch(`/api/exercises/${encodeURIComponent(attempt.exercise)}`).then((r) => (r.ok ? r.json() : null)).catch(() => null);
+    const ex = (await api.exercises()).find((e) => e.id === attempt.exercise);
     if (ex?.title) title = ex.title;
   }
   showAttempt(attempt, title);
@@ -195,10 +181,7 @@ setInterval(() => { if (view.drawn) status.update(view.drawn, { arm }); }, 100);
   connect();
 })();
 
-window.__seaarms = view.debugHooks({
+window.__seaarms = view.debugHooks(() => conn, {
   get replay() { return { ...rp }; },
   get attempt() { return attempt; },
-  get connection() { return conn ? { session: attemptId, framesReceived: conn.framesReceived, open: !!conn.ws && conn.gotHello } : null; },
-  get lastReceived() { return conn?.latest; },
-  statusText() { return $('status').innerText; },
 });

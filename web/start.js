@@ -3,23 +3,13 @@
 // docs/exercises.md) and free play. Resolves with the body of POST /api/sessions:
 // {exercise, trainee, group?} or {scenario: 'training', trainee, group?}.
 
-import { esc } from './status.js';
+import { esc } from './page.js';
+import { exercises } from './api.js';
 
 const NAME_KEY = 'seaarms.trainee';
 const GROUP_KEY = 'seaarms.group';
 /** Longest display name and group sent (the server accepts up to 64 characters). */
 const MAX_NAME_CHARS = 40;
-
-/** GET /api/exercises → the list (empty when the server has none or cannot say). */
-export async function fetchExercises() {
-  try {
-    const r = await fetch('/api/exercises', { cache: 'no-store' });
-    if (!r.ok) return [];
-    return (await r.json()).exercises || [];
-  } catch {
-    return [];
-  }
-}
 
 export class StartScreen {
   constructor(el) {
@@ -37,7 +27,7 @@ export class StartScreen {
 
   /** Shows the screen; resolves with the trainee's choice. `selected`: exercise id to preselect. */
   async choose(selected) {
-    this.exercises = await fetchExercises();
+    this.exercises = await exercises();
     const name = localStorage.getItem(NAME_KEY) || '';
     const group = localStorage.getItem(GROUP_KEY) || '';
     const el = this.el;

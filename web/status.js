@@ -3,17 +3,7 @@
 // Every number is the server's, formatted here; the DOM is built once and only text changes.
 
 import { GRASP_COLOURS } from './scene.js';
-
-/** Text made safe for innerHTML. */
-export function esc(s) {
-  return String(s).replace(/[&<>"']/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;', "'": '&#39;' }[c]));
-}
-
-export function fmt(v, digits = 4) {
-  if (v === null || v === undefined) return '∞';
-  if (!Number.isFinite(v)) return '—';
-  return v.toFixed(digits);
-}
+import { fmt } from './page.js';
 
 const FIELDS = [
   ['left', 'L'], ['right', 'R'],

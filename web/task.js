@@ -5,8 +5,9 @@
 // threshold (GET /api/sessions/{id}/assessment, web/assessment.js) and a link to the
 // attempt's debrief (/replay/{attempt}). Every number is the server's.
 
-import { fmt, esc } from './status.js';
+import { fmt, esc } from './page.js';
 import { assessmentHtml } from './assessment.js';
+import * as api from './api.js';
 
 /** Event kinds shown as a warning banner (the rest, e.g. `step`, as information). */
 const BAD_EVENTS = new Set(['strike', 'obstacle', 'drop', 'overload', 'relief', 'limit', 'fault']);
@@ -107,12 +108,7 @@ export class TaskPanel {
   /** The completion card, from the session's assessment. */
   async showCard(ex) {
     const s = this.session;
-    const auth = { headers: { authorization: `Bearer ${s.control_token}` }, cache: 'no-store' };
-    let a = null;
-    try {
-      const r = await fetch(`${s.base || ''}/api/sessions/${encodeURIComponent(s.id)}/assessment`, auth);
-      if (r.ok) a = await r.json();
-    } catch { /* shown from the frame below */ }
+    const a = await api.sessionAssessment(s.id, s.control_token, s.base || ''); // null: shown from the frame
     const next = this.ui.nextTitle?.();
     this.card.innerHTML = `${assessmentHtml(a, { title: this.spec.title, frame: ex })}
       <div class="card-actions">
@@ -130,12 +126,12 @@ export class TaskPanel {
     // the finished attempt: the session's newest (GET /api/sessions/{id} names its attempts,
     // newest first; a new one starts only with "try again")
     try {
-      const r = await fetch(`${s.base || ''}/api/sessions/${encodeURIComponent(s.id)}`, auth);
+      const r = await api.sessionSummary(s.id, s.control_token, s.base || '');
       const sum = r.ok ? await r.json() : null;
       const id = sum?.attempts?.[0] ?? sum?.attempt;
       const link = this.card.querySelector('[data-act="debrief"]');
       if (id && link) {
-        link.href = `/replay/${encodeURIComponent(id)}?token=${encodeURIComponent(s.control_token)}`;
+        link.href = api.links.debrief(id, s.control_token);
         link.hidden = false;
       }
     } catch { /* no link: the server cannot say which attempt */ }

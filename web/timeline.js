@@ -5,7 +5,7 @@
 // list beside the view. Colours are CSS classes (style.css `.k-…`), positions set through
 // the CSSOM (the page's CSP refuses style="" attributes).
 
-import { esc } from './status.js';
+import { esc } from './page.js';
 
 /** Categories in legend order: [id, label, costs points]. */
 export const CATEGORIES = [

@@ -3,6 +3,8 @@
 // layout as the Gamepad API), which web/input.js samples exactly like a real pad: one input
 // path, one sender. Pointer events, so a finger, a pen or a mouse all work.
 
+import { jointNames } from './api.js';
+
 /** Standard-mapping button indices used here (web/input.js MAPPING). */
 const BUTTON = { LB: 4, RB: 5, LT: 6, RT: 7, UP: 12, DOWN: 13, LEFT: 14, RIGHT: 15 };
 
@@ -27,7 +29,7 @@ export class TouchPad {
     this.el.id = 'touch';
     this.el.hidden = true;
     this.el.innerHTML = `
-      <div class="stick" data-stick="left" title="left stick: swing ↔, shoulder ↕"><span class="knob"></span></div>
+      <div class="stick" data-stick="left"><span class="knob"></span></div>
       <div class="tpad tpad-left">
         <button type="button" data-btn="${BUTTON.LB}" class="arm-btn">L arm</button>
         <button type="button" data-btn="${BUTTON.RB}" class="arm-btn">R arm</button>
@@ -35,15 +37,28 @@ export class TouchPad {
         <button type="button" data-btn="${BUTTON.RT}">close</button>
       </div>
       <div class="tpad tpad-right">
-        <button type="button" data-btn="${BUTTON.UP}" title="pitch + / wx +">▲</button>
-        <button type="button" data-btn="${BUTTON.LEFT}" title="rotate − / wz −">◀</button>
-        <button type="button" data-btn="${BUTTON.RIGHT}" title="rotate + / wz +">▶</button>
-        <button type="button" data-btn="${BUTTON.DOWN}" title="pitch − / wx −">▼</button>
+        <button type="button" data-btn="${BUTTON.UP}">▲</button>
+        <button type="button" data-btn="${BUTTON.LEFT}">◀</button>
+        <button type="button" data-btn="${BUTTON.RIGHT}">▶</button>
+        <button type="button" data-btn="${BUTTON.DOWN}">▼</button>
       </div>
-      <div class="stick" data-stick="right" title="right stick: elbow ↕, yaw ↔"><span class="knob"></span></div>`;
+      <div class="stick" data-stick="right"><span class="knob"></span></div>`;
     container.appendChild(this.el);
+    this.setJoints(jointNames(null));
     for (const s of this.el.querySelectorAll('.stick')) this.bindStick(s, s.dataset.stick === 'left' ? 0 : 2);
     for (const b of this.el.querySelectorAll('[data-btn]')) this.bindButton(b, +b.dataset.btn);
+  }
+
+  /** Names what each control drives (web/input.js PAD_AXES: axis i is joint i, or the i-th
+   * of vx vy vz wx wy wz), the joints by `names` (web/api.js jointNames: the hello's model). */
+  setJoints(names) {
+    const title = (sel, text) => { this.el.querySelector(sel).title = text; };
+    title('[data-stick="left"]', `left stick: ${names[0]} ↔, ${names[1]} ↕`);
+    title('[data-stick="right"]', `right stick: ${names[2]} ↕, ${names[4]} ↔`);
+    title(`[data-btn="${BUTTON.UP}"]`, `${names[3]} + / wx +`);
+    title(`[data-btn="${BUTTON.DOWN}"]`, `${names[3]} − / wx −`);
+    title(`[data-btn="${BUTTON.RIGHT}"]`, `${names[5]} + / wz +`);
+    title(`[data-btn="${BUTTON.LEFT}"]`, `${names[5]} − / wz −`);
   }
 
   get visible() { return !this.el.hidden; }

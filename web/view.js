@@ -8,6 +8,7 @@ import { Ellipsoids, ELLIPSOID_COLOURS } from './ellipsoids.js';
 import { Viewports } from './viewports.js';
 import { Markers } from './markers.js';
 import { waterText } from './status.js';
+import { analysis } from './api.js';
 
 const SIDES = ['left', 'right'];
 const POLYTOPE_PERIOD_MS = 1000;
@@ -103,12 +104,8 @@ export class View {
     try {
       await Promise.all(SIDES.map(async (side, i) => {
         const spec = this.hello.arms[i];
-        const resp = await fetch('/api/analysis', {
-          method: 'POST', headers: { 'content-type': 'application/json' },
-          body: JSON.stringify({ robot: spec.model, q: this.drawn.arms[side].q, polytope: true }),
-        });
-        if (!resp.ok) return;
-        const a = await resp.json();
+        const a = await analysis({ robot: spec.model, q: this.drawn.arms[side].q, polytope: true });
+        if (!a) return;
         if (this.polytopes) this.ellipsoids.setPolytope(side, a.polytope, spec.base.rotation);
       }));
       if (this.drawn) this.ellipsoids.update(this.drawn);
@@ -142,10 +139,14 @@ export class View {
     }
   }
 
-  /** Read-only hooks for the browser tests. */
-  debugHooks(extra = {}) {
+  /** Read-only hooks for the browser tests; `conn()` is the page's current connection
+   * (web/connection.js) or null. */
+  debugHooks(conn, extra = {}) {
     const v = this;
     const hooks = {
+      get connection() { return conn()?.debugInfo() ?? null; },
+      get lastReceived() { return conn()?.latest; },
+      statusText() { return document.getElementById('status').innerText; },
       get hello() { return v.hello; },
       get lastState() { return v.drawn; },
       get statesDrawn() { return v.statesDrawn; },

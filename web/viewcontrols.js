@@ -3,7 +3,20 @@
 // pages carry the same elements (ids chk-ell, chk-plots, btn-layout; chk-poly and sel-ell-scale
 // where the page has them).
 
-const $ = (id) => document.getElementById(id);
+import { $ } from './page.js';
+import { View } from './view.js';
+import { StatusBar } from './status.js';
+import { Plots } from './plots.js';
+
+/** The parts of a page with the 3D views, the status bar and the plots (elements #canvas,
+ * #viewports, #legend, #status, #plots), the toolbar's view controls bound to them:
+ * {view, status, plots, controls} (controls: bindViewControls's). */
+export function mountViews() {
+  const view = new View({ canvas: $('canvas'), viewportsEl: $('viewports'), legendEl: $('legend') });
+  const status = new StatusBar($('status'));
+  const plots = new Plots($('plots'));
+  return { view, status, plots, controls: bindViewControls(view, plots) };
+}
 
 /** Binds the controls to `view` (web/view.js) and `plots` (web/plots.js, its panel #plots);
  * returns {layout()} (the keyboard's V). */

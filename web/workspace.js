@@ -1,5 +1,7 @@
 // Workspace heat map: asks the server for the map and draws it; no kinematics here.
-const $ = (id) => document.getElementById(id);
+
+import { $ } from './page.js';
+import { workspaceMap } from './api.js';
 
 /** Colour for t in [0, 1] on a dark-blue → cyan → yellow ramp. */
 export function ramp(t) {
@@ -12,10 +14,7 @@ export function ramp(t) {
 }
 
 export async function fetchMap({ robot, measure, orientation, n }) {
-  const body = { robot, orientation, nx: n, nz: n };
-  const r = await fetch('/api/studies/workspace-map', { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify(body) });
-  const doc = await r.json();
-  if (!r.ok) throw new Error(doc.error || r.statusText);
+  const doc = await workspaceMap({ robot, orientation, nx: n, nz: n });
   return { doc, grid: doc[measure] };
 }
 

@@ -6,7 +6,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { startServer, createSession, openBrowser, until, ARTIFACTS } from './harness.mjs';
+import { startServer, createSession, openBrowser, untilDrawn, ARTIFACTS } from './harness.mjs';
 
 const CODE = 'reef-7341';
 /** Console lines the browser logs for the deliberately refused POST /api/sessions. */
@@ -22,7 +22,7 @@ test('join code: ?join=CODE creates a session; without it the prompt asks and th
     assert.equal(bare.status, 403);
 
     await a.page.goto(`${srv.url}/?scenario=training&join=${encodeURIComponent(CODE)}`);
-    await until(a.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(a.page);
     assert.equal(await a.page.isHidden('#join'), true, 'no prompt when the URL carries the code');
     assert.deepEqual(a.errors, []);
 
@@ -41,7 +41,7 @@ test('join code: ?join=CODE creates a session; without it the prompt asks and th
 
     await b.page.fill('#join-code', CODE);
     await b.page.click('#join button[type="submit"]');
-    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(b.page);
     assert.equal(await b.page.isHidden('#join'), true, 'prompt gone once the session runs');
     const id = await b.page.evaluate(() => window.__seaarms.connection.session);
     const list = await (await fetch(`${srv.url}/api/sessions`, { headers: { authorization: `Bearer ${process.env.SEAARMS_INSTRUCTOR_TOKEN || 'test-token'}` } })).json();

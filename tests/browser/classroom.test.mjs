@@ -12,7 +12,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, startServer, openBrowser, until, FAKE_GAMEPAD, workDualLift, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+import { server, startServer, openBrowser, until, untilDrawn, FAKE_GAMEPAD, workDualLift, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || ARTIFACTS;
 const auth = { authorization: `Bearer ${INSTRUCTOR_TOKEN}` };
@@ -30,8 +30,8 @@ async function startTrainee(url, name, group, exercise, opts = {}, query = '') {
   await b.page.fill('#start-group', group);
   await b.page.click(`#start .ex[data-id="${exercise}"]`);
   await b.page.click('#start-exercise');
-  const id = await until(b.page, (ex) => window.__seaarms?.hello?.exercise?.id === ex && window.__seaarms.statesDrawn > 2
-    && window.__seaarms.connection.open && window.__seaarms.connection.session, exercise, 30000);
+  await until(b.page, (ex) => window.__seaarms?.hello?.exercise?.id === ex, exercise, 30000);
+  const id = await untilDrawn(b.page, { timeout: 30000 });
   return { ...b, id };
 }
 
@@ -111,7 +111,8 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     dp.on('console', (m) => { if (m.type() === 'error') derrors.push(m.text()); });
 
     // the debrief page: the same four views, the replay's clock, the markers of the events
-    await until(dp, () => window.__seaarms?.hello && window.__seaarms.replay.duration_s > 0 && window.__seaarms.statesDrawn > 0, undefined, 30000);
+    await until(dp, () => window.__seaarms?.hello && window.__seaarms.replay.duration_s > 0, undefined, 30000);
+    await untilDrawn(dp, { states: 0, open: false, timeout: 30000 });
     const info = await dp.evaluate(() => ({ views: window.__seaarms.viewports().length, hz: window.__seaarms.hello.frame_hz,
       d: window.__seaarms.replay.duration_s, events: window.__seaarms.attempt.events }));
     assert.equal(info.views, 4);
@@ -170,7 +171,8 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
 
     // a silent fault on trainee B: the instructor sees it, the trainee's page shows nothing
     await ip.click(`${row(b)} [data-observe]`);
-    await until(ip, (id) => window.__seaarms?.hello?.session === id && window.__seaarms.statesDrawn > 2, b.id);
+    await until(ip, (id) => window.__seaarms?.hello?.session === id, b.id);
+    await untilDrawn(ip, { open: false });
     await ip.selectOption('#act-fault', 'leak');
     await ip.check('#act-silent');
     await ip.click('#instr-actions button[data-act="fault"]');
@@ -234,7 +236,7 @@ test('a session abandoned while the page was away: the page says why it ended wh
   const b = await openBrowser();
   try {
     await b.page.goto(`${own.url}/?scenario=training`);
-    const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open && window.__seaarms.connection.session);
+    const id = await untilDrawn(b.page);
     // the tab goes away (its socket closes); the same browser comes back after the grace
     const page2 = await b.context.newPage();
     await b.page.close();

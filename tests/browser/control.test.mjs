@@ -5,14 +5,14 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, FAKE_GAMEPAD, ARTIFACTS } from './harness.mjs';
+import { server, openBrowser, until, untilDrawn, FAKE_GAMEPAD, ARTIFACTS } from './harness.mjs';
 
 test('a gamepad stick moves a joint: streamed q changes and the drawn arm moves', { timeout: 60000 }, async () => {
   const url = await server();
   const b = await openBrowser({ initScript: FAKE_GAMEPAD });
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(b.page);
     await b.page.evaluate(() => window.__connectPad());
     await until(b.page, () => window.__seaarms.statusText().includes('Fake pad'));
     // the status bar names the pad (not a cut-off id); the whole id is its tooltip
@@ -78,7 +78,7 @@ test('keyboard fallback: arm select, joint keys and grip', { timeout: 60000 }, a
   const b = await openBrowser();
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(b.page);
     await b.page.keyboard.press('Digit2');
     assert.equal(await b.page.evaluate(() => window.__seaarms.selectedArm), 'right');
     const q0 = await b.page.evaluate(() => window.__seaarms.lastState.arms.right.q);
@@ -108,7 +108,7 @@ test('the keyboard keeps driving after clicking a checkbox or a menu (trial find
   const b = await openBrowser();
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(b.page);
     const held = async (what) => {
       await b.page.keyboard.down('KeyE');
       try {

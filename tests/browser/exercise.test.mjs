@@ -6,7 +6,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, FAKE_GAMEPAD, workDualLift, ROOT, INSTRUCTOR_TOKEN, instructorAction } from './harness.mjs';
+import { server, openBrowser, until, untilDrawn, FAKE_GAMEPAD, workDualLift, ROOT, INSTRUCTOR_TOKEN, instructorAction } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || join(ROOT, 'tests', 'browser', 'artifacts');
 
@@ -26,7 +26,8 @@ test('dual-lift: start screen, task panel, handles, scripted gamepad through the
     await page.click('#start .ex[data-id="dual-lift"]');
     await page.screenshot({ path: join(SHOTS, 'start-screen.png') });
     await page.click('#start-exercise');
-    await until(page, () => window.__seaarms?.hello?.exercise?.id === 'dual-lift' && window.__seaarms.statesDrawn > 2 && window.__seaarms.connection.open);
+    await until(page, () => window.__seaarms?.hello?.exercise?.id === 'dual-lift');
+    await untilDrawn(page);
     // the session carries the trainee's name (what the instructor sees)
     const sid = await page.evaluate(() => window.__seaarms.connection.session);
     const summary = await (await fetch(`${url}/api/sessions/${sid}`, { headers: { authorization: 'Bearer test-token' } })).json().catch(() => null);
@@ -90,7 +91,7 @@ test('an instructor\'s scenario or exercise switch takes effect on the trainee\'
   const act = (id, body) => instructorAction(url, id, body);
   try {
     await page.goto(`${url}/?scenario=training`);
-    await until(page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(page);
     const id = await page.evaluate(() => window.__seaarms.connection.session);
     const other = await page.evaluate(() => window.__seaarms.hello.scenarios.map((s) => s.name).find((n) => n !== 'training'));
     await act(id, { type: 'scenario', scenario: other });
@@ -115,7 +116,8 @@ test('fault drill: the page offers the four answers and the server records the o
   const page = b.page;
   try {
     await page.goto(`${url}/?exercise=fault-diagnosis`);
-    await until(page, () => window.__seaarms?.hello?.exercise?.id === 'fault-diagnosis' && window.__seaarms.statesDrawn > 2);
+    await until(page, () => window.__seaarms?.hello?.exercise?.id === 'fault-diagnosis');
+    await untilDrawn(page, { open: false });
     const buttons = await page.$$eval('#task [data-answer]', (bs) => bs.map((b) => b.dataset.answer));
     assert.deepEqual(buttons, ['supply_drop', 'stuck_valve', 'leak', 'air']);
     await page.click('#task [data-answer="leak"]');

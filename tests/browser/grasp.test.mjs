@@ -6,7 +6,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, FAKE_GAMEPAD, padDriver, decodePng, classify, ARTIFACTS } from './harness.mjs';
+import { server, openBrowser, until, untilDrawn, FAKE_GAMEPAD, padDriver, decodePng, classify, ARTIFACTS } from './harness.mjs';
 
 const COLOUR_NAME = { free: 'grey', one_on_surface: 'black', one_lifted: 'lightblue', one_holding_other_contact: 'red', both_holding: 'yellow' };
 
@@ -32,7 +32,7 @@ test('scripted grasp: object turns black, light blue, yellow as drawn', { timeou
   const { setSticks, selectArm, grab } = padDriver(page, (st) => { if (!seen.includes(st.grasp)) seen.push(st.grasp); });
   try {
     await page.goto(`${url}/?scenario=training`);
-    await until(page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(page);
     await page.uncheck('#chk-ell'); // sample the object's own colour, not through an ellipsoid
     await page.evaluate(() => window.__connectPad());
     const first = await snap('free');

@@ -140,6 +140,19 @@ export async function until(page, fn, arg, timeout = 15000) {
   return h.jsonValue();
 }
 
+/**
+ * Waits until the page (web/view.js debug hooks, `window.__seaarms`) has drawn more than
+ * `states` state frames of the server's and, with `open` (the default), its socket is open
+ * (the hello received); returns the page's session id (true when it has none).
+ */
+export async function untilDrawn(page, { states = 2, open = true, timeout } = {}) {
+  return until(page, ([n, o]) => {
+    const w = window.__seaarms;
+    if (!(w?.statesDrawn > n) || (o && !w.connection?.open)) return false;
+    return w.connection?.session || true;
+  }, [states, open], timeout);
+}
+
 /** RGB of a pixel in a PNG screenshot buffer (decoded by the page itself: no extra packages). */
 export async function decodePng(page, png) {
   return page.evaluate(async (b64) => {
@@ -239,7 +252,7 @@ export async function soak(url, seconds, { log = () => {}, every = 30 } = {}) {
   const b = await openBrowser();
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(b.page);
     const cdp = await b.context.newCDPSession(b.page);
     await cdp.send('Performance.enable');
     await b.page.waitForTimeout(5000); // warm up (JIT, plots filling their windows)

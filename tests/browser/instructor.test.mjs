@@ -4,7 +4,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, startServer, createSession, openBrowser, until, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+import { server, startServer, createSession, openBrowser, until, untilDrawn, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
 
 async function instructorPath(url) {
   const r = await fetch(`${url}/instructor`);
@@ -17,7 +17,7 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
   const instr = await openBrowser();
   try {
     await trainee.page.goto(`${url}/?scenario=training`);
-    const id = await until(trainee.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
+    const id = await untilDrawn(trainee.page);
 
     // a wrong token is refused with a clear message
     await instr.page.goto(`${url}${await instructorPath(url)}`);
@@ -46,7 +46,7 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
 
     // observe it read-only in the 3D view
     await instr.page.click(`${row} button[data-open]`);
-    await until(instr.page, () => window.__seaarms?.statesDrawn > 5);
+    await untilDrawn(instr.page, { states: 5, open: false });
     assert.equal(await bar(), true, 'the control bar shows for the observed session');
     assert.equal(await instr.page.isVisible('#view-hint'), false, 'no hint over the observed session');
     assert.match(await instr.page.innerText('#obs-title'), new RegExp(`session ${id}$`), 'titled with the observed session');
@@ -110,7 +110,7 @@ test('a session ended by the instructor: the trainee page shows the typed reason
   const b = await openBrowser();
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
+    const id = await untilDrawn(b.page);
     const r = await fetch(`${url}/api/sessions/${id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
     assert.ok(r.ok, `DELETE: ${r.status}`);
     // The server says why with a typed `ended` message (server/src/protocol.rs EndReason) and

@@ -7,7 +7,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, decodePng, instructorAction, ARTIFACTS } from './harness.mjs';
+import { server, openBrowser, until, untilDrawn, decodePng, instructorAction, ARTIFACTS } from './harness.mjs';
 
 const PAGES = [
   ['trainee', '/?scenario=training', () => window.__seaarms?.statesDrawn > 2 && !document.getElementById('plots').hidden],
@@ -88,7 +88,7 @@ test('a banner shown with the completion card is not hidden behind it', { timeou
   const b = await openBrowser();
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
+    const id = await untilDrawn(b.page);
     // the card as the page shows it at the end of an exercise (its real content needs a whole
     // attempt: exercise.test.mjs), and a two-line banner (an instructor's message) over it
     await b.page.evaluate(() => {
@@ -114,7 +114,7 @@ test('the water current\'s arrow is drawn solid: its shaft stands out several pi
   const b = await openBrowser();
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    const id = await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.session);
+    const id = await untilDrawn(b.page);
     await instructorAction(url, id, { type: 'set_current', speed_m_s: 0.8, heading_deg: 30 });
     await until(b.page, () => window.__seaarms.drawnCurrent().visible);
     await b.page.click('.vp[data-view="top"] .vp-max');

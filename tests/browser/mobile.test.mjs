@@ -5,7 +5,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, decodePng, ARTIFACTS } from './harness.mjs';
+import { server, openBrowser, until, untilDrawn, decodePng, ARTIFACTS } from './harness.mjs';
 
 const PHONE = { viewport: { width: 390, height: 844 }, hasTouch: true, isMobile: true };
 const TABLET = { viewport: { width: 1024, height: 768 }, hasTouch: true };
@@ -15,7 +15,8 @@ test('phone 390×844: a 3D view with non-zero size and a non-blank picture; help
   const b = await openBrowser(PHONE);
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.framesRendered > 2);
+    await untilDrawn(b.page, { open: false });
+    await until(b.page, () => window.__seaarms.framesRendered > 2);
     const views = await b.page.evaluate(() => window.__seaarms.viewports().filter((v) => v.visible));
     assert.ok(views.length >= 1, 'a view is shown');
     const v = views[0];
@@ -62,7 +63,7 @@ test('tablet 1024×768 with touch: the on-screen sticks and buttons drive the se
   const b = await openBrowser(TABLET);
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    await until(b.page, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(b.page);
     assert.equal(await b.page.isVisible('#touch .stick[data-stick="left"]'), true, 'sticks shown on a touch screen');
     // right arm by its on-screen button (RB, through the pad's button edges)
     await b.page.tap('#touch [data-btn="5"]');

@@ -5,7 +5,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, decodePng, classify, ARTIFACTS } from './harness.mjs';
+import { server, openBrowser, until, untilDrawn, decodePng, classify, ARTIFACTS } from './harness.mjs';
 
 const COMMON = { timeout: 60000 };
 
@@ -14,7 +14,8 @@ test('page loads offline, renders the arms and the object; reports the first-fra
   const b = await openBrowser();
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    await until(b.page, () => window.__seaarms?.statesDrawn > 3 && window.__seaarms.framesRendered > 3);
+    await untilDrawn(b.page, { states: 3, open: false });
+    await until(b.page, () => window.__seaarms.framesRendered > 3);
     const t = await b.page.evaluate(() => {
       const nav = performance.getEntriesByType('navigation')[0];
       return { firstFrame: window.__seaarms.firstFrameAt, firstArms: window.__seaarms.firstStateFrameAt, domContentLoaded: nav.domContentLoadedEventEnd };
@@ -62,7 +63,7 @@ test('four viewports, switchable to one large view', COMMON, async () => {
   const b = await openBrowser();
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    await until(b.page, () => window.__seaarms?.statesDrawn > 1);
+    await untilDrawn(b.page, { states: 1, open: false });
     const four = await b.page.evaluate(() => window.__seaarms.viewports());
     assert.deepEqual(four.map((v) => v.name), ['top', 'front', 'side', 'persp']);
     for (const v of four) assert.ok(v.visible && v.rect.width > 200 && v.rect.height > 150, JSON.stringify(v));
@@ -101,7 +102,7 @@ test('status bar shows the latest state frame\'s measures', COMMON, async () => 
   const b = await openBrowser();
   try {
     await b.page.goto(`${url}/?scenario=training`);
-    await until(b.page, () => window.__seaarms?.statesDrawn > 1);
+    await untilDrawn(b.page, { states: 1, open: false });
     await b.page.click('#btn-pause');
     await until(b.page, () => window.__seaarms.lastState.paused === true);
     await b.page.waitForTimeout(400); // the status bar refreshes at 10 Hz

@@ -4,7 +4,7 @@
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { server, openBrowser, until } from './harness.mjs';
+import { server, openBrowser, until, untilDrawn } from './harness.mjs';
 
 /** Input sequence numbers the server applied (state frames' `input_seq`), sampled for `ms`. */
 async function appliedSeqs(page, ms) {
@@ -25,7 +25,7 @@ test('a second tab asks, watches without sending, and can take control', { timeo
   try {
     const one = b.page;
     await one.goto(`${url}/?scenario=training`);
-    await until(one, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(one);
     assert.equal(await one.evaluate(() => window.__seaarms.hello.role), 'trainee');
     const session = await one.evaluate(() => window.__seaarms.connection.session);
 
@@ -35,7 +35,7 @@ test('a second tab asks, watches without sending, and can take control', { timeo
     await two.waitForSelector('#tabs [data-choice="watch"]', { timeout: 10000 });
     assert.match(await two.innerText('#tabs'), /Another tab is driving this session/);
     await two.click('#tabs [data-choice="watch"]');
-    await until(two, () => window.__seaarms?.statesDrawn > 2 && window.__seaarms.connection.open);
+    await untilDrawn(two);
     assert.equal(await two.evaluate(() => window.__seaarms.hello.role), 'observer');
     assert.equal(await two.evaluate(() => window.__seaarms.connection.session), session, 'the same session');
 

@@ -1,12 +1,14 @@
 //! Shared by the integration tests: a server on port 0 (the library's `run`, as `main`
-//! uses it), session creation, WebSocket connection and reading helpers.
+//! uses it), session creation, WebSocket connection, sending and reading helpers, the
+//! built-in Magnum model, temporary data directories.
 
 #![allow(clippy::unwrap_used, dead_code, unreachable_pub)]
 
 use std::path::PathBuf;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use futures_util::StreamExt;
+use futures_util::{SinkExt, StreamExt};
 use serde_json::Value;
 use tokio_tungstenite::tungstenite::Message;
 
@@ -29,11 +31,25 @@ impl Server {
     }
 }
 
-pub fn temp_dir() -> PathBuf {
+/// A fresh path `seaarms-{tag}-{random hex}` in the system's temporary folder (not created).
+pub fn temp_dir(tag: &str) -> PathBuf {
     std::env::temp_dir().join(format!(
-        "seaarms-sessions-{}",
+        "seaarms-{tag}-{}",
         seaarms::sessions::random_hex(6)
     ))
+}
+
+/// The built-in Magnum model (server/core/robots/magnum.json) for both arms, as the server
+/// loads it.
+pub fn magnum() -> [Arc<seaarms_core::Model>; 2] {
+    let robots = seaarms::robots::Robots::load().expect("built-in robots");
+    let m = robots.get("magnum").expect("magnum");
+    [m.clone(), m]
+}
+
+/// Joint `j`'s angle (rad) of `arm` (`left`, `right`) in a state frame.
+pub fn q(state: &Value, arm: &str, j: usize) -> f64 {
+    state["arms"][arm]["q"][j].as_f64().unwrap()
 }
 
 pub async fn start_with(
@@ -65,7 +81,7 @@ pub async fn start_with(
 }
 
 pub async fn start() -> Server {
-    start_with(temp_dir(), |_| {}).await
+    start_with(temp_dir("sessions"), |_| {}).await
 }
 
 /// GET with the instructor token; the body as text.
@@ -210,15 +226,20 @@ pub async fn next_of(ws: &mut Ws, kind: &str, timeout: Duration) -> Value {
     }
 }
 
+/// Sends `v` as one text message.
+pub async fn send(ws: &mut Ws, v: Value) {
+    ws.send(Message::Text(v.to_string().into())).await.unwrap();
+}
+
 /// Holds the sticks: sends `count` input messages 40 ms apart (seq `first_seq`, …) with the
 /// `arms` given (e.g. `{"left": {"axes": [1, 0, 0, 0, 0, 0]}}`).
 pub async fn hold_sticks(ws: &mut Ws, first_seq: u64, count: u64, arms: Value) {
-    use futures_util::SinkExt;
     for seq in first_seq..first_seq + count {
-        let msg = serde_json::json!({"type": "input", "seq": seq, "arms": arms});
-        ws.send(Message::Text(msg.to_string().into()))
-            .await
-            .unwrap();
+        send(
+            ws,
+            serde_json::json!({"type": "input", "seq": seq, "arms": arms}),
+        )
+        .await;
         tokio::time::sleep(Duration::from_millis(40)).await;
     }
 }
@@ -258,7 +279,7 @@ impl SyncServer {
             .enable_all()
             .build()
             .unwrap();
-        let server = rt.block_on(start_with(temp_dir(), tweak));
+        let server = rt.block_on(start_with(temp_dir("sync"), tweak));
         let openapi = rt.block_on(async {
             reqwest::get(format!("{}/api/openapi.json", server.base))
                 .await
@@ -385,7 +406,7 @@ impl Reply {
 /// Sends one request (raw body bytes, headers as given; values that are not valid header
 /// bytes are skipped) and reads the answer; `Err` when the connection fails or the
 /// answer takes more than 60 s (a hang guard, not a speed check).
-pub async fn send(
+pub async fn send_request(
     http: &reqwest::Client,
     method: &str,
     url: &str,

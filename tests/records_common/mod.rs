@@ -3,22 +3,13 @@
 #![allow(dead_code, clippy::unwrap_used)]
 
 use std::io::{BufRead, BufReader};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use futures_util::SinkExt;
 use serde_json::{Value, json};
-use tokio_tungstenite::tungstenite::Message;
 
 use crate::common::TEACHER;
-
-pub(crate) fn temp_dir(tag: &str) -> PathBuf {
-    std::env::temp_dir().join(format!(
-        "seaarms-{tag}-{}",
-        seaarms::sessions::random_hex(6)
-    ))
-}
 
 /// The real `seaarms` binary serving on a free port; killed (SIGKILL) when dropped.
 pub(crate) struct Binary {
@@ -129,9 +120,7 @@ pub(crate) async fn drive(c: &Value, joint: usize, seconds: f64) {
     for seq in 1..=n {
         let msg = json!({"type": "input", "seq": seq,
             "arms": {"left": {"axes": axes, "grip": 0}, "right": {"axes": axes, "grip": 0}}});
-        ws.send(Message::Text(msg.to_string().into()))
-            .await
-            .unwrap();
+        crate::common::send(&mut ws, msg).await;
         tokio::time::sleep(Duration::from_millis(40)).await;
     }
     let _ = ws.close(None).await;

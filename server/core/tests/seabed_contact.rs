@@ -5,13 +5,8 @@
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
 use seaarms_core::grasp::{ObjectParams, seabed_contact, seabed_wrench};
 use seaarms_core::sim::{Input, SimParams, Simulation};
-use seaarms_core::{Model, ModelSpec, robots};
 
-fn magnum() -> Model {
-    let spec: ModelSpec =
-        serde_json::from_str(robots::builtin_text("magnum").expect("built-in")).expect("json");
-    Model::from_spec(&spec).expect("model")
-}
+mod common;
 
 /// The case-study box tilted onto one corner (or one edge), that corner `depth_m` into the
 /// seabed.
@@ -82,7 +77,7 @@ fn damping_matrix_is_the_wrench_velocity_derivative() {
 /// never rises more than the spring energy allows and ends at rest on its face.
 #[test]
 fn box_dropped_on_a_corner_settles() {
-    let m = magnum();
+    let m = common::builtin("magnum");
     let mut params = SimParams::case_study(&m, &m).expect("params");
     let pose = tilted(&params.object, 0.35, 0.25, 0.01);
     params.object.initial_pose = pose;

@@ -1,0 +1,218 @@
+// The page's protocol module: every URL the pages request or link to and every WebSocket
+// message they send or read, in one place (server/src/protocol.rs is the server's side;
+// docs/api.md documents both). The other modules call these functions; none builds a URL or
+// a wire message of its own. Nothing here touches the DOM or runs at load (the browser tests
+// import the page's modules in Node).
+
+const enc = encodeURIComponent;
+
+/** The `authorization` header of a bearer token (none without a token). */
+function auth(token) {
+  return token ? { authorization: `Bearer ${token}` } : {};
+}
+
+/** A request to this server: `token` sent as a bearer token, `body` as JSON; GETs are never
+ * answered from the browser's cache (the server's state changes under them). */
+function call(method, path, { token, body } = {}) {
+  const init = { method, headers: auth(token) };
+  if (body !== undefined) {
+    init.headers['content-type'] = 'application/json';
+    init.body = JSON.stringify(body);
+  }
+  if (method === 'GET') init.cache = 'no-store';
+  return fetch(path, init);
+}
+
+/** The JSON body of an answer, or null when it has none. */
+export async function jsonOf(resp) {
+  try { return await resp.json(); } catch { return null; }
+}
+
+/** Why an answer failed: the server's `error` text (every error body has one), else the status. */
+async function errorOf(resp) {
+  return (await jsonOf(resp))?.error || `HTTP ${resp.status}`;
+}
+
+// ---- URLs ------------------------------------------------------------------------------
+
+/** A session's REST path; `base` is its replica's path prefix ('' on a single server,
+ * docs/api.md "Replicas"). */
+const sessionPath = (id, base = '') => `${base}/api/sessions/${enc(id)}`;
+const withToken = (path, token) => (token ? `${path}?token=${enc(token)}` : path);
+
+/** Links the pages show (downloads and the debrief page take the token in the query). */
+export const links = {
+  /** A session's record as CSV. */
+  sessionCsv: (id, token, base = '') => withToken(`${sessionPath(id, base)}/log.csv`, token),
+  /** The debrief page of an attempt. */
+  debrief: (attemptId, token) => withToken(`/replay/${enc(attemptId)}`, token),
+  /** A link of GET /api/attempts (an attempt's `links.replay`, `links.csv`) with the token. */
+  attemptLink: (path, token) => withToken(path, token),
+  /** The class results (CSV of finished attempts), of one group or all. */
+  resultsCsv: (group, token) => {
+    const q = new URLSearchParams();
+    if (group) q.set('group', group);
+    q.set('token', token);
+    return `/api/results.csv?${q}`;
+  },
+};
+
+/** WebSocket paths (see `wsUrl`). */
+export const sockets = {
+  /** A live session's socket, as its trainee or (`observer`) read-only. */
+  session: (id, token, { observer = false, base = '' } = {}) =>
+    `${base}/ws/sessions/${enc(id)}?token=${enc(token)}${observer ? '&role=observer' : ''}`,
+  /** The replay socket of a recorded attempt. */
+  replay: (attemptId, token) => `/ws/replay/${enc(attemptId)}?token=${enc(token)}`,
+};
+
+/** Absolute WebSocket URL on this page's origin (only the path and query of the server's
+ * `ws_url` are used, so the page also works behind a TLS proxy or another host name). */
+export function wsUrl(pathOrUrl) {
+  const u = new URL(pathOrUrl, location.href);
+  const proto = location.protocol === 'https:' ? 'wss:' : 'ws:';
+  return `${proto}//${location.host}${u.pathname}${u.search}`;
+}
+
+// ---- REST ------------------------------------------------------------------------------
+
+/** GET /healthz: whether the server answers. */
+export function healthy() {
+  return fetch('/healthz', { cache: 'no-store' }).then((r) => r.ok).catch(() => false);
+}
+
+/** POST /api/sessions (`body`: scenario or exercise, trainee, group, join_code); the answer. */
+export function createSession(body) {
+  return call('POST', '/api/sessions', { body });
+}
+
+/** GET /api/sessions/{id} with the session's control token or the instructor's; the answer. */
+export function sessionSummary(id, token, base = '') {
+  return call('GET', sessionPath(id, base), { token });
+}
+
+/** DELETE /api/sessions/{id}: ends the session. */
+export function endSession(id, token, base = '') {
+  return call('DELETE', sessionPath(id, base), { token });
+}
+
+/** GET /api/sessions/{id}/assessment: the session's exercise assessment, or null. */
+export async function sessionAssessment(id, token, base = '') {
+  try {
+    const r = await call('GET', `${sessionPath(id, base)}/assessment`, { token });
+    return r.ok ? await r.json() : null;
+  } catch {
+    return null;
+  }
+}
+
+/** GET /api/sessions with the instructor token; the answer. */
+export function listSessions(token) {
+  return call('GET', '/api/sessions', { token });
+}
+
+/** POST /api/sessions/{id}/actions (an instructor's action); resolves {ok, error}. */
+export async function sessionAction(id, body, token, base = '') {
+  try {
+    const r = await call('POST', `${sessionPath(id, base)}/actions`, { token, body });
+    return { ok: r.ok, error: r.ok ? null : await errorOf(r) };
+  } catch {
+    return { ok: false, error: 'server unreachable' };
+  }
+}
+
+/** GET /api/scenarios: the scenario list ([{name, description}] or names), or null when the
+ * server cannot say. */
+export async function scenarios() {
+  try {
+    const r = await call('GET', '/api/scenarios');
+    if (!r.ok) return null;
+    const body = await r.json();
+    return Array.isArray(body) ? body : body.scenarios || [];
+  } catch {
+    return null;
+  }
+}
+
+let exerciseList = null;
+/** GET /api/exercises, asked once per page and shared: the list ([] when the server has none
+ * or cannot say; a failed ask is asked again next time). */
+export function exercises() {
+  exerciseList ??= call('GET', '/api/exercises')
+    .then((r) => (r.ok ? r.json() : Promise.reject(new Error(`HTTP ${r.status}`))))
+    .then((b) => b.exercises || [])
+    .catch(() => { exerciseList = null; return []; });
+  return exerciseList;
+}
+
+/** GET /api/attempts/{id} (metadata, assessment, events); the answer. */
+export function attempt(id, token) {
+  return call('GET', `/api/attempts/${enc(id)}`, { token });
+}
+
+/** GET /api/attempts filtered by `filter` ({trainee, exercise, group, limit}); the list, or
+ * throws with the server's reason. */
+export async function attempts(filter, token) {
+  const r = await call('GET', `/api/attempts?${new URLSearchParams(filter)}`, { token });
+  if (!r.ok) throw new Error(await errorOf(r));
+  return (await r.json()).attempts || [];
+}
+
+/** POST /api/analysis (`body`: {robot, q, polytope?}); the analysis, or null. */
+export async function analysis(body) {
+  try {
+    const r = await call('POST', '/api/analysis', { body });
+    return r.ok ? await r.json() : null;
+  } catch {
+    return null;
+  }
+}
+
+/** POST /api/studies/workspace-map; the map, or throws with the server's reason. */
+export async function workspaceMap(body) {
+  const r = await call('POST', '/api/studies/workspace-map', { body });
+  if (!r.ok) throw new Error(await errorOf(r));
+  return r.json();
+}
+
+// ---- WebSocket messages ----------------------------------------------------------------
+
+/** Messages the page sends: on a session's socket (protocol.rs `ClientMessage`) and on a
+ * replay's (docs/api.md "Attempts and replay": play, pause, seek, speed). */
+export const messages = {
+  /** Stick input: `arms` {left, right: {axes[6], grip}}, `object` the object's twist
+   * sticks in closed loop (else absent). */
+  input: (seq, arms, object) => (object ? { type: 'input', seq, arms, object } : { type: 'input', seq, arms }),
+  /** A change of settings ({control_mode, control_method, arm_speed}, any of them). */
+  settings: (patch) => ({ type: 'settings', ...patch }),
+  reset: () => ({ type: 'reset' }),
+  release: () => ({ type: 'release' }),
+  pause: () => ({ type: 'pause' }),
+  resume: () => ({ type: 'resume' }),
+  /** The fault drill's answer (a fault kind's name). */
+  diagnose: (answer) => ({ type: 'diagnose', answer }),
+  /** Latency probe: the server answers `pong` with the same `t`. */
+  ping: (t) => ({ type: 'ping', t }),
+  play: () => ({ type: 'play' }),
+  /** Replay: go to `t` (s since the attempt's start). */
+  seek: (t) => ({ type: 'seek', t }),
+  /** Replay: play at `value` × real time. */
+  speed: (value) => ({ type: 'speed', value }),
+};
+
+/** The names of the joints of the model a `hello` carries for arm `i` (0 left, 1 right:
+ * `arms[i].model.joints[j].name`, the robot file's names); "joint j" where the model names
+ * none, or before the hello. */
+export function jointNames(hello, i = 0) {
+  const joints = hello?.arms?.[i]?.model?.joints;
+  return Array.from({ length: joints?.length || 6 }, (_, j) => joints?.[j]?.name || `joint ${j + 1}`);
+}
+
+/** The server's messages the page reads (protocol.rs `ServerMessage`): `hello`, `state`,
+ * `pong`, `message`, `error`, `ended`, and the replay socket's `replay`. Parses `text` and
+ * calls `handlers[type](msg)`; a message that is not JSON or has no handler is ignored. */
+export function dispatch(text, handlers) {
+  let msg;
+  try { msg = JSON.parse(text); } catch { return; }
+  if (typeof msg?.type === 'string' && Object.hasOwn(handlers, msg.type)) handlers[msg.type](msg);
+}

@@ -4,6 +4,8 @@
 //! directions (Lim eq. 3.62: the ellipsoid of the translational rows of J). Two independent
 //! paths through the server: the physics worker's frame and the analysis route.
 
+#![allow(clippy::unwrap_used)]
+
 mod common;
 
 use std::time::Duration;

@@ -91,7 +91,8 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     await trainee.page.waitForFunction(() => /0\.50 m\/s → 30°/.test(window.__seaarms.statusText()));
     // the arrow in the views is named in the legend, with its speed, heading and scale
     await trainee.page.waitForFunction(() => /water current\s*arrow: 0\.50 m\/s → 30° \(0\.5 m per m\/s\)/.test(document.querySelector('#legend').innerText));
-    assert.match(await instr.page.innerText('#legend'), /water current\s*arrow: 0\.50 m\/s → 30°/, 'the observer\'s legend too');
+    // the observer's legend too (its own frames arrive on its own socket: wait for them)
+    await instr.page.waitForFunction(() => /water current\s*arrow: 0\.50 m\/s → 30°/.test(document.querySelector('#legend').innerText));
     await instr.page.fill('#act-cur-speed', '9');
     await instr.page.click('#instr-actions button[data-act="set_current"]');
     await instr.page.waitForFunction(() => /set_current: .*speed_m_s/.test(document.querySelector('#act-result').textContent));

@@ -278,7 +278,7 @@ async fn an_attempt_of_another_simulator_version_says_it_cannot_be_replayed() {
             group: "B".into(),
             scenario: "training".into(),
             created_unix: 1.0,
-            token_sha256: seaarms::sessions::sha256_hex("old-token"),
+            token_sha256: seaarms::auth::sha256_hex("old-token"),
         },
         Write::AttemptStart(Box::new(AttemptStart {
             id: attempt.into(),

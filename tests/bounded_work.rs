@@ -20,10 +20,8 @@ struct Server {
 async fn serve(config: ServeConfig) -> Server {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let base = format!("http://{}", listener.local_addr().unwrap());
-    let data_dir = std::env::temp_dir().join(format!(
-        "seaarms-bounded-{}",
-        seaarms::sessions::random_hex(6)
-    ));
+    let data_dir =
+        std::env::temp_dir().join(format!("seaarms-bounded-{}", seaarms::ids::random_hex(6)));
     let state = seaarms::app::AppState::new(&ServeConfig { data_dir, ..config }).unwrap();
     let (stop, stopped) = tokio::sync::oneshot::channel::<()>();
     tokio::spawn(seaarms::run(listener, state, async {

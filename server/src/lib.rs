@@ -26,6 +26,8 @@
 pub mod api;
 pub mod app;
 pub mod assets;
+pub mod auth;
+pub mod clock;
 pub mod cluster;
 pub mod compute;
 pub mod config;
@@ -33,6 +35,7 @@ pub mod csv_out;
 pub mod db;
 pub mod error;
 pub mod exercises;
+pub mod ids;
 pub mod json;
 pub mod limits;
 pub mod load;
@@ -95,7 +98,7 @@ pub async fn run(
     // Every session has ended and is recorded: out of the directory now, not declared lost
     // by the others later.
     if let Some((db, name)) = leaving {
-        if let Err(e) = db.leave(&name, sessions::unix_now()).await {
+        if let Err(e) = db.leave(&name, clock::unix_now()).await {
             tracing::warn!("leaving the session directory: {e:#}");
         }
     }

@@ -170,17 +170,6 @@ pub enum ClientMessage {
     },
 }
 
-/// Who paused a session's clock (state frames' and summaries' `paused_by`): an instructor's
-/// pause is lifted only by the instructor.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum PausedBy {
-    /// The instructor (the trainee cannot resume).
-    Instructor,
-    /// The trainee.
-    Trainee,
-}
-
 /// Current settings of a session.
 #[derive(Debug, Clone, Copy, Serialize, Deserialize, PartialEq)]
 pub struct Settings {
@@ -490,7 +479,7 @@ pub struct StateFrame {
     /// Clock paused.
     pub paused: bool,
     /// Who paused it (`instructor`, `trainee`), `null` while running.
-    pub paused_by: Option<PausedBy>,
+    pub paused_by: Option<crate::auth::Actor>,
     /// Current settings.
     pub settings: Settings,
     /// Left and right arm.

@@ -30,10 +30,7 @@ impl Server {
 }
 
 pub fn temp_dir() -> PathBuf {
-    std::env::temp_dir().join(format!(
-        "seaarms-sessions-{}",
-        seaarms::sessions::random_hex(6)
-    ))
+    std::env::temp_dir().join(format!("seaarms-sessions-{}", seaarms::ids::random_hex(6)))
 }
 
 pub async fn start_with(

@@ -14,10 +14,7 @@ use tokio_tungstenite::tungstenite::Message;
 use crate::common::TEACHER;
 
 pub(crate) fn temp_dir(tag: &str) -> PathBuf {
-    std::env::temp_dir().join(format!(
-        "seaarms-{tag}-{}",
-        seaarms::sessions::random_hex(6)
-    ))
+    std::env::temp_dir().join(format!("seaarms-{tag}-{}", seaarms::ids::random_hex(6)))
 }
 
 /// The real `seaarms` binary serving on a free port; killed (SIGKILL) when dropped.
@@ -211,7 +208,7 @@ pub(crate) async fn database_urls() -> Vec<Option<String>> {
 pub(crate) async fn fresh_postgres_database(base: &str) -> String {
     use sqlx::{Connection, Executor};
     sqlx::any::install_default_drivers();
-    let name = format!("seaarms_{}", seaarms::sessions::random_hex(6));
+    let name = format!("seaarms_{}", seaarms::ids::random_hex(6));
     let mut c = sqlx::AnyConnection::connect(base)
         .await
         .unwrap_or_else(|e| panic!("SEAARMS_TEST_DATABASE_URL {base}: {e}"));

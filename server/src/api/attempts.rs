@@ -18,21 +18,20 @@ use std::time::Duration;
 use axum::Json;
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, Query, State};
-use axum::http::{HeaderMap, StatusCode, header};
+use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use futures_util::{SinkExt, StreamExt};
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use tokio::sync::Semaphore;
 
+use crate::api::session_ws::error_text;
 use crate::app::AppState;
+use crate::auth::{Credentials, MISSING_TOKEN_OR_QUERY, Principal, TokenFrom, WRONG_TOKEN};
 use crate::db::{AttemptFilter, AttemptRow, EventRow, unavailable as db_error};
 use crate::error::ApiError;
 use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ServerMessage};
 use crate::replay::{Init, Replay, ReplayError, check_version, log};
-use crate::sessions::rest::bearer;
-use crate::sessions::ws::error_text;
-use crate::sessions::{sha256_hex, token_eq};
 
 /// Most replay WebSockets open at once (each may re-simulate on a blocking thread).
 pub const MAX_REPLAYS: usize = 32;
@@ -43,53 +42,45 @@ pub const MAX_LIST: usize = 1000;
 
 static REPLAY_SLOTS: LazyLock<Semaphore> = LazyLock::new(|| Semaphore::new(MAX_REPLAYS));
 
-/// The token of `Authorization: Bearer …`, else `?token=`.
-fn token<'a>(headers: &'a HeaderMap, query: Option<&'a str>) -> Option<&'a str> {
-    bearer(headers).or(query)
+/// The attempts routes read the token from the header, else the query.
+const FROM: TokenFrom = TokenFrom::BearerOrQuery;
+
+fn is_instructor(state: &AppState, creds: &Credentials) -> bool {
+    creds.principal(state, FROM, None).is_instructor()
 }
 
-fn is_instructor(state: &AppState, token: Option<&str>) -> bool {
-    token.is_some_and(|t| token_eq(t, &state.instructor_token))
-}
-
-/// The attempt, if `token` may see it: 403 for a wrong token, 404 for an unknown id (after
-/// the token check for the instructor, so ids are not probed without one).
+/// The attempt, if `creds` may see it (the instructor, or the trainee of its session): 403
+/// for a wrong token, 404 for an unknown id (after the token check for the instructor, so
+/// ids are not probed without one).
 async fn authorized(
     state: &AppState,
-    token: Option<&str>,
+    creds: &Credentials,
     id: &str,
 ) -> Result<AttemptRow, ApiError> {
-    let Some(token) = token else {
-        return Err(ApiError::forbidden(
-            "missing token (Authorization: Bearer … or ?token=)",
-        ));
-    };
+    if creds.token(FROM).is_none() {
+        return Err(ApiError::forbidden(MISSING_TOKEN_OR_QUERY));
+    }
     let not_found = || ApiError::not_found(format!("no attempt `{id}`"));
     if !crate::sessions::record::valid_id(id) {
         return Err(not_found());
     }
     let row = state.db.attempt(id).await.map_err(db_error)?;
-    if token_eq(token, &state.instructor_token) {
+    if is_instructor(state, creds) {
         return row.ok_or_else(not_found);
     }
     let Some(row) = row else {
-        return Err(ApiError::forbidden("wrong token"));
+        return Err(ApiError::forbidden(WRONG_TOKEN));
     };
-    let hash = state
-        .db
-        .session_token_sha256(&row.session)
-        .await
-        .map_err(db_error)?;
-    match hash {
-        Some(h) if token_eq(&sha256_hex(token), &h) => Ok(row),
-        _ => Err(ApiError::forbidden("wrong token")),
+    match creds.principal_stored(state, FROM, &row.session).await? {
+        Principal::Trainee { .. } => Ok(row),
+        _ => Err(ApiError::forbidden(WRONG_TOKEN)),
     }
 }
 
 /// A trainee opens an attempt's inputs and replay once it has ended (a running drill's
 /// silent fault is in them); the instructor at any time.
-fn check_open(state: &AppState, token: Option<&str>, row: &AttemptRow) -> Result<(), ApiError> {
-    if row.outcome.is_none() && !is_instructor(state, token) {
+fn check_open(state: &AppState, creds: &Credentials, row: &AttemptRow) -> Result<(), ApiError> {
+    if row.outcome.is_none() && !is_instructor(state, creds) {
         return Err(ApiError::new(
             StatusCode::CONFLICT,
             "the attempt is still running; its replay opens when it ends",
@@ -140,16 +131,18 @@ pub struct ListQuery {
     exercise: Option<String>,
     session: Option<String>,
     limit: Option<usize>,
+    /// Read by [`Credentials`]; listed so that it is a known field.
+    #[allow(dead_code)]
     token: Option<String>,
 }
 
 /// `GET /api/attempts` (instructor).
 pub async fn list(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Query(q): Query<ListQuery>,
 ) -> Result<Json<Value>, ApiError> {
-    if !is_instructor(&state, token(&headers, q.token.as_deref())) {
+    if !is_instructor(&state, &creds) {
         return Err(ApiError::forbidden("instructor token required"));
     }
     let filter = AttemptFilter {
@@ -164,24 +157,16 @@ pub async fn list(
     Ok(Json(json!({ "attempts": out })))
 }
 
-/// `?token=` of the single-attempt routes.
-#[derive(Debug, Default, Deserialize)]
-pub struct TokenQuery {
-    token: Option<String>,
-}
-
 /// `GET /api/attempts/{id}`: the record, its assessment and its events.
 pub async fn get(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
-    Query(q): Query<TokenQuery>,
 ) -> Result<Json<AttemptOut>, ApiError> {
-    let token = token(&headers, q.token.as_deref());
-    let row = authorized(&state, token, &id).await?;
+    let row = authorized(&state, &creds, &id).await?;
     let mut events = state.db.attempt_events(&id).await.map_err(db_error)?;
     // A silent fault stays hidden from the trainee while the attempt runs (a drill).
-    if row.outcome.is_none() && !is_instructor(&state, token) {
+    if row.outcome.is_none() && !is_instructor(&state, &creds) {
         events.retain(|e| e.detail.get("silent") != Some(&Value::Bool(true)));
     }
     Ok(Json(AttemptOut::new(row, Some(events))))
@@ -190,13 +175,11 @@ pub async fn get(
 /// `GET /api/attempts/{id}/inputs`: the initial conditions and the decoded input log.
 pub async fn inputs(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
-    Query(q): Query<TokenQuery>,
 ) -> Result<Json<Value>, ApiError> {
-    let token = token(&headers, q.token.as_deref());
-    let row = authorized(&state, token, &id).await?;
-    check_open(&state, token, &row)?;
+    let row = authorized(&state, &creds, &id).await?;
+    check_open(&state, &creds, &row)?;
     let bytes = state.db.attempt_inputs(&id).await.map_err(db_error)?;
     let entries = log::decode(&bytes).map_err(|e| {
         ApiError::new(
@@ -247,14 +230,13 @@ async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, ApiError> {
 #[derive(Debug, Default, Deserialize)]
 pub struct ReplayQuery {
     t: Option<f64>,
-    token: Option<String>,
 }
 
 /// `GET /api/attempts/{id}/replay?t=`: the state frame at t (s since the attempt's start,
 /// clamped to its length), re-simulated from the record.
 pub async fn replay_at(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
     Query(q): Query<ReplayQuery>,
 ) -> Result<Response, ApiError> {
@@ -264,9 +246,8 @@ pub async fn replay_at(
             "`t` must be a finite number of seconds",
         ));
     }
-    let token = token(&headers, q.token.as_deref());
-    let row = authorized(&state, token, &id).await?;
-    check_open(&state, token, &row)?;
+    let row = authorized(&state, &creds, &id).await?;
+    check_open(&state, &creds, &row)?;
     let mut replay = load(&state, &row).await?;
     let json = tokio::task::spawn_blocking(move || {
         replay.seek(t)?;
@@ -293,11 +274,11 @@ fn state_text(replay: &mut Replay) -> Utf8Bytes {
 pub async fn replay_ws(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    Query(q): Query<TokenQuery>,
+    creds: Credentials,
     ws: WebSocketUpgrade,
 ) -> Result<Response, ApiError> {
-    let row = authorized(&state, q.token.as_deref(), &id).await?;
-    check_open(&state, q.token.as_deref(), &row)?;
+    let row = authorized(&state, &creds, &id).await?;
+    check_open(&state, &creds, &row)?;
     let permit = REPLAY_SLOTS.try_acquire().map_err(|_| {
         ApiError::new(
             StatusCode::SERVICE_UNAVAILABLE,
@@ -316,7 +297,7 @@ pub async fn replay_ws(
 }
 
 fn replay_hello(state: &AppState, row: &AttemptRow, replay: &mut Replay) -> Utf8Bytes {
-    let hello = crate::sessions::ws::hello_for(
+    let hello = crate::api::session_ws::hello_for(
         &row.session,
         "observer",
         replay.live(),

@@ -78,7 +78,7 @@ pub async fn run(
             })
         })
         .await?;
-    let run_id = format!("{name}-{}.csv", crate::sessions::random_hex(4));
+    let run_id = format!("{name}-{}.csv", crate::ids::random_hex(4));
     state.scenario_runs.put(run_id.clone(), csv);
     let mut body = serde_json::to_value(&summary).map_err(|_| ComputeError::Failed)?;
     body["csv_url"] = serde_json::json!(format!("/api/scenarios/runs/{run_id}"));

@@ -19,9 +19,9 @@ use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 
 use crate::app::AppState;
+use crate::clock::unix_now;
 use crate::db::{Backend, ReplicaBeat};
 use crate::error::ApiError;
-use crate::sessions::unix_now;
 
 /// How often a replica writes its heartbeat and its sessions' directory rows.
 pub const HEARTBEAT: Duration = Duration::from_secs(1);
@@ -205,7 +205,7 @@ pub async fn beat(state: &AppState) -> anyhow::Result<Vec<crate::db::LostReplica
             .all()
             .iter()
             .map(|s| {
-                let v = crate::sessions::rest::directory_summary(&st, s);
+                let v = crate::api::sessions::directory_summary(&st, s);
                 (s.id.clone(), v.to_string())
             })
             .collect::<Vec<_>>()

@@ -11,7 +11,8 @@ use serde_json::json;
 
 use super::record::RecordMsg;
 use super::{Live, Scenario, Session, SessionManager};
-use crate::protocol::{ControlMethod, ControlMode, EndReason, PausedBy, ServerMessage};
+use crate::auth::Actor;
+use crate::protocol::{ControlMethod, ControlMode, EndReason, ServerMessage};
 use crate::replay::log::{Applied, dequantize, quantize};
 
 /// What a trainee's `resume` gets while the instructor has paused the session.
@@ -144,37 +145,6 @@ pub enum Command {
     Message(String),
     /// End the session.
     End,
-}
-
-/// Who gives a command.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Actor {
-    /// The instructor token: every command.
-    Instructor,
-    /// The session's own control token: driving, settings, reset/pause/resume/release, end.
-    Trainee,
-    /// A read-only connection: nothing.
-    Observer,
-}
-
-impl Actor {
-    /// Whose pause a `pause` from this actor is (observers cannot pause).
-    pub fn pauser(self) -> Option<PausedBy> {
-        match self {
-            Actor::Instructor => Some(PausedBy::Instructor),
-            Actor::Trainee => Some(PausedBy::Trainee),
-            Actor::Observer => None,
-        }
-    }
-
-    /// Name in records and messages.
-    pub fn as_str(self) -> &'static str {
-        match self {
-            Actor::Instructor => "instructor",
-            Actor::Trainee => "trainee",
-            Actor::Observer => "observer",
-        }
-    }
 }
 
 /// Why a command was refused.
@@ -321,9 +291,9 @@ pub fn apply(
             if actor == Actor::Instructor {
                 live.note_intervention(&command);
             }
-            let detail = match (&command, actor.pauser()) {
-                (Command::Pause, Some(by)) => live.pause_as(by, true),
-                (Command::Resume, Some(by)) => live.pause_as(by, false),
+            let detail = match &command {
+                Command::Pause => live.pause_as(actor, true),
+                Command::Resume => live.pause_as(actor, false),
                 _ => live.apply(&command),
             };
             // A reset or switch ended an attempt and started one: records go out in order,
@@ -396,8 +366,8 @@ impl Live {
                 json!({})
             }
             // Without an actor (headless attempts), pause and resume act as the trainee's.
-            Command::Pause => self.pause_as(PausedBy::Trainee, true)?,
-            Command::Resume => self.pause_as(PausedBy::Trainee, false)?,
+            Command::Pause => self.pause_as(Actor::Trainee, true)?,
+            Command::Resume => self.pause_as(Actor::Trainee, false)?,
             Command::Release => {
                 self.log(Applied::Release);
                 self.release(RELEASE_DURATION_S);
@@ -450,17 +420,13 @@ impl Live {
     /// ([`PAUSED_BY_INSTRUCTOR`]) and the trainee's `pause` leaves it the instructor's. The
     /// instructor's pause takes over a trainee's; the instructor's resume lifts any pause.
     /// Returns the record's detail (who holds the pause now).
-    pub fn pause_as(
-        &mut self,
-        by: PausedBy,
-        pause: bool,
-    ) -> Result<serde_json::Value, CommandError> {
-        let instructors = self.paused_by() == Some(PausedBy::Instructor);
+    pub fn pause_as(&mut self, by: Actor, pause: bool) -> Result<serde_json::Value, CommandError> {
+        let instructors = self.paused_by() == Some(Actor::Instructor);
         match (pause, by) {
-            (false, PausedBy::Trainee) if instructors => {
+            (false, Actor::Trainee) if instructors => {
                 return Err(CommandError::Forbidden(PAUSED_BY_INSTRUCTOR.to_string()));
             }
-            (true, PausedBy::Trainee) if instructors => {}
+            (true, Actor::Trainee) if instructors => {}
             (true, _) => self.set_paused(Some(by)),
             (false, _) => self.set_paused(None),
         }

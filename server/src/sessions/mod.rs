@@ -15,14 +15,12 @@ pub mod admission;
 pub mod command;
 pub mod physics;
 pub mod record;
-pub mod rest;
 pub mod snapshot;
-pub mod ws;
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
 use axum::extract::ws::Utf8Bytes;
 use seaarms_core::Model;
@@ -33,8 +31,12 @@ use seaarms_core::redundancy::{Redundancy, RedundancyParams};
 use seaarms_core::sim::{Input, Medium, SimParams, Simulation};
 use tokio::sync::watch;
 
+use crate::auth::Actor;
+use crate::auth::sha256_hex;
+use crate::clock::unix_now;
+use crate::ids::{random_hex, random_seed};
 use crate::metrics::Metrics;
-use crate::protocol::{ControlMethod, ControlMode, EndReason, PausedBy, Settings};
+use crate::protocol::{ControlMethod, ControlMode, EndReason, Settings};
 use admission::ClientKey;
 use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
@@ -96,53 +98,6 @@ pub struct SessionConfig {
     pub max_sessions_per_client: usize,
 }
 
-/// A random hex token of `bytes` bytes.
-pub fn random_hex(bytes: usize) -> String {
-    let mut buf = vec![0u8; bytes];
-    // getrandom only fails when the OS has no entropy source at all; fall back to the clock
-    // mixed with the address of the buffer so ids stay unique in that case.
-    if getrandom::fill(&mut buf).is_err() {
-        let seed = SystemTime::now()
-            .duration_since(UNIX_EPOCH)
-            .map(|d| d.as_nanos())
-            .unwrap_or(0);
-        for (i, b) in buf.iter_mut().enumerate() {
-            *b = (seed >> ((i % 16) * 8)) as u8 ^ (i as u8).wrapping_mul(151);
-        }
-    }
-    buf.iter().map(|b| format!("{b:02x}")).collect()
-}
-
-/// Compares two tokens exactly (no trimming, case-sensitive) in time independent of their
-/// contents and lengths: the SHA-256 digests of both are compared with an XOR fold, so neither
-/// the position of the first difference nor a length mismatch shows in the timing.
-pub fn token_eq(a: &str, b: &str) -> bool {
-    use sha2::{Digest, Sha256};
-    let (da, db) = (Sha256::digest(a.as_bytes()), Sha256::digest(b.as_bytes()));
-    let diff = da
-        .iter()
-        .zip(db.iter())
-        .fold(0u8, |acc, (x, y)| acc | (x ^ y));
-    std::hint::black_box(diff) == 0
-}
-
-/// The SHA-256 of `text`, as lowercase hex.
-pub fn sha256_hex(text: &str) -> String {
-    use sha2::{Digest, Sha256};
-    Sha256::digest(text.as_bytes())
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
-
-/// Seconds since the Unix epoch.
-pub fn unix_now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0)
-}
-
 /// A published state frame: its sequence number and the serialized JSON, shared by every client.
 #[derive(Debug, Clone)]
 pub struct Frame {
@@ -164,7 +119,7 @@ pub struct Live {
     /// Current settings.
     settings: Settings,
     /// Who paused the clock; `None` while it runs.
-    paused: Option<PausedBy>,
+    paused: Option<Actor>,
     /// Last input sequence number applied.
     input_seq: u64,
     /// Cartesian-mode stick commands per arm (fractions of the maximum speeds), turned into
@@ -557,7 +512,7 @@ impl Live {
     }
 
     /// Who paused the clock, while it is paused.
-    pub fn paused_by(&self) -> Option<PausedBy> {
+    pub fn paused_by(&self) -> Option<Actor> {
         self.paused
     }
 
@@ -631,7 +586,7 @@ impl Live {
 
     /// Pauses the clock on behalf of `by`, or resumes it (`None`); who may lift whose pause
     /// is [`Live::pause_as`]'s rule.
-    pub fn set_paused(&mut self, by: Option<PausedBy>) {
+    pub fn set_paused(&mut self, by: Option<Actor>) {
         self.paused = by;
     }
 
@@ -741,12 +696,6 @@ impl Session {
     pub fn seconds_since_trainee_left(&self) -> f64 {
         unix_now() - f64::from_bits(self.trainee_left.load(Ordering::Relaxed))
     }
-}
-
-/// A random seed for a session's attempts, below 2⁵³ so the page's JavaScript numbers hold
-/// it exactly.
-pub fn random_seed() -> u64 {
-    u64::from_str_radix(&random_hex(8), 16).unwrap_or(0) >> 11
 }
 
 /// Why a session could not be created.

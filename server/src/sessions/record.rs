@@ -258,7 +258,7 @@ impl Recorder {
                 ));
             }
         }
-        let probe = sessions.join(format!(".probe-{}", super::random_hex(4)));
+        let probe = sessions.join(format!(".probe-{}", crate::ids::random_hex(4)));
         match File::create(&probe) {
             Ok(_) => {
                 let _ = std::fs::remove_file(&probe);
@@ -667,7 +667,7 @@ impl RecorderState {
                     seq,
                     attempt,
                     t,
-                    unix: super::unix_now(),
+                    unix: crate::clock::unix_now(),
                     kind,
                     actor,
                     detail: detail.to_string(),
@@ -780,7 +780,12 @@ impl RecorderState {
             })
             .collect();
         let live: HashSet<String> = self.live.keys().cloned().collect();
-        let prune = retention::select(&sized, &live, self.config.retention, super::unix_now());
+        let prune = retention::select(
+            &sized,
+            &live,
+            self.config.retention,
+            crate::clock::unix_now(),
+        );
         let mut deleted = Vec::new();
         for id in prune {
             if valid_id(&id) {
@@ -881,7 +886,7 @@ mod tests {
     #[test]
     fn repair_cuts_a_half_row() {
         let dir =
-            std::env::temp_dir().join(format!("seaarms-repair-{}", super::super::random_hex(6)));
+            std::env::temp_dir().join(format!("seaarms-repair-{}", crate::ids::random_hex(6)));
         std::fs::create_dir_all(&dir).expect("dir");
         let path = dir.join("x.csv");
         let mut whole = b"t,x\n".to_vec();

@@ -25,17 +25,18 @@ use futures_util::{SinkExt, StreamExt};
 use serde::Deserialize;
 use tokio::sync::mpsc;
 
-use super::Session;
-use super::admission::TokenBucket;
-use super::command::{self, Actor, Arm, ArmSticks, Command, StickInput};
 use crate::api::wire::PoseOut;
 use crate::app::AppState;
+use crate::auth::{Actor, Credentials, TokenFrom};
 use crate::error::ApiError;
 use crate::metrics::Metrics;
 use crate::protocol::{
     ArmAxes, ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, MAX_INPUT_SEQ,
     ObjectModelOut, ScenarioOut, SceneOut, ServerMessage, arm_name,
 };
+use crate::sessions::admission::TokenBucket;
+use crate::sessions::command::{self, Arm, ArmSticks, Command, StickInput};
+use crate::sessions::{Live, Session, SessionConfig};
 
 /// Largest message (and frame) the WebSocket transport reads (bytes): 4 × the documented
 /// limit, so oversize messages up to here are read whole and refused with a clean close.
@@ -48,22 +49,11 @@ pub const CLOSE_HANDSHAKE_TIMEOUT: Duration = Duration::from_secs(2);
 /// Close code 1009, "message too big" (RFC 6455 §7.4.1).
 pub const CLOSE_TOO_BIG: u16 = close_code::SIZE;
 
-/// Query of the WebSocket URL.
+/// Query of the WebSocket URL (the token is read by [`Credentials`]).
 #[derive(Debug, Deserialize)]
 pub struct WsQuery {
-    /// Trainee control token or instructor token.
-    pub token: Option<String>,
     /// `observer` for read-only.
     pub role: Option<String>,
-}
-
-/// Who is connected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Role {
-    /// May control the session.
-    Trainee,
-    /// Read-only.
-    Observer,
 }
 
 /// Upgrade handler: 404 for an unknown session, 403 for a wrong or missing token.
@@ -71,6 +61,7 @@ pub async fn upgrade(
     State(state): State<AppState>,
     Path(id): Path<String>,
     Query(q): Query<WsQuery>,
+    creds: Credentials,
     ws: WebSocketUpgrade,
 ) -> Response {
     let Some(session) = state.sessions.get(&id) else {
@@ -79,19 +70,17 @@ pub async fn upgrade(
             .unwrap_or_else(|| ApiError::not_found(format!("no live session `{id}`")))
             .into_response();
     };
-    let token = q.token.unwrap_or_default();
     let wants_observer = q.role.as_deref() == Some("observer");
-    let role = if super::token_eq(&token, &session.control_token) {
-        if wants_observer {
-            Role::Observer
-        } else {
-            Role::Trainee
-        }
-    } else if super::token_eq(&token, &state.instructor_token) {
-        Role::Observer
-    } else {
-        return ApiError::new(axum::http::StatusCode::FORBIDDEN, "wrong or missing token")
-            .into_response();
+    let role = match creds
+        .principal(
+            &state,
+            TokenFrom::Query,
+            Some((&session.id, &session.control_token)),
+        )
+        .on_socket(wants_observer)
+    {
+        Ok(role) => role,
+        Err(e) => return e.into_response(),
     };
     // tungstenite's 128 KiB default read buffer is re-zeroed on reads; client messages are
     // small (≤ 16 KiB), so a small buffer saves that work on every connection.
@@ -112,12 +101,13 @@ pub(crate) fn error_text(message: impl Into<String>) -> Utf8Bytes {
     serde_json::to_string(&msg).unwrap_or_default().into()
 }
 
-fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
-    let role = match role {
-        Role::Trainee => "trainee",
-        Role::Observer => "observer",
-    };
-    let mut hello = hello_for(&session.id, role, &session.live(), &state.sessions.config);
+fn hello(session: &Session, state: &AppState, role: Actor) -> Utf8Bytes {
+    let mut hello = hello_for(
+        &session.id,
+        role.as_str(),
+        &session.live(),
+        &state.sessions.config,
+    );
     hello.replica = Some(state.cluster.name.clone());
     serde_json::to_string(&ServerMessage::Hello(Box::new(hello)))
         .unwrap_or_default()
@@ -125,12 +115,7 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
 }
 
 /// The `hello` of session `id` in state `live` (a live session's, or a replay's).
-pub fn hello_for(
-    id: &str,
-    role: &'static str,
-    live: &super::Live,
-    config: &super::SessionConfig,
-) -> Hello {
+pub fn hello_for(id: &str, role: &'static str, live: &Live, config: &SessionConfig) -> Hello {
     let params = live.sim().params();
     let models = live.models();
     let arm = |arm: Arm| ArmModelOut {
@@ -151,7 +136,7 @@ pub fn hello_for(
         scenario: live.scenario().name().to_string(),
         frame_hz: config.frame_hz,
         max_messages_per_second: config.max_messages_per_second,
-        scenarios: super::LIVE_SCENARIOS
+        scenarios: crate::sessions::LIVE_SCENARIOS
             .iter()
             .map(|&(name, description)| ScenarioOut { name, description })
             .collect(),
@@ -208,7 +193,7 @@ async fn await_peer_close(stream: &mut SplitStream<WebSocket>) {
 
 /// One WebSocket connection: a writer task sends the hello, frames, notices and replies; this
 /// task reads the client's messages until it stops, then closes the connection cleanly.
-async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>, role: Role) {
+async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>, role: Actor) {
     let metrics = state.metrics.clone();
     connected(&metrics, &session, role);
     let (sink, mut stream) = socket.split();
@@ -233,9 +218,9 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
 }
 
 /// Counts a new connection (and a trainee joining its session).
-fn connected(metrics: &Metrics, session: &Session, role: Role) {
+fn connected(metrics: &Metrics, session: &Session, role: Actor) {
     metrics.ws_clients.fetch_add(1, Ordering::Relaxed);
-    if role == Role::Trainee {
+    if role == Actor::Trainee {
         session.trainees.fetch_add(1, Ordering::Relaxed);
         session.joined.store(true, Ordering::Relaxed);
         session.touch();
@@ -243,9 +228,9 @@ fn connected(metrics: &Metrics, session: &Session, role: Role) {
 }
 
 /// Counts a connection gone (and a trainee leaving its session).
-fn disconnected(metrics: &Metrics, session: &Session, role: Role) {
+fn disconnected(metrics: &Metrics, session: &Session, role: Actor) {
     metrics.ws_clients.fetch_sub(1, Ordering::Relaxed);
-    if role == Role::Trainee {
+    if role == Actor::Trainee {
         // The last one out starts the abandon grace (SessionManager::expire_idle).
         if session.trainees.fetch_sub(1, Ordering::Relaxed) == 1 {
             session.trainee_left();
@@ -376,7 +361,7 @@ async fn read_loop(
     stream: &mut SplitStream<WebSocket>,
     state: &AppState,
     session: &Session,
-    role: Role,
+    role: Actor,
     reply_tx: &mpsc::Sender<Outgoing>,
 ) -> Ending {
     let metrics = &state.metrics;
@@ -425,7 +410,7 @@ fn reply(
     text: &str,
     state: &AppState,
     session: &Session,
-    role: Role,
+    role: Actor,
     reply_tx: &mpsc::Sender<Outgoing>,
 ) {
     let replies = match serde_json::from_str::<ClientMessage>(text) {
@@ -524,20 +509,15 @@ fn parse(msg: ClientMessage, notes: &mut Vec<String>) -> Result<Command, String>
 fn handle(
     session: &Session,
     state: &AppState,
-    role: Role,
+    role: Actor,
     msg: ClientMessage,
 ) -> Vec<ServerMessage> {
     if let ClientMessage::Ping { t } = msg {
         return vec![ServerMessage::Pong { t }];
     }
-    let actor = match role {
-        Role::Trainee => Actor::Trainee,
-        Role::Observer => Actor::Observer,
-    };
     let mut notes = Vec::new();
-    let result = parse(msg, &mut notes).and_then(|c| {
-        command::apply(&state.sessions, session, actor, c).map_err(|e| e.to_string())
-    });
+    let result = parse(msg, &mut notes)
+        .and_then(|c| command::apply(&state.sessions, session, role, c).map_err(|e| e.to_string()));
     match result {
         Ok(()) => notes
             .into_iter()

@@ -228,7 +228,9 @@ pub fn run_recorded(
                 )?)?;
             }
             if let Some(answer) = out.answer {
-                live.apply(&Command::Diagnose(answer.to_string()))?;
+                live.apply(&Command::Diagnose {
+                    answer: answer.to_string(),
+                })?;
             }
             seq += 1;
             let input = StickInput {

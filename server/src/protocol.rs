@@ -14,8 +14,10 @@ use seaarms_core::exercise::ExerciseSpec;
 use seaarms_core::grasp::GraspState;
 use serde::{Deserialize, Serialize, Serializer};
 
+use seaarms_core::hydraulics::Fault;
+use seaarms_core::sim::Arm;
+
 use crate::api::wire::PoseOut;
-use crate::sessions::command::{ActiveFault, Arm, Fault};
 
 /// Largest WebSocket message accepted from a client (bytes); a larger one closes the
 /// connection with a close frame, code 1009 (message too big, RFC 6455 §7.4.1).
@@ -51,6 +53,30 @@ pub fn grasp_name(state: GraspState) -> &'static str {
 
 fn serialize_grasp<S: Serializer>(state: &GraspState, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(grasp_name(*state))
+}
+
+/// A fault active on one arm: set by the instructor's `fault` action
+/// (`crate::sessions::command::fault`), serialized as its label ([`fault_label`]) in state
+/// frames and summaries.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ActiveFault {
+    /// Which arm.
+    pub arm: Arm,
+    /// What and how much.
+    pub fault: Fault,
+    /// Injected without telling the trainee (a diagnosis drill): it acts on the simulation
+    /// like any fault but is left out of the state frames and of the trainee's summary; only
+    /// the instructor's session summary lists it.
+    pub silent: bool,
+}
+
+impl ActiveFault {
+    /// Whether `other` replaces this one (same arm, kind and actuator).
+    pub fn same_slot(&self, other: &ActiveFault) -> bool {
+        self.arm == other.arm
+            && self.fault.kind() == other.fault.kind()
+            && self.fault.joint() == other.fault.joint()
+    }
 }
 
 /// An active fault as users see it: `supply_drop:left:3000000Pa`, `stuck_valve:right:2:0.5`,
@@ -167,6 +193,59 @@ pub enum ClientMessage {
     Ping {
         /// Client timestamp (any unit; echoed).
         t: f64,
+    },
+}
+
+/// `POST /api/sessions/{id}/actions`: instructor actions on a session (a trainee may give `reset`, `pause`, `resume` and
+/// `release` to its own session).
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Action {
+    /// Back to the initial position.
+    Reset,
+    /// Pause the clock.
+    Pause,
+    /// Resume it.
+    Resume,
+    /// Open both jaws.
+    Release,
+    /// Change scenario (resets the session).
+    Scenario {
+        /// Scenario name.
+        scenario: String,
+    },
+    /// Inject a fault.
+    Fault {
+        /// `supply_drop` (value: Pa, 0..6.89e6), `stuck_valve` (joint 0..5, value: spool in
+        /// [−1, 1]), `leak` (joint, value: m³/(s·Pa) in [0, 1e-9]), `air` (value: bulk-modulus
+        /// scale in [0.01, 1]).
+        fault: String,
+        /// `left` or `right`.
+        arm: String,
+        /// Joint index 0..5 (stuck_valve, leak).
+        #[serde(default)]
+        joint: Option<usize>,
+        /// Size of the fault (see `fault`).
+        value: f64,
+        /// Injected without telling the trainee: left out of the state frames and the
+        /// trainee's view; the instructor's session summary lists it with `"silent": true`.
+        #[serde(default)]
+        silent: bool,
+    },
+    /// Remove every fault.
+    ClearFaults,
+    /// Set the water's current (a subsea session): speed in [0, 2.5] m/s, heading (the
+    /// direction it flows towards, degrees from +x towards +y) within ±360°.
+    SetCurrent {
+        /// Speed (m/s).
+        speed_m_s: f64,
+        /// Heading (degrees).
+        heading_deg: f64,
+    },
+    /// Show a message on the trainee's page.
+    Message {
+        /// Up to 500 characters.
+        text: String,
     },
 }
 
@@ -582,7 +661,7 @@ impl ServerMessage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sessions::command::FaultKind;
+    use seaarms_core::hydraulics::FaultKind;
 
     /// The `ended` message as web/connection.js reads it (`type`, `reason` code, `text`);
     /// the texts are the record strings tests/sessions.rs and tests/admission_and_security.rs

@@ -31,11 +31,11 @@ use crate::auth::{Actor, Credentials, TokenFrom};
 use crate::error::ApiError;
 use crate::metrics::Metrics;
 use crate::protocol::{
-    ArmAxes, ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, MAX_INPUT_SEQ,
-    ObjectModelOut, ScenarioOut, SceneOut, ServerMessage, arm_name,
+    ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, ObjectModelOut, ScenarioOut,
+    SceneOut, ServerMessage,
 };
 use crate::sessions::admission::TokenBucket;
-use crate::sessions::command::{self, Arm, ArmSticks, Command, StickInput};
+use crate::sessions::command::{self, Arm, Command};
 use crate::sessions::{Live, Session, SessionConfig};
 
 /// Largest message (and frame) the WebSocket transport reads (bytes): 4 × the documented
@@ -431,80 +431,6 @@ fn reply(
     }
 }
 
-/// Validates one arm's axes: six values (an empty list means all zero), each clamped to
-/// [−1, 1]; clamping is reported.
-fn arm_sticks(name: &str, a: &ArmAxes, notes: &mut Vec<String>) -> Result<ArmSticks, String> {
-    let mut axes = [0.0; 6];
-    if !a.axes.is_empty() && a.axes.len() != 6 {
-        return Err(format!(
-            "arms.{name}.axes must have 6 values, got {}",
-            a.axes.len()
-        ));
-    }
-    for (i, v) in a.axes.iter().enumerate() {
-        axes[i] = clamp_unit(*v, &format!("arms.{name}.axes[{i}]"), notes);
-    }
-    let grip = clamp_unit(a.grip, &format!("arms.{name}.grip"), notes);
-    Ok(ArmSticks { axes, grip })
-}
-
-fn clamp_unit(v: f64, what: &str, notes: &mut Vec<String>) -> f64 {
-    if !v.is_finite() {
-        notes.push(format!("{what} is not finite; used 0"));
-        return 0.0;
-    }
-    if v.abs() > 1.0 {
-        notes.push(format!("{what} = {v} clamped to {}", v.signum()));
-        return v.signum();
-    }
-    v
-}
-
-/// The WebSocket edge: a client message to a typed command (values validated, clamping
-/// reported in `notes`). `Ping` is answered by the connection itself and is no command.
-fn parse(msg: ClientMessage, notes: &mut Vec<String>) -> Result<Command, String> {
-    Ok(match msg {
-        ClientMessage::Input { seq, arms, object } => {
-            if seq > MAX_INPUT_SEQ {
-                return Err(format!(
-                    "seq must be at most 2^53 - 1 = {MAX_INPUT_SEQ} (exact in JavaScript), got {seq}; input ignored"
-                ));
-            }
-            let mut input = StickInput {
-                seq,
-                ..StickInput::default()
-            };
-            for (arm, a) in [(Arm::Left, &arms.left), (Arm::Right, &arms.right)] {
-                if let Some(a) = a {
-                    input.arms[arm.index()] = arm_sticks(arm_name(arm), a, notes)?;
-                }
-            }
-            if let Some(o) = &object {
-                if o.len() != 6 {
-                    return Err(format!("object must have 6 values, got {}", o.len()));
-                }
-                for (i, v) in o.iter().enumerate() {
-                    input.object[i] = clamp_unit(*v, &format!("object[{i}]"), notes);
-                }
-            }
-            Command::Input(input)
-        }
-        ClientMessage::Settings {
-            control_mode,
-            control_method,
-            arm_speed,
-        } => {
-            Command::settings(control_mode, control_method, arm_speed).map_err(|e| e.to_string())?
-        }
-        ClientMessage::Reset => Command::Reset,
-        ClientMessage::Pause => Command::Pause,
-        ClientMessage::Resume => Command::Resume,
-        ClientMessage::Release => Command::Release,
-        ClientMessage::Diagnose { answer } => Command::Diagnose(answer),
-        ClientMessage::Ping { .. } => return Err("ping is not a command".into()),
-    })
-}
-
 /// Handles one client message; returns the replies.
 fn handle(
     session: &Session,
@@ -516,7 +442,7 @@ fn handle(
         return vec![ServerMessage::Pong { t }];
     }
     let mut notes = Vec::new();
-    let result = parse(msg, &mut notes)
+    let result = Command::from_client(msg, &mut notes)
         .and_then(|c| command::apply(&state.sessions, session, role, c).map_err(|e| e.to_string()));
     match result {
         Ok(()) => notes

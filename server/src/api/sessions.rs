@@ -18,10 +18,10 @@ use crate::auth::{Actor, Credentials, MISSING_TOKEN, TokenFrom, token_eq};
 use crate::db::unavailable as db_error;
 use crate::error::ApiError;
 use crate::json::ApiJson;
-use crate::protocol::{ControlMethod, ControlMode, fault_label, grasp_name, parse_arm};
+use crate::protocol::{Action, ControlMethod, ControlMode, fault_label, grasp_name};
 use crate::security::ws_base;
 use crate::sessions::admission::{ClientKey, Peer, client_ip};
-use crate::sessions::command::{self, ActiveFault, Command, CommandError, Fault};
+use crate::sessions::command::{self, Command, CommandError};
 use crate::sessions::record::valid_id;
 use crate::sessions::{CreateError, LIVE_SCENARIOS, Session};
 
@@ -612,99 +612,6 @@ async fn live_session(state: &AppState, id: &str) -> Result<Arc<Session>, ApiErr
     Err(crate::cluster::elsewhere(state, id)
         .await
         .unwrap_or_else(|| ApiError::not_found(format!("no live session `{id}`"))))
-}
-
-/// Instructor actions on a session (a trainee may give `reset`, `pause`, `resume` and
-/// `release` to its own session).
-#[derive(Debug, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum Action {
-    /// Back to the initial position.
-    Reset,
-    /// Pause the clock.
-    Pause,
-    /// Resume it.
-    Resume,
-    /// Open both jaws.
-    Release,
-    /// Change scenario (resets the session).
-    Scenario {
-        /// Scenario name.
-        scenario: String,
-    },
-    /// Inject a fault.
-    Fault {
-        /// `supply_drop` (value: Pa, 0..6.89e6), `stuck_valve` (joint 0..5, value: spool in
-        /// [−1, 1]), `leak` (joint, value: m³/(s·Pa) in [0, 1e-9]), `air` (value: bulk-modulus
-        /// scale in [0.01, 1]).
-        fault: String,
-        /// `left` or `right`.
-        arm: String,
-        /// Joint index 0..5 (stuck_valve, leak).
-        #[serde(default)]
-        joint: Option<usize>,
-        /// Size of the fault (see `fault`).
-        value: f64,
-        /// Injected without telling the trainee: left out of the state frames and the
-        /// trainee's view; the instructor's session summary lists it with `"silent": true`.
-        #[serde(default)]
-        silent: bool,
-    },
-    /// Remove every fault.
-    ClearFaults,
-    /// Set the water's current (a subsea session): speed in [0, 2.5] m/s, heading (the
-    /// direction it flows towards, degrees from +x towards +y) within ±360°.
-    SetCurrent {
-        /// Speed (m/s).
-        speed_m_s: f64,
-        /// Heading (degrees).
-        heading_deg: f64,
-    },
-    /// Show a message on the trainee's page.
-    Message {
-        /// Up to 500 characters.
-        text: String,
-    },
-}
-
-impl TryFrom<Action> for Command {
-    type Error = CommandError;
-
-    /// The REST edge: an action's wire fields to a typed command.
-    fn try_from(action: Action) -> Result<Command, CommandError> {
-        Ok(match action {
-            Action::Reset => Command::Reset,
-            Action::Pause => Command::Pause,
-            Action::Resume => Command::Resume,
-            Action::Release => Command::Release,
-            Action::Scenario { scenario } => Command::scenario(&scenario)?,
-            Action::Fault {
-                fault,
-                arm,
-                joint,
-                value,
-                silent,
-            } => {
-                let arm = parse_arm(&arm).ok_or_else(|| {
-                    CommandError::Invalid(format!("arm must be `left` or `right`, got `{arm}`"))
-                })?;
-                let kind = command::FaultKind::parse(&fault).ok_or_else(|| {
-                    CommandError::Invalid(format!(
-                        "unknown fault `{fault}` ({})",
-                        command::FaultKind::NAMES.join(", ")
-                    ))
-                })?;
-                let fault = Fault::new(kind, joint, value).map_err(CommandError::Invalid)?;
-                Command::InjectFault(ActiveFault { arm, fault, silent })
-            }
-            Action::ClearFaults => Command::ClearFaults,
-            Action::SetCurrent {
-                speed_m_s,
-                heading_deg,
-            } => Command::current(speed_m_s, heading_deg)?,
-            Action::Message { text } => Command::message(&text)?,
-        })
-    }
 }
 
 /// `POST /api/sessions/{id}/actions`.

@@ -38,6 +38,7 @@ use crate::ids::{random_hex, random_seed};
 use crate::metrics::Metrics;
 use crate::protocol::{ControlMethod, ControlMode, EndReason, Settings};
 use admission::ClientKey;
+use command::fault::log_form::FaultEntry;
 use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
 use snapshot::{CARTESIAN_MAX_ANGULAR_RAD_S, CARTESIAN_MAX_LINEAR_M_S};
@@ -162,7 +163,7 @@ pub struct Live {
     /// Whether attempts are recorded (a replay records nothing).
     recording: bool,
     /// The running attempt's input log (when recording).
-    log: Option<crate::replay::log::Writer>,
+    log: Option<command::log::Writer>,
     /// Attempt records waiting for the recorder, oldest first ([`Live::take_records`]).
     pending: Vec<RecordMsg>,
 }
@@ -174,6 +175,13 @@ pub enum Scenario {
     Free(String),
     /// An exercise (`exercises/<id>.json`).
     Exercise(Arc<ExerciseSpec>),
+}
+
+/// Scenarios are equal when their names are (an exercise id names one file of this build).
+impl PartialEq for Scenario {
+    fn eq(&self, other: &Scenario) -> bool {
+        self.name() == other.name()
+    }
 }
 
 impl Scenario {
@@ -329,11 +337,11 @@ impl Live {
             ExerciseRun::new(spec.clone(), &self.sim, seed)
         });
         if self.recording {
-            let init = crate::replay::Init {
-                format: crate::replay::log::FORMAT,
+            let init = command::log::Init {
+                format: command::log::FORMAT,
                 scenario: self.scenario.name().to_string(),
                 settings: self.settings,
-                faults: self.faults.iter().map(crate::replay::fault_entry).collect(),
+                faults: self.faults.iter().map(FaultEntry::from).collect(),
                 sim_faults: command::Arm::BOTH.map(|a| self.sim.params().arms[a.index()].faults),
                 seed,
                 current: self
@@ -351,11 +359,11 @@ impl Live {
                     scenario: self.scenario.name().to_string(),
                     exercise: exercise.map(|e| e.id.clone()),
                     exercise_version: exercise.map(|e| format!("{}", e.version)),
-                    sim_version: crate::replay::SIM_VERSION.to_string(),
+                    sim_version: command::log::SIM_VERSION.to_string(),
                     started_unix: unix_now(),
                     init: serde_json::to_value(&init).unwrap_or_default(),
                 })));
-            self.log = Some(crate::replay::log::Writer::new());
+            self.log = Some(command::log::Writer::new());
         }
     }
 
@@ -413,17 +421,19 @@ impl Live {
     }
 
     /// Logs what was applied in the running attempt, stamped with the current step.
-    fn log(&mut self, what: crate::replay::log::Applied) {
+    fn log(&mut self, what: command::log::Logged) {
         let k = self.sim.steps();
         if let Some(log) = self.log.as_mut() {
-            log.push(&crate::replay::log::Entry { k, what });
+            log.push(&command::log::Entry { k, what });
         }
     }
 
     /// Counts an instructor's intervention in the running attempt (and logs it: it counts in
     /// the score).
     pub fn intervene(&mut self) {
-        self.log(crate::replay::log::Applied::Intervention);
+        self.log(command::log::Logged::Intervention(
+            command::log::Intervention::Intervention,
+        ));
         if let Some(run) = self.exercise.as_mut() {
             run.intervention();
         }
@@ -600,6 +610,23 @@ impl Live {
         fault.fault.apply_to(self.sim.faults_mut(fault.arm));
         self.faults.retain(|f| !f.same_slot(&fault));
         self.faults.push(fault);
+    }
+
+    /// Answers the running exercise's diagnosis drill.
+    pub fn diagnose(&mut self, answer: &str) -> Result<(), String> {
+        let run = self
+            .exercise
+            .as_mut()
+            .ok_or_else(|| "no exercise is running".to_string())?;
+        run.diagnose(answer).map(|_| ())
+    }
+
+    /// Sets the water's current (refused in air).
+    pub fn set_current(
+        &mut self,
+        current: seaarms_core::sim::water::Current,
+    ) -> Result<(), seaarms_core::Error> {
+        self.sim.set_current(current)
     }
 
     /// Removes every fault.

@@ -329,6 +329,38 @@ pub struct Hello {
     /// The replica serving this connection (live sessions; absent in replays).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replica: Option<String>,
+    /// On the replay socket: the attempt replayed and its length (absent on live sessions).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replay: Option<ReplayOut>,
+}
+
+/// The attempt a replay socket plays (`hello.replay`).
+#[derive(Debug, Clone, Serialize)]
+pub struct ReplayOut {
+    /// Attempt id.
+    pub attempt: String,
+    /// Its length (s).
+    pub duration_s: f64,
+}
+
+/// Everything a client may send on the replay socket `/ws/replay/{id}`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ReplayClientMessage {
+    /// Play from the current time (from the start when at the end).
+    Play,
+    /// Stop playing.
+    Pause,
+    /// Move to `t` (s since the attempt's start; finite, clamped to its length).
+    Seek {
+        /// Time (s).
+        t: f64,
+    },
+    /// Playback speed (0.25–8×).
+    Speed {
+        /// Speed factor.
+        value: f64,
+    },
 }
 
 /// What the page draws besides the arms and the box: the box's handles, the exercise's
@@ -633,6 +665,17 @@ pub enum ServerMessage {
         scene: Box<SceneOut>,
         /// Settings now in force.
         settings: Settings,
+    },
+    /// The replay socket's playback status, after every command and every frame played.
+    Replay {
+        /// Replay time (s since the attempt's start).
+        t: f64,
+        /// Playing or paused.
+        playing: bool,
+        /// Playback speed.
+        speed: f64,
+        /// The attempt's length (s).
+        duration_s: f64,
     },
     /// Answer to a ping.
     Pong {

@@ -25,12 +25,12 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use tokio::sync::Semaphore;
 
-use crate::api::session_ws::error_text;
+use crate::api::session_ws::{RateLimit, error_text};
 use crate::app::AppState;
 use crate::auth::{Credentials, MISSING_TOKEN_OR_QUERY, Principal, TokenFrom, WRONG_TOKEN};
 use crate::db::{AttemptFilter, AttemptRow, EventRow, unavailable as db_error};
 use crate::error::ApiError;
-use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ServerMessage};
+use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ReplayClientMessage, ReplayOut, ServerMessage};
 use crate::replay::{Init, Replay, ReplayError, check_version, log};
 
 /// Most replay WebSockets open at once (each may re-simulate on a blocking thread).
@@ -288,34 +288,29 @@ pub async fn replay_ws(
     let mut replay = load(&state, &row).await?;
     let hello = replay_hello(&state, &row, &mut replay);
     let frame_hz = state.sessions.config.frame_hz.clamp(10, 120);
+    let per_second = state.sessions.config.max_messages_per_second;
     Ok(ws
         .max_message_size(MAX_CLIENT_MESSAGE_BYTES)
         .on_upgrade(move |socket| async move {
             let _permit = permit;
-            serve_replay(socket, replay, hello, frame_hz).await;
+            serve_replay(socket, replay, hello, frame_hz, per_second).await;
         }))
 }
 
 fn replay_hello(state: &AppState, row: &AttemptRow, replay: &mut Replay) -> Utf8Bytes {
-    let hello = crate::api::session_ws::hello_for(
+    let mut hello = crate::api::session_ws::hello_for(
         &row.session,
         "observer",
         replay.live(),
         &state.sessions.config,
     );
-    let mut v = serde_json::to_value(ServerMessage::Hello(Box::new(hello))).unwrap_or_default();
-    v["replay"] = json!({"attempt": row.id, "duration_s": replay.duration_s()});
-    v.to_string().into()
-}
-
-/// What a replay client may send.
-#[derive(Debug, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-enum ReplayCommand {
-    Play,
-    Pause,
-    Seek { t: f64 },
-    Speed { value: f64 },
+    hello.replay = Some(ReplayOut {
+        attempt: row.id.clone(),
+        duration_s: replay.duration_s(),
+    });
+    serde_json::to_string(&ServerMessage::Hello(Box::new(hello)))
+        .unwrap_or_default()
+        .into()
 }
 
 /// Playback state of one replay socket.
@@ -330,15 +325,13 @@ struct Playback {
 
 impl Playback {
     fn status(&self) -> Utf8Bytes {
-        json!({
-            "type": "replay",
-            "t": self.replay.time_s(),
-            "playing": self.playing,
-            "speed": self.speed,
-            "duration_s": self.replay.duration_s(),
-        })
-        .to_string()
-        .into()
+        let msg = ServerMessage::Replay {
+            t: self.replay.time_s(),
+            playing: self.playing,
+            speed: self.speed,
+            duration_s: self.replay.duration_s(),
+        };
+        serde_json::to_string(&msg).unwrap_or_default().into()
     }
 
     /// Moves to `t` on a blocking thread; returns the frame there (None if the thread
@@ -353,7 +346,16 @@ impl Playback {
     }
 }
 
-async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame_hz: u32) {
+/// One replay socket: hello, the first frame and the status, then the client's commands
+/// (rate-limited like the session socket's messages) and, while playing, frames at the
+/// frame rate.
+async fn serve_replay(
+    socket: WebSocket,
+    replay: Replay,
+    hello: Utf8Bytes,
+    frame_hz: u32,
+    per_second: u32,
+) {
     let (mut tx, mut rx) = socket.split();
     let mut pb = Playback {
         replay,
@@ -368,6 +370,7 @@ async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame
         }
     }
     let interval = Duration::from_secs_f64(1.0 / f64::from(frame_hz));
+    let mut rate = RateLimit::new(per_second);
     let mut tick = tokio::time::interval(interval);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
@@ -379,42 +382,48 @@ async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame
                     Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
                     Some(Ok(_)) => continue,
                 };
-                match serde_json::from_str::<ReplayCommand>(&text) {
-                    Ok(ReplayCommand::Play) => {
-                        if pb.replay.at_end() {
-                            let Some((p, frame)) = pb.seek(0.0).await else { return };
-                            pb = p;
-                            out.extend(frame.ok());
+                match rate.admit() {
+                    // Over the rate: dropped, with at most one notice a second.
+                    Err(notice) => out.extend(notice),
+                    Ok(()) => {
+                        match serde_json::from_str::<ReplayClientMessage>(&text) {
+                            Ok(ReplayClientMessage::Play) => {
+                                if pb.replay.at_end() {
+                                    let Some((p, frame)) = pb.seek(0.0).await else { return };
+                                    pb = p;
+                                    out.extend(frame.ok());
+                                }
+                                pb.playing = true;
+                            }
+                            Ok(ReplayClientMessage::Pause) => pb.playing = false,
+                            Ok(ReplayClientMessage::Seek { t }) if t.is_finite() => {
+                                let Some((p, frame)) = pb.seek(t).await else { return };
+                                pb = p;
+                                match frame {
+                                    Ok(f) => out.push(f),
+                                    Err(e) => out.push(error_text(e)),
+                                }
+                            }
+                            Ok(ReplayClientMessage::Seek { .. }) => {
+                                out.push(error_text("`t` must be a finite number of seconds"));
+                            }
+                            Ok(ReplayClientMessage::Speed { value })
+                                if (SPEED_RANGE.0..=SPEED_RANGE.1).contains(&value) =>
+                            {
+                                pb.speed = value;
+                            }
+                            Ok(ReplayClientMessage::Speed { value }) => out.push(error_text(format!(
+                                "speed must be in [{}, {}], got {value}",
+                                SPEED_RANGE.0, SPEED_RANGE.1
+                            ))),
+                            Err(e) => out.push(error_text(format!(
+                                "expected {{\"type\": \"play\"|\"pause\"|\"seek\"|\"speed\", …}}: {e}"
+                            ))),
                         }
-                        pb.playing = true;
+                        pb.anchor = None;
+                        out.push(pb.status());
                     }
-                    Ok(ReplayCommand::Pause) => pb.playing = false,
-                    Ok(ReplayCommand::Seek { t }) if t.is_finite() => {
-                        let Some((p, frame)) = pb.seek(t).await else { return };
-                        pb = p;
-                        match frame {
-                            Ok(f) => out.push(f),
-                            Err(e) => out.push(error_text(e)),
-                        }
-                    }
-                    Ok(ReplayCommand::Seek { .. }) => {
-                        out.push(error_text("`t` must be a finite number of seconds"));
-                    }
-                    Ok(ReplayCommand::Speed { value })
-                        if (SPEED_RANGE.0..=SPEED_RANGE.1).contains(&value) =>
-                    {
-                        pb.speed = value;
-                    }
-                    Ok(ReplayCommand::Speed { value }) => out.push(error_text(format!(
-                        "speed must be in [{}, {}], got {value}",
-                        SPEED_RANGE.0, SPEED_RANGE.1
-                    ))),
-                    Err(e) => out.push(error_text(format!(
-                        "expected {{\"type\": \"play\"|\"pause\"|\"seek\"|\"speed\", …}}: {e}"
-                    ))),
                 }
-                pb.anchor = None;
-                out.push(pb.status());
             }
             _ = tick.tick(), if pb.playing => {
                 let (wall, t0) = *pb

@@ -143,6 +143,7 @@ pub fn hello_for(id: &str, role: &'static str, live: &Live, config: &SessionConf
         exercise: live.scenario().exercise().cloned(),
         scene: SceneOut::new(params, live.scenario().exercise().map(|e| &**e)),
         replica: None,
+        replay: None,
     }
 }
 
@@ -308,15 +309,16 @@ async fn write_loop(
 }
 
 /// A connection's message rate limit: a token bucket allowing bursts of up to two seconds'
-/// worth of messages, and at most one notice a second about dropped ones.
-struct RateLimit {
+/// worth of messages, and at most one notice a second about dropped ones. The session and
+/// replay sockets both use it.
+pub(crate) struct RateLimit {
     bucket: TokenBucket,
     per_second: u32,
     last_notice: Option<Instant>,
 }
 
 impl RateLimit {
-    fn new(per_second: u32) -> RateLimit {
+    pub(crate) fn new(per_second: u32) -> RateLimit {
         let rate = f64::from(per_second.max(1));
         RateLimit {
             bucket: TokenBucket::new(2.0 * rate, rate, Instant::now()),
@@ -327,7 +329,7 @@ impl RateLimit {
 
     /// Takes a token for one message: `Ok` if within the limit, else `Err` with the notice to
     /// send the client, if one is due.
-    fn admit(&mut self) -> Result<(), Option<Utf8Bytes>> {
+    pub(crate) fn admit(&mut self) -> Result<(), Option<Utf8Bytes>> {
         if self.bucket.try_take(Instant::now()) {
             return Ok(());
         }

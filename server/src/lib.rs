@@ -62,10 +62,12 @@ pub async fn run(
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
     let sessions = state.sessions.clone();
-    let heartbeat = state
-        .cluster
-        .multi
-        .then(|| tokio::spawn(cluster::heartbeat_loop(state.clone())));
+    let heartbeat = state.cluster.multi.then(|| {
+        tokio::spawn(cluster::heartbeat_loop(
+            state.clone(),
+            api::sessions::directory_summary,
+        ))
+    });
     let leaving = state
         .cluster
         .multi

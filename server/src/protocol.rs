@@ -10,14 +10,13 @@
 
 use std::sync::Arc;
 
+use nalgebra::{Isometry3, IsometryMatrix3, Matrix3};
 use seaarms_core::exercise::ExerciseSpec;
 use seaarms_core::grasp::GraspState;
 use serde::{Deserialize, Serialize, Serializer};
 
 use seaarms_core::hydraulics::Fault;
 use seaarms_core::sim::Arm;
-
-use crate::api::wire::PoseOut;
 
 /// Largest WebSocket message accepted from a client (bytes); a larger one closes the
 /// connection with a close frame, code 1009 (message too big, RFC 6455 §7.4.1).
@@ -27,6 +26,44 @@ pub const MAX_CLIENT_MESSAGE_BYTES: usize = 16 * 1024;
 /// exactly (`Number.MAX_SAFE_INTEGER`). A larger one is refused with an `error` message (the
 /// session goes on), so `input_seq` can never be pushed out of the page's reach.
 pub const MAX_INPUT_SEQ: u64 = (1 << 53) - 1;
+
+/// A pose: position (m) and 3×3 rotation matrix (rows), base frame (also the analysis
+/// routes' pose, [`crate::api::wire`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct PoseOut {
+    /// [x, y, z] (m).
+    pub position: [f64; 3],
+    /// Row-major 3×3 rotation.
+    pub rotation: [[f64; 3]; 3],
+}
+
+impl PoseOut {
+    fn new(r: &Matrix3<f64>, p: &nalgebra::Vector3<f64>) -> PoseOut {
+        PoseOut {
+            position: [p.x, p.y, p.z],
+            rotation: [
+                [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+                [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+                [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+            ],
+        }
+    }
+}
+
+impl From<&Isometry3<f64>> for PoseOut {
+    fn from(t: &Isometry3<f64>) -> PoseOut {
+        PoseOut::new(
+            t.rotation.to_rotation_matrix().matrix(),
+            &t.translation.vector,
+        )
+    }
+}
+
+impl From<&IsometryMatrix3<f64>> for PoseOut {
+    fn from(t: &IsometryMatrix3<f64>) -> PoseOut {
+        PoseOut::new(t.rotation.matrix(), &t.translation.vector)
+    }
+}
 
 /// Wire name of an arm.
 pub fn arm_name(arm: Arm) -> &'static str {

@@ -7,8 +7,8 @@ use std::collections::HashMap;
 use anyhow::Result;
 use sqlx::Row;
 
+use super::attempt::{AttemptEnd, AttemptStart};
 use super::{Db, INTERRUPTED, SessionRecord};
-use crate::sessions::record::{AttemptEnd, AttemptStart};
 
 /// One write of the recorder.
 #[derive(Debug, Clone)]

@@ -23,11 +23,10 @@
 //!   retention age, then the oldest ended records beyond the size cap, are deleted (CSV and
 //!   database rows) — never a live session's.
 
-mod attempt;
 mod retention;
 mod row;
 
-pub use attempt::{AttemptEnd, AttemptStart, EventRecord};
+pub use crate::db::attempt::{AttemptEnd, AttemptStart, EventRecord};
 pub use retention::Retention;
 pub use row::{ArmRow, SessionRow};
 

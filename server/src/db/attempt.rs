@@ -1,5 +1,5 @@
-//! What the recorder is told about attempts and events (the typed records of the database;
-//! [`crate::db`] stores them).
+//! The typed records of attempts and events: what the live state tells the recorder
+//! ([`crate::sessions::record`]) and the database stores.
 //!
 //! An *attempt* is one stretch of a session from a start (session creation, reset, scenario
 //! switch) to the next start or the session's end, for every scenario (an exercise's

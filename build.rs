@@ -18,6 +18,7 @@ const SIM_SOURCES: &[&str] = &[
     "server/src/sessions/physics.rs",
     "server/src/replay",
     "server/src/exercises.rs",
+    "server/src/catalogue.rs",
 ];
 
 fn main() {

@@ -5,7 +5,8 @@
 
 use std::sync::Arc;
 
-use seaarms::exercises::{Driver, EXERCISES, run_headless};
+use seaarms::catalogue::EXERCISES;
+use seaarms::exercises::{Driver, run_headless};
 use seaarms_core::exercise::ExerciseSpec;
 use serde_json::Value;
 

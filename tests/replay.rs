@@ -12,11 +12,13 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use seaarms::exercises::{Driver, EXERCISES, run_recorded};
+use seaarms::catalogue::EXERCISES;
+use seaarms::catalogue::Scenario;
+use seaarms::exercises::{Driver, run_recorded};
 use seaarms::replay::{Init, Replay, log};
+use seaarms::sessions::Live;
 use seaarms::sessions::command::{ArmSticks, Command, StickInput};
 use seaarms::sessions::record::RecordMsg;
-use seaarms::sessions::{Live, Scenario};
 use seaarms_core::sim::Arm;
 
 fn magnum() -> [Arc<seaarms_core::Model>; 2] {

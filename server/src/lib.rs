@@ -27,6 +27,7 @@ pub mod api;
 pub mod app;
 pub mod assets;
 pub mod auth;
+pub mod catalogue;
 pub mod clock;
 pub mod cluster;
 pub mod compute;

@@ -185,6 +185,22 @@ pub enum ControlMethod {
     Closed,
 }
 
+/// The wire's mode for the core's.
+pub fn wire_mode(m: seaarms_core::exercise::Mode) -> ControlMode {
+    match m {
+        seaarms_core::exercise::Mode::Joint => ControlMode::Joint,
+        seaarms_core::exercise::Mode::Cartesian => ControlMode::Cartesian,
+    }
+}
+
+/// The wire's method for the core's.
+pub fn wire_method(m: seaarms_core::exercise::Method) -> ControlMethod {
+    match m {
+        seaarms_core::exercise::Method::Open => ControlMethod::Open,
+        seaarms_core::exercise::Method::Closed => ControlMethod::Closed,
+    }
+}
+
 /// Everything a client may send.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]

@@ -136,7 +136,7 @@ pub fn hello_for(id: &str, role: &'static str, live: &Live, config: &SessionConf
         scenario: live.scenario().name().to_string(),
         frame_hz: config.frame_hz,
         max_messages_per_second: config.max_messages_per_second,
-        scenarios: crate::sessions::LIVE_SCENARIOS
+        scenarios: crate::catalogue::LIVE_SCENARIOS
             .iter()
             .map(|&(name, description)| ScenarioOut { name, description })
             .collect(),

@@ -23,7 +23,7 @@ use crate::security::ws_base;
 use crate::sessions::admission::{ClientKey, Peer, client_ip};
 use crate::sessions::command::{self, Command, CommandError};
 use crate::sessions::record::valid_id;
-use crate::sessions::{CreateError, LIVE_SCENARIOS, Session};
+use crate::sessions::{CreateError, Session};
 
 impl From<CommandError> for ApiError {
     fn from(e: CommandError) -> ApiError {
@@ -195,9 +195,7 @@ pub async fn create(
         CreateError::ClientFull(_) => ApiError::new(StatusCode::TOO_MANY_REQUESTS, e.to_string()),
         CreateError::UnknownScenario(_) => {
             ApiError::bad_request(e.to_string()).with_detail(serde_json::json!({
-                "known": LIVE_SCENARIOS.iter().map(|(n, _)| (*n).to_string())
-                    .chain(crate::exercises::EXERCISES.all().iter().map(|e| e.id.clone()))
-                    .collect::<Vec<_>>()
+                "known": crate::catalogue::live_names()
             }))
         }
         CreateError::Sim(_) => ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
@@ -400,7 +398,7 @@ fn live_summary(
         trainee: s.label.clone(),
         group: s.group.clone(),
         attempts,
-        scenario: s.scenario(),
+        scenario: live.scenario().name().to_string(),
         created_unix: s.created_unix,
         ended_unix: None,
         end_reason: None,

@@ -11,10 +11,11 @@ use std::sync::Arc;
 
 use seaarms_core::Model;
 
+use crate::catalogue::Scenario;
 use crate::protocol::{ActiveFault, StateFrame};
+use crate::sessions::Live;
 use crate::sessions::command::Command;
 use crate::sessions::snapshot::build_frame;
-use crate::sessions::{Live, Scenario};
 use log::{Entry, Logged};
 
 /// The record's format, written by the live state (it lives with the commands it logs).

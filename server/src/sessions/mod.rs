@@ -24,15 +24,16 @@ use std::time::{Duration, Instant};
 
 use axum::extract::ws::Utf8Bytes;
 use seaarms_core::Model;
-use seaarms_core::exercise::{ExerciseRun, ExerciseSpec};
+use seaarms_core::exercise::ExerciseRun;
 use seaarms_core::grasp::GraspState;
 use seaarms_core::kinematics::KinData;
 use seaarms_core::redundancy::{Redundancy, RedundancyParams};
-use seaarms_core::sim::{Input, Medium, SimParams, Simulation};
+use seaarms_core::sim::{Input, Simulation};
 use tokio::sync::watch;
 
 use crate::auth::Actor;
 use crate::auth::sha256_hex;
+use crate::catalogue::Scenario;
 use crate::clock::unix_now;
 use crate::ids::{random_hex, random_seed};
 use crate::metrics::Metrics;
@@ -42,41 +43,6 @@ use command::fault::log_form::FaultEntry;
 use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
 use snapshot::{CARTESIAN_MAX_ANGULAR_RAD_S, CARTESIAN_MAX_LINEAR_M_S};
-
-/// Scenarios a live session can start from (the initial position of Lim §4.1 for all of
-/// them); `training` is free play.
-pub const LIVE_SCENARIOS: &[(&str, &str)] = &[
-    (
-        "training",
-        "Free play: both arms at the initial position, the 50 kg box on the seabed, in sea water",
-    ),
-    (
-        "case1-single-arm",
-        "Lim case study 1 set-up: move the left arm joint by joint, no object (in air, as the thesis)",
-    ),
-    (
-        "case2-single-arm-load",
-        "Lim case study 2 set-up: grab, lift and release the box with the left arm (in air, as the thesis)",
-    ),
-    (
-        "case3-dual-open-loop",
-        "Lim case study 3 set-up: both arms grab and carry the box in open loop (in air, as the thesis)",
-    ),
-    (
-        "case4-dual-closed-loop",
-        "Lim case study 4 set-up: both arms grab the box, switch to closed loop, carry it (in air, as the thesis)",
-    ),
-];
-
-/// The medium of a live scenario: free play (`training`) is subsea, like the exercises; the
-/// case-study set-ups stay in air, the thesis's setting (Lim §4.2), so their figures compare.
-pub fn free_medium(name: &str) -> Medium {
-    if name == "training" {
-        Medium::Subsea
-    } else {
-        Medium::Air
-    }
-}
 
 /// Session settings and limits (from [`crate::config::ServeConfig`]).
 #[derive(Debug, Clone)]
@@ -168,61 +134,6 @@ pub struct Live {
     pending: Vec<RecordMsg>,
 }
 
-/// What a session runs.
-#[derive(Debug, Clone)]
-pub enum Scenario {
-    /// Free play or a case-study set-up ([`LIVE_SCENARIOS`]), by name.
-    Free(String),
-    /// An exercise (`exercises/<id>.json`).
-    Exercise(Arc<ExerciseSpec>),
-}
-
-/// Scenarios are equal when their names are (an exercise id names one file of this build).
-impl PartialEq for Scenario {
-    fn eq(&self, other: &Scenario) -> bool {
-        self.name() == other.name()
-    }
-}
-
-impl Scenario {
-    /// Resolves a name: a live scenario or an exercise id.
-    pub fn resolve(name: &str) -> Option<Scenario> {
-        if LIVE_SCENARIOS.iter().any(|(n, _)| *n == name) {
-            Some(Scenario::Free(name.to_string()))
-        } else {
-            crate::exercises::EXERCISES
-                .get(name)
-                .map(Scenario::Exercise)
-        }
-    }
-
-    /// Its name (an exercise's id).
-    pub fn name(&self) -> &str {
-        match self {
-            Scenario::Free(n) => n,
-            Scenario::Exercise(e) => &e.id,
-        }
-    }
-
-    /// The exercise, if it is one.
-    pub fn exercise(&self) -> Option<&Arc<ExerciseSpec>> {
-        match self {
-            Scenario::Free(_) => None,
-            Scenario::Exercise(e) => Some(e),
-        }
-    }
-
-    /// A fresh simulation for it.
-    fn build_sim(&self, models: &[Arc<Model>; 2]) -> Result<Simulation, seaarms_core::Error> {
-        let params = match self {
-            Scenario::Free(n) => SimParams::case_study(&models[0], &models[1])?
-                .with_environment(free_medium(n).environment()),
-            Scenario::Exercise(e) => e.sim_params(&models[0], &models[1])?,
-        };
-        Simulation::new((*models[0]).clone(), (*models[1]).clone(), params)
-    }
-}
-
 impl Live {
     /// A session's live state at its start: the scenario's simulation at its reset state, the
     /// settings (an exercise's own unless `mode`/`method` override them), and for an
@@ -279,10 +190,10 @@ impl Live {
         let control = scenario.exercise().map(|e| e.control);
         let settings = Settings {
             control_mode: mode
-                .or(control.map(|c| crate::exercises::wire_mode(c.mode)))
+                .or(control.map(|c| crate::protocol::wire_mode(c.mode)))
                 .unwrap_or_default(),
             control_method: method
-                .or(control.map(|c| crate::exercises::wire_method(c.method)))
+                .or(control.map(|c| crate::protocol::wire_method(c.method)))
                 .unwrap_or_default(),
             arm_speed: 1.0,
         };
@@ -476,8 +387,8 @@ impl Live {
         self.scenario = scenario;
         if let Some(c) = self.scenario.exercise().map(|e| e.control) {
             self.apply_settings(&SettingsChange {
-                control_mode: Some(crate::exercises::wire_mode(c.mode)),
-                control_method: Some(crate::exercises::wire_method(c.method)),
+                control_mode: Some(crate::protocol::wire_mode(c.mode)),
+                control_method: Some(crate::protocol::wire_method(c.method)),
                 arm_speed: None,
             });
         }
@@ -646,8 +557,6 @@ pub struct Session {
     pub label: String,
     /// The trainee's class or group ("" when none).
     pub group: String,
-    /// Scenario name.
-    pub scenario: Mutex<String>,
     /// Token that lets a trainee control this session.
     pub control_token: String,
     /// Creation time (Unix seconds).
@@ -693,19 +602,6 @@ impl Session {
     /// Seconds since the last trainee activity.
     pub fn idle_seconds(&self) -> f64 {
         unix_now() - f64::from_bits(self.last_activity.load(Ordering::Relaxed))
-    }
-
-    /// Current scenario name.
-    pub fn scenario(&self) -> String {
-        self.scenario
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .clone()
-    }
-
-    /// Sets the scenario name (the caller resets the simulation).
-    pub fn set_scenario(&self, name: &str) {
-        *self.scenario.lock().unwrap_or_else(|e| e.into_inner()) = name.to_string();
     }
 
     /// Seconds since creation.
@@ -816,7 +712,6 @@ impl SessionManager {
             id,
             label,
             group,
-            scenario: Mutex::new(scenario.name().to_string()),
             control_token: random_hex(16),
             created_unix: unix_now(),
             live: Mutex::new(live),
@@ -841,7 +736,7 @@ impl SessionManager {
             id: session.id.clone(),
             label: session.label.clone(),
             group: session.group.clone(),
-            scenario: session.scenario(),
+            scenario: scenario.name().to_string(),
             created_unix: session.created_unix,
             token_sha256: sha256_hex(&session.control_token),
         });

@@ -48,8 +48,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::json;
 
 use super::record::RecordMsg;
-use super::{Live, Scenario, Session, SessionManager};
+use super::{Live, Session, SessionManager};
 use crate::auth::Actor;
+use crate::catalogue::Scenario;
 use crate::protocol::{Action, ClientMessage};
 
 pub use crate::protocol::ActiveFault;

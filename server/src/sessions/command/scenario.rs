@@ -6,8 +6,9 @@
 use serde_json::json;
 
 use super::{Command, CommandError};
+use crate::catalogue::Scenario;
 use crate::protocol::{SceneOut, ServerMessage};
-use crate::sessions::{Live, Scenario, Session};
+use crate::sessions::{Live, Session};
 
 impl Command {
     /// Parses a scenario switch: a live scenario's name or an exercise id.

@@ -100,11 +100,13 @@ pub const WRONG_TOKEN: &str = "wrong token";
 /// The 403 message of a session WebSocket without a token that opens it.
 pub const WRONG_OR_MISSING_TOKEN: &str = "wrong or missing token";
 
-/// A request's credentials: the bearer token and the `token` query parameter, as sent.
-#[derive(Debug, Clone, Default)]
+/// A request's credentials: the bearer token and the `token` query parameter, as sent. A
+/// malformed query (`?token=a&token=b`) is a 400 for the routes that read the query, as their
+/// own query extractor's rejection would be, and no concern of the others.
+#[derive(Debug, Clone)]
 pub struct Credentials {
     bearer: Option<String>,
-    query: Option<String>,
+    query: Result<Option<String>, ApiError>,
 }
 
 #[derive(Deserialize)]
@@ -116,10 +118,9 @@ impl<S: Send + Sync> FromRequestParts<S> for Credentials {
     type Rejection = std::convert::Infallible;
 
     async fn from_request_parts(parts: &mut Parts, _: &S) -> Result<Self, Self::Rejection> {
-        // A malformed query is the route's own extractor's business; here it means no token.
         let query = Query::<TokenParam>::try_from_uri(&parts.uri)
-            .ok()
-            .and_then(|Query(p)| p.token);
+            .map(|Query(p)| p.token)
+            .map_err(|e| ApiError::new(e.status(), e.body_text()));
         Ok(Credentials {
             bearer: bearer(&parts.headers).map(str::to_string),
             query,
@@ -145,21 +146,23 @@ pub enum Principal {
 }
 
 impl Credentials {
-    /// Credentials presenting `token` in the header (tests, internal callers).
-    pub fn bearer_token(token: &str) -> Credentials {
-        Credentials {
-            bearer: Some(token.to_string()),
-            query: None,
-        }
-    }
-
-    /// The token presented where `from` says.
-    pub fn token(&self, from: TokenFrom) -> Option<&str> {
-        match from {
+    /// The token presented where `from` says (400 for a malformed query when `from` reads
+    /// it).
+    pub fn token(&self, from: TokenFrom) -> Result<Option<&str>, ApiError> {
+        let query = || {
+            self.query
+                .as_ref()
+                .map(Option::as_deref)
+                .map_err(Clone::clone)
+        };
+        Ok(match from {
             TokenFrom::Bearer => self.bearer.as_deref(),
-            TokenFrom::BearerOrQuery => self.bearer.as_deref().or(self.query.as_deref()),
-            TokenFrom::Query => self.query.as_deref(),
-        }
+            TokenFrom::BearerOrQuery => {
+                let query = query()?;
+                self.bearer.as_deref().or(query)
+            }
+            TokenFrom::Query => query()?,
+        })
     }
 
     /// Who the token (read from `from`) is, for session `session` (its id and live control
@@ -169,19 +172,19 @@ impl Credentials {
         state: &AppState,
         from: TokenFrom,
         session: Option<(&str, &str)>,
-    ) -> Principal {
-        let Some(token) = self.token(from) else {
-            return Principal::Anonymous { token_given: false };
+    ) -> Result<Principal, ApiError> {
+        let Some(token) = self.token(from)? else {
+            return Ok(Principal::Anonymous { token_given: false });
         };
         if token_eq(token, &state.instructor_token) {
-            return Principal::Instructor;
+            return Ok(Principal::Instructor);
         }
-        match session {
+        Ok(match session {
             Some((id, control)) if token_eq(token, control) => Principal::Trainee {
                 session: id.to_string(),
             },
             _ => Principal::Anonymous { token_given: true },
-        }
+        })
     }
 
     /// Who the token is for a session that may have ended: the instructor, or the trainee who
@@ -192,8 +195,8 @@ impl Credentials {
         from: TokenFrom,
         id: &str,
     ) -> Result<Principal, ApiError> {
-        let p = self.principal(state, from, None);
-        let (Principal::Anonymous { token_given: true }, Some(token)) = (&p, self.token(from))
+        let p = self.principal(state, from, None)?;
+        let (Principal::Anonymous { token_given: true }, Some(token)) = (&p, self.token(from)?)
         else {
             return Ok(p);
         };
@@ -208,7 +211,7 @@ impl Credentials {
 
     /// 403 unless the bearer token is the instructor's ([`MISSING_TOKEN`], [`WRONG_TOKEN`]).
     pub fn require_instructor(&self, state: &AppState) -> Result<(), ApiError> {
-        self.principal(state, TokenFrom::Bearer, None)
+        self.principal(state, TokenFrom::Bearer, None)?
             .actor(MISSING_TOKEN)
             .map(|_| ())
     }

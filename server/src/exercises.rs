@@ -171,7 +171,7 @@ pub fn run_recorded(
         .map(|r| r.assessment())
         .ok_or_else(|| anyhow::anyhow!("no exercise"))?;
     let sim_seconds = live.sim().time_s();
-    live.end_attempt("abandoned");
+    live.end_attempt(crate::sessions::AttemptStop::Left);
     let (mut init, mut inputs) = (None, Vec::new());
     for msg in live.take_records(false) {
         match msg {

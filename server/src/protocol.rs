@@ -1,12 +1,27 @@
-//! WebSocket wire types of `/ws/sessions/{id}` — the contract between the server and the
-//! page. Explicit types, `#[serde(tag = "type")]`, never the core's internal structs; parse
-//! and validate at the edge into typed inputs.
+//! Wire types of the sessions — the contract between the server and the page: the session
+//! socket `/ws/sessions/{id}`, the session actions `POST /api/sessions/{id}/actions`
+//! ([`Action`]) and the replay socket `/ws/replay/{id}` ([`ReplayClientMessage`]). Explicit
+//! types, `#[serde(tag = "type")]`; parse and validate at the edge into typed commands
+//! (`crate::sessions::command`).
 //!
 //! Client → server: [`ClientMessage`]. Server → client: a one-time [`Hello`], then a
 //! [`StateFrame`] at the frame rate (latest state wins: a slow client skips frames), plus
 //! [`ServerMessage::Error`], [`ServerMessage::Message`] and [`ServerMessage::Pong`]; when the
 //! session ends, one [`ServerMessage::Ended`] (with its [`EndReason`]) right before the close
-//! frame (code 1000, reason `session ended`).
+//! frame (code 1000, reason `session ended`). The replay socket sends the same [`Hello`] (with
+//! `replay`) and frames, and [`ServerMessage::Replay`] statuses.
+//!
+//! **Core types on the wire.** The simulation's internal state (its `Simulation`, `Input`,
+//! arm and object states) never is: frames copy what they show into the `…Frame` types here.
+//! A few core types are sent as they are, because they are data with their own documented
+//! serde schema, the same on disk and on the wire: the robot model file
+//! ([`seaarms_core::ModelSpec`], `hello.arms[].model`), the exercise file
+//! ([`ExerciseSpec`], `hello.exercise`, the `scenario` message) and its scene items
+//! (`spec::{Target, Zone, Ghost, Obstacle}`, [`SceneOut`]), the water's current
+//! (`seaarms_core::sim::Current`, `state.current`) and an exercise's status
+//! (`seaarms_core::exercise::Status`, `state.exercise`). A change to those types changes the
+//! wire. Enums are mapped to wire strings here ([`arm_name`], [`grasp_name`],
+//! [`fault_label`], [`wire_mode`]).
 
 use std::sync::Arc;
 

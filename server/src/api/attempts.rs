@@ -45,8 +45,8 @@ static REPLAY_SLOTS: LazyLock<Semaphore> = LazyLock::new(|| Semaphore::new(MAX_R
 /// The attempts routes read the token from the header, else the query.
 const FROM: TokenFrom = TokenFrom::BearerOrQuery;
 
-fn is_instructor(state: &AppState, creds: &Credentials) -> bool {
-    creds.principal(state, FROM, None).is_instructor()
+fn is_instructor(state: &AppState, creds: &Credentials) -> Result<bool, ApiError> {
+    Ok(creds.principal(state, FROM, None)?.is_instructor())
 }
 
 /// The attempt, if `creds` may see it (the instructor, or the trainee of its session): 403
@@ -57,7 +57,7 @@ async fn authorized(
     creds: &Credentials,
     id: &str,
 ) -> Result<AttemptRow, ApiError> {
-    if creds.token(FROM).is_none() {
+    if creds.token(FROM)?.is_none() {
         return Err(ApiError::forbidden(MISSING_TOKEN_OR_QUERY));
     }
     let not_found = || ApiError::not_found(format!("no attempt `{id}`"));
@@ -65,7 +65,7 @@ async fn authorized(
         return Err(not_found());
     }
     let row = state.db.attempt(id).await.map_err(db_error)?;
-    if is_instructor(state, creds) {
+    if is_instructor(state, creds)? {
         return row.ok_or_else(not_found);
     }
     let Some(row) = row else {
@@ -80,7 +80,7 @@ async fn authorized(
 /// A trainee opens an attempt's inputs and replay once it has ended (a running drill's
 /// silent fault is in them); the instructor at any time.
 fn check_open(state: &AppState, creds: &Credentials, row: &AttemptRow) -> Result<(), ApiError> {
-    if row.outcome.is_none() && !is_instructor(state, creds) {
+    if row.outcome.is_none() && !is_instructor(state, creds)? {
         return Err(ApiError::new(
             StatusCode::CONFLICT,
             "the attempt is still running; its replay opens when it ends",
@@ -142,7 +142,7 @@ pub async fn list(
     creds: Credentials,
     Query(q): Query<ListQuery>,
 ) -> Result<Json<Value>, ApiError> {
-    if !is_instructor(&state, &creds) {
+    if !is_instructor(&state, &creds)? {
         return Err(ApiError::forbidden("instructor token required"));
     }
     let filter = AttemptFilter {
@@ -166,7 +166,7 @@ pub async fn get(
     let row = authorized(&state, &creds, &id).await?;
     let mut events = state.db.attempt_events(&id).await.map_err(db_error)?;
     // A silent fault stays hidden from the trainee while the attempt runs (a drill).
-    if row.outcome.is_none() && !is_instructor(&state, &creds) {
+    if row.outcome.is_none() && !is_instructor(&state, &creds)? {
         events.retain(|e| e.detail.get("silent") != Some(&Value::Bool(true)));
     }
     Ok(Json(AttemptOut::new(row, Some(events))))

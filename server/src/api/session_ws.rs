@@ -77,7 +77,7 @@ pub async fn upgrade(
             TokenFrom::Query,
             Some((&session.id, &session.control_token)),
         )
-        .on_socket(wants_observer)
+        .and_then(|p| p.on_socket(wants_observer))
     {
         Ok(role) => role,
         Err(e) => return e.into_response(),

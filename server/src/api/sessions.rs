@@ -43,7 +43,7 @@ fn live_actor(
     s: &Session,
 ) -> Result<Actor, ApiError> {
     creds
-        .principal(state, from, Some((&s.id, &s.control_token)))
+        .principal(state, from, Some((&s.id, &s.control_token)))?
         .actor(MISSING_TOKEN)
 }
 
@@ -124,7 +124,7 @@ pub async fn create(
         crate::json::parse(&body)?
     };
     let instructor = creds
-        .principal(&state, TokenFrom::Bearer, None)
+        .principal(&state, TokenFrom::Bearer, None)?
         .is_instructor();
     let client = if instructor {
         ClientKey::Exempt

@@ -5,7 +5,7 @@
 //! switch) to the next start or the session's end, for every scenario (an exercise's
 //! attempt carries its assessment). It is recorded as its initial conditions
 //! ([`AttemptStart::init`]) and the compressed stream of applied inputs
-//! ([`crate::replay::log`]), from which [`crate::replay`] re-simulates it exactly.
+//! ([`crate::sessions::command::log`]), from which [`crate::replay`] re-simulates it exactly.
 
 use serde::Serialize;
 

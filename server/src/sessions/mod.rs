@@ -44,6 +44,33 @@ use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
 use snapshot::{CARTESIAN_MAX_ANGULAR_RAD_S, CARTESIAN_MAX_LINEAR_M_S};
 
+/// Why an attempt's record ends; with the attempt's assessment, it gives the stored outcome.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AttemptStop {
+    /// The exercise is done (the step that finished it; outcome `passed` or `failed`).
+    Finished,
+    /// The trainee moved on: a reset, a scenario switch, the session's end, or a headless
+    /// attempt's time limit (an unfinished exercise is `abandoned`, free play `ended`).
+    Left,
+    /// The server shut down (`interrupted`, unless the exercise was already done).
+    Interrupted,
+}
+
+impl AttemptStop {
+    /// The outcome stored for an attempt ending so: `passed` or `failed` for a done
+    /// exercise whatever stopped it; else `interrupted` on shutdown, `ended` for free play,
+    /// `abandoned` for an unfinished exercise.
+    pub fn outcome(self, assessment: Option<&seaarms_core::exercise::Assessment>) -> &'static str {
+        match (assessment, self) {
+            (Some(a), _) if a.done && a.passed => "passed",
+            (Some(a), _) if a.done => "failed",
+            (_, AttemptStop::Interrupted) => "interrupted",
+            (None, _) => "ended",
+            (Some(_), AttemptStop::Finished | AttemptStop::Left) => "abandoned",
+        }
+    }
+}
+
 /// Session settings and limits (from [`crate::config::ServeConfig`]).
 #[derive(Debug, Clone)]
 pub struct SessionConfig {
@@ -278,10 +305,9 @@ impl Live {
         }
     }
 
-    /// Ends the running attempt's record (its log's last piece and its outcome): `passed`
-    /// or `failed` for a finished exercise, `ended` for free play, else `unfinished`
-    /// (`abandoned`, `interrupted`).
-    pub fn end_attempt(&mut self, unfinished: &str) {
+    /// Ends the running attempt's record: its log's last piece and its outcome
+    /// ([`AttemptStop::outcome`]).
+    pub fn end_attempt(&mut self, stop: AttemptStop) {
         let Some(mut log) = self.log.take() else {
             return;
         };
@@ -293,17 +319,7 @@ impl Live {
             });
         }
         let assessment = self.exercise.as_ref().map(ExerciseRun::assessment);
-        let outcome = match &assessment {
-            Some(a) if a.done => {
-                if a.passed {
-                    "passed"
-                } else {
-                    "failed"
-                }
-            }
-            None if unfinished != "interrupted" => "ended",
-            _ => unfinished,
-        };
+        let outcome = stop.outcome(assessment.as_ref());
         self.pending
             .push(RecordMsg::AttemptEnded(Box::new(record::AttemptEnd {
                 id: self.attempt_id.clone(),
@@ -381,7 +397,7 @@ impl Live {
     /// cleared, inputs cleared, an exercise's settings, a new attempt.
     pub fn set_scenario(&mut self, scenario: Scenario) -> Result<(), seaarms_core::Error> {
         let sim = scenario.build_sim(&self.models)?;
-        self.end_attempt("abandoned");
+        self.end_attempt(AttemptStop::Left);
         self.sim = sim;
         self.faults.clear();
         self.scenario = scenario;
@@ -494,7 +510,7 @@ impl Live {
 
     /// Back to the initial position (Lim §4.1): simulation reset, inputs cleared.
     pub fn reset(&mut self) {
-        self.end_attempt("abandoned");
+        self.end_attempt(AttemptStop::Left);
         self.sim.reset();
         self.input.arms = Default::default();
         self.input.object_velocity = [0.0; 6];
@@ -795,8 +811,8 @@ impl SessionManager {
         let sim_seconds = {
             let mut live = session.live();
             live.end_attempt(match reason {
-                EndReason::ServerShutdown => "interrupted",
-                _ => "abandoned",
+                EndReason::ServerShutdown => AttemptStop::Interrupted,
+                _ => AttemptStop::Left,
             });
             for msg in live.take_records(false) {
                 self.recorder.send(msg);

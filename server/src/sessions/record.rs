@@ -97,7 +97,7 @@ pub enum RecordMsg {
     Event(Box<EventRecord>),
     /// An attempt started.
     AttemptStarted(Box<AttemptStart>),
-    /// The next piece of an attempt's compressed input stream ([`crate::replay::log`]):
+    /// The next piece of an attempt's compressed input stream ([`crate::sessions::command::log`]):
     /// appended in order; the pieces so far always decode.
     AttemptInputs {
         /// Attempt id.
@@ -387,8 +387,9 @@ fn open_whole(path: &Path) -> io::Result<WholeFile<File>> {
     Ok(WholeFile { file, len })
 }
 
-/// One live session in the recorder thread.
-struct Live {
+/// The recorder thread's files and counters of one live session (its CSV, rows not yet
+/// written, figures, next event number); not the session's live state, [`super::Live`].
+struct SessionRecording {
     csv: Option<WholeFile<File>>,
     /// Rows formatted since the last write (whole rows only).
     rows: CsvOut<Vec<u8>>,
@@ -403,8 +404,8 @@ struct Live {
     next_event: i64,
 }
 
-impl Live {
-    fn open(dir: &Path, id: &str) -> (Live, Option<io::Error>) {
+impl SessionRecording {
+    fn open(dir: &Path, id: &str) -> (SessionRecording, Option<io::Error>) {
         let mut err = None;
         let csv = match open_whole(&csv_path(dir, id)) {
             Ok(mut f) => {
@@ -427,7 +428,7 @@ impl Live {
         };
         let failed = err.is_some();
         (
-            Live {
+            SessionRecording {
                 csv: csv.filter(|_| !failed),
                 rows: CsvOut::new(Vec::new()),
                 pending_rows: 0,
@@ -450,7 +451,7 @@ struct RecorderState {
     metrics: Arc<Metrics>,
     config: RecordConfig,
     failed: FailedSet,
-    live: HashMap<String, Live>,
+    live: HashMap<String, SessionRecording>,
     /// Database writes since the last commit, in arrival order.
     writes: Vec<DbWrite>,
     /// Sequence number of each running attempt's next input piece.
@@ -616,7 +617,7 @@ impl RecorderState {
                 created_unix,
                 token_sha256,
             } => {
-                let (live, err) = Live::open(&self.dir, &id);
+                let (live, err) = SessionRecording::open(&self.dir, &id);
                 if let Some(e) = &err {
                     self.mark_failed(&id, "opening the record", e);
                 }

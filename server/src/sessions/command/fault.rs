@@ -129,7 +129,7 @@ mod tests {
         assert!(!a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Right, 2, 0.5)));
     }
 
-    /// The log form is the one format 1 logs carry (`replay::log` tests wrote it by hand).
+    /// The log form is the one format 1 logs carry (`log.rs` tests decode it by hand-written lines).
     #[test]
     fn the_log_form_is_arm_index_kind_joint_value() {
         let c = Command::fault("leak", "right", Some(3), 1e-11, true).unwrap();

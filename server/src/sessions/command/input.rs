@@ -175,8 +175,10 @@ mod tests {
 
     #[test]
     fn the_log_form_is_the_quanta_and_reads_back_the_applied_input() {
-        let mut input = StickInput::default();
-        input.seq = 7;
+        let mut input = StickInput {
+            seq: 7,
+            ..StickInput::default()
+        };
         input.arms[1].axes[2] = 0.12345;
         input.object[5] = -1.0;
         let applied = input.quantized();

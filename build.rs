@@ -14,10 +14,11 @@ const SIM_SOURCES: &[&str] = &[
     "server/core/robots",
     "exercises",
     "server/src/sessions/mod.rs",
-    "server/src/sessions/command.rs",
+    "server/src/sessions/command",
     "server/src/sessions/physics.rs",
     "server/src/replay",
     "server/src/exercises.rs",
+    "server/src/catalogue.rs",
 ];
 
 fn main() {

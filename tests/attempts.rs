@@ -272,7 +272,7 @@ async fn an_attempt_of_another_simulator_version_says_it_cannot_be_replayed() {
             group: "B".into(),
             scenario: "training".into(),
             created_unix: 1.0,
-            token_sha256: seaarms::sessions::sha256_hex("old-token"),
+            token_sha256: seaarms::auth::sha256_hex("old-token"),
         },
         Write::AttemptStart(Box::new(AttemptStart {
             id: attempt.into(),
@@ -311,5 +311,62 @@ async fn an_attempt_of_another_simulator_version_says_it_cannot_be_replayed() {
     .await;
     assert_eq!(st, 409, "{e}");
     assert!(e.to_string().contains(old), "{e}");
+    s.stop().await;
+}
+
+/// Issue 26: the replay socket takes client messages at the session socket's rate
+/// (`--max-messages-per-second`, bursts of two seconds' worth, the same limiter): a burst of
+/// 40 messages at 5 per second gets the session socket's "too many messages" notice (its
+/// text is the one tests/sessions.rs reads on the session socket), and the
+/// socket goes on answering once the rate allows.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_replay_socket_has_the_session_sockets_message_rate_limit() {
+    let s = start_with(temp_dir("replay-rate"), |c| c.max_messages_per_second = 5).await;
+    let (id, token) = new_session(&s).await;
+    let mut ws = trainee(&s, &id, &token).await;
+    let mut seq = 0;
+    drive(&mut ws, &mut seq, 5, 0.0).await;
+    let r = reqwest::Client::new()
+        .delete(format!("{}/api/sessions/{id}", s.base))
+        .bearer_auth(&token)
+        .send()
+        .await
+        .unwrap();
+    assert!(r.status().is_success(), "{}", r.status());
+    let mut attempt = None;
+    for _ in 0..50 {
+        let list = get_json(&format!("{}/api/attempts?session={id}", s.base)).await;
+        if let Some(a) = list["attempts"]
+            .as_array()
+            .and_then(|a| a.first())
+            .filter(|a| a["outcome"].is_string())
+        {
+            attempt = a["id"].as_str().map(str::to_string);
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    let attempt = attempt.expect("the attempt is recorded");
+    let url = format!(
+        "{}/ws/replay/{attempt}?token={token}",
+        s.base.replace("http://", "ws://")
+    );
+    let (mut rs, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    next_of(&mut rs, "hello", Duration::from_secs(10)).await;
+    next_of(&mut rs, "replay", Duration::from_secs(10)).await;
+    for _ in 0..40 {
+        send(&mut rs, json!({"type": "pause"})).await;
+    }
+    let e = next_of(&mut rs, "error", Duration::from_secs(10)).await;
+    let message = e["message"].as_str().unwrap();
+    assert!(
+        message.contains("too many messages: at most 5 per second"),
+        "{message}"
+    );
+    // The bucket refills at 5 a second: after 1.5 s a seek is answered.
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    send(&mut rs, json!({"type": "seek", "t": 0.05})).await;
+    let f = next_of(&mut rs, "state", Duration::from_secs(10)).await;
+    assert!((f["t"].as_f64().unwrap() - 0.05).abs() < 1e-9, "{}", f["t"]);
     s.stop().await;
 }

@@ -8,7 +8,8 @@ use common::magnum;
 
 use std::sync::Arc;
 
-use seaarms::exercises::{Driver, EXERCISES, run_headless};
+use seaarms::catalogue::EXERCISES;
+use seaarms::exercises::{Driver, run_headless};
 use seaarms_core::exercise::ExerciseSpec;
 use serde_json::Value;
 

@@ -8,7 +8,8 @@ use common::magnum;
 
 use std::collections::BTreeMap;
 
-use seaarms::exercises::{Driver, EXERCISES, run_headless};
+use seaarms::catalogue::EXERCISES;
+use seaarms::exercises::{Driver, run_headless};
 use seaarms_core::exercise::Assessment;
 use seaarms_core::hydraulics::FaultKind;
 

@@ -15,7 +15,8 @@ use common::magnum;
 
 use std::sync::Arc;
 
-use seaarms::exercises::{Driver, EXERCISES, run_recorded};
+use seaarms::catalogue::EXERCISES;
+use seaarms::exercises::{Driver, run_recorded};
 use seaarms_core::exercise::ExerciseSpec;
 use seaarms_core::exercise::autopilot::Action;
 use seaarms_core::grasp::GraspState;

@@ -12,11 +12,13 @@
 mod common;
 use common::magnum;
 
-use seaarms::exercises::{Driver, EXERCISES, run_recorded};
+use seaarms::catalogue::EXERCISES;
+use seaarms::catalogue::Scenario;
+use seaarms::exercises::{Driver, run_recorded};
 use seaarms::replay::{Init, Replay, log};
+use seaarms::sessions::Live;
 use seaarms::sessions::command::{ArmSticks, Command, StickInput};
 use seaarms::sessions::record::RecordMsg;
-use seaarms::sessions::{Live, Scenario};
 use seaarms_core::sim::Arm;
 use std::collections::BTreeMap;
 
@@ -163,7 +165,7 @@ fn a_current_set_mid_attempt_and_at_an_attempts_start_replays_bit_for_bit() {
     drive(&mut live, &mut seq, 0.3, 800, &mut states);
     let moved = live.sim().environment().water().expect("water").current;
     assert_eq!((moved.speed_m_s, moved.heading_deg), (1.5, 200.0));
-    live.end_attempt("abandoned");
+    live.end_attempt(seaarms::sessions::AttemptStop::Left);
     let (init, inputs) = records(&mut live);
     assert_eq!(init.current, None, "attempt 1 started in still water");
     check_replay(init, &inputs, &states, "current set mid-attempt");
@@ -172,7 +174,7 @@ fn a_current_set_mid_attempt_and_at_an_attempts_start_replays_bit_for_bit() {
     live.reset();
     let mut states = BTreeMap::new();
     drive(&mut live, &mut seq, 0.5, 2000, &mut states);
-    live.end_attempt("abandoned");
+    live.end_attempt(seaarms::sessions::AttemptStop::Left);
     let (init, inputs) = records(&mut live);
     let c = init.current.expect("the init carries the current");
     assert_eq!((c.speed_m_s, c.heading_deg), (1.5, 200.0));

@@ -21,7 +21,7 @@ use crate::robots::Robots;
 use crate::security::{self, Policy};
 use crate::sessions::admission::CreationLimiter;
 use crate::sessions::record::Recorder;
-use crate::sessions::{self, SessionConfig, SessionManager};
+use crate::sessions::{SessionConfig, SessionManager};
 
 /// State shared by every handler.
 #[derive(Clone)]
@@ -120,7 +120,7 @@ impl AppState {
                 check_secret("the instructor token", t)?;
                 t.as_str().into()
             }
-            _ => sessions::random_hex(16).into(),
+            _ => crate::ids::random_hex(16).into(),
         };
         let join_code = match &config.join_code {
             Some(c) if !c.is_empty() => {
@@ -271,22 +271,22 @@ fn routes(state: AppState) -> Router {
         .route("/api/scenarios/runs/{run}", get(api::scenarios::download))
         .route(
             "/api/sessions",
-            post(sessions::rest::create).get(sessions::rest::list),
+            post(api::sessions::create).get(api::sessions::list),
         )
         .route(
             "/api/sessions/{id}",
-            get(sessions::rest::get_one).delete(sessions::rest::end),
+            get(api::sessions::get_one).delete(api::sessions::end),
         )
-        .route("/api/sessions/{id}/actions", post(sessions::rest::act))
-        .route("/api/sessions/{id}/log.csv", get(sessions::rest::log_csv))
+        .route("/api/sessions/{id}/actions", post(api::sessions::act))
+        .route("/api/sessions/{id}/log.csv", get(api::sessions::log_csv))
         .route(
             "/api/sessions/{id}/assessment",
-            get(sessions::rest::assessment),
+            get(api::sessions::assessment),
         )
         .route("/api/results.csv", get(api::results::export))
         .route("/api/exercises", get(crate::exercises::list))
         .route("/api/exercises/{id}", get(crate::exercises::get))
-        .route("/ws/sessions/{id}", get(sessions::ws::upgrade))
+        .route("/ws/sessions/{id}", get(api::session_ws::upgrade))
         .route("/api/attempts", get(api::attempts::list))
         .route("/api/attempts/{id}", get(api::attempts::get))
         .route("/api/attempts/{id}/inputs", get(api::attempts::inputs))

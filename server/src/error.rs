@@ -17,14 +17,6 @@ pub struct ApiError {
     pub detail: Option<serde_json::Value>,
 }
 
-/// The message of every 413 (bodies over [`crate::json::MAX_BODY_BYTES`]).
-pub fn body_too_large_message() -> String {
-    format!(
-        "request body is larger than {} bytes",
-        crate::json::MAX_BODY_BYTES
-    )
-}
-
 impl ApiError {
     /// Any status with a message.
     pub fn new(status: StatusCode, error: impl Into<String>) -> ApiError {

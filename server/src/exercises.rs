@@ -1,95 +1,25 @@
-//! The exercise files (`exercises/*.json`, embedded in the binary), their routes, and headless
-//! attempts: `seaarms exercise <id> --autopilot | --idle`.
+//! The exercises' routes (`GET /api/exercises`, the files themselves are in
+//! [`crate::catalogue`]) and headless attempts: `seaarms exercise <id> --autopilot | --idle`.
 //!
 //! A headless attempt builds the same [`Live`] a WebSocket session has and drives it with
 //! the same [`Command`]s the WebSocket edge produces (stick input at 50 Hz, settings, the
 //! diagnosis answer), stepping it with the same [`Live::advance`]; only the wall clock is
 //! missing.
 
-use std::collections::BTreeMap;
-use std::sync::{Arc, LazyLock};
+use std::sync::Arc;
 
 use axum::Json;
 use axum::extract::Path;
-use rust_embed::RustEmbed;
 use seaarms_core::exercise::autopilot::PILOT_INTERVAL_S;
-use seaarms_core::exercise::{Assessment, Autopilot, ExerciseSpec, Method, Mode};
+use seaarms_core::exercise::{Assessment, Autopilot, ExerciseSpec};
 use serde::Serialize;
 
+use crate::catalogue::{EXERCISES, Scenario};
 use crate::error::ApiError;
-use crate::protocol::{ControlMethod, ControlMode};
+use crate::protocol::{wire_method, wire_mode};
+use crate::sessions::Live;
 use crate::sessions::command::{ArmSticks, Command, StickInput};
 use crate::sessions::record::RecordMsg;
-use crate::sessions::{Live, Scenario};
-
-#[derive(RustEmbed)]
-#[folder = "exercises/"]
-struct Files;
-
-/// Every exercise, by id, parsed and checked once.
-pub struct Exercises {
-    by_id: BTreeMap<String, Arc<ExerciseSpec>>,
-    /// Files that did not parse or check (a bug in a shipped file; a test keeps this empty).
-    pub errors: Vec<String>,
-}
-
-/// The exercises shipped in the binary.
-pub static EXERCISES: LazyLock<Exercises> = LazyLock::new(Exercises::load);
-
-/// The order the start screen lists them in (first steps first); others follow by id.
-const ORDER: &[&str] = &[
-    "familiarisation",
-    "reach-targets",
-    "pick-and-place",
-    "dual-lift",
-    "valve-turn",
-    "hot-stab",
-    "fault-diagnosis",
-];
-
-impl Exercises {
-    fn load() -> Exercises {
-        let mut by_id = BTreeMap::new();
-        let mut errors = Vec::new();
-        for name in Files::iter().filter(|n| n.ends_with(".json")) {
-            let Some(file) = Files::get(&name) else {
-                continue;
-            };
-            let parsed = serde_json::from_slice::<ExerciseSpec>(&file.data)
-                .map_err(|e| format!("exercises/{name}: {e}"))
-                .and_then(|spec| {
-                    spec.check().map_err(|e| format!("exercises/{name}: {e}"))?;
-                    if format!("{}.json", spec.id) != name {
-                        return Err(format!("exercises/{name}: id `{}` ≠ file name", spec.id));
-                    }
-                    Ok(spec)
-                });
-            match parsed {
-                Ok(spec) => {
-                    by_id.insert(spec.id.clone(), Arc::new(spec));
-                }
-                Err(e) => {
-                    tracing::error!("{e}");
-                    errors.push(e);
-                }
-            }
-        }
-        Exercises { by_id, errors }
-    }
-
-    /// An exercise by id.
-    pub fn get(&self, id: &str) -> Option<Arc<ExerciseSpec>> {
-        self.by_id.get(id).cloned()
-    }
-
-    /// Every exercise, in the start screen's order.
-    pub fn all(&self) -> Vec<Arc<ExerciseSpec>> {
-        let rank = |id: &str| ORDER.iter().position(|o| *o == id).unwrap_or(ORDER.len());
-        let mut v: Vec<_> = self.by_id.values().cloned().collect();
-        v.sort_by(|a, b| rank(&a.id).cmp(&rank(&b.id)).then(a.id.cmp(&b.id)));
-        v
-    }
-}
 
 /// One exercise in `GET /api/exercises`.
 #[derive(Debug, Serialize)]
@@ -141,22 +71,6 @@ pub async fn get(Path(id): Path<String>) -> Result<Json<Arc<ExerciseSpec>>, ApiE
             "known": EXERCISES.all().iter().map(|s| s.id.clone()).collect::<Vec<_>>()
         }))
     })
-}
-
-/// The wire's mode for the core's.
-pub fn wire_mode(m: Mode) -> ControlMode {
-    match m {
-        Mode::Joint => ControlMode::Joint,
-        Mode::Cartesian => ControlMode::Cartesian,
-    }
-}
-
-/// The wire's method for the core's.
-pub fn wire_method(m: Method) -> ControlMethod {
-    match m {
-        Method::Open => ControlMethod::Open,
-        Method::Closed => ControlMethod::Closed,
-    }
 }
 
 /// Who drives a headless attempt.
@@ -228,7 +142,9 @@ pub fn run_recorded(
                 )?)?;
             }
             if let Some(answer) = out.answer {
-                live.apply(&Command::Diagnose(answer.to_string()))?;
+                live.apply(&Command::Diagnose {
+                    answer: answer.to_string(),
+                })?;
             }
             seq += 1;
             let input = StickInput {
@@ -255,7 +171,7 @@ pub fn run_recorded(
         .map(|r| r.assessment())
         .ok_or_else(|| anyhow::anyhow!("no exercise"))?;
     let sim_seconds = live.sim().time_s();
-    live.end_attempt("abandoned");
+    live.end_attempt(crate::sessions::AttemptStop::Left);
     let (mut init, mut inputs) = (None, Vec::new());
     for msg in live.take_records(false) {
         match msg {

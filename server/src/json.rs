@@ -11,12 +11,17 @@ use crate::error::ApiError;
 /// Largest REST request body accepted (bytes).
 pub const MAX_BODY_BYTES: usize = 64 * 1024;
 
+/// The message of every 413 (bodies over [`MAX_BODY_BYTES`]).
+pub fn body_too_large_message() -> String {
+    format!("request body is larger than {MAX_BODY_BYTES} bytes")
+}
+
 /// The API error of a body that could not be read (413 over [`MAX_BODY_BYTES`]).
 pub fn body_rejection(rejection: BytesRejection) -> ApiError {
     ApiError {
         status: rejection.status(),
         error: match rejection.status().as_u16() {
-            413 => crate::error::body_too_large_message(),
+            413 => body_too_large_message(),
             _ => rejection.body_text(),
         },
         detail: None,

@@ -26,6 +26,9 @@
 pub mod api;
 pub mod app;
 pub mod assets;
+pub mod auth;
+pub mod catalogue;
+pub mod clock;
 pub mod cluster;
 pub mod compute;
 pub mod config;
@@ -33,6 +36,7 @@ pub mod csv_out;
 pub mod db;
 pub mod error;
 pub mod exercises;
+pub mod ids;
 pub mod json;
 pub mod limits;
 pub mod load;
@@ -59,10 +63,12 @@ pub async fn run(
     shutdown: impl Future<Output = ()> + Send + 'static,
 ) -> std::io::Result<()> {
     let sessions = state.sessions.clone();
-    let heartbeat = state
-        .cluster
-        .multi
-        .then(|| tokio::spawn(cluster::heartbeat_loop(state.clone())));
+    let heartbeat = state.cluster.multi.then(|| {
+        tokio::spawn(cluster::heartbeat_loop(
+            state.clone(),
+            api::sessions::directory_summary,
+        ))
+    });
     let leaving = state
         .cluster
         .multi
@@ -95,7 +101,7 @@ pub async fn run(
     // Every session has ended and is recorded: out of the directory now, not declared lost
     // by the others later.
     if let Some((db, name)) = leaving {
-        if let Err(e) = db.leave(&name, sessions::unix_now()).await {
+        if let Err(e) = db.leave(&name, clock::unix_now()).await {
             tracing::warn!("leaving the session directory: {e:#}");
         }
     }

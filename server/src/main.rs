@@ -30,10 +30,10 @@ async fn main() -> anyhow::Result<()> {
             idle: _,
             seed,
         }) => {
-            let spec = seaarms::exercises::EXERCISES.get(&id).ok_or_else(|| {
+            let spec = seaarms::catalogue::EXERCISES.get(&id).ok_or_else(|| {
                 anyhow::anyhow!(
                     "unknown exercise `{id}` (known: {})",
-                    seaarms::exercises::EXERCISES
+                    seaarms::catalogue::EXERCISES
                         .all()
                         .iter()
                         .map(|s| s.id.as_str())

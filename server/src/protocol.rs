@@ -1,21 +1,37 @@
-//! WebSocket wire types of `/ws/sessions/{id}` — the contract between the server and the
-//! page. Explicit types, `#[serde(tag = "type")]`, never the core's internal structs; parse
-//! and validate at the edge into typed inputs.
+//! Wire types of the sessions — the contract between the server and the page: the session
+//! socket `/ws/sessions/{id}`, the session actions `POST /api/sessions/{id}/actions`
+//! ([`Action`]) and the replay socket `/ws/replay/{id}` ([`ReplayClientMessage`]). Explicit
+//! types, `#[serde(tag = "type")]`; parse and validate at the edge into typed commands
+//! (`crate::sessions::command`).
 //!
 //! Client → server: [`ClientMessage`]. Server → client: a one-time [`Hello`], then a
 //! [`StateFrame`] at the frame rate (latest state wins: a slow client skips frames), plus
 //! [`ServerMessage::Error`], [`ServerMessage::Message`] and [`ServerMessage::Pong`]; when the
 //! session ends, one [`ServerMessage::Ended`] (with its [`EndReason`]) right before the close
-//! frame (code 1000, reason `session ended`).
+//! frame (code 1000, reason `session ended`). The replay socket sends the same [`Hello`] (with
+//! `replay`) and frames, and [`ServerMessage::Replay`] statuses.
+//!
+//! **Core types on the wire.** The simulation's internal state (its `Simulation`, `Input`,
+//! arm and object states) never is: frames copy what they show into the `…Frame` types here.
+//! A few core types are sent as they are, because they are data with their own documented
+//! serde schema, the same on disk and on the wire: the robot model file
+//! ([`seaarms_core::ModelSpec`], `hello.arms[].model`), the exercise file
+//! ([`ExerciseSpec`], `hello.exercise`, the `scenario` message) and its scene items
+//! (`spec::{Target, Zone, Ghost, Obstacle}`, [`SceneOut`]), the water's current
+//! (`seaarms_core::sim::Current`, `state.current`) and an exercise's status
+//! (`seaarms_core::exercise::Status`, `state.exercise`). A change to those types changes the
+//! wire. Enums are mapped to wire strings here ([`arm_name`], [`grasp_name`],
+//! [`fault_label`], [`wire_mode`]).
 
 use std::sync::Arc;
 
+use nalgebra::{Isometry3, IsometryMatrix3, Matrix3};
 use seaarms_core::exercise::ExerciseSpec;
 use seaarms_core::grasp::GraspState;
 use serde::{Deserialize, Serialize, Serializer};
 
-use crate::api::wire::PoseOut;
-use crate::sessions::command::{ActiveFault, Arm, Fault};
+use seaarms_core::hydraulics::Fault;
+use seaarms_core::sim::Arm;
 
 /// Largest WebSocket message accepted from a client (bytes); a larger one closes the
 /// connection with a close frame, code 1009 (message too big, RFC 6455 §7.4.1).
@@ -25,6 +41,44 @@ pub const MAX_CLIENT_MESSAGE_BYTES: usize = 16 * 1024;
 /// exactly (`Number.MAX_SAFE_INTEGER`). A larger one is refused with an `error` message (the
 /// session goes on), so `input_seq` can never be pushed out of the page's reach.
 pub const MAX_INPUT_SEQ: u64 = (1 << 53) - 1;
+
+/// A pose: position (m) and 3×3 rotation matrix (rows), base frame (also the analysis
+/// routes' pose, [`crate::api::wire`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct PoseOut {
+    /// [x, y, z] (m).
+    pub position: [f64; 3],
+    /// Row-major 3×3 rotation.
+    pub rotation: [[f64; 3]; 3],
+}
+
+impl PoseOut {
+    fn new(r: &Matrix3<f64>, p: &nalgebra::Vector3<f64>) -> PoseOut {
+        PoseOut {
+            position: [p.x, p.y, p.z],
+            rotation: [
+                [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
+                [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
+                [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
+            ],
+        }
+    }
+}
+
+impl From<&Isometry3<f64>> for PoseOut {
+    fn from(t: &Isometry3<f64>) -> PoseOut {
+        PoseOut::new(
+            t.rotation.to_rotation_matrix().matrix(),
+            &t.translation.vector,
+        )
+    }
+}
+
+impl From<&IsometryMatrix3<f64>> for PoseOut {
+    fn from(t: &IsometryMatrix3<f64>) -> PoseOut {
+        PoseOut::new(t.rotation.matrix(), &t.translation.vector)
+    }
+}
 
 /// Wire name of an arm.
 pub fn arm_name(arm: Arm) -> &'static str {
@@ -51,6 +105,30 @@ pub fn grasp_name(state: GraspState) -> &'static str {
 
 fn serialize_grasp<S: Serializer>(state: &GraspState, s: S) -> Result<S::Ok, S::Error> {
     s.serialize_str(grasp_name(*state))
+}
+
+/// A fault active on one arm: set by the instructor's `fault` action
+/// (`crate::sessions::command::fault`), serialized as its label ([`fault_label`]) in state
+/// frames and summaries.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ActiveFault {
+    /// Which arm.
+    pub arm: Arm,
+    /// What and how much.
+    pub fault: Fault,
+    /// Injected without telling the trainee (a diagnosis drill): it acts on the simulation
+    /// like any fault but is left out of the state frames and of the trainee's summary; only
+    /// the instructor's session summary lists it.
+    pub silent: bool,
+}
+
+impl ActiveFault {
+    /// Whether `other` replaces this one (same arm, kind and actuator).
+    pub fn same_slot(&self, other: &ActiveFault) -> bool {
+        self.arm == other.arm
+            && self.fault.kind() == other.fault.kind()
+            && self.fault.joint() == other.fault.joint()
+    }
 }
 
 /// An active fault as users see it: `supply_drop:left:3000000Pa`, `stuck_valve:right:2:0.5`,
@@ -122,6 +200,22 @@ pub enum ControlMethod {
     Closed,
 }
 
+/// The wire's mode for the core's.
+pub fn wire_mode(m: seaarms_core::exercise::Mode) -> ControlMode {
+    match m {
+        seaarms_core::exercise::Mode::Joint => ControlMode::Joint,
+        seaarms_core::exercise::Mode::Cartesian => ControlMode::Cartesian,
+    }
+}
+
+/// The wire's method for the core's.
+pub fn wire_method(m: seaarms_core::exercise::Method) -> ControlMethod {
+    match m {
+        seaarms_core::exercise::Method::Open => ControlMethod::Open,
+        seaarms_core::exercise::Method::Closed => ControlMethod::Closed,
+    }
+}
+
 /// Everything a client may send.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
@@ -170,15 +264,57 @@ pub enum ClientMessage {
     },
 }
 
-/// Who paused a session's clock (state frames' and summaries' `paused_by`): an instructor's
-/// pause is lifted only by the instructor.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum PausedBy {
-    /// The instructor (the trainee cannot resume).
-    Instructor,
-    /// The trainee.
-    Trainee,
+/// `POST /api/sessions/{id}/actions`: instructor actions on a session (a trainee may give `reset`, `pause`, `resume` and
+/// `release` to its own session).
+#[derive(Debug, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Action {
+    /// Back to the initial position.
+    Reset,
+    /// Pause the clock.
+    Pause,
+    /// Resume it.
+    Resume,
+    /// Open both jaws.
+    Release,
+    /// Change scenario (resets the session).
+    Scenario {
+        /// Scenario name.
+        scenario: String,
+    },
+    /// Inject a fault.
+    Fault {
+        /// `supply_drop` (value: Pa, 0..6.89e6), `stuck_valve` (joint 0..5, value: spool in
+        /// [−1, 1]), `leak` (joint, value: m³/(s·Pa) in [0, 1e-9]), `air` (value: bulk-modulus
+        /// scale in [0.01, 1]).
+        fault: String,
+        /// `left` or `right`.
+        arm: String,
+        /// Joint index 0..5 (stuck_valve, leak).
+        #[serde(default)]
+        joint: Option<usize>,
+        /// Size of the fault (see `fault`).
+        value: f64,
+        /// Injected without telling the trainee: left out of the state frames and the
+        /// trainee's view; the instructor's session summary lists it with `"silent": true`.
+        #[serde(default)]
+        silent: bool,
+    },
+    /// Remove every fault.
+    ClearFaults,
+    /// Set the water's current (a subsea session): speed in [0, 2.5] m/s, heading (the
+    /// direction it flows towards, degrees from +x towards +y) within ±360°.
+    SetCurrent {
+        /// Speed (m/s).
+        speed_m_s: f64,
+        /// Heading (degrees).
+        heading_deg: f64,
+    },
+    /// Show a message on the trainee's page.
+    Message {
+        /// Up to 500 characters.
+        text: String,
+    },
 }
 
 /// Current settings of a session.
@@ -261,6 +397,38 @@ pub struct Hello {
     /// The replica serving this connection (live sessions; absent in replays).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub replica: Option<String>,
+    /// On the replay socket: the attempt replayed and its length (absent on live sessions).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub replay: Option<ReplayOut>,
+}
+
+/// The attempt a replay socket plays (`hello.replay`).
+#[derive(Debug, Clone, Serialize)]
+pub struct ReplayOut {
+    /// Attempt id.
+    pub attempt: String,
+    /// Its length (s).
+    pub duration_s: f64,
+}
+
+/// Everything a client may send on the replay socket `/ws/replay/{id}`.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ReplayClientMessage {
+    /// Play from the current time (from the start when at the end).
+    Play,
+    /// Stop playing.
+    Pause,
+    /// Move to `t` (s since the attempt's start; finite, clamped to its length).
+    Seek {
+        /// Time (s).
+        t: f64,
+    },
+    /// Playback speed (0.25–8×).
+    Speed {
+        /// Speed factor.
+        value: f64,
+    },
 }
 
 /// What the page draws besides the arms and the box: the box's handles, the exercise's
@@ -490,7 +658,7 @@ pub struct StateFrame {
     /// Clock paused.
     pub paused: bool,
     /// Who paused it (`instructor`, `trainee`), `null` while running.
-    pub paused_by: Option<PausedBy>,
+    pub paused_by: Option<crate::auth::Actor>,
     /// Current settings.
     pub settings: Settings,
     /// Left and right arm.
@@ -566,6 +734,17 @@ pub enum ServerMessage {
         /// Settings now in force.
         settings: Settings,
     },
+    /// The replay socket's playback status, after every command and every frame played.
+    Replay {
+        /// Replay time (s since the attempt's start).
+        t: f64,
+        /// Playing or paused.
+        playing: bool,
+        /// Playback speed.
+        speed: f64,
+        /// The attempt's length (s).
+        duration_s: f64,
+    },
     /// Answer to a ping.
     Pong {
         /// The ping's timestamp.
@@ -593,7 +772,7 @@ impl ServerMessage {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sessions::command::FaultKind;
+    use seaarms_core::hydraulics::FaultKind;
 
     /// The `ended` message as web/connection.js reads it (`type`, `reason` code, `text`);
     /// the texts are the record strings tests/sessions.rs and tests/admission_and_security.rs

@@ -4,7 +4,9 @@
 
 use std::time::Instant;
 
-use seaarms_core::sim::scenario::{self, Row, SCENARIOS, Summary};
+use seaarms_core::sim::scenario::{self, Row, Summary};
+
+use crate::catalogue::SCRIPTED;
 
 use crate::csv_out::CsvOut;
 use seaarms_core::{Model, ModelSpec, robots};
@@ -42,14 +44,6 @@ pub struct ScenarioSummary {
     pub rows: usize,
 }
 
-/// (name, description) of every scenario.
-pub fn list_scenarios() -> Vec<(String, String)> {
-    SCENARIOS
-        .iter()
-        .map(|(n, d)| (n.to_string(), d.to_string()))
-        .collect()
-}
-
 fn magnum() -> Result<Model, ScenarioError> {
     let text = robots::builtin_text("magnum")
         .ok_or_else(|| ScenarioError::Model("magnum missing".into()))?;
@@ -60,7 +54,7 @@ fn magnum() -> Result<Model, ScenarioError> {
 
 /// Runs scenario `name` with two built-in Magnum arms; returns the summary and the CSV text.
 pub fn run_scenario(name: &str) -> Result<(ScenarioSummary, String), ScenarioError> {
-    if !SCENARIOS.iter().any(|(n, _)| *n == name) {
+    if !SCRIPTED.iter().any(|(n, _)| *n == name) {
         return Err(ScenarioError::Unknown(name.to_string()));
     }
     let m = magnum()?;
@@ -113,7 +107,7 @@ mod tests {
 
     #[test]
     fn lists_four_and_rejects_unknown() {
-        assert_eq!(list_scenarios().len(), 4);
+        assert_eq!(SCRIPTED.len(), 4);
         assert!(matches!(
             run_scenario("nope"),
             Err(ScenarioError::Unknown(_))

@@ -256,7 +256,7 @@ async fn json_error(resp: Response) -> Response {
         .map(|b| String::from_utf8_lossy(&b).trim().to_string())
         .unwrap_or_default();
     let error = if status == StatusCode::PAYLOAD_TOO_LARGE {
-        crate::error::body_too_large_message()
+        crate::json::body_too_large_message()
     } else if text.is_empty() {
         status
             .canonical_reason()

@@ -35,7 +35,7 @@ impl Server {
 pub fn temp_dir(tag: &str) -> PathBuf {
     std::env::temp_dir().join(format!(
         "seaarms-{tag}-{}",
-        seaarms::sessions::random_hex(6)
+        seaarms::ids::random_hex(6)
     ))
 }
 

@@ -200,7 +200,7 @@ pub(crate) async fn database_urls() -> Vec<Option<String>> {
 pub(crate) async fn fresh_postgres_database(base: &str) -> String {
     use sqlx::{Connection, Executor};
     sqlx::any::install_default_drivers();
-    let name = format!("seaarms_{}", seaarms::sessions::random_hex(6));
+    let name = format!("seaarms_{}", seaarms::ids::random_hex(6));
     let mut c = sqlx::AnyConnection::connect(base)
         .await
         .unwrap_or_else(|e| panic!("SEAARMS_TEST_DATABASE_URL {base}: {e}"));

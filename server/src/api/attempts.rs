@@ -18,21 +18,20 @@ use std::time::Duration;
 use axum::Json;
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, Query, State};
-use axum::http::{HeaderMap, StatusCode, header};
+use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use futures_util::{SinkExt, StreamExt};
 use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 use tokio::sync::Semaphore;
 
+use crate::api::session_ws::{RateLimit, error_text};
 use crate::app::AppState;
+use crate::auth::{Credentials, MISSING_TOKEN_OR_QUERY, Principal, TokenFrom, WRONG_TOKEN};
 use crate::db::{AttemptFilter, AttemptRow, EventRow, unavailable as db_error};
 use crate::error::ApiError;
-use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ServerMessage};
+use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ReplayClientMessage, ReplayOut, ServerMessage};
 use crate::replay::{Init, Replay, ReplayError, check_version, log};
-use crate::sessions::rest::bearer;
-use crate::sessions::ws::error_text;
-use crate::sessions::{sha256_hex, token_eq};
 
 /// Most replay WebSockets open at once (each may re-simulate on a blocking thread).
 pub const MAX_REPLAYS: usize = 32;
@@ -43,53 +42,45 @@ pub const MAX_LIST: usize = 1000;
 
 static REPLAY_SLOTS: LazyLock<Semaphore> = LazyLock::new(|| Semaphore::new(MAX_REPLAYS));
 
-/// The token of `Authorization: Bearer …`, else `?token=`.
-fn token<'a>(headers: &'a HeaderMap, query: Option<&'a str>) -> Option<&'a str> {
-    bearer(headers).or(query)
+/// The attempts routes read the token from the header, else the query.
+const FROM: TokenFrom = TokenFrom::BearerOrQuery;
+
+fn is_instructor(state: &AppState, creds: &Credentials) -> Result<bool, ApiError> {
+    Ok(creds.principal(state, FROM, None)?.is_instructor())
 }
 
-fn is_instructor(state: &AppState, token: Option<&str>) -> bool {
-    token.is_some_and(|t| token_eq(t, &state.instructor_token))
-}
-
-/// The attempt, if `token` may see it: 403 for a wrong token, 404 for an unknown id (after
-/// the token check for the instructor, so ids are not probed without one).
+/// The attempt, if `creds` may see it (the instructor, or the trainee of its session): 403
+/// for a wrong token, 404 for an unknown id (after the token check for the instructor, so
+/// ids are not probed without one).
 async fn authorized(
     state: &AppState,
-    token: Option<&str>,
+    creds: &Credentials,
     id: &str,
 ) -> Result<AttemptRow, ApiError> {
-    let Some(token) = token else {
-        return Err(ApiError::forbidden(
-            "missing token (Authorization: Bearer … or ?token=)",
-        ));
-    };
+    if creds.token(FROM)?.is_none() {
+        return Err(ApiError::forbidden(MISSING_TOKEN_OR_QUERY));
+    }
     let not_found = || ApiError::not_found(format!("no attempt `{id}`"));
     if !crate::sessions::record::valid_id(id) {
         return Err(not_found());
     }
     let row = state.db.attempt(id).await.map_err(db_error)?;
-    if token_eq(token, &state.instructor_token) {
+    if is_instructor(state, creds)? {
         return row.ok_or_else(not_found);
     }
     let Some(row) = row else {
-        return Err(ApiError::forbidden("wrong token"));
+        return Err(ApiError::forbidden(WRONG_TOKEN));
     };
-    let hash = state
-        .db
-        .session_token_sha256(&row.session)
-        .await
-        .map_err(db_error)?;
-    match hash {
-        Some(h) if token_eq(&sha256_hex(token), &h) => Ok(row),
-        _ => Err(ApiError::forbidden("wrong token")),
+    match creds.principal_stored(state, FROM, &row.session).await? {
+        Principal::Trainee { .. } => Ok(row),
+        _ => Err(ApiError::forbidden(WRONG_TOKEN)),
     }
 }
 
 /// A trainee opens an attempt's inputs and replay once it has ended (a running drill's
 /// silent fault is in them); the instructor at any time.
-fn check_open(state: &AppState, token: Option<&str>, row: &AttemptRow) -> Result<(), ApiError> {
-    if row.outcome.is_none() && !is_instructor(state, token) {
+fn check_open(state: &AppState, creds: &Credentials, row: &AttemptRow) -> Result<(), ApiError> {
+    if row.outcome.is_none() && !is_instructor(state, creds)? {
         return Err(ApiError::new(
             StatusCode::CONFLICT,
             "the attempt is still running; its replay opens when it ends",
@@ -140,16 +131,18 @@ pub struct ListQuery {
     exercise: Option<String>,
     session: Option<String>,
     limit: Option<usize>,
+    /// Read by [`Credentials`]; listed so that it is a known field.
+    #[allow(dead_code)]
     token: Option<String>,
 }
 
 /// `GET /api/attempts` (instructor).
 pub async fn list(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Query(q): Query<ListQuery>,
 ) -> Result<Json<Value>, ApiError> {
-    if !is_instructor(&state, token(&headers, q.token.as_deref())) {
+    if !is_instructor(&state, &creds)? {
         return Err(ApiError::forbidden("instructor token required"));
     }
     let filter = AttemptFilter {
@@ -164,24 +157,16 @@ pub async fn list(
     Ok(Json(json!({ "attempts": out })))
 }
 
-/// `?token=` of the single-attempt routes.
-#[derive(Debug, Default, Deserialize)]
-pub struct TokenQuery {
-    token: Option<String>,
-}
-
 /// `GET /api/attempts/{id}`: the record, its assessment and its events.
 pub async fn get(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
-    Query(q): Query<TokenQuery>,
 ) -> Result<Json<AttemptOut>, ApiError> {
-    let token = token(&headers, q.token.as_deref());
-    let row = authorized(&state, token, &id).await?;
+    let row = authorized(&state, &creds, &id).await?;
     let mut events = state.db.attempt_events(&id).await.map_err(db_error)?;
     // A silent fault stays hidden from the trainee while the attempt runs (a drill).
-    if row.outcome.is_none() && !is_instructor(&state, token) {
+    if row.outcome.is_none() && !is_instructor(&state, &creds)? {
         events.retain(|e| e.detail.get("silent") != Some(&Value::Bool(true)));
     }
     Ok(Json(AttemptOut::new(row, Some(events))))
@@ -190,13 +175,11 @@ pub async fn get(
 /// `GET /api/attempts/{id}/inputs`: the initial conditions and the decoded input log.
 pub async fn inputs(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
-    Query(q): Query<TokenQuery>,
 ) -> Result<Json<Value>, ApiError> {
-    let token = token(&headers, q.token.as_deref());
-    let row = authorized(&state, token, &id).await?;
-    check_open(&state, token, &row)?;
+    let row = authorized(&state, &creds, &id).await?;
+    check_open(&state, &creds, &row)?;
     let bytes = state.db.attempt_inputs(&id).await.map_err(db_error)?;
     let entries = log::decode(&bytes).map_err(|e| {
         ApiError::new(
@@ -247,14 +230,13 @@ async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, ApiError> {
 #[derive(Debug, Default, Deserialize)]
 pub struct ReplayQuery {
     t: Option<f64>,
-    token: Option<String>,
 }
 
 /// `GET /api/attempts/{id}/replay?t=`: the state frame at t (s since the attempt's start,
 /// clamped to its length), re-simulated from the record.
 pub async fn replay_at(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
     Query(q): Query<ReplayQuery>,
 ) -> Result<Response, ApiError> {
@@ -264,9 +246,8 @@ pub async fn replay_at(
             "`t` must be a finite number of seconds",
         ));
     }
-    let token = token(&headers, q.token.as_deref());
-    let row = authorized(&state, token, &id).await?;
-    check_open(&state, token, &row)?;
+    let row = authorized(&state, &creds, &id).await?;
+    check_open(&state, &creds, &row)?;
     let mut replay = load(&state, &row).await?;
     let json = tokio::task::spawn_blocking(move || {
         replay.seek(t)?;
@@ -293,11 +274,11 @@ fn state_text(replay: &mut Replay) -> Utf8Bytes {
 pub async fn replay_ws(
     State(state): State<AppState>,
     Path(id): Path<String>,
-    Query(q): Query<TokenQuery>,
+    creds: Credentials,
     ws: WebSocketUpgrade,
 ) -> Result<Response, ApiError> {
-    let row = authorized(&state, q.token.as_deref(), &id).await?;
-    check_open(&state, q.token.as_deref(), &row)?;
+    let row = authorized(&state, &creds, &id).await?;
+    check_open(&state, &creds, &row)?;
     let permit = REPLAY_SLOTS.try_acquire().map_err(|_| {
         ApiError::new(
             StatusCode::SERVICE_UNAVAILABLE,
@@ -307,34 +288,29 @@ pub async fn replay_ws(
     let mut replay = load(&state, &row).await?;
     let hello = replay_hello(&state, &row, &mut replay);
     let frame_hz = state.sessions.config.frame_hz.clamp(10, 120);
+    let per_second = state.sessions.config.max_messages_per_second;
     Ok(ws
         .max_message_size(MAX_CLIENT_MESSAGE_BYTES)
         .on_upgrade(move |socket| async move {
             let _permit = permit;
-            serve_replay(socket, replay, hello, frame_hz).await;
+            serve_replay(socket, replay, hello, frame_hz, per_second).await;
         }))
 }
 
 fn replay_hello(state: &AppState, row: &AttemptRow, replay: &mut Replay) -> Utf8Bytes {
-    let hello = crate::sessions::ws::hello_for(
+    let mut hello = crate::api::session_ws::hello_for(
         &row.session,
         "observer",
         replay.live(),
         &state.sessions.config,
     );
-    let mut v = serde_json::to_value(ServerMessage::Hello(Box::new(hello))).unwrap_or_default();
-    v["replay"] = json!({"attempt": row.id, "duration_s": replay.duration_s()});
-    v.to_string().into()
-}
-
-/// What a replay client may send.
-#[derive(Debug, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-enum ReplayCommand {
-    Play,
-    Pause,
-    Seek { t: f64 },
-    Speed { value: f64 },
+    hello.replay = Some(ReplayOut {
+        attempt: row.id.clone(),
+        duration_s: replay.duration_s(),
+    });
+    serde_json::to_string(&ServerMessage::Hello(Box::new(hello)))
+        .unwrap_or_default()
+        .into()
 }
 
 /// Playback state of one replay socket.
@@ -349,15 +325,13 @@ struct Playback {
 
 impl Playback {
     fn status(&self) -> Utf8Bytes {
-        json!({
-            "type": "replay",
-            "t": self.replay.time_s(),
-            "playing": self.playing,
-            "speed": self.speed,
-            "duration_s": self.replay.duration_s(),
-        })
-        .to_string()
-        .into()
+        let msg = ServerMessage::Replay {
+            t: self.replay.time_s(),
+            playing: self.playing,
+            speed: self.speed,
+            duration_s: self.replay.duration_s(),
+        };
+        serde_json::to_string(&msg).unwrap_or_default().into()
     }
 
     /// Moves to `t` on a blocking thread; returns the frame there (None if the thread
@@ -372,7 +346,16 @@ impl Playback {
     }
 }
 
-async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame_hz: u32) {
+/// One replay socket: hello, the first frame and the status, then the client's commands
+/// (rate-limited like the session socket's messages) and, while playing, frames at the
+/// frame rate.
+async fn serve_replay(
+    socket: WebSocket,
+    replay: Replay,
+    hello: Utf8Bytes,
+    frame_hz: u32,
+    per_second: u32,
+) {
     let (mut tx, mut rx) = socket.split();
     let mut pb = Playback {
         replay,
@@ -387,6 +370,7 @@ async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame
         }
     }
     let interval = Duration::from_secs_f64(1.0 / f64::from(frame_hz));
+    let mut rate = RateLimit::new(per_second);
     let mut tick = tokio::time::interval(interval);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
@@ -398,42 +382,48 @@ async fn serve_replay(socket: WebSocket, replay: Replay, hello: Utf8Bytes, frame
                     Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
                     Some(Ok(_)) => continue,
                 };
-                match serde_json::from_str::<ReplayCommand>(&text) {
-                    Ok(ReplayCommand::Play) => {
-                        if pb.replay.at_end() {
-                            let Some((p, frame)) = pb.seek(0.0).await else { return };
-                            pb = p;
-                            out.extend(frame.ok());
+                match rate.admit() {
+                    // Over the rate: dropped, with at most one notice a second.
+                    Err(notice) => out.extend(notice),
+                    Ok(()) => {
+                        match serde_json::from_str::<ReplayClientMessage>(&text) {
+                            Ok(ReplayClientMessage::Play) => {
+                                if pb.replay.at_end() {
+                                    let Some((p, frame)) = pb.seek(0.0).await else { return };
+                                    pb = p;
+                                    out.extend(frame.ok());
+                                }
+                                pb.playing = true;
+                            }
+                            Ok(ReplayClientMessage::Pause) => pb.playing = false,
+                            Ok(ReplayClientMessage::Seek { t }) if t.is_finite() => {
+                                let Some((p, frame)) = pb.seek(t).await else { return };
+                                pb = p;
+                                match frame {
+                                    Ok(f) => out.push(f),
+                                    Err(e) => out.push(error_text(e)),
+                                }
+                            }
+                            Ok(ReplayClientMessage::Seek { .. }) => {
+                                out.push(error_text("`t` must be a finite number of seconds"));
+                            }
+                            Ok(ReplayClientMessage::Speed { value })
+                                if (SPEED_RANGE.0..=SPEED_RANGE.1).contains(&value) =>
+                            {
+                                pb.speed = value;
+                            }
+                            Ok(ReplayClientMessage::Speed { value }) => out.push(error_text(format!(
+                                "speed must be in [{}, {}], got {value}",
+                                SPEED_RANGE.0, SPEED_RANGE.1
+                            ))),
+                            Err(e) => out.push(error_text(format!(
+                                "expected {{\"type\": \"play\"|\"pause\"|\"seek\"|\"speed\", …}}: {e}"
+                            ))),
                         }
-                        pb.playing = true;
+                        pb.anchor = None;
+                        out.push(pb.status());
                     }
-                    Ok(ReplayCommand::Pause) => pb.playing = false,
-                    Ok(ReplayCommand::Seek { t }) if t.is_finite() => {
-                        let Some((p, frame)) = pb.seek(t).await else { return };
-                        pb = p;
-                        match frame {
-                            Ok(f) => out.push(f),
-                            Err(e) => out.push(error_text(e)),
-                        }
-                    }
-                    Ok(ReplayCommand::Seek { .. }) => {
-                        out.push(error_text("`t` must be a finite number of seconds"));
-                    }
-                    Ok(ReplayCommand::Speed { value })
-                        if (SPEED_RANGE.0..=SPEED_RANGE.1).contains(&value) =>
-                    {
-                        pb.speed = value;
-                    }
-                    Ok(ReplayCommand::Speed { value }) => out.push(error_text(format!(
-                        "speed must be in [{}, {}], got {value}",
-                        SPEED_RANGE.0, SPEED_RANGE.1
-                    ))),
-                    Err(e) => out.push(error_text(format!(
-                        "expected {{\"type\": \"play\"|\"pause\"|\"seek\"|\"speed\", …}}: {e}"
-                    ))),
                 }
-                pb.anchor = None;
-                out.push(pb.status());
             }
             _ = tick.tick(), if pb.playing => {
                 let (wall, t0) = *pb

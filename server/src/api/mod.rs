@@ -8,4 +8,6 @@ pub mod optimize;
 pub mod results;
 pub mod robots;
 pub mod scenarios;
+pub mod session_ws;
+pub mod sessions;
 pub mod wire;

@@ -3,11 +3,12 @@
 //! written by [`crate::csv_out`].
 
 use axum::extract::{Query, State};
-use axum::http::{HeaderMap, StatusCode, header};
+use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
 
 use crate::app::AppState;
+use crate::auth::Credentials;
 use crate::csv_out::{CsvOut, Field};
 use crate::db::AttemptRow;
 use crate::error::ApiError;
@@ -43,10 +44,10 @@ pub const COLUMNS: [&str; 13] = [
 /// `GET /api/results.csv`.
 pub async fn export(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Query(q): Query<ResultsQuery>,
 ) -> Result<Response, ApiError> {
-    crate::sessions::rest::require_instructor(&state, &headers)?;
+    creds.require_instructor(&state)?;
     let group = q.group.filter(|g| !g.is_empty());
     let exercise = q.exercise.filter(|e| !e.is_empty());
     let rows = state

@@ -10,9 +10,10 @@ use axum::response::{IntoResponse, Response};
 use serde::Serialize;
 
 use crate::app::AppState;
+use crate::catalogue::SCRIPTED;
 use crate::compute::ComputeError;
 use crate::error::ApiError;
-use crate::scenarios::{ScenarioError, list_scenarios, run_scenario};
+use crate::scenarios::{ScenarioError, run_scenario};
 
 /// CSVs of recent runs kept for download (oldest dropped first).
 pub const KEPT_RUNS: usize = 16;
@@ -49,9 +50,12 @@ pub struct ScenarioInfo {
 /// Lists the scenarios.
 pub async fn list() -> Json<Vec<ScenarioInfo>> {
     Json(
-        list_scenarios()
-            .into_iter()
-            .map(|(name, description)| ScenarioInfo { name, description })
+        SCRIPTED
+            .iter()
+            .map(|(name, description)| ScenarioInfo {
+                name: name.to_string(),
+                description: description.to_string(),
+            })
             .collect(),
     )
 }
@@ -62,7 +66,7 @@ pub async fn run(
     State(state): State<AppState>,
     Path(name): Path<String>,
 ) -> Result<Response, ComputeError> {
-    if !list_scenarios().iter().any(|(n, _)| *n == name) {
+    if !SCRIPTED.iter().any(|(n, _)| *n == name) {
         return Err(ApiError::not_found(ScenarioError::Unknown(name).to_string()).into());
     }
     let n = name.clone();
@@ -78,7 +82,7 @@ pub async fn run(
             })
         })
         .await?;
-    let run_id = format!("{name}-{}.csv", crate::sessions::random_hex(4));
+    let run_id = format!("{name}-{}.csv", crate::ids::random_hex(4));
     state.scenario_runs.put(run_id.clone(), csv);
     let mut body = serde_json::to_value(&summary).map_err(|_| ComputeError::Failed)?;
     body["csv_url"] = serde_json::json!(format!("/api/scenarios/runs/{run_id}"));

@@ -1,46 +1,12 @@
 //! JSON shapes shared by several routes (measures, ellipsoids, poses, polytopes).
 //! Infinite values are `null`, never NaN.
 
-use nalgebra::{DMatrix, Isometry3, IsometryMatrix3, Matrix3};
+use nalgebra::DMatrix;
 use seaarms_core::manipulability::{Ellipsoid, Measures};
 use serde::Serialize;
 
-/// A pose: position (m) and 3×3 rotation matrix (rows), base frame.
-#[derive(Debug, Clone, Serialize)]
-pub struct PoseOut {
-    /// [x, y, z] (m).
-    pub position: [f64; 3],
-    /// Row-major 3×3 rotation.
-    pub rotation: [[f64; 3]; 3],
-}
-
-impl PoseOut {
-    fn new(r: &Matrix3<f64>, p: &nalgebra::Vector3<f64>) -> PoseOut {
-        PoseOut {
-            position: [p.x, p.y, p.z],
-            rotation: [
-                [r[(0, 0)], r[(0, 1)], r[(0, 2)]],
-                [r[(1, 0)], r[(1, 1)], r[(1, 2)]],
-                [r[(2, 0)], r[(2, 1)], r[(2, 2)]],
-            ],
-        }
-    }
-}
-
-impl From<&Isometry3<f64>> for PoseOut {
-    fn from(t: &Isometry3<f64>) -> PoseOut {
-        PoseOut::new(
-            t.rotation.to_rotation_matrix().matrix(),
-            &t.translation.vector,
-        )
-    }
-}
-
-impl From<&IsometryMatrix3<f64>> for PoseOut {
-    fn from(t: &IsometryMatrix3<f64>) -> PoseOut {
-        PoseOut::new(t.rotation.matrix(), &t.translation.vector)
-    }
-}
+/// The pose wire type, shared with the session socket ([`crate::protocol`]).
+pub use crate::protocol::PoseOut;
 
 /// The columns of a matrix, each as a list (bases of subspaces, ellipsoid axes).
 pub fn columns(m: &DMatrix<f64>) -> Vec<Vec<f64>> {

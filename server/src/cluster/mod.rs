@@ -19,9 +19,9 @@ use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 
 use crate::app::AppState;
+use crate::clock::unix_now;
 use crate::db::{Backend, ReplicaBeat};
 use crate::error::ApiError;
-use crate::sessions::unix_now;
 
 /// How often a replica writes its heartbeat and its sessions' directory rows.
 pub const HEARTBEAT: Duration = Duration::from_secs(1);
@@ -195,9 +195,18 @@ pub async fn elsewhere(state: &AppState, id: &str) -> Option<ApiError> {
     }
 }
 
-/// Writes one heartbeat (this replica's row and its sessions' directory rows) and declares
-/// lost the replicas whose heartbeat is older than [`HEARTBEAT_TIMEOUT`].
-pub async fn beat(state: &AppState) -> anyhow::Result<Vec<crate::db::LostReplica>> {
+/// How a live session is summarised in the directory (the instructor's REST summary,
+/// `crate::api::sessions::directory_summary`, given by [`crate::run`]: the cluster does not
+/// know the summary's shape).
+pub type Summarize = fn(&AppState, &crate::sessions::Session) -> serde_json::Value;
+
+/// Writes one heartbeat (this replica's row and its sessions' directory rows, each summarised
+/// by `summarize`) and declares lost the replicas whose heartbeat is older than
+/// [`HEARTBEAT_TIMEOUT`].
+pub async fn beat(
+    state: &AppState,
+    summarize: Summarize,
+) -> anyhow::Result<Vec<crate::db::LostReplica>> {
     let since = unix_now();
     let st = state.clone();
     let summaries = tokio::task::spawn_blocking(move || {
@@ -205,7 +214,7 @@ pub async fn beat(state: &AppState) -> anyhow::Result<Vec<crate::db::LostReplica
             .all()
             .iter()
             .map(|s| {
-                let v = crate::sessions::rest::directory_summary(&st, s);
+                let v = summarize(&st, s);
                 (s.id.clone(), v.to_string())
             })
             .collect::<Vec<_>>()
@@ -239,12 +248,12 @@ pub async fn beat(state: &AppState) -> anyhow::Result<Vec<crate::db::LostReplica
 }
 
 /// The heartbeat loop (multi-replica mode): [`beat`] every [`HEARTBEAT`] until aborted.
-pub async fn heartbeat_loop(state: AppState) {
+pub async fn heartbeat_loop(state: AppState, summarize: Summarize) {
     let mut tick = tokio::time::interval(HEARTBEAT);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
     loop {
         tick.tick().await;
-        if let Err(e) = beat(&state).await {
+        if let Err(e) = beat(&state, summarize).await {
             tracing::warn!("heartbeat: {e:#}");
         }
     }

@@ -10,6 +10,7 @@
 //! flush ([`Db::write_batch`]); everything here is queries with `$1, $2, …` placeholders,
 //! which both back ends take (SQLite reads `$N` as parameter N).
 
+pub mod attempt;
 mod directory;
 mod write;
 

@@ -7,8 +7,8 @@ use std::collections::HashMap;
 use anyhow::Result;
 use sqlx::Row;
 
+use super::attempt::{AttemptEnd, AttemptStart};
 use super::{Db, INTERRUPTED, SessionRecord};
-use crate::sessions::record::{AttemptEnd, AttemptStart};
 
 /// One write of the recorder.
 #[derive(Debug, Clone)]
@@ -123,7 +123,7 @@ impl Db {
                             "INSERT INTO trainees (id, name, grp, created_unix) \
                              VALUES ($1, $2, $3, $4) ON CONFLICT (name, grp) DO NOTHING",
                         )
-                        .bind(crate::sessions::random_hex(8))
+                        .bind(crate::ids::random_hex(8))
                         .bind(trainee.as_str())
                         .bind(group.as_str())
                         .bind(*created_unix)

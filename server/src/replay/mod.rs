@@ -1,53 +1,28 @@
 //! Deterministic replay: an attempt is recorded as its initial conditions ([`Init`]) and the
-//! log of everything applied to it ([`log`]); replaying builds the same [`Live`] and applies
-//! the same entries before the same steps through the same [`Live::apply`] and
-//! [`Live::advance`], so the state at any step is the recorded one bit for bit (the step is
+//! log of the commands applied to it ([`log`], the commands' own log form); replaying builds
+//! the same [`Live`] and applies the same commands before the same steps through the same
+//! [`Live::apply`] and [`Live::advance`], so the state at any step is the recorded one bit for bit (the step is
 //! deterministic: no clock, no randomness but the attempt's seed, no threads inside a step).
 //!
 //! An attempt recorded by another simulator ([`SIM_VERSION`] differs) is not replayed: the
 //! same inputs would no longer give the same states, so the attempt says so instead.
 
-pub mod log;
-
 use std::sync::Arc;
 
 use seaarms_core::Model;
-use seaarms_core::hydraulics::Faults;
-use serde::{Deserialize, Serialize};
 
-use crate::protocol::{Settings, StateFrame};
-use crate::sessions::command::{ActiveFault, Arm, Command, Current, Fault, FaultKind};
+use crate::catalogue::Scenario;
+use crate::protocol::{ActiveFault, StateFrame};
+use crate::sessions::Live;
+use crate::sessions::command::Command;
 use crate::sessions::snapshot::build_frame;
-use crate::sessions::{Live, Scenario};
-use log::{Applied, Entry, FaultEntry};
+use log::{Entry, Logged};
 
-/// The simulator's version stamp: the crate version and a hash of every source that decides
-/// what the logged inputs do (see `build.rs`).
-pub const SIM_VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "+", env!("SEAARMS_SIM_HASH"));
+/// The record's format, written by the live state (it lives with the commands it logs).
+pub use crate::sessions::command::log::{self, Init, SIM_VERSION};
 
 /// Steps per simulated second (the 1 ms step).
 pub const STEPS_PER_S: f64 = 1000.0;
-
-/// An attempt's initial conditions: with the log, all replay needs.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct Init {
-    /// Log format ([`log::FORMAT`]).
-    pub format: u32,
-    /// Scenario name or exercise id.
-    pub scenario: String,
-    /// Settings at the start.
-    pub settings: Settings,
-    /// Instructor faults active at the start (shown in frames).
-    pub faults: Vec<FaultEntry>,
-    /// The simulation's fault parameters per arm at the start (left, right), exactly.
-    pub sim_faults: [Faults; 2],
-    /// Seed of the attempt's random draws.
-    pub seed: u64,
-    /// The water's current at the start (a subsea scenario with a current set; absent:
-    /// still water or air).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub current: Option<Current>,
-}
 
 /// Why an attempt cannot be replayed.
 #[derive(Debug, thiserror::Error)]
@@ -79,30 +54,6 @@ pub fn check_version(sim_version: &str) -> Result<(), ReplayError> {
             current: SIM_VERSION.to_string(),
         })
     }
-}
-
-/// A fault as logged.
-pub fn fault_entry(f: &ActiveFault) -> FaultEntry {
-    FaultEntry {
-        arm: f.arm.index(),
-        kind: f.fault.kind().name().to_string(),
-        joint: f.fault.joint(),
-        value: f.fault.value(),
-    }
-}
-
-/// A logged fault back as a fault.
-pub fn active_fault(e: &FaultEntry) -> Result<ActiveFault, String> {
-    let kind = FaultKind::parse(&e.kind).ok_or_else(|| format!("unknown fault `{}`", e.kind))?;
-    let arm = *Arm::BOTH
-        .get(e.arm)
-        .ok_or_else(|| format!("arm {}", e.arm))?;
-    Ok(ActiveFault {
-        arm,
-        fault: Fault::new(kind, e.joint, e.value)?,
-        // A debrief shows every fault, silent ones too.
-        silent: false,
-    })
 }
 
 /// An attempt being replayed: its live state at some step.
@@ -152,7 +103,7 @@ impl Replay {
         let faults = init
             .faults
             .iter()
-            .map(active_fault)
+            .map(ActiveFault::try_from)
             .collect::<Result<Vec<_>, _>>()
             .map_err(ReplayError::Record)?;
         let mut live = Live::replaying(
@@ -202,7 +153,14 @@ impl Replay {
         while self.live.sim().steps() < step {
             let k = self.live.sim().steps();
             while let Some(e) = self.entries.get(self.next).filter(|e| e.k <= k) {
-                apply_entry(&mut self.live, e)?;
+                match &e.what {
+                    Logged::Command(command) => {
+                        self.live
+                            .apply(command)
+                            .map_err(|e| ReplayError::Record(e.to_string()))?;
+                    }
+                    Logged::Intervention(_) => self.live.intervene(),
+                }
                 self.next += 1;
             }
             self.live.advance();
@@ -220,43 +178,4 @@ impl Replay {
     pub fn frame(&mut self) -> StateFrame {
         build_frame(&mut self.live)
     }
-}
-
-/// Applies one logged entry, through the same [`Live::apply`] a live session uses.
-fn apply_entry(live: &mut Live, e: &Entry) -> Result<(), ReplayError> {
-    let command = match &e.what {
-        Applied::Input { v } => {
-            if v.len() != log::INPUT_VALUES {
-                return Err(ReplayError::Record(format!("input of {} values", v.len())));
-            }
-            Command::Input(crate::sessions::command::StickInput::from_quanta(v))
-        }
-        Applied::Settings {
-            mode,
-            method,
-            speed,
-        } => Command::Settings(crate::sessions::command::SettingsChange {
-            control_mode: *mode,
-            control_method: *method,
-            arm_speed: *speed,
-        }),
-        Applied::Release => Command::Release,
-        Applied::Diagnose { answer } => Command::Diagnose(answer.clone()),
-        Applied::Fault { fault } => {
-            Command::InjectFault(active_fault(fault).map_err(ReplayError::Record)?)
-        }
-        Applied::ClearFaults => Command::ClearFaults,
-        Applied::Current {
-            speed_m_s,
-            heading_deg,
-        } => Command::current(*speed_m_s, *heading_deg)
-            .map_err(|e| ReplayError::Record(e.to_string()))?,
-        Applied::Intervention => {
-            live.intervene();
-            return Ok(());
-        }
-    };
-    live.apply(&command)
-        .map(|_| ())
-        .map_err(|e| ReplayError::Record(e.to_string()))
 }

@@ -15,63 +15,59 @@ pub mod admission;
 pub mod command;
 pub mod physics;
 pub mod record;
-pub mod rest;
 pub mod snapshot;
-pub mod ws;
 
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Mutex, MutexGuard, OnceLock};
-use std::time::{Duration, Instant, SystemTime, UNIX_EPOCH};
+use std::time::{Duration, Instant};
 
 use axum::extract::ws::Utf8Bytes;
 use seaarms_core::Model;
-use seaarms_core::exercise::{ExerciseRun, ExerciseSpec};
+use seaarms_core::exercise::ExerciseRun;
 use seaarms_core::grasp::GraspState;
 use seaarms_core::kinematics::KinData;
 use seaarms_core::redundancy::{Redundancy, RedundancyParams};
-use seaarms_core::sim::{Input, Medium, SimParams, Simulation};
+use seaarms_core::sim::{Input, Simulation};
 use tokio::sync::watch;
 
+use crate::auth::Actor;
+use crate::auth::sha256_hex;
+use crate::catalogue::Scenario;
+use crate::clock::unix_now;
+use crate::ids::{random_hex, random_seed};
 use crate::metrics::Metrics;
-use crate::protocol::{ControlMethod, ControlMode, EndReason, PausedBy, Settings};
+use crate::protocol::{ControlMethod, ControlMode, EndReason, Settings};
 use admission::ClientKey;
+use command::fault::log_form::FaultEntry;
 use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
 use snapshot::{CARTESIAN_MAX_ANGULAR_RAD_S, CARTESIAN_MAX_LINEAR_M_S};
 
-/// Scenarios a live session can start from (the initial position of Lim §4.1 for all of
-/// them); `training` is free play.
-pub const LIVE_SCENARIOS: &[(&str, &str)] = &[
-    (
-        "training",
-        "Free play: both arms at the initial position, the 50 kg box on the seabed, in sea water",
-    ),
-    (
-        "case1-single-arm",
-        "Lim case study 1 set-up: move the left arm joint by joint, no object (in air, as the thesis)",
-    ),
-    (
-        "case2-single-arm-load",
-        "Lim case study 2 set-up: grab, lift and release the box with the left arm (in air, as the thesis)",
-    ),
-    (
-        "case3-dual-open-loop",
-        "Lim case study 3 set-up: both arms grab and carry the box in open loop (in air, as the thesis)",
-    ),
-    (
-        "case4-dual-closed-loop",
-        "Lim case study 4 set-up: both arms grab the box, switch to closed loop, carry it (in air, as the thesis)",
-    ),
-];
+/// Why an attempt's record ends; with the attempt's assessment, it gives the stored outcome.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum AttemptStop {
+    /// The exercise is done (the step that finished it; outcome `passed` or `failed`).
+    Finished,
+    /// The trainee moved on: a reset, a scenario switch, the session's end, or a headless
+    /// attempt's time limit (an unfinished exercise is `abandoned`, free play `ended`).
+    Left,
+    /// The server shut down (`interrupted`, unless the exercise was already done).
+    Interrupted,
+}
 
-/// The medium of a live scenario: free play (`training`) is subsea, like the exercises; the
-/// case-study set-ups stay in air, the thesis's setting (Lim §4.2), so their figures compare.
-pub fn free_medium(name: &str) -> Medium {
-    if name == "training" {
-        Medium::Subsea
-    } else {
-        Medium::Air
+impl AttemptStop {
+    /// The outcome stored for an attempt ending so: `passed` or `failed` for a done
+    /// exercise whatever stopped it; else `interrupted` on shutdown, `ended` for free play,
+    /// `abandoned` for an unfinished exercise.
+    pub fn outcome(self, assessment: Option<&seaarms_core::exercise::Assessment>) -> &'static str {
+        match (assessment, self) {
+            (Some(a), _) if a.done && a.passed => "passed",
+            (Some(a), _) if a.done => "failed",
+            (_, AttemptStop::Interrupted) => "interrupted",
+            (None, _) => "ended",
+            (Some(_), AttemptStop::Finished | AttemptStop::Left) => "abandoned",
+        }
     }
 }
 
@@ -96,53 +92,6 @@ pub struct SessionConfig {
     pub max_sessions_per_client: usize,
 }
 
-/// A random hex token of `bytes` bytes.
-pub fn random_hex(bytes: usize) -> String {
-    let mut buf = vec![0u8; bytes];
-    // getrandom only fails when the OS has no entropy source at all; fall back to the clock
-    // mixed with the address of the buffer so ids stay unique in that case.
-    if getrandom::fill(&mut buf).is_err() {
-        let seed = SystemTime::now()
-            .duration_since(UNIX_EPOCH)
-            .map(|d| d.as_nanos())
-            .unwrap_or(0);
-        for (i, b) in buf.iter_mut().enumerate() {
-            *b = (seed >> ((i % 16) * 8)) as u8 ^ (i as u8).wrapping_mul(151);
-        }
-    }
-    buf.iter().map(|b| format!("{b:02x}")).collect()
-}
-
-/// Compares two tokens exactly (no trimming, case-sensitive) in time independent of their
-/// contents and lengths: the SHA-256 digests of both are compared with an XOR fold, so neither
-/// the position of the first difference nor a length mismatch shows in the timing.
-pub fn token_eq(a: &str, b: &str) -> bool {
-    use sha2::{Digest, Sha256};
-    let (da, db) = (Sha256::digest(a.as_bytes()), Sha256::digest(b.as_bytes()));
-    let diff = da
-        .iter()
-        .zip(db.iter())
-        .fold(0u8, |acc, (x, y)| acc | (x ^ y));
-    std::hint::black_box(diff) == 0
-}
-
-/// The SHA-256 of `text`, as lowercase hex.
-pub fn sha256_hex(text: &str) -> String {
-    use sha2::{Digest, Sha256};
-    Sha256::digest(text.as_bytes())
-        .iter()
-        .map(|b| format!("{b:02x}"))
-        .collect()
-}
-
-/// Seconds since the Unix epoch.
-pub fn unix_now() -> f64 {
-    SystemTime::now()
-        .duration_since(UNIX_EPOCH)
-        .map(|d| d.as_secs_f64())
-        .unwrap_or(0.0)
-}
-
 /// A published state frame: its sequence number and the serialized JSON, shared by every client.
 #[derive(Debug, Clone)]
 pub struct Frame {
@@ -164,7 +113,7 @@ pub struct Live {
     /// Current settings.
     settings: Settings,
     /// Who paused the clock; `None` while it runs.
-    paused: Option<PausedBy>,
+    paused: Option<Actor>,
     /// Last input sequence number applied.
     input_seq: u64,
     /// Cartesian-mode stick commands per arm (fractions of the maximum speeds), turned into
@@ -207,57 +156,9 @@ pub struct Live {
     /// Whether attempts are recorded (a replay records nothing).
     recording: bool,
     /// The running attempt's input log (when recording).
-    log: Option<crate::replay::log::Writer>,
+    log: Option<command::log::Writer>,
     /// Attempt records waiting for the recorder, oldest first ([`Live::take_records`]).
     pending: Vec<RecordMsg>,
-}
-
-/// What a session runs.
-#[derive(Debug, Clone)]
-pub enum Scenario {
-    /// Free play or a case-study set-up ([`LIVE_SCENARIOS`]), by name.
-    Free(String),
-    /// An exercise (`exercises/<id>.json`).
-    Exercise(Arc<ExerciseSpec>),
-}
-
-impl Scenario {
-    /// Resolves a name: a live scenario or an exercise id.
-    pub fn resolve(name: &str) -> Option<Scenario> {
-        if LIVE_SCENARIOS.iter().any(|(n, _)| *n == name) {
-            Some(Scenario::Free(name.to_string()))
-        } else {
-            crate::exercises::EXERCISES
-                .get(name)
-                .map(Scenario::Exercise)
-        }
-    }
-
-    /// Its name (an exercise's id).
-    pub fn name(&self) -> &str {
-        match self {
-            Scenario::Free(n) => n,
-            Scenario::Exercise(e) => &e.id,
-        }
-    }
-
-    /// The exercise, if it is one.
-    pub fn exercise(&self) -> Option<&Arc<ExerciseSpec>> {
-        match self {
-            Scenario::Free(_) => None,
-            Scenario::Exercise(e) => Some(e),
-        }
-    }
-
-    /// A fresh simulation for it.
-    fn build_sim(&self, models: &[Arc<Model>; 2]) -> Result<Simulation, seaarms_core::Error> {
-        let params = match self {
-            Scenario::Free(n) => SimParams::case_study(&models[0], &models[1])?
-                .with_environment(free_medium(n).environment()),
-            Scenario::Exercise(e) => e.sim_params(&models[0], &models[1])?,
-        };
-        Simulation::new((*models[0]).clone(), (*models[1]).clone(), params)
-    }
 }
 
 impl Live {
@@ -316,10 +217,10 @@ impl Live {
         let control = scenario.exercise().map(|e| e.control);
         let settings = Settings {
             control_mode: mode
-                .or(control.map(|c| crate::exercises::wire_mode(c.mode)))
+                .or(control.map(|c| crate::protocol::wire_mode(c.mode)))
                 .unwrap_or_default(),
             control_method: method
-                .or(control.map(|c| crate::exercises::wire_method(c.method)))
+                .or(control.map(|c| crate::protocol::wire_method(c.method)))
                 .unwrap_or_default(),
             arm_speed: 1.0,
         };
@@ -374,11 +275,11 @@ impl Live {
             ExerciseRun::new(spec.clone(), &self.sim, seed)
         });
         if self.recording {
-            let init = crate::replay::Init {
-                format: crate::replay::log::FORMAT,
+            let init = command::log::Init {
+                format: command::log::FORMAT,
                 scenario: self.scenario.name().to_string(),
                 settings: self.settings,
-                faults: self.faults.iter().map(crate::replay::fault_entry).collect(),
+                faults: self.faults.iter().map(FaultEntry::from).collect(),
                 sim_faults: command::Arm::BOTH.map(|a| self.sim.params().arms[a.index()].faults),
                 seed,
                 current: self
@@ -396,18 +297,17 @@ impl Live {
                     scenario: self.scenario.name().to_string(),
                     exercise: exercise.map(|e| e.id.clone()),
                     exercise_version: exercise.map(|e| format!("{}", e.version)),
-                    sim_version: crate::replay::SIM_VERSION.to_string(),
+                    sim_version: command::log::SIM_VERSION.to_string(),
                     started_unix: unix_now(),
                     init: serde_json::to_value(&init).unwrap_or_default(),
                 })));
-            self.log = Some(crate::replay::log::Writer::new());
+            self.log = Some(command::log::Writer::new());
         }
     }
 
-    /// Ends the running attempt's record (its log's last piece and its outcome): `passed`
-    /// or `failed` for a finished exercise, `ended` for free play, else `unfinished`
-    /// (`abandoned`, `interrupted`).
-    pub fn end_attempt(&mut self, unfinished: &str) {
+    /// Ends the running attempt's record: its log's last piece and its outcome
+    /// ([`AttemptStop::outcome`]).
+    pub fn end_attempt(&mut self, stop: AttemptStop) {
         let Some(mut log) = self.log.take() else {
             return;
         };
@@ -419,17 +319,7 @@ impl Live {
             });
         }
         let assessment = self.exercise.as_ref().map(ExerciseRun::assessment);
-        let outcome = match &assessment {
-            Some(a) if a.done => {
-                if a.passed {
-                    "passed"
-                } else {
-                    "failed"
-                }
-            }
-            None if unfinished != "interrupted" => "ended",
-            _ => unfinished,
-        };
+        let outcome = stop.outcome(assessment.as_ref());
         self.pending
             .push(RecordMsg::AttemptEnded(Box::new(record::AttemptEnd {
                 id: self.attempt_id.clone(),
@@ -458,17 +348,19 @@ impl Live {
     }
 
     /// Logs what was applied in the running attempt, stamped with the current step.
-    fn log(&mut self, what: crate::replay::log::Applied) {
+    fn log(&mut self, what: command::log::Logged) {
         let k = self.sim.steps();
         if let Some(log) = self.log.as_mut() {
-            log.push(&crate::replay::log::Entry { k, what });
+            log.push(&command::log::Entry { k, what });
         }
     }
 
     /// Counts an instructor's intervention in the running attempt (and logs it: it counts in
     /// the score).
     pub fn intervene(&mut self) {
-        self.log(crate::replay::log::Applied::Intervention);
+        self.log(command::log::Logged::Intervention(
+            command::log::Intervention::Intervention,
+        ));
         if let Some(run) = self.exercise.as_mut() {
             run.intervention();
         }
@@ -505,14 +397,14 @@ impl Live {
     /// cleared, inputs cleared, an exercise's settings, a new attempt.
     pub fn set_scenario(&mut self, scenario: Scenario) -> Result<(), seaarms_core::Error> {
         let sim = scenario.build_sim(&self.models)?;
-        self.end_attempt("abandoned");
+        self.end_attempt(AttemptStop::Left);
         self.sim = sim;
         self.faults.clear();
         self.scenario = scenario;
         if let Some(c) = self.scenario.exercise().map(|e| e.control) {
             self.apply_settings(&SettingsChange {
-                control_mode: Some(crate::exercises::wire_mode(c.mode)),
-                control_method: Some(crate::exercises::wire_method(c.method)),
+                control_mode: Some(crate::protocol::wire_mode(c.mode)),
+                control_method: Some(crate::protocol::wire_method(c.method)),
                 arm_speed: None,
             });
         }
@@ -557,7 +449,7 @@ impl Live {
     }
 
     /// Who paused the clock, while it is paused.
-    pub fn paused_by(&self) -> Option<PausedBy> {
+    pub fn paused_by(&self) -> Option<Actor> {
         self.paused
     }
 
@@ -618,7 +510,7 @@ impl Live {
 
     /// Back to the initial position (Lim §4.1): simulation reset, inputs cleared.
     pub fn reset(&mut self) {
-        self.end_attempt("abandoned");
+        self.end_attempt(AttemptStop::Left);
         self.sim.reset();
         self.input.arms = Default::default();
         self.input.object_velocity = [0.0; 6];
@@ -631,7 +523,7 @@ impl Live {
 
     /// Pauses the clock on behalf of `by`, or resumes it (`None`); who may lift whose pause
     /// is [`Live::pause_as`]'s rule.
-    pub fn set_paused(&mut self, by: Option<PausedBy>) {
+    pub fn set_paused(&mut self, by: Option<Actor>) {
         self.paused = by;
     }
 
@@ -645,6 +537,23 @@ impl Live {
         fault.fault.apply_to(self.sim.faults_mut(fault.arm));
         self.faults.retain(|f| !f.same_slot(&fault));
         self.faults.push(fault);
+    }
+
+    /// Answers the running exercise's diagnosis drill.
+    pub fn diagnose(&mut self, answer: &str) -> Result<(), String> {
+        let run = self
+            .exercise
+            .as_mut()
+            .ok_or_else(|| "no exercise is running".to_string())?;
+        run.diagnose(answer).map(|_| ())
+    }
+
+    /// Sets the water's current (refused in air).
+    pub fn set_current(
+        &mut self,
+        current: seaarms_core::sim::water::Current,
+    ) -> Result<(), seaarms_core::Error> {
+        self.sim.set_current(current)
     }
 
     /// Removes every fault.
@@ -664,8 +573,6 @@ pub struct Session {
     pub label: String,
     /// The trainee's class or group ("" when none).
     pub group: String,
-    /// Scenario name.
-    pub scenario: Mutex<String>,
     /// Token that lets a trainee control this session.
     pub control_token: String,
     /// Creation time (Unix seconds).
@@ -713,19 +620,6 @@ impl Session {
         unix_now() - f64::from_bits(self.last_activity.load(Ordering::Relaxed))
     }
 
-    /// Current scenario name.
-    pub fn scenario(&self) -> String {
-        self.scenario
-            .lock()
-            .unwrap_or_else(|e| e.into_inner())
-            .clone()
-    }
-
-    /// Sets the scenario name (the caller resets the simulation).
-    pub fn set_scenario(&self, name: &str) {
-        *self.scenario.lock().unwrap_or_else(|e| e.into_inner()) = name.to_string();
-    }
-
     /// Seconds since creation.
     pub fn age_seconds(&self) -> f64 {
         unix_now() - self.created_unix
@@ -741,12 +635,6 @@ impl Session {
     pub fn seconds_since_trainee_left(&self) -> f64 {
         unix_now() - f64::from_bits(self.trainee_left.load(Ordering::Relaxed))
     }
-}
-
-/// A random seed for a session's attempts, below 2⁵³ so the page's JavaScript numbers hold
-/// it exactly.
-pub fn random_seed() -> u64 {
-    u64::from_str_radix(&random_hex(8), 16).unwrap_or(0) >> 11
 }
 
 /// Why a session could not be created.
@@ -840,7 +728,6 @@ impl SessionManager {
             id,
             label,
             group,
-            scenario: Mutex::new(scenario.name().to_string()),
             control_token: random_hex(16),
             created_unix: unix_now(),
             live: Mutex::new(live),
@@ -865,7 +752,7 @@ impl SessionManager {
             id: session.id.clone(),
             label: session.label.clone(),
             group: session.group.clone(),
-            scenario: session.scenario(),
+            scenario: scenario.name().to_string(),
             created_unix: session.created_unix,
             token_sha256: sha256_hex(&session.control_token),
         });
@@ -924,8 +811,8 @@ impl SessionManager {
         let sim_seconds = {
             let mut live = session.live();
             live.end_attempt(match reason {
-                EndReason::ServerShutdown => "interrupted",
-                _ => "abandoned",
+                EndReason::ServerShutdown => AttemptStop::Interrupted,
+                _ => AttemptStop::Left,
             });
             for msg in live.take_records(false) {
                 self.recorder.send(msg);

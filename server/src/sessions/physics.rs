@@ -259,7 +259,7 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
     // A finished exercise ends its attempt there and then (outcome passed or failed), so its
     // debrief opens from the trainee's completion card; "try again" starts the next one.
     if live.log.is_some() && live.exercise.as_ref().is_some_and(|run| run.done()) {
-        live.end_attempt("abandoned");
+        live.end_attempt(super::AttemptStop::Finished);
         for msg in live.take_records(false) {
             recorder.send(msg);
         }

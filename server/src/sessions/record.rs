@@ -23,11 +23,10 @@
 //!   retention age, then the oldest ended records beyond the size cap, are deleted (CSV and
 //!   database rows) — never a live session's.
 
-mod attempt;
 mod retention;
 mod row;
 
-pub use attempt::{AttemptEnd, AttemptStart, EventRecord};
+pub use crate::db::attempt::{AttemptEnd, AttemptStart, EventRecord};
 pub use retention::Retention;
 pub use row::{ArmRow, SessionRow};
 
@@ -98,7 +97,7 @@ pub enum RecordMsg {
     Event(Box<EventRecord>),
     /// An attempt started.
     AttemptStarted(Box<AttemptStart>),
-    /// The next piece of an attempt's compressed input stream ([`crate::replay::log`]):
+    /// The next piece of an attempt's compressed input stream ([`crate::sessions::command::log`]):
     /// appended in order; the pieces so far always decode.
     AttemptInputs {
         /// Attempt id.
@@ -258,7 +257,7 @@ impl Recorder {
                 ));
             }
         }
-        let probe = sessions.join(format!(".probe-{}", super::random_hex(4)));
+        let probe = sessions.join(format!(".probe-{}", crate::ids::random_hex(4)));
         match File::create(&probe) {
             Ok(_) => {
                 let _ = std::fs::remove_file(&probe);
@@ -388,8 +387,9 @@ fn open_whole(path: &Path) -> io::Result<WholeFile<File>> {
     Ok(WholeFile { file, len })
 }
 
-/// One live session in the recorder thread.
-struct Live {
+/// The recorder thread's files and counters of one live session (its CSV, rows not yet
+/// written, figures, next event number); not the session's live state, [`super::Live`].
+struct SessionRecording {
     csv: Option<WholeFile<File>>,
     /// Rows formatted since the last write (whole rows only).
     rows: CsvOut<Vec<u8>>,
@@ -404,8 +404,8 @@ struct Live {
     next_event: i64,
 }
 
-impl Live {
-    fn open(dir: &Path, id: &str) -> (Live, Option<io::Error>) {
+impl SessionRecording {
+    fn open(dir: &Path, id: &str) -> (SessionRecording, Option<io::Error>) {
         let mut err = None;
         let csv = match open_whole(&csv_path(dir, id)) {
             Ok(mut f) => {
@@ -428,7 +428,7 @@ impl Live {
         };
         let failed = err.is_some();
         (
-            Live {
+            SessionRecording {
                 csv: csv.filter(|_| !failed),
                 rows: CsvOut::new(Vec::new()),
                 pending_rows: 0,
@@ -451,7 +451,7 @@ struct RecorderState {
     metrics: Arc<Metrics>,
     config: RecordConfig,
     failed: FailedSet,
-    live: HashMap<String, Live>,
+    live: HashMap<String, SessionRecording>,
     /// Database writes since the last commit, in arrival order.
     writes: Vec<DbWrite>,
     /// Sequence number of each running attempt's next input piece.
@@ -617,7 +617,7 @@ impl RecorderState {
                 created_unix,
                 token_sha256,
             } => {
-                let (live, err) = Live::open(&self.dir, &id);
+                let (live, err) = SessionRecording::open(&self.dir, &id);
                 if let Some(e) = &err {
                     self.mark_failed(&id, "opening the record", e);
                 }
@@ -667,7 +667,7 @@ impl RecorderState {
                     seq,
                     attempt,
                     t,
-                    unix: super::unix_now(),
+                    unix: crate::clock::unix_now(),
                     kind,
                     actor,
                     detail: detail.to_string(),
@@ -780,7 +780,12 @@ impl RecorderState {
             })
             .collect();
         let live: HashSet<String> = self.live.keys().cloned().collect();
-        let prune = retention::select(&sized, &live, self.config.retention, super::unix_now());
+        let prune = retention::select(
+            &sized,
+            &live,
+            self.config.retention,
+            crate::clock::unix_now(),
+        );
         let mut deleted = Vec::new();
         for id in prune {
             if valid_id(&id) {
@@ -881,7 +886,7 @@ mod tests {
     #[test]
     fn repair_cuts_a_half_row() {
         let dir =
-            std::env::temp_dir().join(format!("seaarms-repair-{}", super::super::random_hex(6)));
+            std::env::temp_dir().join(format!("seaarms-repair-{}", crate::ids::random_hex(6)));
         std::fs::create_dir_all(&dir).expect("dir");
         let path = dir.join("x.csv");
         let mut whole = b"t,x\n".to_vec();

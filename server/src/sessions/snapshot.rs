@@ -9,7 +9,7 @@ use seaarms_core::manipulability::{Measures, dual_measures, jlm};
 use seaarms_core::sim::Arm;
 
 use super::Live;
-use crate::api::wire::PoseOut;
+use crate::protocol::PoseOut;
 use crate::protocol::{
     ArmFrame, ArmsFrame, DualFrame, EllipsoidFrame, MeasuresFrame, ObjectFrame, StateFrame,
     arm_name,

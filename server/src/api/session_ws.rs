@@ -25,17 +25,18 @@ use futures_util::{SinkExt, StreamExt};
 use serde::Deserialize;
 use tokio::sync::mpsc;
 
-use super::Session;
-use super::admission::TokenBucket;
-use super::command::{self, Actor, Arm, ArmSticks, Command, StickInput};
 use crate::api::wire::PoseOut;
 use crate::app::AppState;
+use crate::auth::{Actor, Credentials, TokenFrom};
 use crate::error::ApiError;
 use crate::metrics::Metrics;
 use crate::protocol::{
-    ArmAxes, ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, MAX_INPUT_SEQ,
-    ObjectModelOut, ScenarioOut, SceneOut, ServerMessage, arm_name,
+    ArmModelOut, ClientMessage, Hello, MAX_CLIENT_MESSAGE_BYTES, ObjectModelOut, ScenarioOut,
+    SceneOut, ServerMessage,
 };
+use crate::sessions::admission::TokenBucket;
+use crate::sessions::command::{self, Arm, Command};
+use crate::sessions::{Live, Session, SessionConfig};
 
 /// Largest message (and frame) the WebSocket transport reads (bytes): 4 × the documented
 /// limit, so oversize messages up to here are read whole and refused with a clean close.
@@ -48,22 +49,11 @@ pub const CLOSE_HANDSHAKE_TIMEOUT: Duration = Duration::from_secs(2);
 /// Close code 1009, "message too big" (RFC 6455 §7.4.1).
 pub const CLOSE_TOO_BIG: u16 = close_code::SIZE;
 
-/// Query of the WebSocket URL.
+/// Query of the WebSocket URL (the token is read by [`Credentials`]).
 #[derive(Debug, Deserialize)]
 pub struct WsQuery {
-    /// Trainee control token or instructor token.
-    pub token: Option<String>,
     /// `observer` for read-only.
     pub role: Option<String>,
-}
-
-/// Who is connected.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Role {
-    /// May control the session.
-    Trainee,
-    /// Read-only.
-    Observer,
 }
 
 /// Upgrade handler: 404 for an unknown session, 403 for a wrong or missing token.
@@ -71,6 +61,7 @@ pub async fn upgrade(
     State(state): State<AppState>,
     Path(id): Path<String>,
     Query(q): Query<WsQuery>,
+    creds: Credentials,
     ws: WebSocketUpgrade,
 ) -> Response {
     let Some(session) = state.sessions.get(&id) else {
@@ -79,19 +70,17 @@ pub async fn upgrade(
             .unwrap_or_else(|| ApiError::not_found(format!("no live session `{id}`")))
             .into_response();
     };
-    let token = q.token.unwrap_or_default();
     let wants_observer = q.role.as_deref() == Some("observer");
-    let role = if super::token_eq(&token, &session.control_token) {
-        if wants_observer {
-            Role::Observer
-        } else {
-            Role::Trainee
-        }
-    } else if super::token_eq(&token, &state.instructor_token) {
-        Role::Observer
-    } else {
-        return ApiError::new(axum::http::StatusCode::FORBIDDEN, "wrong or missing token")
-            .into_response();
+    let role = match creds
+        .principal(
+            &state,
+            TokenFrom::Query,
+            Some((&session.id, &session.control_token)),
+        )
+        .and_then(|p| p.on_socket(wants_observer))
+    {
+        Ok(role) => role,
+        Err(e) => return e.into_response(),
     };
     // tungstenite's 128 KiB default read buffer is re-zeroed on reads; client messages are
     // small (≤ 16 KiB), so a small buffer saves that work on every connection.
@@ -112,12 +101,13 @@ pub(crate) fn error_text(message: impl Into<String>) -> Utf8Bytes {
     serde_json::to_string(&msg).unwrap_or_default().into()
 }
 
-fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
-    let role = match role {
-        Role::Trainee => "trainee",
-        Role::Observer => "observer",
-    };
-    let mut hello = hello_for(&session.id, role, &session.live(), &state.sessions.config);
+fn hello(session: &Session, state: &AppState, role: Actor) -> Utf8Bytes {
+    let mut hello = hello_for(
+        &session.id,
+        role.as_str(),
+        &session.live(),
+        &state.sessions.config,
+    );
     hello.replica = Some(state.cluster.name.clone());
     serde_json::to_string(&ServerMessage::Hello(Box::new(hello)))
         .unwrap_or_default()
@@ -125,12 +115,7 @@ fn hello(session: &Session, state: &AppState, role: Role) -> Utf8Bytes {
 }
 
 /// The `hello` of session `id` in state `live` (a live session's, or a replay's).
-pub fn hello_for(
-    id: &str,
-    role: &'static str,
-    live: &super::Live,
-    config: &super::SessionConfig,
-) -> Hello {
+pub fn hello_for(id: &str, role: &'static str, live: &Live, config: &SessionConfig) -> Hello {
     let params = live.sim().params();
     let models = live.models();
     let arm = |arm: Arm| ArmModelOut {
@@ -151,13 +136,14 @@ pub fn hello_for(
         scenario: live.scenario().name().to_string(),
         frame_hz: config.frame_hz,
         max_messages_per_second: config.max_messages_per_second,
-        scenarios: super::LIVE_SCENARIOS
+        scenarios: crate::catalogue::LIVE_SCENARIOS
             .iter()
             .map(|&(name, description)| ScenarioOut { name, description })
             .collect(),
         exercise: live.scenario().exercise().cloned(),
         scene: SceneOut::new(params, live.scenario().exercise().map(|e| &**e)),
         replica: None,
+        replay: None,
     }
 }
 
@@ -208,7 +194,7 @@ async fn await_peer_close(stream: &mut SplitStream<WebSocket>) {
 
 /// One WebSocket connection: a writer task sends the hello, frames, notices and replies; this
 /// task reads the client's messages until it stops, then closes the connection cleanly.
-async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>, role: Role) {
+async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>, role: Actor) {
     let metrics = state.metrics.clone();
     connected(&metrics, &session, role);
     let (sink, mut stream) = socket.split();
@@ -233,9 +219,9 @@ async fn serve_socket(socket: WebSocket, state: AppState, session: Arc<Session>,
 }
 
 /// Counts a new connection (and a trainee joining its session).
-fn connected(metrics: &Metrics, session: &Session, role: Role) {
+fn connected(metrics: &Metrics, session: &Session, role: Actor) {
     metrics.ws_clients.fetch_add(1, Ordering::Relaxed);
-    if role == Role::Trainee {
+    if role == Actor::Trainee {
         session.trainees.fetch_add(1, Ordering::Relaxed);
         session.joined.store(true, Ordering::Relaxed);
         session.touch();
@@ -243,9 +229,9 @@ fn connected(metrics: &Metrics, session: &Session, role: Role) {
 }
 
 /// Counts a connection gone (and a trainee leaving its session).
-fn disconnected(metrics: &Metrics, session: &Session, role: Role) {
+fn disconnected(metrics: &Metrics, session: &Session, role: Actor) {
     metrics.ws_clients.fetch_sub(1, Ordering::Relaxed);
-    if role == Role::Trainee {
+    if role == Actor::Trainee {
         // The last one out starts the abandon grace (SessionManager::expire_idle).
         if session.trainees.fetch_sub(1, Ordering::Relaxed) == 1 {
             session.trainee_left();
@@ -323,15 +309,16 @@ async fn write_loop(
 }
 
 /// A connection's message rate limit: a token bucket allowing bursts of up to two seconds'
-/// worth of messages, and at most one notice a second about dropped ones.
-struct RateLimit {
+/// worth of messages, and at most one notice a second about dropped ones. The session and
+/// replay sockets both use it.
+pub(crate) struct RateLimit {
     bucket: TokenBucket,
     per_second: u32,
     last_notice: Option<Instant>,
 }
 
 impl RateLimit {
-    fn new(per_second: u32) -> RateLimit {
+    pub(crate) fn new(per_second: u32) -> RateLimit {
         let rate = f64::from(per_second.max(1));
         RateLimit {
             bucket: TokenBucket::new(2.0 * rate, rate, Instant::now()),
@@ -342,7 +329,7 @@ impl RateLimit {
 
     /// Takes a token for one message: `Ok` if within the limit, else `Err` with the notice to
     /// send the client, if one is due.
-    fn admit(&mut self) -> Result<(), Option<Utf8Bytes>> {
+    pub(crate) fn admit(&mut self) -> Result<(), Option<Utf8Bytes>> {
         if self.bucket.try_take(Instant::now()) {
             return Ok(());
         }
@@ -376,7 +363,7 @@ async fn read_loop(
     stream: &mut SplitStream<WebSocket>,
     state: &AppState,
     session: &Session,
-    role: Role,
+    role: Actor,
     reply_tx: &mpsc::Sender<Outgoing>,
 ) -> Ending {
     let metrics = &state.metrics;
@@ -425,7 +412,7 @@ fn reply(
     text: &str,
     state: &AppState,
     session: &Session,
-    role: Role,
+    role: Actor,
     reply_tx: &mpsc::Sender<Outgoing>,
 ) {
     let replies = match serde_json::from_str::<ClientMessage>(text) {
@@ -446,98 +433,19 @@ fn reply(
     }
 }
 
-/// Validates one arm's axes: six values (an empty list means all zero), each clamped to
-/// [−1, 1]; clamping is reported.
-fn arm_sticks(name: &str, a: &ArmAxes, notes: &mut Vec<String>) -> Result<ArmSticks, String> {
-    let mut axes = [0.0; 6];
-    if !a.axes.is_empty() && a.axes.len() != 6 {
-        return Err(format!(
-            "arms.{name}.axes must have 6 values, got {}",
-            a.axes.len()
-        ));
-    }
-    for (i, v) in a.axes.iter().enumerate() {
-        axes[i] = clamp_unit(*v, &format!("arms.{name}.axes[{i}]"), notes);
-    }
-    let grip = clamp_unit(a.grip, &format!("arms.{name}.grip"), notes);
-    Ok(ArmSticks { axes, grip })
-}
-
-fn clamp_unit(v: f64, what: &str, notes: &mut Vec<String>) -> f64 {
-    if !v.is_finite() {
-        notes.push(format!("{what} is not finite; used 0"));
-        return 0.0;
-    }
-    if v.abs() > 1.0 {
-        notes.push(format!("{what} = {v} clamped to {}", v.signum()));
-        return v.signum();
-    }
-    v
-}
-
-/// The WebSocket edge: a client message to a typed command (values validated, clamping
-/// reported in `notes`). `Ping` is answered by the connection itself and is no command.
-fn parse(msg: ClientMessage, notes: &mut Vec<String>) -> Result<Command, String> {
-    Ok(match msg {
-        ClientMessage::Input { seq, arms, object } => {
-            if seq > MAX_INPUT_SEQ {
-                return Err(format!(
-                    "seq must be at most 2^53 - 1 = {MAX_INPUT_SEQ} (exact in JavaScript), got {seq}; input ignored"
-                ));
-            }
-            let mut input = StickInput {
-                seq,
-                ..StickInput::default()
-            };
-            for (arm, a) in [(Arm::Left, &arms.left), (Arm::Right, &arms.right)] {
-                if let Some(a) = a {
-                    input.arms[arm.index()] = arm_sticks(arm_name(arm), a, notes)?;
-                }
-            }
-            if let Some(o) = &object {
-                if o.len() != 6 {
-                    return Err(format!("object must have 6 values, got {}", o.len()));
-                }
-                for (i, v) in o.iter().enumerate() {
-                    input.object[i] = clamp_unit(*v, &format!("object[{i}]"), notes);
-                }
-            }
-            Command::Input(input)
-        }
-        ClientMessage::Settings {
-            control_mode,
-            control_method,
-            arm_speed,
-        } => {
-            Command::settings(control_mode, control_method, arm_speed).map_err(|e| e.to_string())?
-        }
-        ClientMessage::Reset => Command::Reset,
-        ClientMessage::Pause => Command::Pause,
-        ClientMessage::Resume => Command::Resume,
-        ClientMessage::Release => Command::Release,
-        ClientMessage::Diagnose { answer } => Command::Diagnose(answer),
-        ClientMessage::Ping { .. } => return Err("ping is not a command".into()),
-    })
-}
-
 /// Handles one client message; returns the replies.
 fn handle(
     session: &Session,
     state: &AppState,
-    role: Role,
+    role: Actor,
     msg: ClientMessage,
 ) -> Vec<ServerMessage> {
     if let ClientMessage::Ping { t } = msg {
         return vec![ServerMessage::Pong { t }];
     }
-    let actor = match role {
-        Role::Trainee => Actor::Trainee,
-        Role::Observer => Actor::Observer,
-    };
     let mut notes = Vec::new();
-    let result = parse(msg, &mut notes).and_then(|c| {
-        command::apply(&state.sessions, session, actor, c).map_err(|e| e.to_string())
-    });
+    let result = Command::from_client(msg, &mut notes)
+        .and_then(|c| command::apply(&state.sessions, session, role, c).map_err(|e| e.to_string()));
     match result {
         Ok(()) => notes
             .into_iter()

@@ -1,11 +1,11 @@
 //! REST endpoints of sessions. Tokens travel as `Authorization: Bearer …` (the CSV download
-//! also accepts `?token=` so a plain link works). The instructor token may do everything;
-//! a trainee's control token acts on its own session only.
+//! and the assessment also accept `?token=` so a plain link works). The instructor token may
+//! do everything; a trainee's control token acts on its own session only ([`crate::auth`]).
 
 use std::sync::Arc;
 
 use axum::Json;
-use axum::extract::{Path, Query, State};
+use axum::extract::{Path, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use seaarms_core::exercise::ExerciseRun;
@@ -13,26 +13,17 @@ use seaarms_core::manipulability::{jlm, measures};
 use seaarms_core::sim::{Arm, Simulation};
 use serde::{Deserialize, Serialize};
 
-use super::admission::{ClientKey, Peer, client_ip};
-use super::command::{self, ActiveFault, Actor, Command, CommandError, Fault};
-use super::record::valid_id;
-use super::{CreateError, LIVE_SCENARIOS, Session, token_eq};
 use crate::app::AppState;
+use crate::auth::{Actor, Credentials, MISSING_TOKEN, TokenFrom, token_eq};
 use crate::db::unavailable as db_error;
 use crate::error::ApiError;
 use crate::json::ApiJson;
-use crate::protocol::{ControlMethod, ControlMode, PausedBy, fault_label, grasp_name, parse_arm};
+use crate::protocol::{Action, ControlMethod, ControlMode, fault_label, grasp_name};
 use crate::security::ws_base;
-
-/// The token of `Authorization: Bearer <token>`, exactly as sent (no trimming).
-pub(crate) fn bearer(headers: &HeaderMap) -> Option<&str> {
-    let (scheme, token) = headers
-        .get(header::AUTHORIZATION)?
-        .to_str()
-        .ok()?
-        .split_once(' ')?;
-    scheme.eq_ignore_ascii_case("bearer").then_some(token)
-}
+use crate::sessions::admission::{ClientKey, Peer, client_ip};
+use crate::sessions::command::{self, Command, CommandError};
+use crate::sessions::record::valid_id;
+use crate::sessions::{CreateError, Session};
 
 impl From<CommandError> for ApiError {
     fn from(e: CommandError) -> ApiError {
@@ -43,40 +34,31 @@ impl From<CommandError> for ApiError {
     }
 }
 
-/// Who a request acts as.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Caller {
-    Instructor,
-    Trainee,
-}
-
-fn caller(
+/// Who `creds` (read from `from`) act as on the live session `s`: its trainee or the
+/// instructor, else 403.
+fn live_actor(
     state: &AppState,
-    token: Option<&str>,
-    session: Option<&Session>,
-) -> Result<Caller, ApiError> {
-    let Some(token) = token else {
-        return Err(ApiError::forbidden(
-            "missing token (Authorization: Bearer …)",
-        ));
-    };
-    if token_eq(token, &state.instructor_token) {
-        return Ok(Caller::Instructor);
-    }
-    if let Some(s) = session {
-        if token_eq(token, &s.control_token) {
-            return Ok(Caller::Trainee);
-        }
-    }
-    Err(ApiError::forbidden("wrong token"))
+    creds: &Credentials,
+    from: TokenFrom,
+    s: &Session,
+) -> Result<Actor, ApiError> {
+    creds
+        .principal(state, from, Some((&s.id, &s.control_token)))?
+        .actor(MISSING_TOKEN)
 }
 
-/// 403 unless the request carries the instructor token.
-pub(crate) fn require_instructor(state: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {
-    match caller(state, bearer(headers), None)? {
-        Caller::Instructor => Ok(()),
-        Caller::Trainee => Err(ApiError::forbidden("instructor token required")),
-    }
+/// Who `creds` (read from `from`) act as on session `id`, which is not live: the instructor,
+/// or the trainee who held its control token (checked against the stored hash).
+async fn ended_actor(
+    state: &AppState,
+    creds: &Credentials,
+    from: TokenFrom,
+    id: &str,
+) -> Result<Actor, ApiError> {
+    creds
+        .principal_stored(state, from, id)
+        .await?
+        .actor(MISSING_TOKEN)
 }
 
 /// Body of `POST /api/sessions` (every field optional).
@@ -132,6 +114,7 @@ pub struct Created {
 pub async fn create(
     State(state): State<AppState>,
     Peer(peer): Peer,
+    creds: Credentials,
     headers: HeaderMap,
     body: axum::body::Bytes,
 ) -> Result<Response, ApiError> {
@@ -140,7 +123,9 @@ pub async fn create(
     } else {
         crate::json::parse(&body)?
     };
-    let instructor = bearer(&headers).is_some_and(|t| token_eq(t, &state.instructor_token));
+    let instructor = creds
+        .principal(&state, TokenFrom::Bearer, None)?
+        .is_instructor();
     let client = if instructor {
         ClientKey::Exempt
     } else {
@@ -210,9 +195,7 @@ pub async fn create(
         CreateError::ClientFull(_) => ApiError::new(StatusCode::TOO_MANY_REQUESTS, e.to_string()),
         CreateError::UnknownScenario(_) => {
             ApiError::bad_request(e.to_string()).with_detail(serde_json::json!({
-                "known": LIVE_SCENARIOS.iter().map(|(n, _)| (*n).to_string())
-                    .chain(crate::exercises::EXERCISES.all().iter().map(|e| e.id.clone()))
-                    .collect::<Vec<_>>()
+                "known": crate::catalogue::live_names()
             }))
         }
         CreateError::Sim(_) => ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
@@ -228,7 +211,7 @@ pub async fn create(
         let put = state.db.directory_put(
             session.id.clone(),
             state.cluster.name.clone(),
-            super::unix_now(),
+            crate::clock::unix_now(),
             summary,
         );
         if let Err(e) = put.await {
@@ -330,7 +313,7 @@ pub struct SessionSummary {
 #[derive(Debug, Serialize)]
 pub struct Roster {
     /// Who paused the clock (`instructor`, `trainee`), `null` while it runs.
-    pub paused_by: Option<PausedBy>,
+    pub paused_by: Option<Actor>,
     /// The running exercise attempt, `null` in free play.
     pub exercise: Option<ExerciseSummary>,
     /// The warnings of the session's current state frame.
@@ -393,7 +376,7 @@ fn live_summary(
     s: &Session,
     recording: &'static str,
     attempts: Vec<String>,
-    viewer: Caller,
+    viewer: Actor,
 ) -> SessionSummary {
     let live = s.live();
     let sim = live.sim();
@@ -415,7 +398,7 @@ fn live_summary(
         trainee: s.label.clone(),
         group: s.group.clone(),
         attempts,
-        scenario: s.scenario(),
+        scenario: live.scenario().name().to_string(),
         created_unix: s.created_unix,
         ended_unix: None,
         end_reason: None,
@@ -428,7 +411,7 @@ fn live_summary(
         faults: Some(
             live.faults()
                 .iter()
-                .filter(|f| viewer == Caller::Instructor || !f.silent)
+                .filter(|f| viewer == Actor::Instructor || !f.silent)
                 .map(|f| FaultSummary {
                     label: fault_label(f),
                     silent: f.silent,
@@ -439,7 +422,7 @@ fn live_summary(
         roster: Some(Roster {
             paused_by: live.paused_by(),
             exercise: live.exercise().map(|run| ExerciseSummary::new(run, sim)),
-            warnings: super::snapshot::warnings(&live),
+            warnings: crate::sessions::snapshot::warnings(&live),
             attempt: live.attempt_id().to_string(),
         }),
         replica: None,
@@ -460,7 +443,7 @@ pub(crate) fn directory_summary(state: &AppState, s: &Session) -> serde_json::Va
     let recording = state.sessions.recorder.recording(&s.id);
     serde_json::to_value(placed(
         state,
-        live_summary(s, recording, Vec::new(), Caller::Instructor),
+        live_summary(s, recording, Vec::new(), Actor::Instructor),
     ))
     .unwrap_or_default()
 }
@@ -502,24 +485,6 @@ fn ended_summary(
     }
 }
 
-/// The caller of a request about a session that is not live: the instructor, or the trainee
-/// who held its control token (checked against the stored hash).
-async fn ended_caller(state: &AppState, token: Option<&str>, id: &str) -> Result<Caller, ApiError> {
-    if let Ok(c) = caller(state, token, None) {
-        return Ok(c);
-    }
-    let Some(token) = token else {
-        return Err(ApiError::forbidden(
-            "missing token (Authorization: Bearer …)",
-        ));
-    };
-    let stored = state.db.session_token_sha256(id).await.map_err(db_error)?;
-    match stored {
-        Some(hash) if token_eq(&super::sha256_hex(token), &hash) => Ok(Caller::Trainee),
-        _ => Err(ApiError::forbidden("wrong token")),
-    }
-}
-
 /// Waits until the recorder has stored everything queued so far (sessions just ended).
 async fn flush_records(state: &AppState) {
     let sessions = state.sessions.clone();
@@ -530,9 +495,9 @@ async fn flush_records(state: &AppState) {
 /// from the records database (oldest first).
 pub async fn list(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
 ) -> Result<Json<Vec<serde_json::Value>>, ApiError> {
-    require_instructor(&state, &headers)?;
+    creds.require_instructor(&state)?;
     flush_records(&state).await;
     let live: Vec<Arc<Session>> = state.sessions.all();
     let stored = state.db.sessions().await.map_err(db_error)?;
@@ -549,7 +514,7 @@ pub async fn list(
             let a = attempts.remove(&s.id).unwrap_or_default();
             value(placed(
                 &state,
-                live_summary(s, recorder.recording(&s.id), a, Caller::Instructor),
+                live_summary(s, recorder.recording(&s.id), a, Actor::Instructor),
             ))
         })
         .collect();
@@ -588,12 +553,12 @@ pub async fn list(
 /// after it ended).
 pub async fn get_one(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
 ) -> Result<Json<SessionSummary>, ApiError> {
     let ids = |v: Vec<(String, String)>| v.into_iter().map(|(_, a)| a).collect::<Vec<_>>();
     if let Some(s) = state.sessions.get(&id) {
-        let viewer = caller(&state, bearer(&headers), Some(&s))?;
+        let viewer = live_actor(&state, &creds, TokenFrom::Bearer, &s)?;
         flush_records(&state).await;
         let attempts = ids(state.db.attempt_ids(Some(&id)).await.map_err(db_error)?);
         return Ok(Json(placed(
@@ -609,7 +574,7 @@ pub async fn get_one(
     if let Some(e) = crate::cluster::elsewhere(&state, &id).await {
         return Err(e);
     }
-    ended_caller(&state, bearer(&headers), &id).await?;
+    ended_actor(&state, &creds, TokenFrom::Bearer, &id).await?;
     flush_records(&state).await;
     let record = state
         .db
@@ -626,11 +591,11 @@ pub async fn get_one(
 /// 404 when no such session is live.
 pub async fn end(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
 ) -> Result<StatusCode, ApiError> {
     let s = live_session(&state, &id).await?;
-    let actor = actor(&state, &headers, &s)?;
+    let actor = live_actor(&state, &creds, TokenFrom::Bearer, &s)?;
     let sessions = state.sessions.clone();
     tokio::task::spawn_blocking(move || command::apply(&sessions, &s, actor, Command::End))
         .await
@@ -647,125 +612,18 @@ async fn live_session(state: &AppState, id: &str) -> Result<Arc<Session>, ApiErr
         .unwrap_or_else(|| ApiError::not_found(format!("no live session `{id}`"))))
 }
 
-fn actor(state: &AppState, headers: &HeaderMap, s: &Session) -> Result<Actor, ApiError> {
-    Ok(match caller(state, bearer(headers), Some(s))? {
-        Caller::Instructor => Actor::Instructor,
-        Caller::Trainee => Actor::Trainee,
-    })
-}
-
-/// Instructor actions on a session (a trainee may give `reset`, `pause`, `resume` and
-/// `release` to its own session).
-#[derive(Debug, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum Action {
-    /// Back to the initial position.
-    Reset,
-    /// Pause the clock.
-    Pause,
-    /// Resume it.
-    Resume,
-    /// Open both jaws.
-    Release,
-    /// Change scenario (resets the session).
-    Scenario {
-        /// Scenario name.
-        scenario: String,
-    },
-    /// Inject a fault.
-    Fault {
-        /// `supply_drop` (value: Pa, 0..6.89e6), `stuck_valve` (joint 0..5, value: spool in
-        /// [−1, 1]), `leak` (joint, value: m³/(s·Pa) in [0, 1e-9]), `air` (value: bulk-modulus
-        /// scale in [0.01, 1]).
-        fault: String,
-        /// `left` or `right`.
-        arm: String,
-        /// Joint index 0..5 (stuck_valve, leak).
-        #[serde(default)]
-        joint: Option<usize>,
-        /// Size of the fault (see `fault`).
-        value: f64,
-        /// Injected without telling the trainee: left out of the state frames and the
-        /// trainee's view; the instructor's session summary lists it with `"silent": true`.
-        #[serde(default)]
-        silent: bool,
-    },
-    /// Remove every fault.
-    ClearFaults,
-    /// Set the water's current (a subsea session): speed in [0, 2.5] m/s, heading (the
-    /// direction it flows towards, degrees from +x towards +y) within ±360°.
-    SetCurrent {
-        /// Speed (m/s).
-        speed_m_s: f64,
-        /// Heading (degrees).
-        heading_deg: f64,
-    },
-    /// Show a message on the trainee's page.
-    Message {
-        /// Up to 500 characters.
-        text: String,
-    },
-}
-
-impl TryFrom<Action> for Command {
-    type Error = CommandError;
-
-    /// The REST edge: an action's wire fields to a typed command.
-    fn try_from(action: Action) -> Result<Command, CommandError> {
-        Ok(match action {
-            Action::Reset => Command::Reset,
-            Action::Pause => Command::Pause,
-            Action::Resume => Command::Resume,
-            Action::Release => Command::Release,
-            Action::Scenario { scenario } => Command::scenario(&scenario)?,
-            Action::Fault {
-                fault,
-                arm,
-                joint,
-                value,
-                silent,
-            } => {
-                let arm = parse_arm(&arm).ok_or_else(|| {
-                    CommandError::Invalid(format!("arm must be `left` or `right`, got `{arm}`"))
-                })?;
-                let kind = command::FaultKind::parse(&fault).ok_or_else(|| {
-                    CommandError::Invalid(format!(
-                        "unknown fault `{fault}` ({})",
-                        command::FaultKind::NAMES.join(", ")
-                    ))
-                })?;
-                let fault = Fault::new(kind, joint, value).map_err(CommandError::Invalid)?;
-                Command::InjectFault(ActiveFault { arm, fault, silent })
-            }
-            Action::ClearFaults => Command::ClearFaults,
-            Action::SetCurrent {
-                speed_m_s,
-                heading_deg,
-            } => Command::current(speed_m_s, heading_deg)?,
-            Action::Message { text } => Command::message(&text)?,
-        })
-    }
-}
-
 /// `POST /api/sessions/{id}/actions`.
 pub async fn act(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
     ApiJson(action): ApiJson<Action>,
 ) -> Result<StatusCode, ApiError> {
     let s = live_session(&state, &id).await?;
-    let actor = actor(&state, &headers, &s)?;
+    let actor = live_actor(&state, &creds, TokenFrom::Bearer, &s)?;
     let command = Command::try_from(action)?;
     command::apply(&state.sessions, &s, actor, command)?;
     Ok(StatusCode::NO_CONTENT)
-}
-
-/// Query of the CSV download.
-#[derive(Debug, Deserialize)]
-pub struct TokenQuery {
-    /// Token, for plain download links.
-    pub token: Option<String>,
 }
 
 /// `GET /api/sessions/{id}/assessment` (the session's trainee or the instructor): the
@@ -773,19 +631,14 @@ pub struct TokenQuery {
 /// 404 for an unknown or ended session, 409 when it runs no exercise.
 pub async fn assessment(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
-    Query(q): Query<TokenQuery>,
 ) -> Result<Json<seaarms_core::exercise::Assessment>, ApiError> {
     let session = state
         .sessions
         .get(&id)
         .ok_or_else(|| ApiError::not_found(format!("no live session `{id}`")))?;
-    caller(
-        &state,
-        bearer(&headers).or(q.token.as_deref()),
-        Some(&session),
-    )?;
+    live_actor(&state, &creds, TokenFrom::BearerOrQuery, &session)?;
     let live = session.live();
     live.exercise()
         .map(|r| Json(r.assessment()))
@@ -804,17 +657,16 @@ pub async fn assessment(
 /// the session's trainee (also after it ended).
 pub async fn log_csv(
     State(state): State<AppState>,
-    headers: HeaderMap,
+    creds: Credentials,
     Path(id): Path<String>,
-    Query(q): Query<TokenQuery>,
 ) -> Result<Response, ApiError> {
     if !valid_id(&id) {
         return Err(ApiError::not_found(format!("no session `{id}`")));
     }
-    let token = bearer(&headers).or(q.token.as_deref());
+    let from = TokenFrom::BearerOrQuery;
     match state.sessions.get(&id) {
-        Some(live) => caller(&state, token, Some(&live))?,
-        None => ended_caller(&state, token, &id).await?,
+        Some(live) => live_actor(&state, &creds, from, &live)?,
+        None => ended_actor(&state, &creds, from, &id).await?,
     };
     let path = state
         .sessions

@@ -1,11 +1,11 @@
-//! What the recorder is told about attempts and events (the typed records of the database;
-//! [`crate::db`] stores them).
+//! The typed records of attempts and events: what the live state tells the recorder
+//! ([`crate::sessions::record`]) and the database stores.
 //!
 //! An *attempt* is one stretch of a session from a start (session creation, reset, scenario
 //! switch) to the next start or the session's end, for every scenario (an exercise's
 //! attempt carries its assessment). It is recorded as its initial conditions
 //! ([`AttemptStart::init`]) and the compressed stream of applied inputs
-//! ([`crate::replay::log`]), from which [`crate::replay`] re-simulates it exactly.
+//! ([`crate::sessions::command::log`]), from which [`crate::replay`] re-simulates it exactly.
 
 use serde::Serialize;
 

@@ -1,12 +1,13 @@
-//! An attempt's input log: every input, setting, action and fault applied to the live state,
-//! stamped with the step it was applied before, as one deflate stream.
+//! An attempt's record: its initial conditions ([`Init`]) and its input log, every
+//! [`Command`] applied to the live state that changes the simulation, stamped with the step
+//! it was applied before, as one deflate stream. [`crate::replay`] re-simulates it.
 //!
-//! * **What is logged** is what changes the simulation: stick input (quantized to
-//!   [`INPUT_QUANTUM`] at the edge, so the logged integers give back the applied values
-//!   bit for bit), settings, release, diagnosis, faults, the instructor's water current, and instructor
-//!   interventions
-//!   (they count in an exercise's score). Pause and resume are not: a paused session takes no
-//!   steps, so the step stamps already account for them.
+//! * **What is logged** is what changes the simulation: the [`Command`]s themselves, in
+//!   their log form (each command's file, [`super`]): stick input (quantized to
+//!   [`INPUT_QUANTUM`] when applied, so the logged integers give back the applied values bit
+//!   for bit), settings, release, diagnosis, faults, the instructor's water current; and
+//!   instructor interventions (they count in an exercise's score). Pause and resume are not:
+//!   a paused session takes no steps, so the step stamps already account for them.
 //! * **On disk** each entry is a JSON line. Stick input, the bulk of it, is written as
 //!   `[dk, i, d, i, d, …]`: steps since the previous entry, then the index and change of each
 //!   of the 20 values that changed (in quanta); other entries are objects with `dk`. The lines
@@ -20,12 +21,41 @@ use std::io::{Read, Write};
 use flate2::Compression;
 use flate2::read::DeflateDecoder;
 use flate2::write::DeflateEncoder;
+use seaarms_core::hydraulics::Faults;
+use seaarms_core::sim::water::Current;
 use serde::{Deserialize, Serialize};
 
-use crate::protocol::{ControlMethod, ControlMode};
+use super::Command;
+use super::fault::log_form::FaultEntry;
+use crate::protocol::Settings;
 
 /// Format of the log (stamped in every attempt's `init`).
 pub const FORMAT: u32 = 1;
+
+/// The simulator's version stamp: the crate version and a hash of every source that decides
+/// what the logged inputs do (see `build.rs`).
+pub const SIM_VERSION: &str = concat!(env!("CARGO_PKG_VERSION"), "+", env!("SEAARMS_SIM_HASH"));
+
+/// An attempt's initial conditions: with the log, all replay needs.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Init {
+    /// Log format ([`FORMAT`]).
+    pub format: u32,
+    /// Scenario name or exercise id.
+    pub scenario: String,
+    /// Settings at the start.
+    pub settings: Settings,
+    /// Instructor faults active at the start (shown in frames).
+    pub faults: Vec<FaultEntry>,
+    /// The simulation's fault parameters per arm at the start (left, right), exactly.
+    pub sim_faults: [Faults; 2],
+    /// Seed of the attempt's random draws.
+    pub seed: u64,
+    /// The water's current at the start (a subsea scenario with a current set; absent:
+    /// still water or air).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub current: Option<Current>,
+}
 /// Stick values are applied in steps of this size (a thousandth of full stick: finer than a
 /// proportional valve's hysteresis, coarser than a gamepad's noise).
 pub const INPUT_QUANTUM: f64 = 1e-3;
@@ -50,67 +80,25 @@ pub struct Entry {
     pub k: u64,
     /// What.
     #[serde(flatten)]
-    pub what: Applied,
+    pub what: Logged,
 }
 
-/// What an entry applied.
+/// What an entry applied: a command, or the mark of an instructor's intervention.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Logged {
+    /// A command, in its log form (`{"c": name, …}`).
+    Command(Command),
+    /// An instructor's command counted as an intervention (`{"c": "intervention"}`).
+    Intervention(Intervention),
+}
+
+/// The intervention mark's log form.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(tag = "c", rename_all = "snake_case")]
-pub enum Applied {
-    /// Stick input, in quanta.
-    Input {
-        /// The 20 values ([`INPUT_VALUES`]).
-        v: Vec<i32>,
-    },
-    /// Settings change.
-    Settings {
-        /// Joint or Cartesian.
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        mode: Option<ControlMode>,
-        /// Open or closed loop.
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        method: Option<ControlMethod>,
-        /// Arm speed.
-        #[serde(default, skip_serializing_if = "Option::is_none")]
-        speed: Option<f64>,
-    },
-    /// Both jaws driven open.
-    Release,
-    /// A fault-drill answer.
-    Diagnose {
-        /// The answer.
-        answer: String,
-    },
-    /// A fault injected.
-    Fault {
-        /// The fault (arm, kind, joint, size).
-        fault: FaultEntry,
-    },
-    /// Every fault removed.
-    ClearFaults,
-    /// The water's current set by the instructor.
-    Current {
-        /// Speed (m/s).
-        speed_m_s: f64,
-        /// Direction it flows towards (degrees from +x towards +y).
-        heading_deg: f64,
-    },
-    /// An instructor's command counted as an intervention.
+pub enum Intervention {
+    /// `{"c": "intervention"}`.
     Intervention,
-}
-
-/// A fault as logged (the wire's fields, see `POST /api/sessions/{id}/actions`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct FaultEntry {
-    /// 0 left, 1 right.
-    pub arm: usize,
-    /// Wire name of the kind (`supply_drop`, `stuck_valve`, `leak`, `air`).
-    pub kind: String,
-    /// Actuator, for per-joint kinds.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub joint: Option<usize>,
-    /// Size (Pa, spool position, m³/(s·Pa) or bulk-modulus scale).
-    pub value: f64,
 }
 
 /// Writes one attempt's log.
@@ -145,8 +133,9 @@ impl Writer {
     pub fn push(&mut self, entry: &Entry) {
         let dk = entry.k.saturating_sub(self.last_step);
         let line = match &entry.what {
-            Applied::Input { v } => {
-                if self.last_input.as_ref() == Some(v) {
+            Logged::Command(Command::Input(input)) => {
+                let v = input.quanta();
+                if self.last_input.as_ref() == Some(&v) {
                     return;
                 }
                 let prev = self.last_input.take().unwrap_or_else(|| vec![0; v.len()]);
@@ -157,7 +146,7 @@ impl Writer {
                         parts.push(i64::from(*a) - i64::from(*b));
                     }
                 }
-                self.last_input = Some(v.clone());
+                self.last_input = Some(v);
                 serde_json::to_string(&parts)
             }
             other => {
@@ -247,11 +236,11 @@ pub fn decode(bytes: &[u8]) -> Result<Vec<Entry>, DecodeError> {
                 *slot = i32::try_from(i64::from(*slot) + d)
                     .map_err(|_| err("input value out of range".into()))?;
             }
-            last = Some(v.clone());
             entries.push(Entry {
                 k: step,
-                what: Applied::Input { v },
+                what: Logged::Command(Command::Input(super::StickInput::from_quanta(&v))),
             });
+            last = Some(v);
         } else {
             let mut value: serde_json::Value =
                 serde_json::from_slice(line).map_err(|e| err(e.to_string()))?;
@@ -261,7 +250,7 @@ pub fn decode(bytes: &[u8]) -> Result<Vec<Entry>, DecodeError> {
                 .and_then(|d| d.as_u64())
                 .ok_or_else(|| err("no step (dk)".into()))?;
             step += dk;
-            let what: Applied = serde_json::from_value(value).map_err(|e| err(e.to_string()))?;
+            let what = logged(value).map_err(err)?;
             last = None;
             entries.push(Entry { k: step, what });
         }
@@ -269,9 +258,89 @@ pub fn decode(bytes: &[u8]) -> Result<Vec<Entry>, DecodeError> {
     Ok(entries)
 }
 
+/// A logged entry's object (without `dk`) read back: the intervention mark or a command.
+fn logged(value: serde_json::Value) -> Result<Logged, String> {
+    if value.get("c").and_then(|c| c.as_str()) == Some("intervention") {
+        return Ok(Logged::Intervention(Intervention::Intervention));
+    }
+    serde_json::from_value::<Command>(value)
+        .map(Logged::Command)
+        .map_err(|e| e.to_string())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// A logged stick input from its values in quanta.
+    pub(super) fn input(v: &[i32]) -> Logged {
+        Logged::Command(Command::Input(super::super::StickInput::from_quanta(v)))
+    }
+
+    /// A format-1 log as the server has written it since issue 16 (before commands were
+    /// logged as themselves): hand-written lines of every kind of entry, keys in serde_json's
+    /// sorted order. It decodes to the commands it names, and writing those commands again
+    /// gives back the same bytes.
+    #[test]
+    fn a_format_1_log_decodes_and_is_written_again_byte_for_byte() {
+        let text = concat!(
+            "[5,2,100,19,-3]\n",
+            "[20,2,-50]\n",
+            "{\"c\":\"settings\",\"dk\":3,\"method\":\"closed\",\"mode\":\"cartesian\",\"speed\":0.5}\n",
+            "{\"c\":\"release\",\"dk\":0}\n",
+            "[1,2,50,19,3]\n",
+            "{\"answer\":\"leak\",\"c\":\"diagnose\",\"dk\":1}\n",
+            "{\"c\":\"fault\",\"dk\":2,\"fault\":{\"arm\":1,\"joint\":3,\"kind\":\"leak\",\"value\":1e-11}}\n",
+            "{\"c\":\"fault\",\"dk\":0,\"fault\":{\"arm\":0,\"kind\":\"supply_drop\",\"value\":3000000.0}}\n",
+            "{\"c\":\"clear_faults\",\"dk\":0}\n",
+            "{\"c\":\"current\",\"dk\":4,\"heading_deg\":200.0,\"speed_m_s\":0.8}\n",
+            "{\"c\":\"intervention\",\"dk\":0}\n",
+        );
+        let mut enc = DeflateEncoder::new(Vec::new(), Compression::default());
+        enc.write_all(text.as_bytes()).unwrap();
+        let entries = decode(&enc.finish().unwrap()).unwrap();
+        let steps: Vec<u64> = entries.iter().map(|e| e.k).collect();
+        assert_eq!(steps, [5, 25, 28, 28, 29, 30, 32, 32, 32, 36, 36]);
+        let mut v = vec![0; INPUT_VALUES];
+        v[2] = 50;
+        v[19] = -3;
+        assert_eq!(entries[1].what, input(&v));
+        let Logged::Command(Command::Settings(s)) = &entries[2].what else {
+            panic!("settings: {:?}", entries[2].what);
+        };
+        assert_eq!(
+            s.control_mode,
+            Some(crate::protocol::ControlMode::Cartesian)
+        );
+        assert_eq!(
+            s.control_method,
+            Some(crate::protocol::ControlMethod::Closed)
+        );
+        assert_eq!(s.arm_speed, Some(0.5));
+        assert_eq!(entries[3].what, Logged::Command(Command::Release));
+        let Logged::Command(Command::InjectFault { fault }) = &entries[6].what else {
+            panic!("fault: {:?}", entries[6].what);
+        };
+        assert_eq!(fault.arm, seaarms_core::sim::Arm::Right);
+        assert_eq!(fault.fault.joint(), Some(3));
+        let Logged::Command(Command::SetCurrent(c)) = &entries[9].what else {
+            panic!("current: {:?}", entries[9].what);
+        };
+        assert_eq!((c.speed_m_s, c.heading_deg), (0.8, 200.0));
+        assert_eq!(
+            entries[10].what,
+            Logged::Intervention(Intervention::Intervention)
+        );
+        let mut w = Writer::new();
+        for e in &entries {
+            w.push(e);
+        }
+        let mut again = String::new();
+        DeflateDecoder::new(&w.finish()[..])
+            .read_to_string(&mut again)
+            .unwrap();
+        assert_eq!(again, text);
+    }
 
     #[test]
     fn entries_round_trip_through_pieces_and_a_cut_stream_keeps_whole_pieces() {
@@ -284,21 +353,23 @@ mod tests {
             v[19] = -(k as i32 % 7);
             let e = Entry {
                 k: k * 20,
-                what: Applied::Input { v },
+                what: input(&v),
             };
             w.push(&e);
             all.push(e);
             if k % 100 == 50 {
                 let e = Entry {
                     k: k * 20,
-                    what: Applied::Fault {
-                        fault: FaultEntry {
+                    what: Logged::Command(Command::InjectFault {
+                        fault: (&FaultEntry {
                             arm: 1,
                             kind: "leak".into(),
                             joint: Some(3),
                             value: 1e-11,
-                        },
-                    },
+                        })
+                            .try_into()
+                            .unwrap(),
+                    }),
                 };
                 w.push(&e);
                 all.push(e);
@@ -350,7 +421,7 @@ mod size {
             }
             w.push(&Entry {
                 k: m * 20,
-                what: Applied::Input { v },
+                what: tests::input(&v),
             });
         }
         let bytes = w.finish().len();

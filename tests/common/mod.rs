@@ -33,10 +33,7 @@ impl Server {
 
 /// A fresh path `seaarms-{tag}-{random hex}` in the system's temporary folder (not created).
 pub fn temp_dir(tag: &str) -> PathBuf {
-    std::env::temp_dir().join(format!(
-        "seaarms-{tag}-{}",
-        seaarms::ids::random_hex(6)
-    ))
+    std::env::temp_dir().join(format!("seaarms-{tag}-{}", seaarms::ids::random_hex(6)))
 }
 
 /// The built-in Magnum model (server/core/robots/magnum.json) for both arms, as the server

@@ -13,11 +13,10 @@ use axum::Json;
 use axum::extract::Path;
 use rust_embed::RustEmbed;
 use seaarms_core::exercise::autopilot::PILOT_INTERVAL_S;
-use seaarms_core::exercise::{Assessment, Autopilot, ExerciseSpec, Method, Mode};
+use seaarms_core::exercise::{Assessment, Autopilot, ExerciseSpec};
 use serde::Serialize;
 
 use crate::error::ApiError;
-use crate::protocol::{ControlMethod, ControlMode};
 use crate::sessions::command::{ArmSticks, Command, StickInput};
 use crate::sessions::record::RecordMsg;
 use crate::sessions::{Live, Scenario};
@@ -143,22 +142,6 @@ pub async fn get(Path(id): Path<String>) -> Result<Json<Arc<ExerciseSpec>>, ApiE
     })
 }
 
-/// The wire's mode for the core's.
-pub fn wire_mode(m: Mode) -> ControlMode {
-    match m {
-        Mode::Joint => ControlMode::Joint,
-        Mode::Cartesian => ControlMode::Cartesian,
-    }
-}
-
-/// The wire's method for the core's.
-pub fn wire_method(m: Method) -> ControlMethod {
-    match m {
-        Method::Open => ControlMethod::Open,
-        Method::Closed => ControlMethod::Closed,
-    }
-}
-
 /// Who drives a headless attempt.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Driver {
@@ -221,11 +204,7 @@ pub fn run_recorded(
                 pilot.tick(live.sim(), &run.facts())
             };
             if let Some((mode, method)) = out.settings {
-                live.apply(&Command::settings(
-                    mode.map(wire_mode),
-                    method.map(wire_method),
-                    None,
-                )?)?;
+                live.apply(&Command::settings(mode, method, None)?)?;
             }
             if let Some(answer) = out.answer {
                 live.apply(&Command::Diagnose(answer.to_string()))?;

@@ -100,27 +100,10 @@ pub struct ArmsAxes {
     pub right: Option<ArmAxes>,
 }
 
-/// Joint or Cartesian teleoperation (Lim §4.1 "control mode").
-#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum ControlMode {
-    /// Each axis drives one joint's valve.
-    #[default]
-    Joint,
-    /// Axes command end-effector velocity; redundancy resolution picks joint velocities.
-    Cartesian,
-}
-
-/// Open-loop or closed-loop cooperative control (Lim case studies 3 and 4).
-#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum ControlMethod {
-    /// Each input drives a valve.
-    #[default]
-    Open,
-    /// The operator commands object motion; a controller shares the load (both jaws holding).
-    Closed,
-}
+/// Joint or Cartesian teleoperation (Lim §4.1 "control mode"; wire names `joint`,
+/// `cartesian`) and open- or closed-loop cooperative control (Lim case studies 3 and 4; wire
+/// names `open`, `closed`): the core operator's own settings, one enum each.
+pub use seaarms_core::sim::{ControlMethod, ControlMode};
 
 /// Everything a client may send.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]

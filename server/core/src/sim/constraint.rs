@@ -22,7 +22,7 @@ use nalgebra::{
 
 use super::arm::ArmTerms;
 use super::object::ObjectTerms;
-use super::{ArmState, ObjectState, SimParams, StepParams};
+use super::{Arm, ArmState, Event, ObjectState, SimParams, StepParams};
 use crate::control::rotation_error;
 use crate::grasp::{self, GripCapacity, GripParams};
 use crate::hydraulics::N_ACT;
@@ -151,8 +151,9 @@ pub struct GripState {
     pub depth_slip_m: f64,
     /// Slip onsets since reset.
     pub slips: u64,
-    /// Grasps lost by slipping since reset (the bar slid out of the pads).
-    pub drops: u64,
+    /// Grasps lost by slipping since reset (the bar slid out of the pads; not the
+    /// assessment's *drop*, see [`Event::SlidOut`]).
+    pub slid_out: u64,
     /// The grasp was lost by slipping and the jaw has not opened since: it cannot take the
     /// handle again until it opens past it.
     pub lost: bool,
@@ -307,14 +308,17 @@ impl Constraint {
 /// from where the handle (`handle_m`, object frame) was taken, and lets go when it exceeds
 /// the travel; an episode is reported ([`GripState::slipping`], counted in `slips`) once it
 /// has slid [`SLIP_NOTICE_M`] or turned [`SLIP_NOTICE_RAD`]. `tool`, `object`:
-/// world poses after the step.
+/// world poses after the step. The onset ([`Event::Slip`]) and the slide-out
+/// ([`Event::SlidOut`]) of `arm`'s jaw go to `events`.
 pub(super) fn slip_stage(
+    arm: Arm,
     a: &mut ArmState,
     out: &GripOut,
     gp: &GripParams,
     handle_m: &Vector3<f64>,
     tool: &Isometry3<f64>,
     object: &Isometry3<f64>,
+    events: &mut Vec<Event>,
 ) {
     a.grip.load_fraction = if a.holding { out.load_fraction } else { 0.0 };
     a.grip.sliding = a.holding && out.slipping;
@@ -339,6 +343,10 @@ pub(super) fn slip_stage(
     {
         a.grip.slipping = true;
         a.grip.slips += 1;
+        events.push(Event::Slip {
+            arm,
+            load_fraction: a.grip.load_fraction,
+        });
     }
     let handle_jaw = a.grasp_rel.inverse() * Point3::from(*handle_m);
     a.grip.depth_slip_m = handle_jaw.z - a.grip.handle0.z;
@@ -348,6 +356,7 @@ pub(super) fn slip_stage(
         a.grip.slipping = false;
         a.grip.sliding = false;
         a.grip.lost = true;
-        a.grip.drops += 1;
+        a.grip.slid_out += 1;
+        events.push(Event::SlidOut { arm });
     }
 }

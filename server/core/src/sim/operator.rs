@@ -215,3 +215,112 @@ impl Operator {
         sim.step(input);
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::ModelSpec;
+    use crate::sim::SimParams;
+
+    fn setup() -> (Operator, Simulation) {
+        let text = crate::robots::builtin_text("magnum").unwrap_or_else(|| panic!("magnum"));
+        let spec: ModelSpec = serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}"));
+        let m = Model::from_spec(&spec).unwrap_or_else(|e| panic!("{e}"));
+        let p = SimParams::case_study(&m, &m).unwrap_or_else(|e| panic!("{e}"));
+        let op = Operator::new(&m, &m);
+        let sim = Simulation::new(m.clone(), m, p).unwrap_or_else(|e| panic!("{e}"));
+        (op, sim)
+    }
+
+    const AXES: [f64; 6] = [0.5, -0.25, 0.0, 0.0, 0.75, -1.0];
+
+    /// Joint mode puts each axis on its valve; Cartesian mode leaves the valves centred and
+    /// gives the servo a joint-velocity reference (zero for a centred stick), the same axes
+    /// read the other way; a mode change centres the sticks but not the grips.
+    #[test]
+    fn the_mode_decides_how_the_axes_are_read() {
+        let (mut op, sim) = setup();
+        let sticks = [
+            Sticks {
+                axes: AXES,
+                grip: -0.5,
+            },
+            Sticks::default(),
+        ];
+        op.set_sticks(&sticks, &[0.0; 6]);
+        let joint = *op.input(&sim);
+        assert_eq!(joint.arms[0].valves, AXES);
+        assert_eq!(joint.arms[0].jaw, -0.5);
+        assert!(joint.arms.iter().all(|a| a.joint_velocity_ref.is_none()));
+        op.set_mode(ControlMode::Cartesian);
+        assert_eq!(
+            op.input(&sim).arms[0].jaw,
+            -0.5,
+            "grips survive a mode change"
+        );
+        let linear = [0.5, 0.0, 0.0, 0.0, 0.0, 0.0];
+        op.set_sticks(
+            &[
+                Sticks {
+                    axes: linear,
+                    grip: 0.0,
+                },
+                Sticks::default(),
+            ],
+            &[0.0; 6],
+        );
+        let cart = *op.input(&sim);
+        assert_eq!(cart.arms[0].valves, [0.0; 6]);
+        let qd = cart.arms[0]
+            .joint_velocity_ref
+            .unwrap_or_else(|| panic!("a reference"));
+        assert!(qd.iter().any(|v| v.abs() > 1e-6), "{qd:?}");
+        assert_eq!(cart.arms[1].joint_velocity_ref, Some([0.0; 6]));
+        // The reference moves the tool as commanded: J·q̇ ≈ 0.5 × 0.2 m/s along world x
+        // (teleop::MAX_LINEAR_SPEED_M_S), computed with the simulation's world Jacobian.
+        let v = sim.jacobian_world(Arm::Left) * nalgebra::Vector6::from(qd);
+        assert!(
+            (v[0] - 0.1).abs() < 1e-3 && v[1].abs() < 1e-3 && v[2].abs() < 1e-3,
+            "{v}"
+        );
+    }
+
+    /// A release drives both jaws open until its end, and they stay open until new sticks.
+    #[test]
+    fn a_release_opens_the_jaws_until_new_sticks() {
+        let (mut op, mut sim) = setup();
+        let closing = [Sticks {
+            axes: [0.0; 6],
+            grip: -1.0,
+        }; 2];
+        op.set_sticks(&closing, &[0.0; 6]);
+        op.release(sim.time_s() + 0.005);
+        for _ in 0..10 {
+            op.step(&mut sim);
+            assert_eq!(op.input(&sim).arms.map(|a| a.jaw), [1.0, 1.0]);
+        }
+        op.set_sticks(&closing, &[0.0; 6]);
+        assert_eq!(op.input(&sim).arms.map(|a| a.jaw), [-1.0, -1.0]);
+    }
+
+    /// The object twist is a fraction of the controller's maximum speeds (ControlParams:
+    /// 0.2 m/s, 0.5 rad/s); method and speed are the settings.
+    #[test]
+    fn the_object_twist_and_the_settings_reach_the_input() {
+        let (mut op, sim) = setup();
+        op.set_method(ControlMethod::Closed);
+        op.set_speed(0.5);
+        op.set_sticks(&[Sticks::default(); 2], &[1.0, 0.0, -0.5, 0.0, 0.0, 1.0]);
+        let input = *op.input(&sim);
+        assert!(!op.idle(0.05));
+        assert_eq!(input.object_velocity, [0.2, 0.0, -0.1, 0.0, 0.0, 0.5]);
+        assert_eq!(
+            (input.method, input.speed_scale),
+            (ControlMethod::Closed, 0.5)
+        );
+        op.reset();
+        op.input(&sim);
+        assert!(op.idle(0.05));
+        assert_eq!((op.method(), op.speed()), (ControlMethod::Closed, 0.5));
+    }
+}

@@ -54,7 +54,7 @@ fn bench_step(c: &mut Criterion) {
     });
     let mut coop = base.clone();
     let lift = Input {
-        method: ControlMethod::ClosedLoop,
+        method: ControlMethod::Closed,
         object_velocity: [0.0, 0.0, 0.02, 0.0, 0.0, 0.0],
         ..Input::default()
     };

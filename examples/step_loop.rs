@@ -38,7 +38,7 @@ fn main() {
         _ => (
             holding_sim(&m),
             Input {
-                method: ControlMethod::ClosedLoop,
+                method: ControlMethod::Closed,
                 object_velocity: [0.0, 0.0, 0.02, 0.0, 0.0, 0.0],
                 ..Input::default()
             },

@@ -16,7 +16,6 @@ use serde::Serialize;
 
 use crate::catalogue::{EXERCISES, Scenario};
 use crate::error::ApiError;
-use crate::protocol::{wire_method, wire_mode};
 use crate::sessions::Live;
 use crate::sessions::command::{ArmSticks, Command, StickInput};
 use crate::sessions::record::RecordMsg;
@@ -135,11 +134,7 @@ pub fn run_recorded(
                 pilot.tick(live.sim(), &run.facts())
             };
             if let Some((mode, method)) = out.settings {
-                live.apply(&Command::settings(
-                    mode.map(wire_mode),
-                    method.map(wire_method),
-                    None,
-                )?)?;
+                live.apply(&Command::settings(mode, method, None)?)?;
             }
             if let Some(answer) = out.answer {
                 live.apply(&Command::Diagnose {

@@ -21,7 +21,7 @@
 //! (`seaarms_core::sim::Current`, `state.current`) and an exercise's status
 //! (`seaarms_core::exercise::Status`, `state.exercise`). A change to those types changes the
 //! wire. Enums are mapped to wire strings here ([`arm_name`], [`grasp_name`],
-//! [`fault_label`], [`wire_mode`]).
+//! [`fault_label`]); the control mode and method are the core's own enums.
 
 use std::sync::Arc;
 
@@ -178,43 +178,10 @@ pub struct ArmsAxes {
     pub right: Option<ArmAxes>,
 }
 
-/// Joint or Cartesian teleoperation (Lim §4.1 "control mode").
-#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum ControlMode {
-    /// Each axis drives one joint's valve.
-    #[default]
-    Joint,
-    /// Axes command end-effector velocity; redundancy resolution picks joint velocities.
-    Cartesian,
-}
-
-/// Open-loop or closed-loop cooperative control (Lim case studies 3 and 4).
-#[derive(Debug, Clone, Copy, Default, Deserialize, Serialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum ControlMethod {
-    /// Each input drives a valve.
-    #[default]
-    Open,
-    /// The operator commands object motion; a controller shares the load (both jaws holding).
-    Closed,
-}
-
-/// The wire's mode for the core's.
-pub fn wire_mode(m: seaarms_core::exercise::Mode) -> ControlMode {
-    match m {
-        seaarms_core::exercise::Mode::Joint => ControlMode::Joint,
-        seaarms_core::exercise::Mode::Cartesian => ControlMode::Cartesian,
-    }
-}
-
-/// The wire's method for the core's.
-pub fn wire_method(m: seaarms_core::exercise::Method) -> ControlMethod {
-    match m {
-        seaarms_core::exercise::Method::Open => ControlMethod::Open,
-        seaarms_core::exercise::Method::Closed => ControlMethod::Closed,
-    }
-}
+/// Joint or Cartesian teleoperation (Lim §4.1 "control mode"; wire names `joint`,
+/// `cartesian`) and open- or closed-loop cooperative control (Lim case studies 3 and 4; wire
+/// names `open`, `closed`): the core operator's own settings, one enum each.
+pub use seaarms_core::sim::{ControlMethod, ControlMode};
 
 /// Everything a client may send.
 #[derive(Debug, Clone, Deserialize, Serialize, PartialEq)]

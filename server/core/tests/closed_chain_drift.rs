@@ -59,15 +59,15 @@ fn hold_for_60_s(method: ControlMethod, lifted: bool) {
 
 #[test]
 fn both_jaws_hold_lifted_object_open_loop_without_drift() {
-    hold_for_60_s(ControlMethod::OpenLoop, true);
+    hold_for_60_s(ControlMethod::Open, true);
 }
 
 #[test]
 fn both_jaws_hold_lifted_object_closed_loop_without_drift() {
-    hold_for_60_s(ControlMethod::ClosedLoop, true);
+    hold_for_60_s(ControlMethod::Closed, true);
 }
 
 #[test]
 fn both_jaws_hold_object_on_seabed_without_drift() {
-    hold_for_60_s(ControlMethod::OpenLoop, false);
+    hold_for_60_s(ControlMethod::Open, false);
 }

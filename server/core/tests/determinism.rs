@@ -50,9 +50,9 @@ fn random_inputs(n: usize, seed: u64) -> Vec<Input> {
                 a.jaw = r.sym(1.0);
             }
             cur.method = if r.next() < 0.5 {
-                ControlMethod::OpenLoop
+                ControlMethod::Open
             } else {
-                ControlMethod::ClosedLoop
+                ControlMethod::Closed
             };
             cur.speed_scale = 0.2 + 0.8 * r.next();
         }

@@ -4,8 +4,9 @@
 //! eqs 3.49–3.50 with zero valve flow: the chamber volumes, hence the joints, cannot move but
 //! by compressing the oil), so nothing can make the closed chain's internal load grow: its
 //! internal force is what the grasp and the lift left in it and stays there. The operator
-//! drives the arms either joint by joint (joystick per valve, Lim case studies 1–3) or in
-//! Cartesian mode (an end-effector speed per arm through the joint servo, as the page does);
+//! drives the arms through the core's operator ([`Operator`], as live sessions do) either joint
+//! by joint (joystick per valve, Lim case studies 1–3) or in Cartesian mode (an end-effector
+//! speed per arm through the joint servo);
 //! both must hold, in air (Lim's setting) and subsea (training). Before the fix, the joint
 //! servo's position hold in Cartesian mode pushed each arm towards its own reference through
 //! the rigid box: λ rose by ≈ 0.05 per second and the box slipped out of the jaws after
@@ -17,16 +18,7 @@ use common::scenario_util::{run_while, start};
 use seaarms_core::control::teleop::cartesian_to_joint_velocity;
 use seaarms_core::grasp::GraspState;
 use seaarms_core::redundancy::{Redundancy, RedundancyParams};
-use seaarms_core::sim::{Arm, Environment, Input, Simulation};
-
-/// How the operator's sticks reach the valves.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Mode {
-    /// One valve per stick (open loop).
-    Joint,
-    /// End-effector speeds through redundancy resolution and the joint servo.
-    Cartesian,
-}
+use seaarms_core::sim::{Arm, ControlMode, Environment, Input, Operator, Simulation, Sticks};
 
 /// Both jaws closed on the nominal box resting on the seabed (case study 3 stages A–B:
 /// joint-space reach, then the open-loop grasp), with the finite grip, in `env`.
@@ -52,69 +44,44 @@ fn dual_grasp(env: Environment) -> Simulation {
     sim
 }
 
-/// The operator's input for one step: `stick` the same world end-effector velocity command
-/// for both arms (Cartesian, fractions of full stick) or, in joint mode, `valves` for both.
-struct Operator {
-    mode: Mode,
-    resolvers: [Redundancy; 2],
+/// The core's operator (stage 0, as live sessions, exercises and replays drive the arms) in
+/// `mode` at full speed, open loop: joint mode puts the axes on the valves; Cartesian mode
+/// resolves them per arm, the tools' orientation held while both jaws hold.
+fn operator(mode: ControlMode) -> Operator {
+    let m = common::builtin("magnum");
+    let mut op = Operator::new(&m, &m);
+    op.set_mode(mode);
+    op
 }
 
-impl Operator {
-    fn new(mode: Mode) -> Operator {
-        let m = common::builtin("magnum");
-        Operator {
-            mode,
-            resolvers: [
-                Redundancy::new(&m, RedundancyParams::default()),
-                Redundancy::new(&m, RedundancyParams::default()),
-            ],
-        }
-    }
+/// One step with `axes` on both arms' sticks (grips centred).
+fn step_with(sim: &mut Simulation, op: &mut Operator, axes: [f64; 6]) {
+    op.set_sticks(&[Sticks { axes, grip: 0.0 }; 2], &[0.0; 6]);
+    op.step(sim);
+}
 
-    /// The input the page would send: joint mode puts `valves` on both arms; Cartesian mode
-    /// resolves `stick` for each arm (zero stick gives a zero joint-velocity reference), the
-    /// orientation held while both jaws hold, as the page's resolver does
-    /// (server/src/sessions/physics.rs).
-    fn input(&mut self, sim: &Simulation, stick: [f64; 6], valves: [f64; 6]) -> Input {
-        match self.mode {
-            Mode::Joint => {
-                let mut input = Input {
-                    speed_scale: 1.0,
-                    ..Input::default()
-                };
-                for arm in Arm::BOTH {
-                    input.arms[arm.index()].valves = valves;
-                }
-                input
-            }
-            Mode::Cartesian => {
-                let chain = sim.grasp_state() == GraspState::BothHolding;
-                self.cartesian(sim, stick, chain)
-            }
-        }
+/// The counterfactual the operator does not do: Cartesian `stick` on both arms resolved on
+/// the translational rows only, although both jaws hold (`resolvers`: one per arm).
+fn translational_rows_only(
+    sim: &Simulation,
+    resolvers: &mut [Redundancy; 2],
+    stick: [f64; 6],
+) -> Input {
+    let m = common::builtin("magnum");
+    let mut input = Input::default();
+    for arm in Arm::BOTH {
+        let i = arm.index();
+        input.arms[i].joint_velocity_ref = Some(cartesian_to_joint_velocity(
+            &mut resolvers[i],
+            &m,
+            &sim.params().arms[i].base.rotation,
+            &sim.arm(arm).q,
+            &stick,
+            false,
+            1e-3,
+        ));
     }
-
-    /// Cartesian mode with `keep_orientation` given: all six rows with a zero angular rate
-    /// (`true`) or the translational rows only.
-    fn cartesian(&mut self, sim: &Simulation, stick: [f64; 6], keep_orientation: bool) -> Input {
-        let mut input = Input {
-            speed_scale: 1.0,
-            ..Input::default()
-        };
-        for arm in Arm::BOTH {
-            let i = arm.index();
-            input.arms[i].joint_velocity_ref = Some(cartesian_to_joint_velocity(
-                &mut self.resolvers[i],
-                sim.model(arm),
-                &sim.params().arms[i].base.rotation,
-                &sim.arm(arm).q,
-                &stick,
-                keep_orientation,
-                1e-3,
-            ));
-        }
-        input
-    }
+    input
 }
 
 /// Norm of the internal force (N).
@@ -161,8 +128,7 @@ fn hold(sim: &mut Simulation, op: &mut Operator, seconds: f64) -> Hold {
     };
     let n = (seconds * 1000.0).round() as usize;
     for k in 0..n {
-        let input = op.input(sim, [0.0; 6], [0.0; 6]);
-        sim.step(&input);
+        step_with(sim, op, [0.0; 6]);
         if k >= 200 {
             h.peak_load = h.peak_load.max(load(sim));
         }
@@ -191,7 +157,7 @@ fn hold(sim: &mut Simulation, op: &mut Operator, seconds: f64) -> Hold {
         slips0,
         "slipped: {h:?}"
     );
-    assert_eq!(Arm::BOTH.map(|a| sim.arm(a).grip.drops), [0, 0]);
+    assert_eq!(Arm::BOTH.map(|a| sim.arm(a).grip.slid_out), [0, 0]);
     h
 }
 
@@ -223,10 +189,9 @@ fn assert_held(what: &str, h: &Hold, max_load: f64) {
 /// (0.1 for 0.4 s; joint mode, Lim case 3's open-loop lift in miniature).
 fn lift_a_little(sim: &mut Simulation) -> f64 {
     let z0 = sim.object().pose.translation.vector.z;
-    let mut op = Operator::new(Mode::Joint);
+    let mut op = operator(ControlMode::Joint);
     for _ in 0..400 {
-        let input = op.input(sim, [0.0; 6], [0.0, 0.1, 0.0, 0.0, 0.0, 0.0]);
-        sim.step(&input);
+        step_with(sim, &mut op, [0.0, 0.1, 0.0, 0.0, 0.0, 0.0]);
     }
     let dz = sim.object().pose.translation.vector.z - z0;
     // Off the seabed: the jaws carry the box.
@@ -238,31 +203,31 @@ fn lift_a_little(sim: &mut Simulation) -> f64 {
     dz
 }
 
-fn grasp_and_hold(env: Environment, mode: Mode) {
+fn grasp_and_hold(env: Environment, mode: ControlMode) {
     let mut sim = dual_grasp(env);
-    let mut op = Operator::new(mode);
+    let mut op = operator(mode);
     let h = hold(&mut sim, &mut op, 30.0);
     assert_held(&format!("{mode:?} {env:?} on the seabed"), &h, 0.8);
 }
 
-fn lift_and_hold(env: Environment, mode: Mode) {
+fn lift_and_hold(env: Environment, mode: ControlMode) {
     let mut sim = dual_grasp(env);
     let dz = lift_a_little(&mut sim);
-    let mut op = Operator::new(mode);
+    let mut op = operator(mode);
     let h = hold(&mut sim, &mut op, 30.0);
     assert_held(&format!("{mode:?} {env:?} lifted {dz:.3} m"), &h, 1.0);
 }
 
 #[test]
 fn a_box_grasped_on_the_seabed_stays_held() {
-    grasp_and_hold(Environment::Air, Mode::Joint);
-    grasp_and_hold(Environment::subsea(), Mode::Cartesian);
+    grasp_and_hold(Environment::Air, ControlMode::Joint);
+    grasp_and_hold(Environment::subsea(), ControlMode::Cartesian);
 }
 
 #[test]
 fn a_lifted_box_stays_held_in_joint_mode() {
     for env in [Environment::Air, Environment::subsea()] {
-        lift_and_hold(env, Mode::Joint);
+        lift_and_hold(env, ControlMode::Joint);
     }
 }
 
@@ -271,7 +236,7 @@ fn a_lifted_box_stays_held_in_cartesian_mode() {
     // Failed before the servo centred the valves in a closed chain: the internal force grew
     // from 11 N to 1.58 kN (air) and the box was dropped.
     for env in [Environment::Air, Environment::subsea()] {
-        lift_and_hold(env, Mode::Cartesian);
+        lift_and_hold(env, ControlMode::Cartesian);
     }
 }
 
@@ -286,7 +251,12 @@ fn cartesian_pair_lift(
     t_s: f64,
 ) -> (f64, u64, Option<f64>, f64) {
     let mut sim = dual_grasp(env);
-    let mut op = Operator::new(Mode::Cartesian);
+    let mut op = operator(ControlMode::Cartesian);
+    let m = common::builtin("magnum");
+    let mut resolvers = [
+        Redundancy::new(&m, RedundancyParams::default()),
+        Redundancy::new(&m, RedundancyParams::default()),
+    ];
     let z0 = sim.object().pose.translation.vector.z;
     let slips0: u64 = Arm::BOTH.map(|a| sim.arm(a).grip.slips).iter().sum();
     let (mut first_slip, mut peak) = (None, 0.0f64);
@@ -294,8 +264,12 @@ fn cartesian_pair_lift(
     for k in 0..n {
         let t = k as f64 * 1e-3;
         let stick = [0.0, 0.0, 0.1 * (t / ramp_s).min(1.0), 0.0, 0.0, 0.0];
-        let input = op.cartesian(&sim, stick, chain);
-        sim.step(&input);
+        if chain {
+            step_with(&mut sim, &mut op, stick);
+        } else {
+            let input = translational_rows_only(&sim, &mut resolvers, stick);
+            sim.step(&input);
+        }
         peak = peak.max(load(&sim));
         let slips: u64 = Arm::BOTH.map(|a| sim.arm(a).grip.slips).iter().sum();
         if first_slip.is_none() && slips > slips0 {

@@ -200,7 +200,7 @@ fn nominal_closed_loop_sideways_move_keeps_the_box() {
              object moved {moved:.4?} m over D"
         );
         assert_eq!(slips, [0, 0], "{env:?}");
-        assert_eq!(Arm::BOTH.map(|a| sim.arm(a).grip.drops), [0, 0]);
+        assert_eq!(Arm::BOTH.map(|a| sim.arm(a).grip.slid_out), [0, 0]);
         assert_eq!(sim.grasp_state(), GraspState::BothHolding);
         assert_eq!(sim.numerical_faults(), 0);
         // The move's closed form: 0.05 m/s × 2 s = 0.1 m along y, nothing else (the object

@@ -24,7 +24,7 @@ fn step_does_not_allocate() {
         !(s.arm(Arm::Left).holding && s.arm(Arm::Right).holding)
     });
     let coop = Input {
-        method: ControlMethod::ClosedLoop,
+        method: ControlMethod::Closed,
         object_velocity: [0.0, 0.0, 0.02, 0.0, 0.0, 0.0],
         ..Input::default()
     };

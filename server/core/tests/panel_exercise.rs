@@ -10,10 +10,10 @@ use common::panel_util::{insert_pose, run_toward, stab_in_hand};
 use std::sync::Arc;
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
-use seaarms_core::exercise::{Action, Autopilot, Condition, ExerciseRun, ExerciseSpec, Mode};
+use seaarms_core::exercise::{Action, Autopilot, Condition, ExerciseRun, ExerciseSpec};
 use seaarms_core::ik::magnum_ik;
 use seaarms_core::panel::PanelParams;
-use seaarms_core::sim::{Arm, Input, Simulation, StabPhase};
+use seaarms_core::sim::{Arm, ControlMode, Input, Simulation, StabPhase};
 
 const VALVE_TURN: &str = include_str!("../../../exercises/valve-turn.json");
 const HOT_STAB: &str = include_str!("../../../exercises/hot-stab.json");
@@ -120,14 +120,17 @@ fn move_with_an_attitude_steers_the_angular_sticks() {
         }))
         .expect("action parses")
     };
-    let mut pilot = Autopilot::new(vec![action(rv)], Mode::Cartesian);
+    let mut pilot = Autopilot::new(vec![action(rv)], ControlMode::Cartesian);
     let out = pilot.tick(&sim, &run.facts());
     // Proportional: 5 stick per rad × 0.1 rad about z (autopilot::ATTITUDE_GAIN_PER_RAD).
     let w = Vector3::new(out.axes[1][3], out.axes[1][4], out.axes[1][5]);
     assert!((w - Vector3::z() * 0.5).norm() < 1e-9, "{w:?}");
     assert!(!pilot.finished(), "not there yet");
     // Already at the attitude: done at once, sticks at zero.
-    let mut pilot = Autopilot::new(vec![action(tool.rotation.scaled_axis())], Mode::Cartesian);
+    let mut pilot = Autopilot::new(
+        vec![action(tool.rotation.scaled_axis())],
+        ControlMode::Cartesian,
+    );
     let out = pilot.tick(&sim, &run.facts());
     assert_eq!(out.axes[1], [0.0; 6]);
     assert!(pilot.finished());

@@ -149,7 +149,7 @@ fn ten_minutes_joint_velocity_servo() {
 /// to open loop).
 fn closed_loop_input(r: &mut Rng, _: &Simulation) -> Input {
     let mut inp = Input {
-        method: ControlMethod::ClosedLoop,
+        method: ControlMethod::Closed,
         ..Input::default()
     };
     for v in inp.object_velocity.iter_mut() {

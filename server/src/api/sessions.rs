@@ -9,7 +9,6 @@ use axum::extract::{Path, State};
 use axum::http::{HeaderMap, HeaderValue, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use seaarms_core::exercise::ExerciseRun;
-use seaarms_core::manipulability::{jlm, measures};
 use seaarms_core::sim::{Arm, Simulation};
 use serde::{Deserialize, Serialize};
 
@@ -380,15 +379,14 @@ fn live_summary(
 ) -> SessionSummary {
     let live = s.live();
     let sim = live.sim();
+    // The measures of the last published frame.
     let arm = |arm: Arm| {
-        let jt = sim.jacobian_world(arm).fixed_rows::<3>(0).into_owned();
-        let j = nalgebra::DMatrix::from_column_slice(3, 6, jt.as_slice());
-        let m = measures(&j).ok();
+        let m = &live.measures().arms[arm.index()];
         ArmSummary {
-            yoshikawa: m.as_ref().map_or(0.0, |m| m.yoshikawa),
-            isotropy: m.as_ref().map_or(0.0, |m| m.isotropy),
-            hong: m.as_ref().map_or(0.0, |m| m.hong),
-            jlm: jlm(&s.models[arm.index()], &sim.arm(arm).q),
+            yoshikawa: m.translational.yoshikawa,
+            isotropy: m.translational.isotropy,
+            hong: m.translational.hong,
+            jlm: m.jlm,
         }
     };
     SessionSummary {

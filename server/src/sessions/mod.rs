@@ -25,10 +25,8 @@ use std::time::{Duration, Instant};
 use axum::extract::ws::Utf8Bytes;
 use seaarms_core::Model;
 use seaarms_core::exercise::ExerciseRun;
-use seaarms_core::grasp::GraspState;
-use seaarms_core::kinematics::KinData;
-use seaarms_core::redundancy::{Redundancy, RedundancyParams};
-use seaarms_core::sim::{Input, Simulation};
+use seaarms_core::sim::measures::{SimMeasures, measures};
+use seaarms_core::sim::{Operator, Simulation, Sticks};
 use tokio::sync::watch;
 
 use crate::auth::Actor;
@@ -42,7 +40,6 @@ use admission::ClientKey;
 use command::fault::log_form::FaultEntry;
 use command::{ActiveFault, SettingsChange, StickInput};
 use record::{RecordMsg, Recorder};
-use snapshot::{CARTESIAN_MAX_ANGULAR_RAD_S, CARTESIAN_MAX_LINEAR_M_S};
 
 /// Why an attempt's record ends; with the attempt's assessment, it gives the stored outcome.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -102,23 +99,20 @@ pub struct Frame {
 }
 
 /// Mutable state of a session, behind one mutex (held briefly by the physics worker each
-/// tick and by handlers applying commands). Its fields are private: the edges (WebSocket,
-/// REST) change it only through [`command::apply`] and read it through the accessors; the
-/// stepping engine ([`physics`], [`snapshot`]) works on the fields directly.
+/// tick and by handlers applying commands): the clock, the records and the core's operator
+/// and simulation. Its fields are private: the edges (WebSocket, REST) change it only
+/// through [`command::apply`] and read it through the accessors; the stepping engine
+/// ([`physics`], [`snapshot`]) works on the fields directly.
 pub struct Live {
     /// The simulation.
     sim: Simulation,
-    /// Inputs applied from the next step on.
-    input: Input,
-    /// Current settings.
-    settings: Settings,
+    /// Stage 0 of every step: sticks, grips and the settings (mode, method, speed) to the
+    /// simulation's input.
+    operator: Operator,
     /// Who paused the clock; `None` while it runs.
     paused: Option<Actor>,
     /// Last input sequence number applied.
     input_seq: u64,
-    /// Cartesian-mode stick commands per arm (fractions of the maximum speeds), turned into
-    /// joint-velocity references every step by redundancy resolution.
-    cartesian: [[f64; 6]; 2],
     /// Active faults (one per arm, kind and actuator).
     faults: Vec<ActiveFault>,
     /// Steps taken since the clock origin.
@@ -129,18 +123,11 @@ pub struct Live {
     frame_seq: u64,
     /// When the next frame is due.
     next_frame: Instant,
-    /// Per-arm kinematics scratch for frames.
-    kin: [KinData; 2],
-    /// Relief events already recorded.
-    relief_recorded: u64,
-    /// Grasp state at the last record row (events on change).
-    last_grasp: GraspState,
-    /// Per arm: slip onsets and grasps lost by slipping already recorded (`slip`/`drop` events).
-    grip_recorded: [(u64, u64); 2],
-    /// Both jaws are driven open until this simulated time (release/drop).
-    release_until_s: f64,
-    /// Redundancy resolvers for Cartesian mode, one per arm (preallocated).
-    redundancy: [Redundancy; 2],
+    /// The measures of the last published frame ([`snapshot::build_frame`]).
+    measures: SimMeasures,
+    /// The step events not yet recorded that are recorded once per record row
+    /// ([`physics::EventTally`]).
+    tally: physics::EventTally,
     /// The arm models (left, right).
     models: [Arc<Model>; 2],
     /// What the session runs: free play, a case-study set-up, or an exercise.
@@ -194,7 +181,7 @@ impl Live {
             seed,
             false,
         )?;
-        live.settings.arm_speed = settings.arm_speed;
+        live.operator.set_speed(settings.arm_speed);
         for f in faults {
             live.inject_fault(*f);
         }
@@ -215,37 +202,22 @@ impl Live {
     ) -> Result<Live, seaarms_core::Error> {
         let sim = scenario.build_sim(models)?;
         let control = scenario.exercise().map(|e| e.control);
-        let settings = Settings {
-            control_mode: mode
-                .or(control.map(|c| crate::protocol::wire_mode(c.mode)))
-                .unwrap_or_default(),
-            control_method: method
-                .or(control.map(|c| crate::protocol::wire_method(c.method)))
-                .unwrap_or_default(),
-            arm_speed: 1.0,
-        };
+        let mut operator = Operator::new(&models[0], &models[1]);
+        operator.set_mode(mode.or(control.map(|c| c.mode)).unwrap_or_default());
+        operator.set_method(method.or(control.map(|c| c.method)).unwrap_or_default());
         let now = Instant::now();
         let mut live = Live {
-            input: Input::default(),
+            measures: measures(&sim),
             sim,
-            settings,
+            operator,
             paused: None,
             input_seq: 0,
-            cartesian: [[0.0; 6]; 2],
             faults: Vec::new(),
             steps_since_origin: 0,
             origin: now,
             frame_seq: 0,
             next_frame: now,
-            kin: [KinData::new(&models[0]), KinData::new(&models[1])],
-            relief_recorded: 0,
-            last_grasp: GraspState::Free,
-            grip_recorded: [(0, 0); 2],
-            release_until_s: 0.0,
-            redundancy: [
-                Redundancy::new(&models[0], RedundancyParams::default()),
-                Redundancy::new(&models[1], RedundancyParams::default()),
-            ],
+            tally: Default::default(),
             models: models.clone(),
             scenario: scenario.clone(),
             exercise: None,
@@ -264,11 +236,6 @@ impl Live {
     /// state).
     fn start_attempt(&mut self) {
         self.attempt_id = random_hex(8);
-        // Fresh resolvers, so an attempt's start never depends on what came before it.
-        self.redundancy = [
-            Redundancy::new(&self.models[0], RedundancyParams::default()),
-            Redundancy::new(&self.models[1], RedundancyParams::default()),
-        ];
         let seed = self.next_seed;
         self.exercise = self.scenario.exercise().map(|spec| {
             self.next_seed = self.next_seed.wrapping_add(1);
@@ -278,7 +245,7 @@ impl Live {
             let init = command::log::Init {
                 format: command::log::FORMAT,
                 scenario: self.scenario.name().to_string(),
-                settings: self.settings,
+                settings: self.settings(),
                 faults: self.faults.iter().map(FaultEntry::from).collect(),
                 sim_faults: command::Arm::BOTH.map(|a| self.sim.params().arms[a.index()].faults),
                 seed,
@@ -403,8 +370,8 @@ impl Live {
         self.scenario = scenario;
         if let Some(c) = self.scenario.exercise().map(|e| e.control) {
             self.apply_settings(&SettingsChange {
-                control_mode: Some(crate::protocol::wire_mode(c.mode)),
-                control_method: Some(crate::protocol::wire_method(c.method)),
+                control_mode: Some(c.mode),
+                control_method: Some(c.method),
                 arm_speed: None,
             });
         }
@@ -412,20 +379,14 @@ impl Live {
         Ok(())
     }
 
-    /// No stick, grip or object input above the exercise's idle threshold (the page's
-    /// dead zone by default).
+    /// No stick, grip or object input above the exercise's idle threshold (0.05 by
+    /// default, under the page's dead zone).
     pub fn idle(&self) -> bool {
         let th = self
             .scenario
             .exercise()
             .map_or(0.05, |e| e.thresholds.idle_input);
-        let small = |v: &f64| v.abs() < th;
-        self.input
-            .arms
-            .iter()
-            .all(|a| a.valves.iter().all(small) && small(&a.jaw))
-            && self.cartesian.iter().flatten().all(small)
-            && self.input.object_velocity.iter().all(|v| v.abs() < 1e-12)
+        self.operator.idle(th)
     }
 
     /// The arm models (left, right).
@@ -438,9 +399,18 @@ impl Live {
         &self.sim
     }
 
-    /// Current settings.
+    /// The measures of the last published frame (per arm and dual; computed once per frame).
+    pub fn measures(&self) -> &SimMeasures {
+        &self.measures
+    }
+
+    /// Current settings (the operator's).
     pub fn settings(&self) -> Settings {
-        self.settings
+        Settings {
+            control_mode: self.operator.mode(),
+            control_method: self.operator.method(),
+            arm_speed: self.operator.speed(),
+        }
     }
 
     /// Whether the clock is paused.
@@ -458,66 +428,37 @@ impl Live {
         &self.faults
     }
 
-    /// New stick input: in joint mode the axes drive the valves, in Cartesian mode they are
-    /// end-effector velocity fractions (resolved every step); the grips drive the jaws.
+    /// New stick input for the operator (read by the mode it is in at each step,
+    /// [`Operator::input`]); the grips drive the jaws.
     pub fn apply_input(&mut self, input: &StickInput) {
-        for (arm, sticks) in input.arms.iter().enumerate() {
-            match self.settings.control_mode {
-                ControlMode::Joint => {
-                    self.input.arms[arm].valves = sticks.axes;
-                    self.cartesian[arm] = [0.0; 6];
-                }
-                ControlMode::Cartesian => {
-                    self.input.arms[arm].valves = [0.0; 6];
-                    self.cartesian[arm] = sticks.axes;
-                }
-            }
-            self.input.arms[arm].jaw = sticks.grip;
-        }
-        for (i, (v, f)) in self
-            .input
-            .object_velocity
-            .iter_mut()
-            .zip(input.object)
-            .enumerate()
-        {
-            let max = if i < 3 {
-                CARTESIAN_MAX_LINEAR_M_S
-            } else {
-                CARTESIAN_MAX_ANGULAR_RAD_S
-            };
-            *v = f * max;
-        }
+        let sticks = input.arms.map(|a| Sticks {
+            axes: a.axes,
+            grip: a.grip,
+        });
+        self.operator.set_sticks(&sticks, &input.object);
         self.input_seq = self.input_seq.max(input.seq);
     }
 
     /// Changes settings; a mode change stops every stick command.
     pub fn apply_settings(&mut self, change: &SettingsChange) {
         if let Some(s) = change.arm_speed {
-            self.settings.arm_speed = s;
+            self.operator.set_speed(s);
         }
         if let Some(m) = change.control_mode {
-            self.settings.control_mode = m;
-            self.cartesian = [[0.0; 6]; 2];
-            for a in &mut self.input.arms {
-                a.valves = [0.0; 6];
-            }
+            self.operator.set_mode(m);
         }
         if let Some(m) = change.control_method {
-            self.settings.control_method = m;
+            self.operator.set_method(m);
         }
     }
 
-    /// Back to the initial position (Lim §4.1): simulation reset, inputs cleared.
+    /// Back to the initial position (Lim §4.1): simulation reset, inputs cleared, fresh
+    /// resolvers (an attempt's start never depends on what came before it).
     pub fn reset(&mut self) {
         self.end_attempt(AttemptStop::Left);
         self.sim.reset();
-        self.input.arms = Default::default();
-        self.input.object_velocity = [0.0; 6];
-        self.cartesian = [[0.0; 6]; 2];
-        self.relief_recorded = 0;
-        self.grip_recorded = [(0, 0); 2];
-        self.release_until_s = 0.0;
+        self.operator.reset();
+        self.tally = Default::default();
         self.start_attempt();
     }
 
@@ -529,7 +470,7 @@ impl Live {
 
     /// Drives both jaws open for `duration_s` of simulated time, whatever the sticks say.
     pub fn release(&mut self, duration_s: f64) {
-        self.release_until_s = self.sim.time_s() + duration_s;
+        self.operator.release(self.sim.time_s() + duration_s);
     }
 
     /// Injects a fault, replacing one of the same kind on the same arm and actuator.

@@ -13,15 +13,14 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
-use seaarms_core::control::teleop::cartesian_to_joint_velocity;
-use seaarms_core::grasp::GraspState;
-use seaarms_core::sim::Arm;
+use seaarms_core::sim::{Arm, Event};
+use serde_json::json;
 
 use super::record::{EventRecord, RecordMsg, RecordSender, SessionRow};
 use super::snapshot::build_frame;
 use super::{Frame, Live, Session};
 use crate::metrics::Metrics;
-use crate::protocol::{ControlMethod, ControlMode, ServerMessage, arm_name, grasp_name};
+use crate::protocol::{ServerMessage, arm_name, grasp_name};
 
 /// Most 1 ms steps one session may run in one wake-up to catch up (50 ms of simulated time).
 pub const MAX_CATCH_UP_STEPS: u64 = 50;
@@ -174,14 +173,15 @@ pub fn step_session(
 }
 
 impl Live {
-    /// One 1 ms step of the session: the latest commands become the simulation's input
-    /// ([`Live::apply_control`]), the simulation steps, and every
+    /// One 1 ms step of the session: the core's operator turns the latest commands into the
+    /// simulation's input and the simulation steps ([`seaarms_core::sim::Operator::step`]);
+    /// the step's events go to the records ([`Live::record_events`]); every
     /// [`RECORD_EVERY_STEPS`] steps the exercise attempt takes an assessment sample.
-    /// Returns whether a record row is due (the same cadence). The real-time worker and
-    /// headless attempts both step through here.
+    /// Returns whether a record row is due (the same cadence). The real-time worker,
+    /// headless attempts and replays all step through here.
     pub fn advance(&mut self) -> bool {
-        self.apply_control();
-        self.sim.step(&self.input);
+        self.operator.step(&mut self.sim);
+        self.record_events();
         let due = self.sim.steps() % RECORD_EVERY_STEPS == 0;
         if due {
             let idle = self.idle();
@@ -192,37 +192,52 @@ impl Live {
         due
     }
 
-    /// Turns the latest commands into the simulation's input for the next step: Cartesian
-    /// sticks become joint-velocity references by redundancy resolution; the settings set
-    /// the method and speed scale.
-    fn apply_control(&mut self) {
-        self.input.speed_scale = self.settings.arm_speed;
-        self.input.method = match self.settings.control_method {
-            ControlMethod::Open => seaarms_core::sim::ControlMethod::OpenLoop,
-            ControlMethod::Closed => seaarms_core::sim::ControlMethod::ClosedLoop,
-        };
-        let releasing = self.sim.time_s() < self.release_until_s;
-        // Both jaws on the box: its closed chain fixes the tools' orientation (teleop docs).
-        let chain = self.sim.grasp_state() == GraspState::BothHolding;
-        for arm in Arm::BOTH {
-            let i = arm.index();
-            if releasing {
-                self.input.arms[i].jaw = 1.0;
-            }
-            self.input.arms[i].joint_velocity_ref = match self.settings.control_mode {
-                ControlMode::Joint => None,
-                ControlMode::Cartesian => Some(cartesian_to_joint_velocity(
-                    &mut self.redundancy[i],
-                    &self.models[i],
-                    &self.sim.params().arms[i].base.rotation,
-                    &self.sim.arm(arm).q,
-                    &self.cartesian[i],
-                    chain,
-                    1e-3,
-                )),
+    /// The last step's events for the records (only while recording): grasp changes, slip
+    /// onsets and slide-outs at once, with the step's time; relief openings and end stops
+    /// tallied and recorded once per record row ([`EventTally`]; a relief valve at its
+    /// setting can open and close every millisecond).
+    fn record_events(&mut self) {
+        if !self.recording || self.sim.events().is_empty() {
+            return;
+        }
+        for i in 0..self.sim.events().len() {
+            let e = self.sim.events()[i];
+            let (kind, detail) = match e {
+                Event::Grasp(state) => ("grasp", json!({"state": grasp_name(state)})),
+                Event::Slip { arm, load_fraction } => (
+                    "slip",
+                    json!({"arm": arm_name(arm), "load_fraction": load_fraction}),
+                ),
+                Event::SlidOut { arm } => ("slid_out", json!({"arm": arm_name(arm)})),
+                Event::Relief { arm, actuator } => {
+                    self.tally.relief += 1;
+                    self.tally.relief_first.get_or_insert((arm, actuator));
+                    continue;
+                }
+                Event::EndStop { arm, joint } => {
+                    self.tally.end_stops += 1;
+                    self.tally.end_stop_first.get_or_insert((arm, joint));
+                    continue;
+                }
             };
+            let record = self.event(kind, detail);
+            self.pending.push(RecordMsg::Event(record));
         }
     }
+}
+
+/// Relief openings and end stops since the last record row: recorded as at most one
+/// `relief` and one `end_stop` event per row, with the first one's arm and joint.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct EventTally {
+    /// Relief openings since the last row.
+    relief: u64,
+    /// The first of them: arm and actuator.
+    relief_first: Option<(Arm, usize)>,
+    /// End stops reached since the last row.
+    end_stops: u64,
+    /// The first of them: arm and joint.
+    end_stop_first: Option<(Arm, usize)>,
 }
 
 fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
@@ -232,27 +247,35 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
     }
     let sim = &live.sim;
     let row = Box::new(SessionRow::from_sim(sim, &live.attempt_id));
-    let grasp = sim.grasp_state();
-    let relief = sim.relief_events();
-    if relief > live.relief_recorded {
-        session
-            .overloads
-            .fetch_add(relief - live.relief_recorded, Ordering::Relaxed);
-        recorder.send(RecordMsg::Event(
-            live.event("relief", serde_json::json!({"count": relief})),
-        ));
+    let tally = std::mem::take(&mut live.tally);
+    if let Some((arm, joint)) = tally.relief_first {
+        session.overloads.fetch_add(tally.relief, Ordering::Relaxed);
+        recorder.send(RecordMsg::Event(live.event(
+            "relief",
+            json!({"count": live.sim.relief_events(), "arm": arm_name(arm), "joint": joint}),
+        )));
     }
-    live.relief_recorded = relief;
-    grip_events(live, recorder);
+    if let Some((arm, joint)) = tally.end_stop_first {
+        recorder.send(RecordMsg::Event(live.event(
+            "end_stop",
+            json!({"arm": arm_name(arm), "joint": joint, "count": tally.end_stops}),
+        )));
+    }
     if let Some(run) = live.exercise.as_mut() {
-        for e in run.take_events() {
+        // Slips and relief openings are recorded from the step's events above; the
+        // attempt's own notices of them (for the trainee's banner) are not recorded twice.
+        for e in run
+            .take_events()
+            .into_iter()
+            .filter(|e| !matches!(e.kind, "slip" | "relief"))
+        {
             recorder.send(RecordMsg::Event(Box::new(EventRecord {
                 session: live.session_id.clone(),
                 attempt: Some(live.attempt_id.clone()),
                 t: e.t,
                 kind: "exercise".into(),
                 actor: None,
-                detail: serde_json::json!({"kind": e.kind, "text": e.text}),
+                detail: json!({"kind": e.kind, "text": e.text}),
             })));
         }
     }
@@ -269,32 +292,4 @@ fn record_row(session: &Session, live: &mut Live, recorder: &RecordSender) {
         row,
         overloads: session.overloads.load(Ordering::Relaxed),
     });
-    if grasp != live.last_grasp {
-        recorder.send(RecordMsg::Event(
-            live.event("grasp", serde_json::json!({"state": grasp_name(grasp)})),
-        ));
-        live.last_grasp = grasp;
-    }
-}
-
-/// `slip` events (a jaw's bar started slipping: `{"arm", "load_fraction"}`) and `drop` events
-/// (the bar slid out of the jaw: `{"arm"}`), from the simulation's per-jaw counts.
-fn grip_events(live: &mut Live, recorder: &RecordSender) {
-    for arm in Arm::BOTH {
-        let i = arm.index();
-        let g = live.sim.arm(arm).grip;
-        let (slips, drops) = live.grip_recorded[i];
-        if g.slips > slips {
-            recorder.send(RecordMsg::Event(live.event(
-                "slip",
-                serde_json::json!({"arm": arm_name(arm), "load_fraction": g.load_fraction}),
-            )));
-        }
-        if g.drops > drops {
-            recorder.send(RecordMsg::Event(
-                live.event("drop", serde_json::json!({"arm": arm_name(arm)})),
-            ));
-        }
-        live.grip_recorded[i] = (g.slips, g.drops);
-    }
 }

@@ -2,11 +2,9 @@
 //! joint frames, end-effector poses, translational manipulability ellipsoids and measures
 //! per arm and dual (Lim eqs 3.62, 3.68; Hong eq. 4.1), JLM (Jun eq. 16), forces, warnings.
 
-use nalgebra::{DMatrix, Isometry3};
-use seaarms_core::exercise::assess::{near_limits, translational_measures};
-use seaarms_core::kinematics::forward_kinematics;
-use seaarms_core::manipulability::{Measures, dual_measures, jlm};
+use seaarms_core::manipulability::Measures;
 use seaarms_core::sim::Arm;
+use seaarms_core::sim::measures::measures;
 
 use super::Live;
 use crate::protocol::PoseOut;
@@ -14,15 +12,6 @@ use crate::protocol::{
     ArmFrame, ArmsFrame, DualFrame, EllipsoidFrame, MeasuresFrame, ObjectFrame, StateFrame,
     arm_name,
 };
-
-/// Isotropy below which an arm is reported near a singularity.
-pub const NEAR_SINGULAR_ISOTROPY: f64 = 0.05;
-/// A joint within this fraction of its range from a limit is reported near the limit.
-pub const NEAR_LIMIT_FRACTION: f64 = 0.05;
-/// Cartesian mode: end-effector linear speed at full stick (m/s).
-pub const CARTESIAN_MAX_LINEAR_M_S: f64 = seaarms_core::control::teleop::MAX_LINEAR_SPEED_M_S;
-/// Cartesian mode: end-effector angular speed at full stick (rad/s).
-pub const CARTESIAN_MAX_ANGULAR_RAD_S: f64 = seaarms_core::control::teleop::MAX_ANGULAR_SPEED_RAD_S;
 
 fn ellipsoid(m: &Measures) -> EllipsoidFrame {
     let mut radii = [0.0; 3];
@@ -47,19 +36,17 @@ fn measures_frame(m: &Measures, jlm: Option<f64>) -> MeasuresFrame {
     }
 }
 
-/// One arm's warnings: near a singularity (translational `isotropy` below
-/// [`NEAR_SINGULAR_ISOTROPY`]), joints near a limit, relief valves open, the jaw's bar
+/// One arm's warnings: near a singularity and joints near a limit (the core's measures,
+/// [`seaarms_core::sim::measures`], with its thresholds), relief valves open, the jaw's bar
 /// slipping (`slip:left`). The one rule behind the frames' and the summaries' `warnings`.
-fn arm_warnings(live: &Live, arm: Arm, isotropy: f64, warnings: &mut Vec<String>) {
+fn arm_warnings(live: &Live, arm: Arm, warnings: &mut Vec<String>) {
     let name = arm_name(arm);
     let state = live.sim.arm(arm);
-    if isotropy < NEAR_SINGULAR_ISOTROPY {
+    let m = &live.measures.arms[arm.index()];
+    if m.near_singularity {
         warnings.push(format!("near_singularity:{name}"));
     }
-    for (i, near) in near_limits(&live.models[arm.index()], &state.q, NEAR_LIMIT_FRACTION)
-        .iter()
-        .enumerate()
-    {
+    for (i, near) in m.near_limits.iter().enumerate() {
         if *near {
             warnings.push(format!("near_joint_limit:{name}:{i}"));
         }
@@ -74,36 +61,26 @@ fn arm_warnings(live: &Live, arm: Arm, isotropy: f64, warnings: &mut Vec<String>
     }
 }
 
-/// The warnings a frame of the session's current state carries (`near_singularity:left`,
-/// `near_joint_limit:right:3`, `relief:left:2`, …), without building the frame.
+/// The warnings the last published frame carried (`near_singularity:left`,
+/// `near_joint_limit:right:3`, `relief:left:2`, …; measures as published, valves and grips
+/// as now), without building a frame.
 pub fn warnings(live: &Live) -> Vec<String> {
     let mut warnings = Vec::new();
     for arm in Arm::BOTH {
-        let isotropy = translational_measures(live.sim.jacobian_world(arm)).isotropy;
-        arm_warnings(live, arm, isotropy, &mut warnings);
+        arm_warnings(live, arm, &mut warnings);
     }
     warnings
 }
 
-/// One arm's frame and its translational Jacobian (world), with its warnings.
-fn arm_frame(live: &mut Live, arm: Arm, warnings: &mut Vec<String>) -> (ArmFrame, DMatrix<f64>) {
+/// One arm's frame from the simulation and the published measures, with its warnings.
+fn arm_frame(live: &Live, arm: Arm, warnings: &mut Vec<String>) -> ArmFrame {
     let sim = &live.sim;
-    let model = &*live.models[arm.index()];
     let state = sim.arm(arm);
-    let jw = sim.jacobian_world(arm);
-    let jt = DMatrix::from_fn(3, 6, |r, c| jw[(r, c)]);
-    let m = translational_measures(jw);
-    arm_warnings(live, arm, m.isotropy, warnings);
-    let base: Isometry3<f64> = sim.params().arms[arm.index()].base;
-    forward_kinematics(model, &mut live.kin[arm.index()], &state.q);
-    let base_m = seaarms_core::model::as_matrix_isometry(&base);
-    let joint_frames = live.kin[arm.index()]
-        .joint_frames
-        .iter()
-        .map(|f| PoseOut::from(&(base_m * f)))
-        .collect();
+    let m = &live.measures.arms[arm.index()];
+    arm_warnings(live, arm, warnings);
+    let joint_frames = sim.joint_frames(arm).iter().map(PoseOut::from).collect();
     let w = state.contact_wrench;
-    let frame = ArmFrame {
+    ArmFrame {
         q: state.q,
         qd: state.qd,
         p_in: state.p_in,
@@ -113,8 +90,8 @@ fn arm_frame(live: &mut Live, arm: Arm, warnings: &mut Vec<String>) -> (ArmFrame
         contact: state.contact,
         pose: (&sim.end_effector(arm)).into(),
         joint_frames,
-        ellipsoid: ellipsoid(&m),
-        measures: measures_frame(&m, Some(jlm(model, &state.q))),
+        ellipsoid: ellipsoid(&m.translational),
+        measures: measures_frame(&m.translational, Some(m.jlm)),
         contact_force_n: [w[0], w[1], w[2]],
         contact_torque_nm: [w[3], w[4], w[5]],
         relief_open: state.relief_open,
@@ -125,24 +102,22 @@ fn arm_frame(live: &mut Live, arm: Arm, warnings: &mut Vec<String>) -> (ArmFrame
         } else {
             sim.in_capture_range(arm).map(|g| g.as_str())
         },
-    };
-    (frame, jt)
+    }
 }
 
 /// Builds the frame for a live state (a session's, or a replay's).
+/// The measures are computed here, once per frame ([`seaarms_core::sim::measures::measures`]),
+/// and kept as the session's published ones ([`Live::measures`]).
 pub fn build_frame(live: &mut Live) -> StateFrame {
+    live.measures = measures(&live.sim);
     let mut warnings = Vec::new();
-    let (left, jl) = arm_frame(live, Arm::Left, &mut warnings);
-    let (right, jr) = arm_frame(live, Arm::Right, &mut warnings);
+    let left = arm_frame(live, Arm::Left, &mut warnings);
+    let right = arm_frame(live, Arm::Right, &mut warnings);
     let sim = &live.sim;
-    let dual = if left.holding && right.holding {
-        dual_measures(&jl, &jr).ok().map(|m| DualFrame {
-            ellipsoid: ellipsoid(&m),
-            measures: measures_frame(&m, None),
-        })
-    } else {
-        None
-    };
+    let dual = live.measures.dual.as_ref().map(|m| DualFrame {
+        ellipsoid: ellipsoid(m),
+        measures: measures_frame(m, None),
+    });
     let object = sim.object();
     let v = object.velocity;
     let internal = sim.internal_wrench();
@@ -152,7 +127,7 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
         input_seq: live.input_seq,
         paused: live.paused(),
         paused_by: live.paused_by(),
-        settings: live.settings,
+        settings: live.settings(),
         arms: ArmsFrame { left, right },
         dual,
         object: ObjectFrame {

@@ -1,5 +1,5 @@
 //! The assessment of an attempt, computed from the simulation itself at 100 Hz: counted events
-//! (strikes, drops, overloads, relief, joint-limit hits), peaks (contact and internal force),
+//! (strikes, drops, overloads, relief, joint-limit hits, slips), peaks (contact and internal force),
 //! smoothness (RMS tool jerk), posture (mean Yoshikawa measure and JLM of the working arms,
 //! time near a singularity or a joint limit) and idle time; then the score.
 //!
@@ -14,22 +14,30 @@
 //! **passes** when every
 //! step is completed within the time limit, the score is at least `pass.min_score`, every
 //! `pass.limits` entry holds, and, in a fault drill, the named fault is the injected one.
+//!
+//! # Events
+//! The sampler detects what depends on the exercise (its obstacles and thresholds): seabed
+//! and obstacle strikes, jaw overloads, joint-limit hits (within `limit_hit_deg` of a limit)
+//! and drops (the last jaw lets go of the box above the seabed, [`DROP_HEIGHT_M`]). Slips
+//! and relief openings are detected once, by the step ([`crate::sim::Event`]); the sampler
+//! counts them from the step's tallies ([`crate::sim::GripState::slips`],
+//! [`Simulation::relief_events`]) and tells the trainee ([`Event`]) when they grow.
 
-use nalgebra::{DMatrix, Matrix6, Vector3};
+use nalgebra::Vector3;
 use serde::Serialize;
 
 use super::spec::{ExerciseSpec, Obstacle, Thresholds};
 use crate::kinematics::{KinData, forward_kinematics};
-use crate::manipulability::{Measures, jlm, measures};
 use crate::model::Model;
+use crate::sim::measures::{arm_measures, near_limits};
 use crate::sim::{Arm, Simulation};
 
 /// Interval between assessment samples (s): 0.01 (100 Hz, the record rate).
 pub const SAMPLE_INTERVAL_S: f64 = 0.01;
 /// A box let go with its lowest corner higher than this above the seabed is dropped (m): 0.02.
 pub const DROP_HEIGHT_M: f64 = 0.02;
-/// Score points taken off per slip of a jaw's load (a rising edge of a jaw slipping, sampled
-/// at 100 Hz): 5. A slip is the trainee's loss of control of the load (docs/exercises.md);
+/// Score points taken off per slip of a jaw's load (a slip onset, [`crate::sim::Event::Slip`]):
+/// 5. A slip is the trainee's loss of control of the load (docs/exercises.md);
 /// five of them cost a grade band, as five seabed strikes would in a term weighted 1 of 5.
 pub const SLIP_PENALTY_POINTS: f64 = 5.0;
 /// The most the slips can take off the score (points): 20, so that the score still ranks
@@ -55,7 +63,7 @@ pub struct Metrics {
     pub obstacle_strikes: f64,
     /// Times the last jaw let go of the box with its lowest corner over 2 cm above the seabed.
     pub drops: f64,
-    /// Times a jaw's load started slipping (rising edges, 100 Hz samples).
+    /// Times a jaw's load started slipping (the step's slip onsets, [`crate::sim::Event::Slip`]).
     pub slips: f64,
     /// Time a jaw's load spent slipping (s).
     pub slip_s: f64,
@@ -163,26 +171,6 @@ impl JerkMeter {
     }
 }
 
-/// Translational manipulability measures of a world-frame 6×6 Jacobian's first three rows
-/// (zeros when they cannot be computed): what the state frame shows and the assessment averages.
-pub fn translational_measures(jw: &Matrix6<f64>) -> Measures {
-    let jt = DMatrix::from_fn(3, 6, |r, c| jw[(r, c)]);
-    measures(&jt)
-        .unwrap_or_else(|_| Measures::from_spectrum(&[0.0; 3], &DMatrix::identity(3, 3), 0.0))
-}
-
-/// Per joint: whether `q` lies within `fraction` of the joint's range from a limit.
-pub fn near_limits(model: &Model, q: &[f64; 6], fraction: f64) -> [bool; 6] {
-    let mut out = [false; 6];
-    for ((o, q), joint) in out.iter_mut().zip(q).zip(&model.joints) {
-        if joint.is_limited() {
-            let margin = fraction * (joint.limits[1] - joint.limits[0]);
-            *o = q - joint.limits[0] < margin || joint.limits[1] - q < margin;
-        }
-    }
-    out
-}
-
 /// Points along an arm for strike tests: the origins of every joint frame, the midpoints
 /// between consecutive ones, and the tool point (world frame).
 pub fn arm_points(sim: &Simulation, arm: Arm, kin: &mut KinData, out: &mut Vec<Vector3<f64>>) {
@@ -241,7 +229,8 @@ pub struct Assessor {
     in_seabed: [bool; 2],
     in_obstacle: [bool; 2],
     overloaded: [bool; 2],
-    slipping: [bool; 2],
+    slips_at_start: [u64; 2],
+    slips: [f64; 2],
     at_limit: [[bool; 6]; 2],
     was_holding: bool,
     relief_at_start: u64,
@@ -270,7 +259,8 @@ impl Assessor {
             in_seabed: [false; 2],
             in_obstacle: [false; 2],
             overloaded: [false; 2],
-            slipping: [false; 2],
+            slips_at_start: Arm::BOTH.map(|a| sim.arm(a).grip.slips),
+            slips: [0.0; 2],
             // A joint that starts at a limit (the scene's posture) has not hit it.
             at_limit: Arm::BOTH
                 .map(|a| at_limits(sim.model(a), &sim.arm(a).q, spec.thresholds.limit_hit_deg)),
@@ -339,9 +329,8 @@ impl Assessor {
             }
             self.overloaded[i] = over;
             m.peak_grip_load = m.peak_grip_load.max(st.grip.load_fraction);
-            let slipping = st.grip.slipping;
-            if slipping && !self.slipping[i] {
-                m.slips += 1.0;
+            let slips = st.grip.slips.saturating_sub(self.slips_at_start[i]) as f64;
+            if slips > self.slips[i] {
                 events.push(Event {
                     kind: "slip",
                     t,
@@ -352,10 +341,10 @@ impl Assessor {
                     ),
                 });
             }
-            if slipping {
+            self.slips[i] = slips;
+            if st.grip.slipping {
                 m.slip_s += dt;
             }
-            self.slipping[i] = slipping;
             let model = sim.model(arm);
             let at = at_limits(model, &st.q, th.limit_hit_deg);
             for (k, &hit_now) in at.iter().enumerate() {
@@ -370,6 +359,7 @@ impl Assessor {
                 self.at_limit[i][k] = hit_now;
             }
         }
+        m.slips = self.slips[0] + self.slips[1];
         let w = sim.internal_wrench();
         m.peak_internal_force_n = m
             .peak_internal_force_n
@@ -424,12 +414,12 @@ impl Assessor {
             if jerk_sample {
                 self.jerk[i].add(sim.end_effector(arm).translation.vector, JERK_INTERVAL_S);
             }
-            let me = translational_measures(sim.jacobian_world(arm));
+            let me = arm_measures(sim, arm);
             let q = sim.arm(arm).q;
-            self.yoshikawa_sum += me.yoshikawa;
-            self.jlm_sum += jlm(sim.model(arm), &q);
+            self.yoshikawa_sum += me.translational.yoshikawa;
+            self.jlm_sum += me.jlm;
             self.posture_samples += 1.0;
-            near_s |= me.isotropy < th.singular_isotropy;
+            near_s |= me.translational.isotropy < th.singular_isotropy;
             near_l |= near_limits(sim.model(arm), &q, th.near_limit_fraction)
                 .iter()
                 .any(|b| *b);

@@ -11,10 +11,11 @@ use nalgebra::{UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::condition::{Condition, Facts};
-use super::spec::{ArmName, Method, Mode, Scene};
+use super::spec::{ArmName, Scene};
 use crate::control::rotation_error;
 use crate::hydraulics::FaultKind;
 use crate::sim::{Arm, Simulation};
+use crate::sim::{ControlMethod, ControlMode};
 
 /// Interval between autopilot commands (s): 0.02, the page's 50 Hz send rate.
 pub const PILOT_INTERVAL_S: f64 = 0.02;
@@ -61,10 +62,10 @@ pub enum Action {
     Settings {
         /// New mode.
         #[serde(default)]
-        mode: Option<Mode>,
+        mode: Option<ControlMode>,
         /// New method.
         #[serde(default)]
-        method: Option<Method>,
+        method: Option<ControlMethod>,
     },
     /// Cartesian mode: steer `arm`'s tool (or the box it carries) to `to` + `offset_m`
     /// (proportional control on the linear sticks) until within `tolerance_m`; with `level`,
@@ -200,7 +201,7 @@ impl Action {
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct PilotOutput {
     /// A settings change to send first.
-    pub settings: Option<(Option<Mode>, Option<Method>)>,
+    pub settings: Option<(Option<ControlMode>, Option<ControlMethod>)>,
     /// Stick axes per arm, [−1, 1].
     pub axes: [[f64; 6]; 2],
     /// Grip per arm, [−1, 1] (+ opens, − closes).
@@ -543,14 +544,14 @@ pub struct Autopilot {
     script: Vec<Action>,
     index: usize,
     started_s: Option<f64>,
-    mode: Mode,
+    mode: ControlMode,
     diagnosis: Diagnosis,
     answered: bool,
 }
 
 impl Autopilot {
     /// Starts `script` with the sticks in `mode`.
-    pub fn new(script: Vec<Action>, mode: Mode) -> Autopilot {
+    pub fn new(script: Vec<Action>, mode: ControlMode) -> Autopilot {
         Autopilot {
             script,
             index: 0,
@@ -715,9 +716,9 @@ impl Autopilot {
 
     fn diagnose(&mut self, sim: &Simulation, arm: Arm, out: &mut PilotOutput) -> bool {
         // Joint mode: a centred stick shuts the valve (no servo holding the joint).
-        if self.mode != Mode::Joint {
-            self.mode = Mode::Joint;
-            out.settings = Some((Some(Mode::Joint), None));
+        if self.mode != ControlMode::Joint {
+            self.mode = ControlMode::Joint;
+            out.settings = Some((Some(ControlMode::Joint), None));
         }
         match self.diagnosis.tick(sim, arm, &mut out.axes[arm.index()]) {
             Some(answer) => {
@@ -729,7 +730,7 @@ impl Autopilot {
         }
     }
     /// The stick mode the autopilot believes is set.
-    pub fn mode(&self) -> Mode {
+    pub fn mode(&self) -> ControlMode {
         self.mode
     }
 

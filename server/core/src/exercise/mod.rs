@@ -20,7 +20,7 @@ pub mod spec;
 pub use assess::{Assessor, Event, JerkMeter, Metrics};
 pub use autopilot::{Action, Autopilot, PilotOutput};
 pub use condition::{Condition, Facts, Readout};
-pub use spec::{ExerciseSpec, Method, Mode};
+pub use spec::ExerciseSpec;
 
 use serde::Serialize;
 use std::sync::Arc;

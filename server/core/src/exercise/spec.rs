@@ -8,6 +8,8 @@ use serde::{Deserialize, Serialize};
 use super::autopilot::Action;
 use super::condition::Condition;
 use crate::Error;
+use crate::sim::measures::{NEAR_LIMIT_FRACTION, NEAR_SINGULAR_ISOTROPY};
+use crate::sim::{ControlMethod, ControlMode};
 
 /// One exercise, as stored in its file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -44,28 +46,6 @@ pub struct ExerciseSpec {
     pub fault_drill: Option<FaultDrill>,
     /// The scripted controller for `seaarms exercise <id> --autopilot`.
     pub autopilot: Vec<Action>,
-}
-
-/// Operator control mode (how the sticks are read).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Mode {
-    /// Each axis drives one joint's valve.
-    #[default]
-    Joint,
-    /// The axes are the tool's linear and angular velocity (world frame).
-    Cartesian,
-}
-
-/// Control method (Lim §4.1).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
-#[serde(rename_all = "lowercase")]
-pub enum Method {
-    /// Open loop.
-    #[default]
-    Open,
-    /// Closed-loop cooperative control (both jaws holding).
-    Closed,
 }
 
 /// Which arm or arms.
@@ -118,10 +98,10 @@ impl ArmName {
 #[serde(deny_unknown_fields)]
 pub struct ControlSpec {
     /// Stick mode.
-    pub mode: Mode,
+    pub mode: ControlMode,
     /// Control method.
     #[serde(default)]
-    pub method: Method,
+    pub method: ControlMethod,
     /// The working arm(s): their posture and smoothness are assessed.
     pub arm: ArmSel,
 }
@@ -282,7 +262,8 @@ pub struct Thresholds {
     pub near_limit_fraction: f64,
     /// A joint within this many degrees of a limit has hit it: 1.
     pub limit_hit_deg: f64,
-    /// Sticks and grips all below this magnitude are idle: 0.05 (the page's dead zone).
+    /// Sticks and grips all below this magnitude are idle: 0.05 (below the page's own stick
+    /// dead zone, 0.12 in `web/input.js`, so any stick the page sends counts as input).
     pub idle_input: f64,
 }
 
@@ -291,8 +272,8 @@ impl Default for Thresholds {
         Thresholds {
             overload_force_n: 2000.0,
             internal_force_n: 500.0,
-            singular_isotropy: 0.05,
-            near_limit_fraction: 0.05,
+            singular_isotropy: NEAR_SINGULAR_ISOTROPY,
+            near_limit_fraction: NEAR_LIMIT_FRACTION,
             limit_hit_deg: 1.0,
             idle_input: 0.05,
         }

@@ -216,6 +216,11 @@ pub(super) fn arm_terms(
     out
 }
 
+/// Per joint: `q` past its limits (at its end stop; [`super::Event::EndStop`]).
+pub(super) fn at_end_stops(model: &Model, q: &[f64; N_ACT]) -> [bool; N_ACT] {
+    core::array::from_fn(|j| end_stop_penetration(q[j], model.joints[j].limits) != 0.0)
+}
+
 /// How far `q` is past its limits (rad; negative below the lower one), 0 within them.
 fn end_stop_penetration(q: f64, limits: [f64; 2]) -> f64 {
     if q < limits[0] {

@@ -11,7 +11,7 @@
 //! geometry-carried ones stay as solved), so the object and the jaw accelerate apart there.
 //! After the sub-steps, [`slip_stage`] moves the slipping jaw's grasp frame with the bar in
 //! those directions (so the Baumgarte terms do not pull the bar back) and lets go when the
-//! bar has slid [`GripParams::slip_travel_m`] out of the pads. The geometry-carried
+//! bar has slid [`crate::grasp::GripParams::slip_travel_m`] out of the pads. The geometry-carried
 //! directions of a slipping jaw are solved together with the full rigid system and corrected
 //! by the Baumgarte terms in the next step. [`SimParams::rigid_grasp`] restores the rigid
 //! grasp (the load fraction is still reported).
@@ -22,9 +22,9 @@ use nalgebra::{
 
 use super::arm::ArmTerms;
 use super::object::ObjectTerms;
-use super::{ArmState, ObjectState, SimParams, StepParams};
+use super::{Arm, ArmState, Event, ObjectState, SimParams, StepParams};
 use crate::control::rotation_error;
-use crate::grasp::{self, GripCapacity, GripParams};
+use crate::grasp::{self, GripCapacity};
 use crate::hydraulics::N_ACT;
 use crate::linalg::{BlockLdlt, Ldlt, gram_lower};
 
@@ -151,8 +151,9 @@ pub struct GripState {
     pub depth_slip_m: f64,
     /// Slip onsets since reset.
     pub slips: u64,
-    /// Grasps lost by slipping since reset (the bar slid out of the pads).
-    pub drops: u64,
+    /// Grasps lost by slipping since reset (the bar slid out of the pads; not the
+    /// assessment's *drop*, see [`Event::SlidOut`]).
+    pub slid_out: u64,
     /// The grasp was lost by slipping and the jaw has not opened since: it cannot take the
     /// handle again until it opens past it.
     pub lost: bool,
@@ -304,18 +305,21 @@ impl Constraint {
 /// friction-carried directions (translation along the bar and the depth axis, rotation about
 /// the bar and closing axes; the closing-axis translation and the depth-axis rotation keep
 /// their constraint error for the Baumgarte terms), measures the slip along the depth axis
-/// from where the handle (`handle_m`, object frame) was taken, and lets go when it exceeds
-/// the travel; an episode is reported ([`GripState::slipping`], counted in `slips`) once it
+/// from where `arm`'s handle (object frame, in `p`) was taken, and lets go when it exceeds
+/// the grip's slip travel (`p.grip`); an episode is reported ([`GripState::slipping`], counted in `slips`) once it
 /// has slid [`SLIP_NOTICE_M`] or turned [`SLIP_NOTICE_RAD`]. `tool`, `object`:
-/// world poses after the step.
+/// world poses after the step. The onset ([`Event::Slip`]) and the slide-out
+/// ([`Event::SlidOut`]) of `arm`'s jaw go to `events`.
 pub(super) fn slip_stage(
+    arm: Arm,
     a: &mut ArmState,
     out: &GripOut,
-    gp: &GripParams,
-    handle_m: &Vector3<f64>,
+    p: &SimParams,
     tool: &Isometry3<f64>,
     object: &Isometry3<f64>,
+    events: &mut Vec<Event>,
 ) {
+    let (gp, handle_m) = (&p.grip, &p.object.handles_m[arm.index()]);
     a.grip.load_fraction = if a.holding { out.load_fraction } else { 0.0 };
     a.grip.sliding = a.holding && out.slipping;
     if !a.grip.sliding {
@@ -339,6 +343,10 @@ pub(super) fn slip_stage(
     {
         a.grip.slipping = true;
         a.grip.slips += 1;
+        events.push(Event::Slip {
+            arm,
+            load_fraction: a.grip.load_fraction,
+        });
     }
     let handle_jaw = a.grasp_rel.inverse() * Point3::from(*handle_m);
     a.grip.depth_slip_m = handle_jaw.z - a.grip.handle0.z;
@@ -348,6 +356,7 @@ pub(super) fn slip_stage(
         a.grip.slipping = false;
         a.grip.sliding = false;
         a.grip.lost = true;
-        a.grip.drops += 1;
+        a.grip.slid_out += 1;
+        events.push(Event::SlidOut { arm });
     }
 }

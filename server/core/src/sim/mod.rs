@@ -42,26 +42,35 @@
 //!   friction); links do not collide with the object, the seabed or each other. With a panel
 //!   ([`SimParams::panel`]) the jaws also take its valve T-bar and hot stab, whose loads act
 //!   on the arms as JᵀF (see [`crate::panel`]); links do not collide with the panel either.
-//! * Valves are ideal critically lapped spools with instantaneous response (Lim eq. 3.51);
-//!   no valve leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
+//! * Valves are ideal critically lapped spools (Lim eq. 3.51) whose spool follows its command
+//!   with a first-order lag ([`crate::hydraulics::SPOOL_TIME_CONSTANT_S`], 25 ms); no valve
+//!   leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
 //! * Water ([`StepParams::environment`], [`water`]): buoyancy from the links' mean density and
 //!   the box's size, Morison drag and added mass on link pieces and the box, a uniform steady
 //!   current; no wake, wall or free-surface effects, no rotational drag on the box.
 //!
 //! # Layout
 //! * here: parameters, inputs, state and the [`Simulation`] with its public API;
+//! * `operator.rs`: stage 0, the operator ([`Operator`]): sticks, grips and the control
+//!   mode/method/speed settings to each step's [`Input`];
 //! * `pipeline.rs`: the step as a list of named stages ([`Simulation::step`]);
+//! * `events.rs`: what a step reports ([`Event`], [`Simulation::events`]);
+//! * `measures.rs`: the posture measures of the current state, per arm and dual, with the one
+//!   set of warning thresholds ([`measures::measures`]);
 //! * `arm.rs`, `object.rs`, `constraint.rs`: the stages' per-arm, object and grasp-constraint
 //!   parts;
 //! * `panel.rs`: the intervention panel's stages (grasp, loads on the jaws, item update) and
 //!   its read accessors ([`crate::panel`] holds its parameters and physics);
 //! * `setup.rs`: parameter checks ([`SimParams::check`]) and the case-study setup
 //!   ([`SimParams::case_study`] and its constants);
-//! * `scenario.rs`, `sci.rs`: scripted scenarios and their CSV output.
+//! * `scenario.rs`: the thesis's scripted case-study scenarios and their CSV output.
 
 mod arm;
 mod constraint;
+mod events;
+pub mod measures;
 mod object;
+mod operator;
 mod panel;
 mod pipeline;
 pub mod scenario;
@@ -70,10 +79,13 @@ pub mod water;
 
 pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
 pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
+pub use events::{Event, MAX_EVENTS_PER_STEP};
+pub use operator::{ControlMode, Operator, Sticks};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
 pub use water::{Current, Environment, Medium, Water};
 
-use nalgebra::{Isometry3, Matrix6, Vector3};
+use nalgebra::{Isometry3, IsometryMatrix3, Matrix6, Vector3};
+use serde::{Deserialize, Serialize};
 
 use crate::Error;
 use crate::control::{self, ControlParams};
@@ -188,15 +200,18 @@ pub struct SimParams {
     pub grip: GripParams,
 }
 
-/// Control method (Lim §4.1 "control mode").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+/// Control method (Lim §4.1 "control mode"; Lim case studies 3 and 4). Wire and
+/// exercise-file names `open`, `closed`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum ControlMethod {
-    /// Each input drives one joint's valve (or a joint-velocity reference through the servo).
+    /// Open loop: each input drives one joint's valve (or a joint-velocity reference through
+    /// the servo).
     #[default]
-    OpenLoop,
-    /// Cooperative object control; active only while both jaws hold the object, otherwise the
-    /// open-loop inputs apply.
-    ClosedLoop,
+    Open,
+    /// Closed-loop cooperative object control: the operator commands the object's motion;
+    /// active only while both jaws hold the object, otherwise the open-loop inputs apply.
+    Closed,
 }
 
 /// One arm's operator inputs.
@@ -231,7 +246,7 @@ impl Default for Input {
     fn default() -> Self {
         Input {
             arms: [ArmInput::default(); 2],
-            method: ControlMethod::OpenLoop,
+            method: ControlMethod::Open,
             object_velocity: [0.0; 6],
             speed_scale: 1.0,
         }
@@ -270,8 +285,10 @@ pub struct ArmState {
     pub relief_open: [bool; N_ACT],
     /// Rising edges of relief opening, all actuators, since reset.
     pub relief_events: u64,
-    /// The jaw's grip on the handle: load fraction, slip, slip and drop counts.
+    /// The jaw's grip on the handle: load fraction, slip, slip and slide-out counts.
     pub grip: GripState,
+    /// Per joint: at its end stop (past its limits) at the end of the step.
+    pub at_end_stop: [bool; N_ACT],
     /// Joint-servo integrated reference (rad).
     servo_ref: [f64; N_ACT],
     servo_active: bool,
@@ -301,6 +318,8 @@ struct State {
     internal: [f64; 6],
     /// Whether the object rests on the seabed, as the grasp state reports it.
     surface: SurfaceLatch,
+    /// The grasp state at the end of the last step ([`Event::Grasp`] on change).
+    grasp: GraspState,
     /// The panel's state (when the parameters have a panel).
     panel: Option<PanelState>,
 }
@@ -361,6 +380,9 @@ pub struct Simulation {
     work: [ArmWork; 2],
     /// Steps on which a non-finite value appeared and the state was rolled back (should stay 0).
     numerical_faults: u64,
+    /// The last step's events ([`Simulation::events`]; preallocated to
+    /// [`MAX_EVENTS_PER_STEP`]).
+    events: Vec<Event>,
 }
 
 impl Simulation {
@@ -398,6 +420,7 @@ impl Simulation {
             relief_open: [false; N_ACT],
             relief_events: 0,
             grip: GripState::default(),
+            at_end_stop: [false; N_ACT],
             servo_ref: [0.0; N_ACT],
             servo_active: false,
         };
@@ -415,6 +438,7 @@ impl Simulation {
             coop_ref: Isometry3::identity(),
             internal: [0.0; 6],
             surface: SurfaceLatch::default(),
+            grasp: GraspState::Free,
             panel: None,
         };
         // Bases composed into the models: kinematics and dynamics come out in the world frame.
@@ -428,6 +452,7 @@ impl Simulation {
             state,
             work,
             numerical_faults: 0,
+            events: Vec::with_capacity(MAX_EVENTS_PER_STEP),
         };
         sim.reset();
         Ok(sim)
@@ -455,6 +480,7 @@ impl Simulation {
             a.relief_open = [false; N_ACT];
             a.relief_events = 0;
             a.grip = GripState::default();
+            a.at_end_stop = [false; N_ACT];
             a.servo_active = false;
             a.servo_ref = a.q;
             // Pressures that hold the arm still: A_I P_I − A_O P_O = G/Ĵ, mean half supply.
@@ -507,10 +533,14 @@ impl Simulation {
         };
         self.state.panel = self.params.panel.as_ref().map(PanelState::initial);
         self.numerical_faults = 0;
+        self.events.clear();
         self.update_kinematics();
         for i in 0..2 {
             self.state.arms[i].contact = self.in_contact(i);
+            self.state.arms[i].at_end_stop =
+                arm::at_end_stops(&self.models[i], &self.state.arms[i].q);
         }
+        self.state.grasp = self.grasp_state();
     }
 
     /// Parameters (read-only).
@@ -562,6 +592,17 @@ impl Simulation {
             [a[0].contact, a[1].contact],
             self.state.surface.on,
         )
+    }
+    /// What happened in the last step, in the order the stages detected it (see
+    /// [`Event`] for each detector); empty after a reset. The list is overwritten by the next
+    /// step: read it after each step.
+    pub fn events(&self) -> &[Event] {
+        &self.events
+    }
+    /// World poses of arm `arm`'s joint frames after their motion (its z axis is the joint
+    /// axis), for the state's q: the kinematics the step computed.
+    pub fn joint_frames(&self, arm: Arm) -> &[IsometryMatrix3<f64>] {
+        &self.work[arm.index()].kin.joint_frames
     }
     /// Whether the cooperative closed loop is currently in control.
     pub fn closed_loop_active(&self) -> bool {
@@ -625,9 +666,11 @@ impl Simulation {
     /// validated per the rule on [`Input`].
     pub fn step(&mut self, input: &Input) {
         let saved = self.state;
+        self.events.clear();
         self.step_inner(input);
         if !self.state_is_finite() {
-            // Safety net: roll back, stop the arms, count it.
+            // Safety net: roll back, stop the arms, count it (and forget what it reported).
+            self.events.clear();
             self.state = saved;
             for a in self.state.arms.iter_mut() {
                 a.qd = [0.0; N_ACT];
@@ -641,6 +684,11 @@ impl Simulation {
         }
         let touching = self.state.object.seabed_force_n > 0.0;
         self.state.surface.update(touching, self.params.step.dt_s);
+        let grasp = self.grasp_state();
+        if grasp != self.state.grasp {
+            self.state.grasp = grasp;
+            self.events.push(Event::Grasp(grasp));
+        }
     }
 
     fn state_is_finite(&self) -> bool {

@@ -1,5 +1,6 @@
 //! The 1 ms step as a pipeline of named stages (the scheme is in the [`super`] module docs).
-//! [`Simulation::step_inner`] is the list:
+//! [`Simulation::step_inner`] is the list, after stage 0, the operator
+//! ([`super::Operator::input`]: sticks and settings to the [`Input`], run by the caller):
 //!
 //! 1. jaws and grasp transitions, per arm ([`arm::update_jaw`]), then the panel items'
 //!    grasp and release ([`Simulation::panel_jaw`]; only with a panel);
@@ -14,20 +15,22 @@
 //!    ([`JawGrip::new`]);
 //! 7. the sub-steps ([`Simulation::substep`]): chamber pressures, free accelerations,
 //!    contact wrenches (a slipping jaw's capped at its kinetic friction limits), integration;
-//! 8. outputs: relief events, contact and internal wrenches, time, kinematics, then the slip
-//!    stage: a slipping jaw's grasp frame follows the bar, and the grasp is lost when the bar
-//!    has slid out ([`Simulation::finish_step`], [`constraint::slip_stage`]);
+//! 8. outputs: relief openings, contact and internal wrenches, time, kinematics, end stops,
+//!    then the slip stage: a slipping jaw's grasp frame follows the bar, and the grasp is lost
+//!    when the bar has slid out ([`Simulation::finish_step`], [`constraint::slip_stage`]);
 //! 9. panel items: the valve's 1-DOF step, the stab's pose, phase, depth and side load
 //!    ([`Simulation::panel_update`]; only with a panel).
 //!
-//! Stages 3–6 fill a [`StepScratch`] that the sub-steps read.
+//! Stages 3–6 fill a [`StepScratch`] that the sub-steps read. Stage 8 pushes the step's
+//! events ([`super::Event`]: relief, end stop, slip, slid out); [`Simulation::step`] adds the
+//! grasp change after the seabed debounce.
 
 use nalgebra::{Point3, Vector3, Vector6};
 
 use super::arm::{self, ArmTerms};
 use super::constraint::{self, Constraint, GripOut, JawGrip};
 use super::object::{self, ObjectTerms};
-use super::{ControlMethod, Input, Simulation};
+use super::{Arm, ControlMethod, Event, Input, Simulation};
 use crate::control::{self, ControlParams, CoopInputs};
 use crate::finite_or;
 use crate::hydraulics::N_ACT;
@@ -98,7 +101,7 @@ impl Simulation {
     /// otherwise each arm's operator input. A stuck valve overrides its command.
     fn spool_commands(&mut self, input: &Input, speed: f64, r: &[Vector3<f64>; 2]) {
         let holding_both = self.state.arms.iter().all(|a| a.holding);
-        let coop = input.method == ControlMethod::ClosedLoop && holding_both;
+        let coop = input.method == ControlMethod::Closed && holding_both;
         if coop && !self.state.coop_active {
             self.state.coop_ref = self.state.object.pose;
         }
@@ -219,13 +222,18 @@ impl Simulation {
         out
     }
 
-    /// Stage 8: relief events (rising edges), contact and internal wrenches, time, and the
-    /// kinematics and contact flags for the new q.
+    /// Stage 8: relief openings (rising edges), contact and internal wrenches, time, the
+    /// kinematics, end stops (rising edges) and contact flags for the new q, and the slip
+    /// stage; each detection is pushed to the step's events.
     fn finish_step(&mut self, s: &StepScratch, out: &SubstepOutput) {
         for (i, a) in self.state.arms.iter_mut().enumerate() {
             for j in 0..N_ACT {
                 if out.relief[i][j] && !a.relief_open[j] {
                     a.relief_events += 1;
+                    self.events.push(Event::Relief {
+                        arm: Arm::BOTH[i],
+                        actuator: j,
+                    });
                 }
                 a.relief_open[j] = out.relief[i][j];
             }
@@ -240,13 +248,25 @@ impl Simulation {
         self.state.steps += 1;
         self.update_kinematics();
         for i in 0..2 {
+            let stops = arm::at_end_stops(&self.models[i], &self.state.arms[i].q);
+            let a = &mut self.state.arms[i];
+            for (joint, (&now, was)) in stops.iter().zip(&a.at_end_stop).enumerate() {
+                if now && !was {
+                    self.events.push(Event::EndStop {
+                        arm: Arm::BOTH[i],
+                        joint,
+                    });
+                }
+            }
+            a.at_end_stop = stops;
             constraint::slip_stage(
+                Arm::BOTH[i],
                 &mut self.state.arms[i],
                 &out.grip[i],
-                &self.params.grip,
-                &self.params.object.handles_m[i],
+                &self.params,
                 &self.work[i].tool,
                 &self.state.object.pose,
+                &mut self.events,
             );
             let c = self.in_contact(i);
             self.state.arms[i].contact = c || self.state.arms[i].holding;

@@ -80,7 +80,7 @@ impl Segment {
             stage,
             duration_s,
             arms: [left, right],
-            method: ControlMethod::OpenLoop,
+            method: ControlMethod::Open,
             object_velocity: [0.0; 6],
         }
     }
@@ -89,7 +89,7 @@ impl Segment {
             stage,
             duration_s,
             arms: [ArmCommand::jaw(jaw); 2],
-            method: ControlMethod::ClosedLoop,
+            method: ControlMethod::Closed,
             object_velocity: v,
         }
     }
@@ -473,7 +473,7 @@ pub fn run(
     let mut lift_end: Option<f64> = None;
     for seg in &sc.segments {
         let n = (seg.duration_s / dt).round() as u64;
-        let closed_lift = seg.stage == "C" && seg.method == ControlMethod::ClosedLoop;
+        let closed_lift = seg.stage == "C" && seg.method == ControlMethod::Closed;
         if closed_lift && lift_start.is_none() {
             lift_start = Some(sim.object().pose.translation.z);
         }
@@ -492,7 +492,7 @@ pub fn run(
                 if g.slipping && s.first_slip_s.is_none() {
                     s.first_slip_s = Some(sim.time_s());
                 }
-                if g.drops > 0 && s.first_drop_s.is_none() {
+                if g.slid_out > 0 && s.first_drop_s.is_none() {
                     s.first_drop_s = Some(sim.time_s());
                 }
                 if sim.time_s() > total - 1.0 {
@@ -523,7 +523,7 @@ pub fn run(
     }
     s.relief_events = sim.relief_events();
     s.slips = Arm::BOTH.iter().map(|&a| sim.arm(a).grip.slips).sum();
-    s.drops = Arm::BOTH.iter().map(|&a| sim.arm(a).grip.drops).sum();
+    s.drops = Arm::BOTH.iter().map(|&a| sim.arm(a).grip.slid_out).sum();
     s.final_grasp_state = sim.grasp_state();
     s.sim_seconds = sim.time_s();
     s.numerical_faults = sim.numerical_faults();

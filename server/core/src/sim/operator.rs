@@ -1,0 +1,326 @@
+//! Stage 0 of the step: the operator. The trainee's sticks (six axes and a grip per arm,
+//! fractions of full stick), the object twist of the closed loop (fractions of the
+//! controller's maximum speeds) and the settings (control mode, control method, arm speed)
+//! become the simulation's [`Input`] for each step.
+//!
+//! [`Operator`] owns everything between the sticks and the valves that is not the
+//! simulation: the one control-mode setting and the decision it makes ([`Operator::input`]:
+//! joint mode puts each axis on its joint's valve, Cartesian mode resolves the axes into
+//! joint-velocity references by redundancy resolution, [`cartesian_to_joint_velocity`]),
+//! the two arms' redundancy resolvers, the method and speed setting, and the release timer
+//! that drives both jaws open. The live session, the headless exercises, the replay and the
+//! tests all drive the simulation through it ([`Operator::step`]).
+
+use serde::{Deserialize, Serialize};
+
+use super::{Arm, ControlMethod, Input, Simulation};
+use crate::control::teleop::cartesian_to_joint_velocity;
+use crate::grasp::GraspState;
+use crate::hydraulics::N_ACT;
+use crate::model::Model;
+use crate::redundancy::{Redundancy, RedundancyParams};
+
+/// How the sticks are read (Lim §4.1 "control mode"). Wire and exercise-file names
+/// `joint`, `cartesian`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ControlMode {
+    /// Each axis drives one joint's valve.
+    #[default]
+    Joint,
+    /// The axes are the tool's linear and angular velocity (world frame, fractions of
+    /// [`crate::control::teleop::MAX_LINEAR_SPEED_M_S`] and
+    /// [`crate::control::teleop::MAX_ANGULAR_SPEED_RAD_S`]); redundancy resolution picks
+    /// the joint velocities.
+    Cartesian,
+}
+
+/// One arm's sticks: six axes and the grip, each in [−1, 1] (fractions of full stick).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Sticks {
+    /// Joint mode: one valve per axis (joints 1–6). Cartesian mode: the tool's velocity
+    /// [vx vy vz wx wy wz] (world frame).
+    pub axes: [f64; N_ACT],
+    /// Jaw: + opens, − closes.
+    pub grip: f64,
+}
+
+/// The operator stage: the settings, the latest sticks, the resolvers and the release timer
+/// (see the module docs). Preallocated: [`Operator::input`] does not allocate.
+#[derive(Debug, Clone)]
+pub struct Operator {
+    /// The control mode.
+    mode: ControlMode,
+    /// The latest sticks per arm (left, right).
+    sticks: [Sticks; 2],
+    /// The latest object twist command (fractions of the controller's maximum speeds).
+    object: [f64; 6],
+    /// Both jaws are driven open until this simulated time (s).
+    release_until_s: f64,
+    /// Redundancy resolvers for Cartesian mode, one per arm.
+    redundancy: [Redundancy; 2],
+    /// The arm models (left, right) in their own base frames, as the resolvers use them.
+    models: [Model; 2],
+    /// The next step's input: method and speed are the settings; valves, jaws, joint-velocity
+    /// references and the object twist are filled by [`Operator::input`].
+    input: Input,
+}
+
+impl Operator {
+    /// An operator for arms `left` and `right` (the models as given to [`Simulation::new`],
+    /// in their own base frames): joint mode, open loop, full speed, sticks centred.
+    pub fn new(left: &Model, right: &Model) -> Operator {
+        Operator {
+            mode: ControlMode::Joint,
+            sticks: [Sticks::default(); 2],
+            object: [0.0; 6],
+            release_until_s: 0.0,
+            redundancy: [
+                Redundancy::new(left, RedundancyParams::default()),
+                Redundancy::new(right, RedundancyParams::default()),
+            ],
+            models: [left.clone(), right.clone()],
+            input: Input::default(),
+        }
+    }
+
+    /// The control mode.
+    pub fn mode(&self) -> ControlMode {
+        self.mode
+    }
+
+    /// The control method.
+    pub fn method(&self) -> ControlMethod {
+        self.input.method
+    }
+
+    /// The arm speed setting (Lim §4.1 "arm speed"; the simulation clamps it to [0, 1]).
+    pub fn speed(&self) -> f64 {
+        self.input.speed_scale
+    }
+
+    /// Sets the control mode; every stick command stops (a stick held over the change must
+    /// not drive the arm the other way).
+    pub fn set_mode(&mut self, mode: ControlMode) {
+        self.mode = mode;
+        for s in &mut self.sticks {
+            s.axes = [0.0; N_ACT];
+        }
+    }
+
+    /// Sets the control method (applies from the next step).
+    pub fn set_method(&mut self, method: ControlMethod) {
+        self.input.method = method;
+    }
+
+    /// Sets the arm speed (applies from the next step).
+    pub fn set_speed(&mut self, speed: f64) {
+        self.input.speed_scale = speed;
+    }
+
+    /// New sticks for both arms and the object twist command (fractions of the controller's
+    /// maximum speeds, [`crate::control::ControlParams::max_object_speed_m_s`] and
+    /// [`crate::control::ControlParams::max_object_rate_rad_s`]). A grip ends a release's
+    /// hold on the jaws.
+    pub fn set_sticks(&mut self, sticks: &[Sticks; 2], object: &[f64; 6]) {
+        self.sticks = *sticks;
+        self.object = *object;
+    }
+
+    /// Drives both jaws open until simulated time `until_s`, whatever the grips say; after
+    /// it the jaws stay open until the next [`Operator::set_sticks`].
+    pub fn release(&mut self, until_s: f64) {
+        self.release_until_s = until_s;
+    }
+
+    /// Back to rest: sticks centred, no release, fresh resolvers (an attempt's start never
+    /// depends on what came before it). The settings are kept.
+    pub fn reset(&mut self) {
+        self.sticks = [Sticks::default(); 2];
+        self.object = [0.0; 6];
+        self.release_until_s = 0.0;
+        self.redundancy = [
+            Redundancy::new(&self.models[0], RedundancyParams::default()),
+            Redundancy::new(&self.models[1], RedundancyParams::default()),
+        ];
+        self.input.arms = Default::default();
+        self.input.object_velocity = [0.0; 6];
+    }
+
+    /// No stick, grip or object input: every axis and grip below `threshold` in magnitude
+    /// and no object twist in the last [`Operator::input`] (|v| < 10⁻¹²).
+    pub fn idle(&self, threshold: f64) -> bool {
+        let small = |v: &f64| v.abs() < threshold;
+        self.sticks
+            .iter()
+            .all(|s| s.axes.iter().all(small) && small(&s.grip))
+            && self.input.object_velocity.iter().all(|v| v.abs() < 1e-12)
+    }
+
+    /// Stage 0: the input of `sim`'s next step. While a release runs both jaws are driven
+    /// open. Joint mode puts each axis on its valve; Cartesian mode turns each arm's axes
+    /// into a joint-velocity reference for the joint servo, holding the tool's orientation
+    /// while both jaws hold the object (their closed chain fixes it,
+    /// [`cartesian_to_joint_velocity`]). The object twist is scaled to the controller's
+    /// maximum speeds.
+    pub fn input(&mut self, sim: &Simulation) -> &Input {
+        let releasing = sim.time_s() < self.release_until_s;
+        let chain = sim.grasp_state() == GraspState::BothHolding;
+        let dt_s = sim.params().step.dt_s;
+        for arm in Arm::BOTH {
+            let i = arm.index();
+            if releasing {
+                self.sticks[i].grip = 1.0;
+            }
+            let a = &mut self.input.arms[i];
+            a.jaw = self.sticks[i].grip;
+            // The control-mode decision (the only one).
+            (a.valves, a.joint_velocity_ref) = match self.mode {
+                ControlMode::Joint => (self.sticks[i].axes, None),
+                ControlMode::Cartesian => (
+                    [0.0; N_ACT],
+                    Some(cartesian_to_joint_velocity(
+                        &mut self.redundancy[i],
+                        &self.models[i],
+                        &sim.params().arms[i].base.rotation,
+                        &sim.arm(arm).q,
+                        &self.sticks[i].axes,
+                        chain,
+                        dt_s,
+                    )),
+                ),
+            };
+        }
+        let cp = &sim.params().control;
+        for (k, (v, f)) in self
+            .input
+            .object_velocity
+            .iter_mut()
+            .zip(self.object)
+            .enumerate()
+        {
+            let max = if k < 3 {
+                cp.max_object_speed_m_s
+            } else {
+                cp.max_object_rate_rad_s
+            };
+            *v = f * max;
+        }
+        &self.input
+    }
+
+    /// Stage 0 and the step: [`Operator::input`], then [`Simulation::step`].
+    pub fn step(&mut self, sim: &mut Simulation) {
+        let input = self.input(sim);
+        sim.step(input);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::ModelSpec;
+    use crate::sim::SimParams;
+
+    fn setup() -> (Operator, Simulation) {
+        let text = crate::robots::builtin_text("magnum").unwrap_or_else(|| panic!("magnum"));
+        let spec: ModelSpec = serde_json::from_str(text).unwrap_or_else(|e| panic!("{e}"));
+        let m = Model::from_spec(&spec).unwrap_or_else(|e| panic!("{e}"));
+        let p = SimParams::case_study(&m, &m).unwrap_or_else(|e| panic!("{e}"));
+        let op = Operator::new(&m, &m);
+        let sim = Simulation::new(m.clone(), m, p).unwrap_or_else(|e| panic!("{e}"));
+        (op, sim)
+    }
+
+    const AXES: [f64; 6] = [0.5, -0.25, 0.0, 0.0, 0.75, -1.0];
+
+    /// Joint mode puts each axis on its valve; Cartesian mode leaves the valves centred and
+    /// gives the servo a joint-velocity reference (zero for a centred stick), the same axes
+    /// read the other way; a mode change centres the sticks but not the grips.
+    #[test]
+    fn the_mode_decides_how_the_axes_are_read() {
+        let (mut op, sim) = setup();
+        let sticks = [
+            Sticks {
+                axes: AXES,
+                grip: -0.5,
+            },
+            Sticks::default(),
+        ];
+        op.set_sticks(&sticks, &[0.0; 6]);
+        let joint = *op.input(&sim);
+        assert_eq!(joint.arms[0].valves, AXES);
+        assert_eq!(joint.arms[0].jaw, -0.5);
+        assert!(joint.arms.iter().all(|a| a.joint_velocity_ref.is_none()));
+        op.set_mode(ControlMode::Cartesian);
+        assert_eq!(
+            op.input(&sim).arms[0].jaw,
+            -0.5,
+            "grips survive a mode change"
+        );
+        let linear = [0.5, 0.0, 0.0, 0.0, 0.0, 0.0];
+        op.set_sticks(
+            &[
+                Sticks {
+                    axes: linear,
+                    grip: 0.0,
+                },
+                Sticks::default(),
+            ],
+            &[0.0; 6],
+        );
+        let cart = *op.input(&sim);
+        assert_eq!(cart.arms[0].valves, [0.0; 6]);
+        let qd = cart.arms[0]
+            .joint_velocity_ref
+            .unwrap_or_else(|| panic!("a reference"));
+        assert!(qd.iter().any(|v| v.abs() > 1e-6), "{qd:?}");
+        assert_eq!(cart.arms[1].joint_velocity_ref, Some([0.0; 6]));
+        // The reference moves the tool as commanded: J·q̇ ≈ 0.5 × 0.2 m/s along world x
+        // (teleop::MAX_LINEAR_SPEED_M_S), computed with the simulation's world Jacobian.
+        let v = sim.jacobian_world(Arm::Left) * nalgebra::Vector6::from(qd);
+        assert!(
+            (v[0] - 0.1).abs() < 1e-3 && v[1].abs() < 1e-3 && v[2].abs() < 1e-3,
+            "{v}"
+        );
+    }
+
+    /// A release drives both jaws open until its end, and they stay open until new sticks.
+    #[test]
+    fn a_release_opens_the_jaws_until_new_sticks() {
+        let (mut op, mut sim) = setup();
+        let closing = [Sticks {
+            axes: [0.0; 6],
+            grip: -1.0,
+        }; 2];
+        op.set_sticks(&closing, &[0.0; 6]);
+        op.release(sim.time_s() + 0.005);
+        for _ in 0..10 {
+            op.step(&mut sim);
+            assert_eq!(op.input(&sim).arms.map(|a| a.jaw), [1.0, 1.0]);
+        }
+        op.set_sticks(&closing, &[0.0; 6]);
+        assert_eq!(op.input(&sim).arms.map(|a| a.jaw), [-1.0, -1.0]);
+    }
+
+    /// The object twist is a fraction of the controller's maximum speeds (ControlParams:
+    /// 0.2 m/s, 0.5 rad/s); method and speed are the settings.
+    #[test]
+    fn the_object_twist_and_the_settings_reach_the_input() {
+        let (mut op, sim) = setup();
+        op.set_method(ControlMethod::Closed);
+        op.set_speed(0.5);
+        op.set_sticks(&[Sticks::default(); 2], &[1.0, 0.0, -0.5, 0.0, 0.0, 1.0]);
+        let input = *op.input(&sim);
+        assert!(!op.idle(0.05));
+        assert_eq!(input.object_velocity, [0.2, 0.0, -0.1, 0.0, 0.0, 0.5]);
+        assert_eq!(
+            (input.method, input.speed_scale),
+            (ControlMethod::Closed, 0.5)
+        );
+        op.reset();
+        op.input(&sim);
+        assert!(op.idle(0.05));
+        assert_eq!((op.method(), op.speed()), (ControlMethod::Closed, 0.5));
+    }
+}

@@ -10,7 +10,7 @@ import { esc } from './page.js';
 /** Categories in legend order: [id, label, costs points]. */
 export const CATEGORIES = [
   ['strike', 'strike', true], ['overload', 'overload', true], ['relief', 'relief valve', true],
-  ['drop', 'drop', true], ['limit', 'joint limit', true], ['fault', 'fault', false],
+  ['slip', 'slip', true], ['drop', 'drop', true], ['limit', 'joint limit', true], ['fault', 'fault', false],
   ['grasp', 'grasp', false], ['step', 'step done', false], ['instructor', 'instructor', false],
   ['trainee', 'trainee command', false],
 ];
@@ -23,8 +23,9 @@ export function eventCategory(e) {
     case 'strike': case 'obstacle': return 'strike';
     case 'overload': return 'overload';
     case 'relief': return 'relief';
+    case 'slip': case 'slid_out': return 'slip';
     case 'drop': return 'drop';
-    case 'limit': return 'limit';
+    case 'limit': case 'end_stop': return 'limit';
     case 'fault': case 'clear_faults': return 'fault';
     case 'grasp': return 'grasp';
     case 'step': return 'step';

@@ -4,7 +4,8 @@
 //!   speed setting — a joystick per function, as in Lim case studies 1–3.
 //! * Joint-velocity servo ([`joint_servo`]): turns a joint-velocity reference (from a Cartesian
 //!   teleoperation module) into valve commands: feedforward q̇_ref/q̇_nominal plus a
-//!   proportional term on the integrated reference.
+//!   proportional term on the integrated reference; in a closed chain (both jaws on the
+//!   object) the feedforward alone (rate control).
 //! * Closed-loop cooperative ([`cooperative`]): the operator commands the object twist; the
 //!   controller regulates the object pose, sends each arm the grasp-point twist of the desired
 //!   object motion (Wⁱᵀ, equal sharing) and an admittance term that backs each arm off its
@@ -86,16 +87,20 @@ pub fn open_loop(inputs: &[f64; N_ACT], speed_scale: f64) -> [f64; N_ACT] {
 /// Joint-velocity servo. `q_ref` is the servo's integrated reference (state), advanced by
 /// `qd_ref`·dt here; returns spool commands (q̇_ref + k_p(q_ref − q))/q̇_nominal, clamped to ±1.
 ///
-/// In a closed chain (`chain`: both jaws hold the object) a zero reference instead centres the
-/// valves and lets the reference follow the arm. Two position loops closed through one rigid
-/// object fight: the chain has one pose, the two references generally disagree with it by the
-/// arms' different sag under the shared load, and a proportional term on a flow-control valve
-/// integrates the remaining error into pressure (eqs 3.48–3.50: a steady opening s into a
-/// locked cylinder raises its pressure at β·K·s·√ΔP/V), so the internal load would grow
-/// without bound with the sticks at rest. The centred closed-centre valves trap the oil and
-/// lock the cylinders instead, as the Magnum's own rate control does with the stick released
-/// (docs/physics.md, "Holding a box in open loop"). A moving reference is servoed as usual
-/// (the operator is moving the pair).
+/// In a closed chain (`chain`: both jaws hold the object) the servo is a pure rate control for
+/// every reference, zero or not: the spool opens by q̇_ref/q̇_nominal (valve opening ∝ commanded
+/// rate) and the reference follows the arm (`q_ref = q`), so no position loop acts. Two
+/// position loops closed through one rigid object fight: the chain has one pose, the two
+/// references disagree with it by the arms' different sag under the shared load and by the
+/// different flows the two valves pass at their different load pressures, and a proportional
+/// term on a flow-control valve integrates the remaining error into pressure (eqs 3.48–3.50:
+/// a steady opening s into a locked cylinder raises its pressure at β·K·s·√ΔP/V), so the
+/// internal load grows without bound under any stick, however small. With rate control a
+/// mismatch of the two arms' rates loads the chain only until the valves' pressure–flow
+/// characteristic (eq. 3.48, q ∝ s·√(P_s − P_L)) has matched the flows, and with the sticks
+/// released the centred closed-centre valves trap the oil and lock the cylinders — as the
+/// Magnum's own rate control does (its joysticks command valve openings, Lim §4.2 case
+/// studies 1–3; docs/physics.md, "Holding a box in open loop").
 pub fn joint_servo(
     qd_ref: &[f64; N_ACT],
     q: &[f64; N_ACT],
@@ -105,11 +110,14 @@ pub fn joint_servo(
     p: &ControlParams,
     chain: bool,
 ) -> [f64; N_ACT] {
-    if chain && qd_ref.iter().all(|v| *v == 0.0) {
-        *q_ref = *q;
-        return [0.0; N_ACT];
-    }
     let mut u = [0.0; N_ACT];
+    if chain {
+        *q_ref = *q;
+        for j in 0..N_ACT {
+            u[j] = (qd_ref[j] / nominal_speed[j]).clamp(-1.0, 1.0);
+        }
+        return u;
+    }
     for j in 0..N_ACT {
         q_ref[j] += qd_ref[j] * dt_s;
         let e = (q_ref[j] - q[j]).clamp(-p.servo_max_error_rad, p.servo_max_error_rad);
@@ -283,11 +291,11 @@ mod tests {
     }
 
     /// The servo's law by hand (u = (q̇_ref + k_p·e)/q̇_nominal with e = q_ref + q̇_ref·dt − q,
-    /// [`joint_servo`]'s docs); in a closed chain a zero reference centres the valves and
-    /// moves the reference to the arm, a moving one is servoed the same as out of a chain;
-    /// out of a chain a zero reference still holds its reference.
+    /// [`joint_servo`]'s docs) out of a chain; in a closed chain rate control for any
+    /// reference: u = q̇_ref/q̇_nominal (a zero reference centres the valves) and the reference
+    /// moves to the arm; out of a chain a zero reference still holds its reference.
     #[test]
-    fn servo_centres_the_valves_in_a_closed_chain_at_rest() {
+    fn servo_is_a_rate_control_in_a_closed_chain() {
         let p = ControlParams::default();
         let nominal = [0.2; N_ACT];
         let q = [0.1, -0.2, 0.3, 0.0, 0.05, -0.05];
@@ -303,14 +311,20 @@ mod tests {
         assert!((u[0] - 5.0 * 1e-3 / 0.2).abs() < 1e-12);
         assert!((u[2] + 5.0 * 2e-3 / 0.2).abs() < 1e-12);
         assert_eq!(r, r0);
-        // Moving in a chain: the servo as usual.
+        // Moving in a chain, however slowly: the opening ∝ the rate, no position term.
+        for rate in [0.01, 1e-9] {
+            let qd = [rate, 0.0, -0.5 * rate, 0.0, 0.0, 0.0];
+            let mut a = r0;
+            let u = joint_servo(&qd, &q, &mut a, &nominal, 1e-3, &p, true);
+            assert_eq!(u, [rate / 0.2, 0.0, -0.5 * rate / 0.2, 0.0, 0.0, 0.0]);
+            assert_eq!(a, q);
+        }
+        // Moving alone: feedforward plus the position term.
         let qd = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0];
-        let (mut a, mut b) = (r0, r0);
-        let u = joint_servo(&qd, &q, &mut a, &nominal, 1e-3, &p, true);
+        let mut b = r0;
         let v = joint_servo(&qd, &q, &mut b, &nominal, 1e-3, &p, false);
-        assert_eq!((u, a), (v, b));
         let e0 = r0[0] + 0.01 * 1e-3 - q[0];
-        assert!((u[0] - (0.01 + 5.0 * e0) / 0.2).abs() < 1e-12);
+        assert!((v[0] - (0.01 + 5.0 * e0) / 0.2).abs() < 1e-12);
     }
 
     /// Reference DLS: Jᵀ(JJᵀ + λ²I)⁻¹ẋ formed with nalgebra's own matrix products and Cholesky

@@ -115,8 +115,9 @@ pub(super) fn clamp_force(current: f64, jaw: &JawParams, closed_on: bool, cmd: f
 /// Stage 2 outside cooperative control (per arm): the operator's valve commands (open loop),
 /// or the joint servo's when the input carries a joint-velocity reference (clamped to ±2×
 /// the nominal speeds). `speed` is the validated speed scale. `chain`: both jaws hold the
-/// object (the chain arms–object is closed); then a zero reference centres the valves
-/// instead of holding the servo's reference ([`control::joint_servo`]).
+/// object (the chain arms–object is closed); then the servo is a pure rate control (spool ∝
+/// reference rate, no position term; a zero reference centres the valves), so the two arms'
+/// position loops cannot fight through the object ([`control::joint_servo`]).
 pub(super) fn operator_spools(
     a: &mut ArmState,
     input: &ArmInput,

@@ -125,16 +125,25 @@ impl Simulation {
             }
             u
         } else {
+            // In the closed chain each jaw is taken to carry half the object's weight in the
+            // medium (the equal share, eq. 3.46) for the arms' rate control.
+            let share = -0.5
+                * object::wet_mass_kg(&self.params.object, &self.params.step.environment)
+                * self.params.step.gravity.z;
             let arms = &mut self.state.arms;
+            let work = &mut self.work;
             core::array::from_fn(|i| {
                 arm::operator_spools(
                     &mut arms[i],
                     &input.arms[i],
-                    &nominal[i],
+                    &self.models[i],
+                    &self.params.arms[i],
+                    &self.params.step,
+                    &mut work[i],
                     speed,
-                    dt,
                     cp,
                     holding_both,
+                    share,
                 )
             })
         };

@@ -215,7 +215,8 @@ fn rate_control(
 
 /// Stage 4 (per arm): H, C q̇ + G and J̇q̇ in one pass over the links (eq. 3.38, world frame,
 /// [`dynamics::step_terms`]), the actuator linkages, and the factor of H̃ with the implicit
-/// damping and end stops. `work` holds the kinematics of the state's q; `h` is the sub-step;
+/// damping and end stops. `work` holds the kinematics of the state's q; `flow` is the water's
+/// motion (unused in air); `h` is the sub-step;
 /// `load`: a held panel item's load on the jaw, linearly implicit (h·JᵀCJ + h²·JᵀKJ and the
 /// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side).
 pub(super) fn arm_terms(
@@ -224,6 +225,7 @@ pub(super) fn arm_terms(
     sp: &StepParams,
     work: &ArmWork,
     a: &ArmState,
+    flow: &water::Flow,
     h: f64,
     load: Option<&ToolLoad>,
 ) -> ArmTerms {
@@ -263,7 +265,7 @@ pub(super) fn arm_terms(
     if let Some(w) = sp.environment.water() {
         // The links' added mass and the linearly implicit part of their drag into H̃, the
         // drag at the current q̇ onto the right-hand side ([`water::arm_hydro`]).
-        let hydro = water::arm_hydro(model, &ap.inertials, &work.kin, &a.qd, w, h);
+        let hydro = water::arm_hydro(model, &ap.inertials, &work.kin, &a.qd, w, flow, h);
         m += hydro.matrix;
         out.bias -= hydro.torque;
     }

@@ -71,7 +71,7 @@ pub mod water;
 pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
 pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
-pub use water::{Current, Environment, Medium, Water};
+pub use water::{Current, Environment, Flow, Medium, Water};
 
 use nalgebra::{Isometry3, Matrix6, Vector3};
 
@@ -303,6 +303,8 @@ struct State {
     surface: SurfaceLatch,
     /// The panel's state (when the parameters have a panel).
     panel: Option<PanelState>,
+    /// The water's present motion, ramping towards the set current (still in air).
+    flow: Flow,
 }
 
 /// Seconds the seabed contact must persist, or stay lost, before the grasp state follows it:
@@ -416,6 +418,7 @@ impl Simulation {
             internal: [0.0; 6],
             surface: SurfaceLatch::default(),
             panel: None,
+            flow: Flow::default(),
         };
         // Bases composed into the models: kinematics and dynamics come out in the world frame.
         let models = [
@@ -506,6 +509,13 @@ impl Simulation {
             pending_s: 0.0,
         };
         self.state.panel = self.params.panel.as_ref().map(PanelState::initial);
+        // The set current has been flowing all along: no ramp after a reset.
+        self.state.flow = self
+            .params
+            .step
+            .environment
+            .water()
+            .map_or(Flow::default(), |w| Flow::steady(&w.current));
         self.numerical_faults = 0;
         self.update_kinematics();
         for i in 0..2 {
@@ -575,8 +585,27 @@ impl Simulation {
     pub fn environment(&self) -> &Environment {
         &self.params.step.environment
     }
-    /// Sets the water's current (applies from the next step). In air there is no water to
-    /// move: an error, and nothing changes.
+    /// The water's present motion: the current as it ramps towards the set one
+    /// ([`Flow::advance`]); `None` in air.
+    pub fn flow(&self) -> Option<&Flow> {
+        self.params
+            .step
+            .environment
+            .water()
+            .map(|_| &self.state.flow)
+    }
+    /// Advances the water's motion by one step towards the set current (stage 0 of the
+    /// step; nothing in air).
+    pub(super) fn advance_flow(&mut self) {
+        if let Some(w) = self.params.step.environment.water() {
+            let set = w.current.velocity();
+            self.state.flow.advance(&set, self.params.step.dt_s);
+        }
+    }
+    /// Sets the water's current. The water does not jump to it: from the next step the flow
+    /// ramps towards it with the time constant [`water::CURRENT_TIME_CONSTANT_S`]
+    /// ([`Simulation::flow`]). In air there is no water to move: an error, and nothing
+    /// changes.
     pub fn set_current(&mut self, current: Current) -> Result<(), Error> {
         match &mut self.params.step.environment {
             Environment::Subsea(w) => {

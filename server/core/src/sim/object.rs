@@ -4,7 +4,7 @@
 
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
-use super::water::{BoxHydro, Environment};
+use super::water::{BoxHydro, Environment, Flow};
 use super::{ObjectState, StepParams};
 use crate::grasp::{self, ObjectParams};
 use crate::linalg::Ldlt;
@@ -40,11 +40,12 @@ impl ObjectTerms {
     /// damping of 2·10⁴ N·s/m at h = 1 ms injects energy — so they are treated implicitly
     /// (linearly implicit Euler): the mass matrix becomes M̃ = M_o + h·C, held over the step;
     /// the spring forces stay explicit (k·h²/m_eff ≈ 0.3). `held`: an arm holds the object
-    /// (then M̃⁻¹ is formed for the grasp blocks).
+    /// (then M̃⁻¹ is formed for the grasp blocks); `flow`: the water's motion (unused in air).
     pub(super) fn new(
         op: &ObjectParams,
         sp: &StepParams,
         o: &ObjectState,
+        flow: &Flow,
         held: bool,
         h: f64,
     ) -> ObjectTerms {
@@ -68,7 +69,10 @@ impl ObjectTerms {
         };
         let iw = world(&d);
         let contact = grasp::seabed_contact(op, &o.pose, &o.velocity, &o.angular_velocity);
-        let hydro = sp.environment.water().map(|w| BoxHydro::new(&op.size_m, w));
+        let hydro = sp
+            .environment
+            .water()
+            .map(|w| BoxHydro::new(&op.size_m, w, flow));
         // Effective translational mass: the body's and its added mass (isotropic).
         let mass = op.mass_kg + hydro.map_or(0.0, |b| b.added_mass_kg);
         let factor = contact.damping.and_then(|c| {
@@ -147,10 +151,11 @@ impl ObjectTerms {
         };
         let gyro = o.angular_velocity.cross(&(self.iw * o.angular_velocity));
         // Drag on the velocity relative to the current, explicit (h·λ ≪ 2: see
-        // [`super::water`]), through the COM (no moment: the box is symmetric).
-        let drag = self
-            .hydro
-            .map_or(Vector3::zeros(), |b| b.drag(&self.rot, &o.velocity));
+        // [`super::water`]), and the accelerating current's inertia force, through the COM
+        // (no moment: the box is symmetric).
+        let drag = self.hydro.map_or(Vector3::zeros(), |b| {
+            b.drag(&self.rot, &o.velocity) + b.inertia_n
+        });
         let wrench = Vector6::new(
             self.weight.x + sea[0] + drag.x,
             self.weight.y + sea[1] + drag.y,

@@ -1,6 +1,7 @@
 //! The 1 ms step as a pipeline of named stages (the scheme is in the [`super`] module docs).
 //! [`Simulation::step_inner`] is the list:
 //!
+//! 0. the water's motion ramps towards the set current ([`Simulation::advance_flow`]);
 //! 1. jaws and grasp transitions, per arm ([`arm::update_jaw`]), then the panel items'
 //!    grasp and release ([`Simulation::panel_jaw`]; only with a panel);
 //! 2. spool commands: cooperative control, or each arm's open loop or joint servo, then
@@ -63,6 +64,7 @@ impl Simulation {
     /// One step: the stages in order (see the module docs). Kinematics are current for the
     /// state's q on entry and on exit.
     pub(super) fn step_inner(&mut self, input: &Input) {
+        self.advance_flow();
         let speed = finite_or(input.speed_scale, 0.0).clamp(0.0, 1.0);
         for i in 0..2 {
             let contact = self.in_contact(i) && !self.panel_holds(i);
@@ -169,12 +171,13 @@ impl Simulation {
                 sp,
                 &self.work[i],
                 &st.arms[i],
+                &st.flow,
                 h,
                 loads[i].as_ref(),
             )
         });
         let held = st.arms.iter().any(|a| a.holding);
-        let object = ObjectTerms::new(&self.params.object, sp, &st.object, held, h);
+        let object = ObjectTerms::new(&self.params.object, sp, &st.object, &st.flow, held, h);
         let grip = core::array::from_fn(|i| {
             st.arms[i]
                 .holding

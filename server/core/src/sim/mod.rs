@@ -78,7 +78,7 @@ use nalgebra::{Isometry3, Matrix6, Vector3};
 use crate::Error;
 use crate::control::{self, ControlParams};
 use crate::dynamics::{self, DynData, Inertials};
-use crate::grasp::{GraspState, GripParams, ObjectParams};
+use crate::grasp::{GraspState, GripParams, ObjectParams, SeabedAnchors};
 use crate::hydraulics::{Faults, HydraulicParams, N_ACT};
 use crate::kinematics::{self, KinData};
 use crate::model::Model;
@@ -288,6 +288,15 @@ pub struct ObjectState {
     pub angular_velocity: Vector3<f64>,
     /// Seabed normal force (N) in the last sub-step.
     pub seabed_force_n: f64,
+    /// The seabed friction's anchors of the touching corners ([`crate::grasp::seabed_contact`]).
+    seabed_anchors: SeabedAnchors,
+}
+
+impl ObjectState {
+    /// The seabed friction's anchors: where each touching corner stuck to the seabed.
+    pub fn seabed_anchors(&self) -> &SeabedAnchors {
+        &self.seabed_anchors
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -410,6 +419,7 @@ impl Simulation {
                 velocity: Vector3::zeros(),
                 angular_velocity: Vector3::zeros(),
                 seabed_force_n: 0.0,
+                seabed_anchors: SeabedAnchors::default(),
             },
             time_s: 0.0,
             steps: 0,
@@ -498,6 +508,7 @@ impl Simulation {
             velocity: Vector3::zeros(),
             angular_velocity: Vector3::zeros(),
             seabed_force_n: wet_kg * g.norm(),
+            seabed_anchors: SeabedAnchors::default(),
         };
         self.state.time_s = 0.0;
         self.state.steps = 0;

@@ -212,8 +212,7 @@ impl Simulation {
             qdd[i] = arm::free_acceleration(a, &self.models[i], hp, &s.arms[i], &self.params.step);
         }
         let o = &self.state.object;
-        let (mut acc_o, seabed_normal_n) =
-            s.object.free_acceleration(&self.params.object, o, first);
+        let (mut acc_o, seabed) = s.object.free_acceleration(&self.params.object, o, first);
         let arms = &self.state.arms;
         (out.contact, out.grip) = s.constraint.apply(
             [&s.arms[0], &s.arms[1]],
@@ -227,7 +226,7 @@ impl Simulation {
         for ((a, model), qdd) in self.state.arms.iter_mut().zip(&self.models).zip(&qdd) {
             arm::integrate(a, model, qdd, h);
         }
-        object::integrate(&mut self.state.object, &acc_o, seabed_normal_n, h);
+        object::integrate(&mut self.state.object, &acc_o, &seabed, h);
         out
     }
 

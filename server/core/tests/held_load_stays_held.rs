@@ -222,10 +222,12 @@ fn lift_a_little(sim: &mut Simulation) {
 
 /// How much the internal force may rise over a 60 s hold above its value 2 s in (N): 40. That
 /// value is what the grasp left (≈ 0 on the seabed) or what the open-loop lift left locked in
-/// (≈ 290 N in air, Lim case 3's lesson). Measured rises: zero stick < 0.001 N;
-/// 10⁻⁶ stick ≤ 30 N on the seabed (the commanded 12 µm in 60 s pushes into the seabed; the
-/// closed loop's object reference is the stiffest), < 0.01 N lifted; the 0.02 lift ≤ 30 N
-/// (docs/physics.md, "A held load stays held").
+/// (≈ 280 N in air, 305 N in water: Lim case 3's lesson). Measured rises: zero stick
+/// < 0.01 N; 10⁻⁶ stick < 4 N lifted, on the seabed ≤ 5 N in open loop and 34 N in closed
+/// loop (the stick asks for 12 µm up in 60 s; the box, stuck to the seabed, does not follow, and
+/// the object-pose loop's push grows — Lim's equal-share decomposition, which the reported
+/// internal force uses, counts part of the moment-free share of that push as internal); the
+/// 0.02 lift ≤ 13 N (docs/physics.md, "A held load stays held").
 const MAX_RISE_N: f64 = 40.0;
 /// Upper bound on the internal force at any time (N): the box's weight in air, 490 N — an
 /// internal force larger than the load itself is the arms fighting each other.
@@ -304,17 +306,14 @@ fn current_step(mode: Mode, speed_m_s: f64, heading_deg: f64) -> (u64, f64) {
 /// The instructor steps the current to 2.5 m/s (the largest allowed; before the ramp the
 /// step dropped a held box with 11–20 slips, issue 27) while both jaws hold the lifted box in
 /// open loop, sticks at zero: the current ramps (`sim::water`, τ = 1.5 s) and the box stays
-/// held — no drop along, across and quartering the pair; no slip but quartering, where the
-/// steady 2.5 m/s drag on box and links takes the grip to its limit (a few slips once the
-/// current is nearly full, 6.5 s after the step: the steady load, not the step).
+/// held — no slip, no drop along, across and quartering the pair (peak λ 0.74, 1.08 and 1.26:
+/// the pads creep below the slip notice at the steady 2.5 m/s load).
 #[test]
 fn a_current_stepped_to_full_does_not_drop_a_box_held_in_open_loop() {
     for mode in [Mode::Joint, Mode::Cartesian] {
         for heading in [0.0, 90.0, 225.0] {
             let (slips, _) = current_step(mode, 2.5, heading);
-            if heading != 225.0 {
-                assert_eq!(slips, 0, "{mode:?} at {heading}°");
-            }
+            assert_eq!(slips, 0, "{mode:?} at {heading}°");
         }
     }
 }

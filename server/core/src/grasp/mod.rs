@@ -32,7 +32,7 @@ pub use matrices::{
 };
 pub use object::ObjectParams;
 pub use seabed::{
-    SeabedAnchors, SeabedContact, TANGENTIAL_STIFFNESS_RATIO, corner_friction, seabed_contact,
+    STICK_STIFFNESS_N_M, SeabedAnchors, SeabedContact, corner_friction, seabed_contact,
     seabed_wrench,
 };
 

@@ -9,7 +9,7 @@
 //! horizontal offset from its anchor, v_t its horizontal velocity). The spring is linearly
 //! implicit like the end stops of the arms: the integrator's velocity update sees
 //! f_t = −k_t·(d + h·v_t⁺) − c_t·v_t⁺, so the force carries −h·k_t·v_t and the damping matrix
-//! the coefficient c_t + h·k_t; h·√(k_t/m_corner) ≈ 0.7 for a few kg at one corner, and the
+//! the coefficient c_t + h·k_t; h·√(k_t/m_corner) ≈ 0.2 for a few kg at one corner, and the
 //! implicit form is stable whatever the ratio. While the trial force exceeds the Coulomb cap
 //! μ·f_n the corner slips: the kinetic force −μ·f_n·v_t/√(|v_t|²+ε²) (regularized only so
 //! that its secant is a finite dashpot for the implicit step; within 10⁻⁴ of μ·f_n above
@@ -18,24 +18,30 @@
 //! plastic spring: Simo & Hughes (1998) "Computational Inelasticity" §1.2; in contact
 //! dynamics the "stiction spring" of Cundall & Strack (1979) and of game engines' anchored
 //! friction). A box at rest under a side load below μ·f_n therefore stays put (the springs
-//! stretch μ·f_n/k_t ≤ 19 µm at the cap under the 50 kg box in water) instead of creeping
+//! stretch by F/(4k_t), at most 0.31 mm at the cap under the 50 kg box in water) instead of creeping
 //! at v = ε·F/√((μN)² − F²) as the purely regularized law did (3.7 mm/s at 1 m/s of current).
 //!
-//! Parameters (per corner): [`TANGENTIAL_STIFFNESS_RATIO`] k_t/k_n = 2(1 − ν)/(2 − ν) with
-//! ν = 0.3 (0.82: Mindlin's ratio of tangential to normal contact compliance, Mindlin (1949)
+//! Parameters (per corner): k_t = [`STICK_STIFFNESS_N_M`] = 1·10⁵ N/m; c_t = c_n·√(k_t/k_n)
+//! (4.5·10³ N·s/m: the normal direction's damping ratio); μ_s = μ_k =
+//! [`ObjectParams::friction`] (0.5: one coefficient, as the seabed's was; the stick–slip comes
+//! from the anchor, not from a μ_s > μ_k step). k_t is chosen, not measured: Mindlin's ratio of
+//! tangential to normal contact stiffness, 2(1 − ν)/(2 − ν) = 0.82 at ν = 0.3 (Mindlin (1949)
 //! "Compliance of elastic bodies in contact", J. Appl. Mech. 16; Johnson (1985) "Contact
-//! Mechanics" §7.2), so k_t = 1.65·10⁶ N/m with the default k_n; c_t = c_n·√(k_t/k_n), the
-//! normal direction's damping ratio; μ_s = μ_k = [`ObjectParams::friction`] (0.5: one
-//! coefficient, as the seabed's was; the stick–slip comes from the anchor, not from a
-//! μ_s > μ_k step).
+//! Mechanics" §7.2), would give 1.65·10⁶ N/m, and with that the cooperative controller holding
+//! a box that rests on the seabed in water drifted into a growing oscillation (λ to 1.03 in
+//! 2 s at zero stick): its internal-force admittance (10⁻⁴ m/s per N) pushing against a
+//! 6.6·10⁶ N/m anchorage closes a loop of 660 s⁻¹, far above the valve spools' 40 s⁻¹. At
+//! 1·10⁵ N/m (a soft sediment's shear compliance rather than steel on rock) that hold decays,
+//! and the springs stretch at most μ·f_n/k_t = 0.31 mm at the cap under the box in water
+//! (0.6 mm in air) — a box that sticks moves by that much, never more.
 
 use nalgebra::{Isometry3, Matrix3, Matrix6, Vector2, Vector3, Vector6};
 
 use super::ObjectParams;
 
-/// Ratio of a corner's tangential contact stiffness to its normal one: 2(1 − ν)/(2 − ν) with
-/// Poisson's ratio ν = 0.3 (Mindlin 1949; see the module docs).
-pub const TANGENTIAL_STIFFNESS_RATIO: f64 = 1.4 / 1.7;
+/// Tangential (stick) stiffness of a corner (N/m): 1·10⁵ (see the module docs: chosen for the
+/// closed loop's stability, 1/20 of the normal stiffness).
+pub const STICK_STIFFNESS_N_M: f64 = 1.0e5;
 
 /// Where each bottom corner of the box stuck to the seabed: the world (x, y) of its anchor,
 /// `None` for a corner not touching (indexed as [`ObjectParams::corners`]). The friction's
@@ -110,8 +116,8 @@ pub fn corner_friction(
     anchor: Option<Vector2<f64>>,
     h: f64,
 ) -> (Vector2<f64>, f64, Vector2<f64>, bool) {
-    let k_t = TANGENTIAL_STIFFNESS_RATIO * p.contact_stiffness_n_m;
-    let c_t = p.contact_damping_n_s_m * TANGENTIAL_STIFFNESS_RATIO.sqrt();
+    let k_t = STICK_STIFFNESS_N_M;
+    let c_t = p.contact_damping_n_s_m * (k_t / p.contact_stiffness_n_m).sqrt();
     let c_stick = c_t + h * k_t;
     let a = anchor.unwrap_or(*xy);
     let trial = -(xy - a) * k_t - vt * c_stick;

@@ -101,13 +101,13 @@ impl Operator {
             }
             Mode::ClosedLoop => {
                 input.method = ControlMethod::ClosedLoop;
-                for k in 0..6 {
+                for (k, (v, s)) in input.object_velocity.iter_mut().zip(stick).enumerate() {
                     let max = if k < 3 {
                         MAX_LINEAR_SPEED_M_S
                     } else {
                         MAX_ANGULAR_SPEED_RAD_S
                     };
-                    input.object_velocity[k] = stick[k] * max;
+                    *v = s * max;
                 }
             }
         }

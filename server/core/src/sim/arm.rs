@@ -219,6 +219,7 @@ fn rate_control(
 /// motion (unused in air); `h` is the sub-step;
 /// `load`: a held panel item's load on the jaw, linearly implicit (h·JᵀCJ + h²·JᵀKJ and the
 /// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn arm_terms(
     model: &Model,
     ap: &ArmParams,

@@ -318,16 +318,23 @@ fn a_current_stepped_to_full_does_not_drop_a_box_held_in_open_loop() {
     }
 }
 
-/// The same in closed loop, stepped to 2.0 m/s: no slip. (At 2.5 m/s along the pair the
-/// cooperative controller's moment-free share asks each jaw for half of the drag's 35 N·m
-/// about the bar-normal axis, above the 15.2 N·m torsion limit of `grasp::grip`: the grip
-/// slips once the steady current exceeds ≈ 2.4 m/s however slowly it ramps — a capacity
-/// limit of the finite grip in that share, left to the grasp work of issue 27 item 4.)
+/// The same in closed loop: stepped to 2.0 m/s at every heading and to 2.5 m/s across and
+/// quartering the pair, no slip. (At 2.5 m/s along the pair the cooperative controller's
+/// moment-free share asks each jaw for half of the drag's 35 N·m about the bar-normal axis,
+/// above the 15.2 N·m torsion limit of `grasp::grip`: the grip slips once the current passes
+/// 2.39 m/s, however slowly it ramps — a capacity limit of the finite grip in that share, left
+/// to the grasp work of issue 27 item 4.)
 #[test]
 fn a_current_stepped_to_2_m_s_does_not_drop_a_box_held_in_closed_loop() {
-    for heading in [0.0, 90.0, 225.0] {
-        let (slips, _) = current_step(Mode::ClosedLoop, 2.0, heading);
-        assert_eq!(slips, 0, "closed loop at {heading}°");
+    for (speed, heading) in [
+        (2.0, 0.0),
+        (2.0, 90.0),
+        (2.0, 225.0),
+        (2.5, 90.0),
+        (2.5, 225.0),
+    ] {
+        let (slips, _) = current_step(Mode::ClosedLoop, speed, heading);
+        assert_eq!(slips, 0, "closed loop, {speed} m/s at {heading}°");
     }
 }
 

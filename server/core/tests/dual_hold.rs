@@ -287,8 +287,9 @@ fn cartesian_pair_lift(
 /// resolver while both jaws hold) and the stick pushed over 0.5 s, the pair lifts the box by
 /// about the commanded 2.5 cm in 1.5 s without a slip; the two servos' errors still twist the
 /// bars (the roll about the bar axis grows; in air the jaws slip about 0.4 s later).
-/// With the translational rows only, each arm's null-space motion (Jun eq. 21) turns its jaw
-/// against the other through the box: the jaws slip within 0.15 s and lose part of the lift.
+/// With the translational rows only, each arm's null-space motion (Jun eq. 21, scaled by the
+/// stick's deflection) turns its jaw against the other through the box: the pair loses part of
+/// the lift, and in air the jaws slip.
 /// Other stick speeds and ramps sit just as close to the grip's limit, some slipping and some
 /// not (docs/physics.md, "Moving the pair in Cartesian mode"); trainees lift the pair in closed
 /// loop (the `dual-lift` exercise).
@@ -310,11 +311,15 @@ fn a_cartesian_lift_of_the_pair_keeps_the_box_only_with_the_orientation_held() {
         println!(
             "{env:?} translational rows only: rose {dz:.4} m, {slips} slips, first at {first:?} s"
         );
-        assert!(
-            slips > 0,
-            "{env:?}: the null-space twist must make the jaws slip"
-        );
-        // Sliding, the jaws lose part of the lift (air 0.012 m, water 0.018 m of 0.025 m).
+        // The null-space twist scales with the stick (ε × 0.1 here, issue 27): in air it still
+        // slips the jaws (first at 1.46 s), in water it no longer does; both lose part of the
+        // lift to it (air 0.0085 m, water 0.018 m of the held 0.0245 / 0.0247 m).
+        if env == Environment::Air {
+            assert!(
+                slips > 0,
+                "{env:?}: the null-space twist must make the jaws slip"
+            );
+        }
         assert!(dz < 0.9 * dz_held, "{env:?}: rose {dz} m");
     }
 }

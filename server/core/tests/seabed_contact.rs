@@ -3,7 +3,7 @@
 //! a box dropped onto one corner settling without gaining energy.
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3, Vector6};
-use seaarms_core::grasp::{ObjectParams, seabed_contact, seabed_wrench};
+use seaarms_core::grasp::{ObjectParams, SeabedAnchors, seabed_contact, seabed_wrench};
 use seaarms_core::sim::{Input, SimParams, Simulation};
 
 mod common;
@@ -24,7 +24,8 @@ fn tilted(p: &ObjectParams, rx: f64, ry: f64, depth_m: f64) -> Isometry3<f64> {
 }
 
 /// C = −∂wrench/∂[v; ω] by central differences, at twists whose touching corners do not
-/// slide (there the friction dashpot's secant is its tangent), on a corner and on an edge.
+/// slide (they stick to fresh anchors: the tangential force is the linear −(c_t + h·k_t)·v_t),
+/// on a corner and on an edge.
 #[test]
 fn damping_matrix_is_the_wrench_velocity_derivative() {
     let p = ObjectParams::case_study_box(1.0, 0.5, -0.45);
@@ -33,9 +34,13 @@ fn damping_matrix_is_the_wrench_velocity_derivative() {
         // Pure vertical motion: touching corners move along z only.
         let v = Vector3::new(0.0, 0.0, -0.05);
         let w = Vector3::zeros();
-        let c = seabed_contact(&p, &pose, &v, &w);
+        let fresh = SeabedAnchors::default();
+        let c = seabed_contact(&p, &pose, &v, &w, &fresh, 1e-3);
         let damping = c.damping.expect("a corner touches");
-        assert_eq!(c.wrench, seabed_wrench(&p, &pose, &v, &w).0);
+        assert_eq!(
+            c.wrench,
+            seabed_wrench(&p, &pose, &v, &w, &fresh, 1e-3).wrench
+        );
         let h = 1e-7;
         for k in 0..6 {
             let mut t = Vector6::new(v.x, v.y, v.z, w.x, w.y, w.z);
@@ -46,8 +51,10 @@ fn damping_matrix_is_the_wrench_velocity_derivative() {
                     &pose,
                     &t.fixed_rows::<3>(0).into(),
                     &t.fixed_rows::<3>(3).into(),
+                    &fresh,
+                    1e-3,
                 )
-                .0
+                .wrench
             };
             let plus = wrench_at(&t);
             t[k] -= 2.0 * h;
@@ -65,9 +72,16 @@ fn damping_matrix_is_the_wrench_velocity_derivative() {
     }
     let above = Isometry3::translation(1.0, 0.5, 0.5);
     assert!(
-        seabed_contact(&p, &above, &Vector3::zeros(), &Vector3::zeros())
-            .damping
-            .is_none()
+        seabed_contact(
+            &p,
+            &above,
+            &Vector3::zeros(),
+            &Vector3::zeros(),
+            &SeabedAnchors::default(),
+            1e-3
+        )
+        .damping
+        .is_none()
     );
 }
 

@@ -14,7 +14,7 @@ use nalgebra::Vector3;
 use seaarms_core::dynamics::Inertials;
 use seaarms_core::kinematics::{KinData, forward_kinematics};
 use seaarms_core::sim::water::{self, BOX_ADDED_MASS, BOX_DRAG, MAX_CURRENT_M_S};
-use seaarms_core::sim::{Arm, Current, Environment, Input, SimParams, Simulation, Water};
+use seaarms_core::sim::{Arm, Current, Environment, Flow, Input, SimParams, Simulation, Water};
 
 const RHO: f64 = 1025.0;
 const G: f64 = 9.81;
@@ -133,7 +133,15 @@ fn link_drag_only_takes_energy_out_of_still_water() {
         let q: [f64; 6] = core::array::from_fn(|_| rng.sym(1.0));
         let qd: [f64; 6] = core::array::from_fn(|_| rng.sym(0.6));
         forward_kinematics(&model, &mut kin, &q);
-        let hy = water::arm_hydro(&model, &inr, &kin, &qd, &still, 1e-3);
+        let hy = water::arm_hydro(
+            &model,
+            &inr,
+            &kin,
+            &qd,
+            &still,
+            &Flow::steady(&still.current),
+            1e-3,
+        );
         let power: f64 = (0..6).map(|j| hy.torque[j] * qd[j]).sum();
         assert!(power < 0.0, "drag power {power} W at q̇ {qd:?}");
         // Added mass and the drag Jacobian: symmetric positive semi-definite.
@@ -142,7 +150,15 @@ fn link_drag_only_takes_energy_out_of_still_water() {
         let eig = m.symmetric_eigenvalues();
         assert!(eig.min() > -1e-12 * m.norm(), "eigenvalues {eig}");
         // At rest in still water: no drag, the added mass alone.
-        let rest = water::arm_hydro(&model, &inr, &kin, &[0.0; 6], &still, 1e-3);
+        let rest = water::arm_hydro(
+            &model,
+            &inr,
+            &kin,
+            &[0.0; 6],
+            &still,
+            &Flow::steady(&still.current),
+            1e-3,
+        );
         assert_eq!(rest.torque.norm(), 0.0);
     }
 }
@@ -161,7 +177,15 @@ fn the_links_added_mass_is_the_cylinders_closed_form() {
     }
     let mut kin = KinData::new(&model);
     forward_kinematics(&model, &mut kin, &[0.0; 6]);
-    let hy = water::arm_hydro(&model, &inr, &kin, &[0.0; 6], &Water::default(), 0.0);
+    let hy = water::arm_hydro(
+        &model,
+        &inr,
+        &kin,
+        &[0.0; 6],
+        &Water::default(),
+        &Flow::default(),
+        0.0,
+    );
     let p0 = kin.joint_frames[0].translation.vector;
     let p1 = kin.joint_frames[1].translation.vector;
     let z0 = kin.joint_frames[0].rotation * model.joints[0].axis.into_inner();
@@ -209,7 +233,16 @@ fn the_swing_actuator_carries_the_links_drag() {
                 torque += a.torque[0];
                 if let Some(w) = s.environment().water() {
                     forward_kinematics(&model, &mut kin, &a.q);
-                    drag += water::arm_hydro(&model, &inr, &kin, &a.qd, w, 0.0).torque[0];
+                    drag += water::arm_hydro(
+                        &model,
+                        &inr,
+                        &kin,
+                        &a.qd,
+                        w,
+                        &Flow::steady(&w.current),
+                        0.0,
+                    )
+                    .torque[0];
                 }
                 n += 1.0;
             }

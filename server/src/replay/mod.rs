@@ -113,12 +113,9 @@ impl Replay {
             &faults,
             init.sim_faults,
             init.seed,
+            init.current,
         )
         .map_err(|e| ReplayError::Record(e.to_string()))?;
-        if let Some(c) = init.current {
-            live.apply(&Command::SetCurrent(c))
-                .map_err(|e| ReplayError::Record(e.to_string()))?;
-        }
         Ok(live)
     }
 

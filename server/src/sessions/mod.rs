@@ -163,7 +163,10 @@ impl Live {
         Self::build(session_id, models, scenario, mode, method, seed, true)
     }
 
-    /// The state at a recorded attempt's start ([`crate::replay::Init`]), recording nothing.
+    /// The state at a recorded attempt's start ([`crate::replay::Init`]), recording nothing;
+    /// `current`: the current flowing at that start (the simulation is reset after setting it,
+    /// so the water moves at it steadily, as it did after the recorded session's reset — a
+    /// current set mid-attempt ramps instead, `seaarms_core::sim::water::Flow`).
     pub fn replaying(
         models: &[Arc<Model>; 2],
         scenario: &Scenario,
@@ -171,6 +174,7 @@ impl Live {
         faults: &[ActiveFault],
         sim_faults: [seaarms_core::hydraulics::Faults; 2],
         seed: u64,
+        current: Option<seaarms_core::sim::Current>,
     ) -> Result<Live, seaarms_core::Error> {
         let mut live = Self::build(
             "replay",
@@ -187,6 +191,15 @@ impl Live {
         }
         for arm in command::Arm::BOTH {
             *live.sim.faults_mut(arm) = sim_faults[arm.index()];
+        }
+        if let Some(c) = current {
+            live.apply(&command::Command::SetCurrent(c)).map_err(|e| {
+                seaarms_core::Error::InvalidParameter {
+                    what: "current",
+                    reason: e.to_string(),
+                }
+            })?;
+            live.sim.reset();
         }
         Ok(live)
     }

@@ -4,7 +4,8 @@
 //!   speed setting — a joystick per function, as in Lim case studies 1–3.
 //! * Joint-velocity servo ([`joint_servo`]): turns a joint-velocity reference (from a Cartesian
 //!   teleoperation module) into valve commands: feedforward q̇_ref/q̇_nominal plus a
-//!   proportional term on the integrated reference.
+//!   proportional term on the integrated reference, for an arm on its own (in the closed
+//!   chain the arms are rate-controlled, `sim::arm`).
 //! * Closed-loop cooperative ([`cooperative`]): the operator commands the object twist; the
 //!   controller regulates the object pose, sends each arm the grasp-point twist of the desired
 //!   object motion (Wⁱᵀ, equal sharing) and an admittance term that backs each arm off its
@@ -83,19 +84,18 @@ pub fn open_loop(inputs: &[f64; N_ACT], speed_scale: f64) -> [f64; N_ACT] {
     u
 }
 
-/// Joint-velocity servo. `q_ref` is the servo's integrated reference (state), advanced by
-/// `qd_ref`·dt here; returns spool commands (q̇_ref + k_p(q_ref − q))/q̇_nominal, clamped to ±1.
+/// Joint-velocity servo for an arm on its own. `q_ref` is the servo's integrated reference
+/// (state), advanced by `qd_ref`·dt here; returns spool commands
+/// (q̇_ref + k_p(q_ref − q))/q̇_nominal, clamped to ±1.
 ///
-/// In a closed chain (`chain`: both jaws hold the object) a zero reference instead centres the
-/// valves and lets the reference follow the arm. Two position loops closed through one rigid
-/// object fight: the chain has one pose, the two references generally disagree with it by the
-/// arms' different sag under the shared load, and a proportional term on a flow-control valve
-/// integrates the remaining error into pressure (eqs 3.48–3.50: a steady opening s into a
-/// locked cylinder raises its pressure at β·K·s·√ΔP/V), so the internal load would grow
-/// without bound with the sticks at rest. The centred closed-centre valves trap the oil and
-/// lock the cylinders instead, as the Magnum's own rate control does with the stick released
-/// (docs/physics.md, "Holding a box in open loop"). A moving reference is servoed as usual
-/// (the operator is moving the pair).
+/// Not for a closed chain (both jaws on the object): there two position loops fight through
+/// the rigid object — the chain has one pose, the two references disagree with it by the
+/// arms' different sag under the shared load and the different flows their valves pass, and
+/// a proportional term on a flow-control valve integrates the remaining error into pressure
+/// (eqs 3.48–3.50: a steady opening s into a locked cylinder raises its pressure at
+/// β·K·s·√ΔP/V), so the internal load ramps under any stick, however small. In the chain the
+/// arms are rate-controlled instead ([`crate::hydraulics::steady_opening`], `sim::arm`):
+/// valve opening ∝ commanded rate, no position term, centred valves lock the cylinders.
 pub fn joint_servo(
     qd_ref: &[f64; N_ACT],
     q: &[f64; N_ACT],
@@ -103,12 +103,7 @@ pub fn joint_servo(
     nominal_speed: &[f64; N_ACT],
     dt_s: f64,
     p: &ControlParams,
-    chain: bool,
 ) -> [f64; N_ACT] {
-    if chain && qd_ref.iter().all(|v| *v == 0.0) {
-        *q_ref = *q;
-        return [0.0; N_ACT];
-    }
     let mut u = [0.0; N_ACT];
     for j in 0..N_ACT {
         q_ref[j] += qd_ref[j] * dt_s;
@@ -282,35 +277,24 @@ mod tests {
         }
     }
 
-    /// The servo's law by hand (u = (q̇_ref + k_p·e)/q̇_nominal with e = q_ref + q̇_ref·dt − q,
-    /// [`joint_servo`]'s docs); in a closed chain a zero reference centres the valves and
-    /// moves the reference to the arm, a moving one is servoed the same as out of a chain;
-    /// out of a chain a zero reference still holds its reference.
+    /// The servo's law by hand: u = (q̇_ref + k_p·e)/q̇_nominal with e = q_ref + q̇_ref·dt − q;
+    /// a zero reference holds the reference.
     #[test]
-    fn servo_centres_the_valves_in_a_closed_chain_at_rest() {
+    fn servo_follows_its_law() {
         let p = ControlParams::default();
         let nominal = [0.2; N_ACT];
         let q = [0.1, -0.2, 0.3, 0.0, 0.05, -0.05];
         let r0 = [0.1 + 1e-3, -0.2, 0.3 - 2e-3, 0.0, 0.05, -0.05];
-        // At rest in a chain: spools 0, reference = q.
         let mut r = r0;
-        let u = joint_servo(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, true);
-        assert_eq!(u, [0.0; N_ACT]);
-        assert_eq!(r, q);
-        // At rest alone: the position hold, k_p·e/q̇_nominal.
-        let mut r = r0;
-        let u = joint_servo(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p, false);
+        let u = joint_servo(&[0.0; N_ACT], &q, &mut r, &nominal, 1e-3, &p);
         assert!((u[0] - 5.0 * 1e-3 / 0.2).abs() < 1e-12);
         assert!((u[2] + 5.0 * 2e-3 / 0.2).abs() < 1e-12);
         assert_eq!(r, r0);
-        // Moving in a chain: the servo as usual.
         let qd = [0.01, 0.0, 0.0, 0.0, 0.0, 0.0];
-        let (mut a, mut b) = (r0, r0);
-        let u = joint_servo(&qd, &q, &mut a, &nominal, 1e-3, &p, true);
-        let v = joint_servo(&qd, &q, &mut b, &nominal, 1e-3, &p, false);
-        assert_eq!((u, a), (v, b));
+        let mut b = r0;
+        let v = joint_servo(&qd, &q, &mut b, &nominal, 1e-3, &p);
         let e0 = r0[0] + 0.01 * 1e-3 - q[0];
-        assert!((u[0] - (0.01 + 5.0 * e0) / 0.2).abs() < 1e-12);
+        assert!((v[0] - (0.01 + 5.0 * e0) / 0.2).abs() < 1e-12);
     }
 
     /// Reference DLS: Jᵀ(JJᵀ + λ²I)⁻¹ẋ formed with nalgebra's own matrix products and Cholesky

@@ -26,7 +26,9 @@ pub const MAX_ANGULAR_SPEED_RAD_S: f64 = 0.5;
 /// orientation is not spare — each arm's null-space motion would turn its own jaw against
 /// the other through the box (docs/physics.md, "Moving the pair in Cartesian mode") — so a
 /// translational command holds it (zero angular rate on rows 4–6). Damped near singularities
-/// and scaled to the joints' velocity limits by `resolver`'s settings. Zero for a zero command, and for a command the
+/// and scaled to the joints' velocity limits by `resolver`'s settings. The null-space gain is
+/// `resolver`'s ε times the stick's largest deflection (≤ 1): the spare-DOF motion scales with
+/// the command like the task motion. Zero for a zero command, and for a command the
 /// resolver refuses (e.g. non-finite numbers); non-finite results become 0. `dt_s` is the
 /// control period (s) the resolver's q + q̇·dt refers to.
 pub fn cartesian_to_joint_velocity(
@@ -52,12 +54,20 @@ pub fn cartesian_to_joint_velocity(
     } else {
         (&[0, 1, 2, 3, 4, 5], &full[..])
     };
+    // The null-space motion scales with the stick: ε·s with s the largest deflection (fraction
+    // of full stick, ≤ 1), so a stick barely off zero barely moves the arm's spare DOF (a
+    // 10⁻⁶ stick had turned the arm by 18° in 4 s at the full ε), and full stick gets the
+    // resolver's own ε.
+    let deflection = command.iter().fold(0.0_f64, |m, v| m.max(v.abs())).min(1.0);
+    let epsilon = resolver.params.epsilon;
+    resolver.params.epsilon = epsilon * deflection;
     let mut out = [0.0; N_ACT];
     if let Ok(qd) = resolver.step(model, q, rdot, rows, dt_s) {
         for (o, v) in out.iter_mut().zip(qd) {
             *o = if v.is_finite() { *v } else { 0.0 };
         }
     }
+    resolver.params.epsilon = epsilon;
     out
 }
 

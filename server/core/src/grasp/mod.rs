@@ -31,7 +31,10 @@ pub use matrices::{
     mobility_block_general_lower, moment_free_share, wrench_at_com,
 };
 pub use object::ObjectParams;
-pub use seabed::{SeabedContact, seabed_contact, seabed_wrench};
+pub use seabed::{
+    STICK_STIFFNESS_N_M, SeabedAnchors, SeabedContact, corner_friction, seabed_contact,
+    seabed_wrench,
+};
 
 use serde::{Deserialize, Serialize};
 

@@ -34,7 +34,7 @@ pub use sizing::{
     AREA_RATIO, FOUR_BAR_DESIGNS, HOLD_MARGIN, MAGNUM_FULL_EXTENSION, MAGNUM_LIFT_KG,
     MAGNUM_SPEEDS_DEG_S, MAGNUM_TORQUE_FLOOR_NM, MEAN_LEVER_M, magnum_four_bar,
 };
-pub use valve::{SPOOL_TIME_CONSTANT_S, spool_response, valve_flow};
+pub use valve::{SPOOL_TIME_CONSTANT_S, spool_response, steady_opening, valve_flow};
 
 /// Number of joint actuators per arm.
 pub const N_ACT: usize = 6;

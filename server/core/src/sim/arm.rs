@@ -113,19 +113,41 @@ pub(super) fn clamp_force(current: f64, jaw: &JawParams, closed_on: bool, cmd: f
 }
 
 /// Stage 2 outside cooperative control (per arm): the operator's valve commands (open loop),
-/// or the joint servo's when the input carries a joint-velocity reference (clamped to ±2×
-/// the nominal speeds). `speed` is the validated speed scale. `chain`: both jaws hold the
-/// object (the chain arms–object is closed); then a zero reference centres the valves
-/// instead of holding the servo's reference ([`control::joint_servo`]).
+/// or, when the input carries a joint-velocity reference (clamped to ±2× the nominal speeds;
+/// Cartesian mode), the joint servo's — or, in the closed chain, rate control. `speed` is the
+/// validated speed scale. `chain`: both jaws hold the object (the chain arms–object is
+/// closed); then `held_share_n` is the upward force (N, world z) this arm's jaw is taken to
+/// carry of the object (half its weight in the medium, the equal share of eq. 3.46).
+///
+/// **Rate control in the closed chain.** Each valve opens by what moves its joint at the
+/// reference rate in steady state against the joint's static load from the model
+/// ([`hydraulics::steady_opening`]; the load: gravity and buoyancy of the arm, G(q) by RNEA,
+/// plus Jᵀ of the held share), and the servo's reference follows the arm, so no position
+/// loop acts: the two arms cannot wind the chain up against each other (two position loops
+/// through one rigid object integrate any disagreement into pressure, [`control::joint_servo`]).
+/// A zero reference centres the valves, which lock the cylinders (eqs 3.49–3.50). The load
+/// is the model's, never the measured one: with the measured load an arm pushing harder
+/// against the other would open its valve wider (positive feedback, as a pressure-compensated
+/// valve in a locked chain); with the model's the residual mismatch of the two arms is taken
+/// up by the valves' own pressure–flow droop (eq. 3.48, q ∝ √(P_s − P)), which bounds it.
+/// Measured, two free Magnum arms rate-commanded 4 mm/s up: with q̇_ref/q̇_nominal alone they
+/// rose at 4.4 mm/s and drifted 2 mm towards each other in 20 s (the orifice areas differ by
+/// the rod and the loads by joint); with the steady inverse, 3.99 and 4.01 mm/s, 0.16 mm.
+#[allow(clippy::too_many_arguments)]
 pub(super) fn operator_spools(
     a: &mut ArmState,
     input: &ArmInput,
-    nominal: &[f64; N_ACT],
+    model: &Model,
+    ap: &ArmParams,
+    sp: &StepParams,
+    work: &mut ArmWork,
     speed: f64,
-    dt: f64,
     cp: &ControlParams,
     chain: bool,
+    held_share_n: f64,
 ) -> [f64; N_ACT] {
+    let hp = &ap.hydraulics;
+    let nominal: [f64; N_ACT] = core::array::from_fn(|j| hp.actuators[j].nominal_speed_rad_s);
     match input.joint_velocity_ref {
         Some(r) => {
             if !a.servo_active {
@@ -135,7 +157,12 @@ pub(super) fn operator_spools(
             let qd_ref: [f64; N_ACT] = core::array::from_fn(|j| {
                 (finite_or(r[j], 0.0) * speed).clamp(-2.0 * nominal[j], 2.0 * nominal[j])
             });
-            control::joint_servo(&qd_ref, &a.q, &mut a.servo_ref, nominal, dt, cp, chain)
+            if chain {
+                a.servo_ref = a.q;
+                rate_control(a, &qd_ref, model, ap, sp, work, held_share_n)
+            } else {
+                control::joint_servo(&qd_ref, &a.q, &mut a.servo_ref, &nominal, sp.dt_s, cp)
+            }
         }
         None => {
             a.servo_active = false;
@@ -146,17 +173,60 @@ pub(super) fn operator_spools(
     }
 }
 
+/// The closed chain's rate control ([`operator_spools`]): per joint the steady opening for
+/// q̇_ref against the static load G(q) + J_zᵀ·`held_share_n` (`work` holds the kinematics of
+/// the state's q; its dynamics scratch is reused). Zero for a zero reference (no RNEA then).
+fn rate_control(
+    a: &ArmState,
+    qd_ref: &[f64; N_ACT],
+    model: &Model,
+    ap: &ArmParams,
+    sp: &StepParams,
+    work: &mut ArmWork,
+    held_share_n: f64,
+) -> [f64; N_ACT] {
+    if qd_ref.iter().all(|v| *v == 0.0) {
+        return [0.0; N_ACT];
+    }
+    let mut load = [0.0; N_ACT];
+    dynamics::rnea(
+        model,
+        &ap.inertials,
+        &work.kin,
+        &[0.0; N_ACT],
+        &[0.0; N_ACT],
+        &sp.gravity,
+        sp.environment.density_kgm3(),
+        &mut load,
+        &mut work.dynd,
+    );
+    let hp = &ap.hydraulics;
+    let supply = ap.faults.supply_pa(hp);
+    core::array::from_fn(|j| {
+        let act = &hp.actuators[j];
+        let (_, jh) = act.linkage.coordinate(a.q[j]);
+        let tau = load[j] + work.jw[(2, j)] * held_share_n;
+        if jh == 0.0 {
+            return 0.0;
+        }
+        hydraulics::steady_opening(act, supply, hp.return_pa, jh * qd_ref[j], tau / jh)
+    })
+}
+
 /// Stage 4 (per arm): H, C q̇ + G and J̇q̇ in one pass over the links (eq. 3.38, world frame,
 /// [`dynamics::step_terms`]), the actuator linkages, and the factor of H̃ with the implicit
-/// damping and end stops. `work` holds the kinematics of the state's q; `h` is the sub-step;
+/// damping and end stops. `work` holds the kinematics of the state's q; `flow` is the water's
+/// motion (unused in air); `h` is the sub-step;
 /// `load`: a held panel item's load on the jaw, linearly implicit (h·JᵀCJ + h²·JᵀKJ and the
 /// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side).
+#[allow(clippy::too_many_arguments)]
 pub(super) fn arm_terms(
     model: &Model,
     ap: &ArmParams,
     sp: &StepParams,
     work: &ArmWork,
     a: &ArmState,
+    flow: &water::Flow,
     h: f64,
     load: Option<&ToolLoad>,
 ) -> ArmTerms {
@@ -196,7 +266,7 @@ pub(super) fn arm_terms(
     if let Some(w) = sp.environment.water() {
         // The links' added mass and the linearly implicit part of their drag into H̃, the
         // drag at the current q̇ onto the right-hand side ([`water::arm_hydro`]).
-        let hydro = water::arm_hydro(model, &ap.inertials, &work.kin, &a.qd, w, h);
+        let hydro = water::arm_hydro(model, &ap.inertials, &work.kin, &a.qd, w, flow, h);
         m += hydro.matrix;
         out.bias -= hydro.torque;
     }

@@ -82,7 +82,7 @@ pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
 pub use events::{Event, MAX_EVENTS_PER_STEP};
 pub use operator::{ControlMode, Operator, Sticks};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
-pub use water::{Current, Environment, Medium, Water};
+pub use water::{Current, Environment, Flow, Medium, Water};
 
 use nalgebra::{Isometry3, IsometryMatrix3, Matrix6, Vector3};
 use serde::{Deserialize, Serialize};
@@ -90,7 +90,7 @@ use serde::{Deserialize, Serialize};
 use crate::Error;
 use crate::control::{self, ControlParams};
 use crate::dynamics::{self, DynData, Inertials};
-use crate::grasp::{GraspState, GripParams, ObjectParams};
+use crate::grasp::{GraspState, GripParams, ObjectParams, SeabedAnchors};
 use crate::hydraulics::{Faults, HydraulicParams, N_ACT};
 use crate::kinematics::{self, KinData};
 use crate::model::Model;
@@ -305,6 +305,15 @@ pub struct ObjectState {
     pub angular_velocity: Vector3<f64>,
     /// Seabed normal force (N) in the last sub-step.
     pub seabed_force_n: f64,
+    /// The seabed friction's anchors of the touching corners ([`crate::grasp::seabed_contact`]).
+    seabed_anchors: SeabedAnchors,
+}
+
+impl ObjectState {
+    /// The seabed friction's anchors: where each touching corner stuck to the seabed.
+    pub fn seabed_anchors(&self) -> &SeabedAnchors {
+        &self.seabed_anchors
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -322,6 +331,8 @@ struct State {
     grasp: GraspState,
     /// The panel's state (when the parameters have a panel).
     panel: Option<PanelState>,
+    /// The water's present motion, ramping towards the set current (still in air).
+    flow: Flow,
 }
 
 /// Seconds the seabed contact must persist, or stay lost, before the grasp state follows it:
@@ -431,6 +442,7 @@ impl Simulation {
                 velocity: Vector3::zeros(),
                 angular_velocity: Vector3::zeros(),
                 seabed_force_n: 0.0,
+                seabed_anchors: SeabedAnchors::default(),
             },
             time_s: 0.0,
             steps: 0,
@@ -440,6 +452,7 @@ impl Simulation {
             surface: SurfaceLatch::default(),
             grasp: GraspState::Free,
             panel: None,
+            flow: Flow::default(),
         };
         // Bases composed into the models: kinematics and dynamics come out in the world frame.
         let models = [
@@ -521,6 +534,7 @@ impl Simulation {
             velocity: Vector3::zeros(),
             angular_velocity: Vector3::zeros(),
             seabed_force_n: wet_kg * g.norm(),
+            seabed_anchors: SeabedAnchors::default(),
         };
         self.state.time_s = 0.0;
         self.state.steps = 0;
@@ -532,6 +546,13 @@ impl Simulation {
             pending_s: 0.0,
         };
         self.state.panel = self.params.panel.as_ref().map(PanelState::initial);
+        // The set current has been flowing all along: no ramp after a reset.
+        self.state.flow = self
+            .params
+            .step
+            .environment
+            .water()
+            .map_or(Flow::default(), |w| Flow::steady(&w.current));
         self.numerical_faults = 0;
         self.events.clear();
         self.update_kinematics();
@@ -616,8 +637,27 @@ impl Simulation {
     pub fn environment(&self) -> &Environment {
         &self.params.step.environment
     }
-    /// Sets the water's current (applies from the next step). In air there is no water to
-    /// move: an error, and nothing changes.
+    /// The water's present motion: the current as it ramps towards the set one
+    /// ([`Flow::advance`]); `None` in air.
+    pub fn flow(&self) -> Option<&Flow> {
+        self.params
+            .step
+            .environment
+            .water()
+            .map(|_| &self.state.flow)
+    }
+    /// Advances the water's motion by one step towards the set current (stage 0 of the
+    /// step; nothing in air).
+    pub(super) fn advance_flow(&mut self) {
+        if let Some(w) = self.params.step.environment.water() {
+            let set = w.current.velocity();
+            self.state.flow.advance(&set, self.params.step.dt_s);
+        }
+    }
+    /// Sets the water's current. The water does not jump to it: from the next step the flow
+    /// ramps towards it with the time constant [`water::CURRENT_TIME_CONSTANT_S`]
+    /// ([`Simulation::flow`]). In air there is no water to move: an error, and nothing
+    /// changes.
     pub fn set_current(&mut self, current: Current) -> Result<(), Error> {
         match &mut self.params.step.environment {
             Environment::Subsea(w) => {

@@ -4,9 +4,9 @@
 
 use nalgebra::{Matrix3, Matrix6, UnitQuaternion, Vector3, Vector6};
 
-use super::water::{BoxHydro, Environment};
+use super::water::{BoxHydro, Environment, Flow};
 use super::{ObjectState, StepParams};
-use crate::grasp::{self, ObjectParams};
+use crate::grasp::{self, ObjectParams, SeabedAnchors};
 use crate::linalg::Ldlt;
 
 /// The object's terms computed once per step and held over its sub-steps.
@@ -24,13 +24,25 @@ pub(super) struct ObjectTerms {
     rot: Matrix3<f64>,
     /// Drag and current in water (`None` in air).
     hydro: Option<BoxHydro>,
-    /// Seabed wrench and normal force at the start of the step (the first sub-step's).
-    seabed0: (Vector6<f64>, f64),
+    /// Seabed wrench and what the seabed leaves in the state at the start of the step (the
+    /// first sub-step's).
+    seabed0: (Vector6<f64>, Seabed),
     /// Factor of M̃ = M_o + h·C (C the seabed contact's damping matrix) while anything
     /// touches the seabed; `None` when nothing does (M̃ = M_o, applied blockwise).
     factor: Option<Ldlt<6>>,
     /// M̃⁻¹ itself when the object also touches the seabed and an arm holds it.
     mobility: Option<Matrix6<f64>>,
+    /// The sub-step h (s), for the seabed's linearly implicit stick springs.
+    h: f64,
+}
+
+/// What the seabed contact of a sub-step leaves in the object's state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Seabed {
+    /// Total normal force (N).
+    pub(super) normal_n: f64,
+    /// The corners' friction anchors ([`grasp::seabed_contact`]).
+    pub(super) anchors: SeabedAnchors,
 }
 
 impl ObjectTerms {
@@ -40,11 +52,12 @@ impl ObjectTerms {
     /// damping of 2·10⁴ N·s/m at h = 1 ms injects energy — so they are treated implicitly
     /// (linearly implicit Euler): the mass matrix becomes M̃ = M_o + h·C, held over the step;
     /// the spring forces stay explicit (k·h²/m_eff ≈ 0.3). `held`: an arm holds the object
-    /// (then M̃⁻¹ is formed for the grasp blocks).
+    /// (then M̃⁻¹ is formed for the grasp blocks); `flow`: the water's motion (unused in air).
     pub(super) fn new(
         op: &ObjectParams,
         sp: &StepParams,
         o: &ObjectState,
+        flow: &Flow,
         held: bool,
         h: f64,
     ) -> ObjectTerms {
@@ -67,8 +80,18 @@ impl ObjectTerms {
             m
         };
         let iw = world(&d);
-        let contact = grasp::seabed_contact(op, &o.pose, &o.velocity, &o.angular_velocity);
-        let hydro = sp.environment.water().map(|w| BoxHydro::new(&op.size_m, w));
+        let contact = grasp::seabed_contact(
+            op,
+            &o.pose,
+            &o.velocity,
+            &o.angular_velocity,
+            &o.seabed_anchors,
+            h,
+        );
+        let hydro = sp
+            .environment
+            .water()
+            .map(|w| BoxHydro::new(&op.size_m, w, flow));
         // Effective translational mass: the body's and its added mass (isotropic).
         let mass = op.mass_kg + hydro.map_or(0.0, |b| b.added_mass_kg);
         let factor = contact.damping.and_then(|c| {
@@ -93,7 +116,14 @@ impl ObjectTerms {
             weight: sp.gravity * wet_mass_kg(op, &sp.environment),
             rot: *rot.matrix(),
             hydro,
-            seabed0: (contact.wrench, contact.normal_n),
+            seabed0: (
+                contact.wrench,
+                Seabed {
+                    normal_n: contact.normal_n,
+                    anchors: contact.anchors,
+                },
+            ),
+            h,
             factor,
             mobility,
         }
@@ -132,25 +162,41 @@ impl ObjectTerms {
     }
 
     /// Sub-step: the object's acceleration (linear; angular, world) from weight, seabed
-    /// contact and the gyroscopic term, without the arms, and the seabed normal force (N).
-    /// The first sub-step reuses the contact evaluated by [`ObjectTerms::new`].
+    /// contact and the gyroscopic term, without the arms, and what the seabed leaves in the
+    /// state (normal force, friction anchors). The first sub-step reuses the contact
+    /// evaluated by [`ObjectTerms::new`].
     pub(super) fn free_acceleration(
         &self,
         op: &ObjectParams,
         o: &ObjectState,
         first: bool,
-    ) -> (Vector6<f64>, f64) {
-        let (sea, normal) = if first {
+    ) -> (Vector6<f64>, Seabed) {
+        let (sea, seabed) = if first {
             self.seabed0
         } else {
-            grasp::seabed_wrench(op, &o.pose, &o.velocity, &o.angular_velocity)
+            let c = grasp::seabed_wrench(
+                op,
+                &o.pose,
+                &o.velocity,
+                &o.angular_velocity,
+                &o.seabed_anchors,
+                self.h,
+            );
+            (
+                c.wrench,
+                Seabed {
+                    normal_n: c.normal_n,
+                    anchors: c.anchors,
+                },
+            )
         };
         let gyro = o.angular_velocity.cross(&(self.iw * o.angular_velocity));
         // Drag on the velocity relative to the current, explicit (h·λ ≪ 2: see
-        // [`super::water`]), through the COM (no moment: the box is symmetric).
-        let drag = self
-            .hydro
-            .map_or(Vector3::zeros(), |b| b.drag(&self.rot, &o.velocity));
+        // [`super::water`]), and the accelerating current's inertia force, through the COM
+        // (no moment: the box is symmetric).
+        let drag = self.hydro.map_or(Vector3::zeros(), |b| {
+            b.drag(&self.rot, &o.velocity) + b.inertia_n
+        });
         let wrench = Vector6::new(
             self.weight.x + sea[0] + drag.x,
             self.weight.y + sea[1] + drag.y,
@@ -159,7 +205,7 @@ impl ObjectTerms {
             sea[4] - gyro.y,
             sea[5] - gyro.z,
         );
-        (self.mobility_times(&wrench), normal)
+        (self.mobility_times(&wrench), seabed)
     }
 }
 
@@ -175,12 +221,13 @@ pub(super) fn twist(o: &ObjectState) -> Vector6<f64> {
 }
 
 /// Sub-step: semi-implicit Euler of the object's twist and pose (the rotation by the
-/// exponential map of ω·h), with the seabed normal force recorded.
-pub(super) fn integrate(o: &mut ObjectState, acc: &Vector6<f64>, seabed_normal_n: f64, h: f64) {
+/// exponential map of ω·h), with the seabed normal force and friction anchors recorded.
+pub(super) fn integrate(o: &mut ObjectState, acc: &Vector6<f64>, seabed: &Seabed, h: f64) {
     o.velocity += h * Vector3::new(acc[0], acc[1], acc[2]);
     o.angular_velocity += h * Vector3::new(acc[3], acc[4], acc[5]);
     o.pose.translation.vector += h * o.velocity;
     o.pose.rotation = UnitQuaternion::from_scaled_axis(o.angular_velocity * h) * o.pose.rotation;
     o.pose.rotation.renormalize();
-    o.seabed_force_n = seabed_normal_n;
+    o.seabed_force_n = seabed.normal_n;
+    o.seabed_anchors = seabed.anchors;
 }

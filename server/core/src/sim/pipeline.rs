@@ -2,6 +2,7 @@
 //! [`Simulation::step_inner`] is the list, after stage 0, the operator
 //! ([`super::Operator::input`]: sticks and settings to the [`Input`], run by the caller):
 //!
+//! 0. the water's motion ramps towards the set current ([`Simulation::advance_flow`]);
 //! 1. jaws and grasp transitions, per arm ([`arm::update_jaw`]), then the panel items'
 //!    grasp and release ([`Simulation::panel_jaw`]; only with a panel);
 //! 2. spool commands: cooperative control, or each arm's open loop or joint servo, then
@@ -66,6 +67,7 @@ impl Simulation {
     /// One step: the stages in order (see the module docs). Kinematics are current for the
     /// state's q on entry and on exit.
     pub(super) fn step_inner(&mut self, input: &Input) {
+        self.advance_flow();
         let speed = finite_or(input.speed_scale, 0.0).clamp(0.0, 1.0);
         for i in 0..2 {
             let contact = self.in_contact(i) && !self.panel_holds(i);
@@ -128,16 +130,25 @@ impl Simulation {
             }
             u
         } else {
+            // In the closed chain each jaw is taken to carry half the object's weight in the
+            // medium (the equal share, eq. 3.46) for the arms' rate control.
+            let share = -0.5
+                * object::wet_mass_kg(&self.params.object, &self.params.step.environment)
+                * self.params.step.gravity.z;
             let arms = &mut self.state.arms;
+            let work = &mut self.work;
             core::array::from_fn(|i| {
                 arm::operator_spools(
                     &mut arms[i],
                     &input.arms[i],
-                    &nominal[i],
+                    &self.models[i],
+                    &self.params.arms[i],
+                    &self.params.step,
+                    &mut work[i],
                     speed,
-                    dt,
                     cp,
                     holding_both,
+                    share,
                 )
             })
         };
@@ -163,12 +174,13 @@ impl Simulation {
                 sp,
                 &self.work[i],
                 &st.arms[i],
+                &st.flow,
                 h,
                 loads[i].as_ref(),
             )
         });
         let held = st.arms.iter().any(|a| a.holding);
-        let object = ObjectTerms::new(&self.params.object, sp, &st.object, held, h);
+        let object = ObjectTerms::new(&self.params.object, sp, &st.object, &st.flow, held, h);
         let grip = core::array::from_fn(|i| {
             st.arms[i]
                 .holding
@@ -203,8 +215,7 @@ impl Simulation {
             qdd[i] = arm::free_acceleration(a, &self.models[i], hp, &s.arms[i], &self.params.step);
         }
         let o = &self.state.object;
-        let (mut acc_o, seabed_normal_n) =
-            s.object.free_acceleration(&self.params.object, o, first);
+        let (mut acc_o, seabed) = s.object.free_acceleration(&self.params.object, o, first);
         let arms = &self.state.arms;
         (out.contact, out.grip) = s.constraint.apply(
             [&s.arms[0], &s.arms[1]],
@@ -218,7 +229,7 @@ impl Simulation {
         for ((a, model), qdd) in self.state.arms.iter_mut().zip(&self.models).zip(&qdd) {
             arm::integrate(a, model, qdd, h);
         }
-        object::integrate(&mut self.state.object, &acc_o, seabed_normal_n, h);
+        object::integrate(&mut self.state.object, &acc_o, &seabed, h);
         out
     }
 

@@ -11,12 +11,10 @@
 mod common;
 
 use common::scenario_util::{run_while, start};
-use seaarms_core::control::teleop::{
-    MAX_ANGULAR_SPEED_RAD_S, MAX_LINEAR_SPEED_M_S, cartesian_to_joint_velocity,
-};
 use seaarms_core::grasp::GraspState;
-use seaarms_core::redundancy::{Redundancy, RedundancyParams};
-use seaarms_core::sim::{Arm, ControlMethod, Current, Environment, Input, Simulation};
+use seaarms_core::sim::{
+    self, Arm, ControlMethod, ControlMode, Current, Environment, Input, Simulation, Sticks,
+};
 
 /// How the operator's sticks reach the valves.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -53,65 +51,39 @@ fn dual_grasp(env: Environment) -> Simulation {
     sim
 }
 
-/// The operator: the same stick on both arms (joint or Cartesian) or on the object.
+/// The operator: the same stick on both arms (joint or Cartesian) or on the object, through
+/// the core's operator stage (`sim::Operator`), as live sessions drive it.
 struct Operator {
     mode: Mode,
-    resolvers: [Redundancy; 2],
+    stage: sim::Operator,
 }
 
 impl Operator {
     fn new(mode: Mode) -> Operator {
         let m = common::builtin("magnum");
-        let r = Redundancy::new(&m, RedundancyParams::default());
-        Operator {
-            mode,
-            resolvers: [r.clone(), r],
+        let mut stage = sim::Operator::new(&m, &m);
+        match mode {
+            Mode::Joint => stage.set_mode(ControlMode::Joint),
+            Mode::Cartesian => stage.set_mode(ControlMode::Cartesian),
+            Mode::ClosedLoop => stage.set_method(ControlMethod::Closed),
         }
+        Operator { mode, stage }
     }
 
     /// The input for one step with every stick axis of `stick` (fractions of full stick):
     /// joint mode puts it on both arms' valves, Cartesian mode on both arms' end-effector
-    /// speed (orientation held while both jaws hold, as the page does), closed loop on the
-    /// object twist (scaled as the server does: 0.2 m/s, 0.5 rad/s at full stick).
+    /// speed (orientation held while both jaws hold), closed loop on the object twist (scaled
+    /// to the controller's maxima by the stage).
     fn input(&mut self, sim: &Simulation, stick: [f64; 6]) -> Input {
-        let mut input = Input {
-            speed_scale: 1.0,
-            ..Input::default()
+        let arms = Sticks {
+            axes: stick,
+            grip: 0.0,
         };
         match self.mode {
-            Mode::Joint => {
-                for arm in Arm::BOTH {
-                    input.arms[arm.index()].valves = stick;
-                }
-            }
-            Mode::Cartesian => {
-                let chain = sim.grasp_state() == GraspState::BothHolding;
-                for arm in Arm::BOTH {
-                    let i = arm.index();
-                    input.arms[i].joint_velocity_ref = Some(cartesian_to_joint_velocity(
-                        &mut self.resolvers[i],
-                        sim.model(arm),
-                        &sim.params().arms[i].base.rotation,
-                        &sim.arm(arm).q,
-                        &stick,
-                        chain,
-                        1e-3,
-                    ));
-                }
-            }
-            Mode::ClosedLoop => {
-                input.method = ControlMethod::ClosedLoop;
-                for (k, (v, s)) in input.object_velocity.iter_mut().zip(stick).enumerate() {
-                    let max = if k < 3 {
-                        MAX_LINEAR_SPEED_M_S
-                    } else {
-                        MAX_ANGULAR_SPEED_RAD_S
-                    };
-                    *v = s * max;
-                }
-            }
+            Mode::Joint | Mode::Cartesian => self.stage.set_sticks(&[arms; 2], &[0.0; 6]),
+            Mode::ClosedLoop => self.stage.set_sticks(&[Sticks::default(); 2], &stick),
         }
-        input
+        *self.stage.input(sim)
     }
 }
 
@@ -188,7 +160,7 @@ fn hold(sim: &mut Simulation, mode: Mode, stick: [f64; 6], seconds: f64) -> Hold
         slips0,
         "slipped: {h:?}"
     );
-    assert_eq!(Arm::BOTH.map(|a| sim.arm(a).grip.drops), [0, 0]);
+    assert_eq!(Arm::BOTH.map(|a| sim.arm(a).grip.slid_out), [0, 0]);
     h
 }
 
@@ -289,7 +261,7 @@ fn current_step(mode: Mode, speed_m_s: f64, heading_deg: f64) -> (u64, f64) {
     }
     assert_eq!(sim.numerical_faults(), 0);
     assert_eq!(
-        Arm::BOTH.map(|a| sim.arm(a).grip.drops),
+        Arm::BOTH.map(|a| sim.arm(a).grip.slid_out),
         [0, 0],
         "{mode:?} {speed_m_s} m/s at {heading_deg}°: dropped"
     );

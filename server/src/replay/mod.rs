@@ -14,7 +14,6 @@ use seaarms_core::Model;
 use crate::catalogue::Scenario;
 use crate::protocol::{ActiveFault, StateFrame};
 use crate::sessions::Live;
-use crate::sessions::command::Command;
 use crate::sessions::snapshot::build_frame;
 use log::{Entry, Logged};
 
@@ -106,7 +105,7 @@ impl Replay {
             .map(ActiveFault::try_from)
             .collect::<Result<Vec<_>, _>>()
             .map_err(ReplayError::Record)?;
-        let mut live = Live::replaying(
+        Live::replaying(
             models,
             &scenario,
             init.settings,
@@ -115,8 +114,7 @@ impl Replay {
             init.seed,
             init.current,
         )
-        .map_err(|e| ReplayError::Record(e.to_string()))?;
-        Ok(live)
+        .map_err(|e| ReplayError::Record(e.to_string()))
     }
 
     /// Length (s).

@@ -95,9 +95,11 @@ fn one_arm_pick_and_place_on_the_finite_grip_does_not_chatter() {
         "grasp states {:?}",
         seen.states
     );
-    // Lift-off, the bounce (two changes) and the set-down: without the debounce the bounce
-    // alone would add two grasp-state events.
-    assert!(seen.contact_changes >= 4, "{}", seen.contact_changes);
+    // Lift-off and set-down at least. (Before the seabed had static friction and the lone
+    // arm's lift ran through the position servo, the lift-off also bounced once — two more
+    // contact changes the debounce hid; the lift is clean now. The debounce against many
+    // changes is checked by the dragged-corner test below.)
+    assert!(seen.contact_changes >= 2, "{}", seen.contact_changes);
     assert!(
         seen.checked > 1000,
         "the invariant was checked on {} steps",

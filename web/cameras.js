@@ -37,12 +37,12 @@ export const PILOT_CAMERAS = [
   // 18° down at the work site in front of the vehicle.
   { name: 'pilot', title: 'Pilot camera (pan-tilt: drag / L3 + right stick / arrows; wheel: zoom)', mount: 'vehicle',
     position_m: [-0.15, 0, 0.45], pan_deg: 0, tilt_deg: -18, fov_deg: 55, up: [0, 0, 1], panTilt: true },
-  // Wrist cameras: 8 cm off the jaw's axis on the wrist plate (tool x), 12 cm behind the jaw
-  // centre, looking past the jaw tips (25 cm ahead along tool z); wide angle as such cameras are.
+  // Wrist cameras: 12 cm off the jaw's axis on the wrist plate (tool x), 6 cm behind the jaw
+  // centre, looking past the jaw tips (30 cm ahead along tool z); wide angle as such cameras are.
   { name: 'wrist-left', title: 'Left wrist camera', mount: 'jaw:left',
-    position_m: [0.08, 0, -0.12], look_at_m: [0, 0, 0.25], fov_deg: 75, up: [1, 0, 0] },
+    position_m: [0.12, 0, -0.06], look_at_m: [0, 0, 0.3], fov_deg: 75, up: [1, 0, 0] },
   { name: 'wrist-right', title: 'Right wrist camera', mount: 'jaw:right',
-    position_m: [0.08, 0, -0.12], look_at_m: [0, 0, 0.25], fov_deg: 75, up: [1, 0, 0] },
+    position_m: [0.12, 0, -0.06], look_at_m: [0, 0, 0.3], fov_deg: 75, up: [1, 0, 0] },
   // A fixed overview camera high on the vehicle's starboard corner, over the whole work site.
   { name: 'overview', title: 'Overview camera (fixed)', mount: 'vehicle',
     position_m: [-0.1, -0.75, 0.85], look_at_m: [1.2, 0, -0.25], fov_deg: 60, up: [0, 0, 1] },

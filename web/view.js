@@ -213,12 +213,12 @@ export class View {
         const x = v.viewports.view(name);
         const b = x.el.getBoundingClientRect();
         v.viewports.prepare(x, b.width / Math.max(1, b.height));
-        return { world: x.camera.matrixWorld.toArray(), rect: b.toJSON() };
+        return { world: x.camera.matrixWorld.toArray(), projection: x.camera.projectionMatrix.toArray(), rect: b.toJSON() };
       },
       /** Pan-tilt unit: angles (deg) and zoom now and their targets. */
       panTilt() { const p = v.viewports.panTilt; return { pan: p.pan, tilt: p.tilt, zoom: p.zoom, target: { ...p.target } }; },
       /** The water: visibility (m), silt particles emitted so far and alive now. */
-      water() { return { visibility_m: v.water.visibility_m, siltEmitted: v.water.siltEmitted, siltAlive: v.water.siltAlive() }; },
+      water() { return { colour: v.water.fog.color.getHex(), visibility_m: v.water.visibility_m, siltEmitted: v.water.siltEmitted, siltAlive: v.water.siltAlive() }; },
       /** The work site's box (world, m): what the "work site" preset frames. */
       workSite() { const b = v.workSiteBox(); return b.isEmpty() ? null : { min: b.min.toArray(), max: b.max.toArray() }; },
       ellipsoidsShown() { return v.ellipsoids.showEllipsoids; },

@@ -104,11 +104,11 @@ export class Water {
       this.group.add(l, l.target);
       return l;
     };
-    this.lamps = [spot(9, 0.5), spot(9, 0.5)];
+    this.lamps = [spot(14, 0.5), spot(14, 0.5)];
     this.wristLamps = { left: spot(1.2, 0.6), right: spot(1.2, 0.6) };
     this.current = new THREE.Vector3();
     // backscatter: suspended particles in the water in front of the vehicle
-    this.scatter = this.points(BACKSCATTER_COUNT, 0xcfe3dc, 0.012, 0.5);
+    this.scatter = this.points(BACKSCATTER_COUNT, 0xcfe3dc, 0.007, 0.5);
     this.scatterVel = new Float32Array(BACKSCATTER_COUNT * 3);
     // silt: a pool of particles, each alive for SILT_LIFE_S after a strike
     this.silt = this.points(SILT_MAX, 0xffffff, 0.05, 1, true);

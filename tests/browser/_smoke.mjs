@@ -1,0 +1,16 @@
+import { server, openBrowser, untilDrawn, until } from './harness.mjs';
+const url = await server();
+const b = await openBrowser();
+await b.page.goto(`${url}/?exercise=valve-turn`);
+await untilDrawn(b.page);
+await b.page.selectOption('#sel-views', 'pilot');
+await b.page.selectOption('#sel-visibility', '3');
+await b.page.click('#btn-layout');
+await b.page.waitForTimeout(1500);
+await b.page.screenshot({ path: '/tmp/pilot1.png' });
+await b.page.click('#btn-layout');
+await b.page.waitForTimeout(1000);
+await b.page.screenshot({ path: '/tmp/pilot4.png' });
+console.log(JSON.stringify(await b.page.evaluate(() => [window.__seaarms.viewSet(), window.__seaarms.water(), window.__seaarms.workSite(), document.getElementById('sticks-note').textContent])));
+console.log(b.errors);
+await b.close(); process.exit(0);

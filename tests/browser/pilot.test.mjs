@@ -104,7 +104,7 @@ test('a seabed touch in the pilot cameras raises a visible silt cloud', { timeou
     for (let y = Math.round(at.y) - 60; y <= at.y + 60; y += 2) for (let x = Math.round(at.x) - 90; x <= at.x + 90; x += 2) {
       const k = 4 * (y * i1.width + x);
       const p0 = i0.data.slice(k, k + 3), p1 = i1.data.slice(k, k + 3);
-      if (dist(p0, p1) > 25 && p1[0] > p1[2] + 15 && p1[1] > p1[2]) silty++;
+      if (dist(p0, p1) > 25 && p1[0] > p1[2] + 15 && p1[1] > p1[2] && Math.abs(p1[0] - p1[1]) < 40) silty++; // not the orange arm
     }
     console.log(`silt particles: ${before.siltEmitted} → ${after.siltEmitted} emitted, ${after.siltAlive} alive; ${silty} sampled pixels turned sandy`);
     assert.ok(after.siltAlive > 50, `silt in the water (${after.siltAlive})`);
@@ -165,7 +165,7 @@ test('stick right in Cartesian mode (camera frame) moves the jaw right on the ac
       ['pilot', 'pilot'], ['pilot', 'wrist-left'], ['pilot', 'wrist-right'], ['pilot', 'overview']];
     for (const [set, name] of cams) {
       await b.page.selectOption('#sel-views', set);
-      await b.page.evaluate((n) => document.querySelector(`.vp[data-view="${n}"]`).dispatchEvent(new PointerEvent('pointerdown', { bubbles: true })), name);
+      await b.page.click(`.vp[data-view="${name}"]`); // a click (no drag) makes it the active view
       await until(b.page, (n) => window.__seaarms.viewSet().active === n, name);
       const cam = await b.page.evaluate((n) => window.__seaarms.cameraOf(n), name);
       const p0 = await b.page.evaluate(() => window.__seaarms.lastState.arms.left.pose.position);
@@ -224,9 +224,8 @@ test('a spy on the pad\'s vibrationActuator.playEffect sees rumble on contact an
     const { setSticks, selectArm, grab } = padDriver(b.page, () => {});
     await selectArm('right');
     await grab('right'); // one jaw, not squared: the hanging box twists out of it when lifted
-    const c = await b.page.evaluate(() => window.__effects.filter((e) => e.strongMagnitude > 0).length);
-    seen.contact = c > 0;
-    // lift with the one jaw: the box's moment slips the grip
+    // lift with the one jaw: the jaw loads the box (contact force: the strong motor), then the
+    // box's moment slips the grip (the weak motor)
     const t0 = Date.now();
     while (Date.now() - t0 < 30000 && !seen.slip) {
       await setSticks([0, 0, 0.6]);
@@ -236,9 +235,10 @@ test('a spy on the pad\'s vibrationActuator.playEffect sees rumble on contact an
     await setSticks([0, 0, 0]);
     const effects = await b.page.evaluate(() => window.__effects);
     const weak = effects.filter((e) => e.weakMagnitude >= 0.8).length;
+    seen.contact = effects.some((e) => e.strongMagnitude > 0);
     console.log(`effects: ${effects.length} (${effects.filter((e) => e.strongMagnitude > 0).length} with the strong motor, ${weak} slip buzzes); slip in the frames: ${seen.slip}`);
     assert.ok(effects.every((e) => e.type === 'dual-rumble'));
-    assert.ok(seen.contact, 'rumble on contact (strong motor while the jaw holds)');
+    assert.ok(seen.contact, 'rumble on contact (the strong motor: a jaw force above 3 % of the clamp force)');
     assert.ok(seen.slip, 'the one-jaw lift slipped');
     assert.ok(weak > 0, 'rumble on slip (weak motor)');
     assert.deepEqual(b.errors, []);

@@ -201,10 +201,11 @@ export class View {
       drawnObjectPosition() { return v.world.object ? [...v.world.object.matrix.elements.slice(12, 15)] : null; },
       drawnEllipsoidRadii(which) { return v.ellipsoids.drawnRadii(which); },
       project(view, p) { return v.viewports.project(view, p); },
+      /** The shown view set's viewports (web/viewports.js VIEW_SETS), each shown or not. */
       viewports() {
         const vp = v.viewports;
-        return vp.views.map((x) => ({ name: x.name, set: x.set, rect: x.el.getBoundingClientRect().toJSON(),
-          visible: x.set === vp.set && (!vp.single || vp.single === x.name) }));
+        return vp.views.filter((x) => x.set === vp.set).map((x) => ({ name: x.name, set: x.set, rect: x.el.getBoundingClientRect().toJSON(),
+          visible: !vp.single || vp.single === x.name }));
       },
       /** View sets: the shown one, those allowed, the active view (the sticks follow it). */
       viewSet() { const vp = v.viewports; return { set: vp.set, allowed: vp.allowedSets.slice(), active: vp.active, single: vp.single }; },

@@ -131,7 +131,7 @@ function setExercise(h) {
   view.viewports.setAllowedSets(pilotOnly ? ['pilot'] : ['engineering', 'pilot']);
   $('sel-views').querySelector('option[value="engineering"]').disabled = pilotOnly;
   $('sel-views').value = view.viewports.set;
-  if (ex) requestAnimationFrame(() => view.frameWorkSite());
+  if (ex) view.frameWorkSiteSoon(); // once the first frame has placed the box and its handles
   view.viewports.dirty = true;
 }
 

@@ -70,6 +70,7 @@ export class View {
     this.viewports.setCentre(World.workCentre(hello));
     this.viewports.setHello(hello);
     this.water.setup(hello);
+    this.workSitePending = false;
     this.pending = null;
     for (const s of SIDES) this.ellipsoids.setPolytope(s, null);
   }
@@ -95,6 +96,9 @@ export class View {
     if (st && (sc.zones || []).length) box.expandByPoint(new THREE.Vector3(...st.object.pose.position));
     return box;
   }
+
+  /** The work-site preset once the next state frame is drawn (the handles ride on the box). */
+  frameWorkSiteSoon() { this.workSitePending = true; }
 
   /** The "work site" camera preset (key K, toolbar button). */
   frameWorkSite() {
@@ -168,6 +172,7 @@ export class View {
       this.water.update(s);
       this.viewports.state = s;
       this.drawn = s;
+      if (this.workSitePending) { this.workSitePending = false; this.frameWorkSite(); }
       this.statesDrawn++;
       this.viewports.dirty = true;
     }

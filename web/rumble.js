@@ -63,7 +63,10 @@ export class ForceCues {
     this.gauge(arm);
     const { strong, weak } = rumbleFor(arm, strike);
     const now = performance.now();
-    if ((strong > 0 || weak > 0) && (strike || now - this.lastAt >= EFFECT_PERIOD_MS)) {
+    // a strike or the start of a slip is felt at once, whatever was played just before
+    const onset = strike || (arm.slipping && !this.slipping);
+    this.slipping = arm.slipping;
+    if ((strong > 0 || weak > 0) && (onset || now - this.lastAt >= EFFECT_PERIOD_MS)) {
       this.lastAt = now;
       this.play({ strong, weak, ms: strike ? STRIKE_MS : EFFECT_MS });
     }

@@ -226,12 +226,15 @@ test('a spy on the pad\'s vibrationActuator.playEffect sees rumble on contact an
     await grab('right'); // one jaw, not squared: the hanging box twists out of it when lifted
     // lift with the one jaw: the jaw loads the box (contact force: the strong motor), then the
     // box's moment slips the grip (the weak motor)
+    // every drawn frame is checked for the slip (it may last a few frames only)
+    await b.page.evaluate(() => { window.__slipWatch = setInterval(() => { if (window.__seaarms.lastState?.arms.right.slipping) window.__slipSeen = true; }, 5); });
     const t0 = Date.now();
-    while (Date.now() - t0 < 30000 && !seen.slip) {
+    while (Date.now() - t0 < 45000 && !seen.slip) {
       await setSticks([0, 0, 0.6]);
       await b.page.waitForTimeout(200);
-      seen.slip = await b.page.evaluate(() => window.__slipSeen || (window.__slipSeen = window.__seaarms.lastState.arms.right.slipping));
+      seen.slip = await b.page.evaluate(() => !!window.__slipSeen);
     }
+    await b.page.waitForTimeout(300); // the slip's rumble follows its frame
     await setSticks([0, 0, 0]);
     const effects = await b.page.evaluate(() => window.__effects);
     const weak = effects.filter((e) => e.weakMagnitude >= 0.8).length;

@@ -9,6 +9,8 @@ import { TaskPanel } from './task.js';
 import { mountViews } from './viewcontrols.js';
 import { $, Banner, statusLoop } from './page.js';
 import { messages, exercises, jointNames } from './api.js';
+import { ForceCues } from './rumble.js';
+import { jointTurnWords, frameRows } from './sticks.js';
 const SPEEDS = [0.25, 0.5, 0.75, 1];
 /** Screens this narrow stack the page (style.css has the same width). */
 const NARROW_SCREEN = '(max-width: 700px)';
@@ -56,6 +58,7 @@ const conn = new Connection({
     status.message(endedNote);
   },
   onHello(h) {
+    window.__seaarmsHelloPatch?.(h); // tests only: a field the server cannot send yet (issue 28 `views`)
     setRole(h.role, h.session);
     if (endedNote) { showBanner('info', `${endedNote} This is a new session.`, 8000); endedNote = null; }
     view.setHello(h);
@@ -72,6 +75,7 @@ const conn = new Connection({
   },
   onState(s) {
     view.setState(s);
+    if (driving) cues.update(s, selectedArm);
     followScenario(s);
     plots.add(s, selectedArm);
     if (s.settings.control_mode !== settings.control_mode || s.settings.control_method !== settings.control_method ||
@@ -118,7 +122,16 @@ function setExercise(h) {
   if (!!ex !== was) {
     $('chk-plots').checked = !ex && !matchMedia(NARROW_SCREEN).matches;
     $('chk-plots').dispatchEvent(new Event('change'));
+    // an exercise starts with the work site in sight: no ellipsoids over the jaws (O shows them)
+    $('chk-ell').checked = !ex;
+    $('chk-ell').dispatchEvent(new Event('change'));
   }
+  // an assessed exercise may allow only the vehicle's cameras (`"views": "pilot"`)
+  const pilotOnly = ex?.views === 'pilot';
+  view.viewports.setAllowedSets(pilotOnly ? ['pilot'] : ['engineering', 'pilot']);
+  $('sel-views').querySelector('option[value="engineering"]').disabled = pilotOnly;
+  $('sel-views').value = view.viewports.set;
+  if (ex) view.frameWorkSiteSoon(); // once the first frame has placed the box and its handles
   view.viewports.dirty = true;
 }
 
@@ -181,6 +194,13 @@ const actions = {
     conn.send(paused ? messages.pause() : messages.resume());
   },
   layout: () => viewControls.layout(),
+  ellipsoids() { $('chk-ell').checked = !$('chk-ell').checked; $('chk-ell').dispatchEvent(new Event('change')); },
+  workSite: () => view.frameWorkSite(),
+  viewSet() {
+    const next = view.viewports.set === 'pilot' ? 'engineering' : 'pilot';
+    view.viewports.showSet(next);
+    $('sel-views').value = view.viewports.set;
+  },
   help(show) {
     const h = $('help');
     h.hidden = show === undefined ? !h.hidden : !show;
@@ -194,6 +214,47 @@ const input = new Input(conn, {
   method: () => settings.control_method,
   actions,
   onPad: (id) => status.pad(id),
+  camera: (pan, tilt, zoom) => view.viewports.panTilt.command(pan, tilt, zoom),
+  stickFrame: () => stickFrame(),
+});
+
+/** The frame the Cartesian sticks move the jaw in (toolbar "Sticks", kept per browser):
+ * the active view's camera, the vehicle, or the selected arm's base (web/sticks.js). */
+let stickFrameName = ['camera', 'vehicle', 'base'].includes(localStorage.getItem('seaarms.stickFrame'))
+  ? localStorage.getItem('seaarms.stickFrame') : 'camera';
+$('sel-frame').value = stickFrameName;
+$('sel-frame').addEventListener('change', (e) => { stickFrameName = e.target.value; localStorage.setItem('seaarms.stickFrame', stickFrameName); });
+function stickFrame() {
+  return frameRows(stickFrameName, view.viewports.activeCamera(), view.hello, selectedArm);
+}
+
+/** Rumble and the jaw-force / line-pressure gauge (web/rumble.js). */
+const cues = new ForceCues(() => input.pads(), $('gauges'));
+
+/** On screen: what the sticks do now — Cartesian: the frame they follow; joint mode: which
+ * way each axis turns the jaw in the active view (web/sticks.js). */
+setInterval(() => {
+  const el = $('sticks-note');
+  const vp = view.viewports;
+  const camTitle = vp.view(vp.active).title.replace(/ \(.*$/, '');
+  let html;
+  if (settings.control_mode === 'cartesian' || settings.control_method === 'closed') {
+    const name = { camera: `the ${camTitle} view`, vehicle: 'the vehicle (x ahead, y left, z up)', base: `the ${selectedArm} arm's base` }[stickFrameName];
+    html = `<b>Sticks follow</b> ${name}: left stick ↔ right/left, ↕ up/down; right stick ↕ ${stickFrameName === 'camera' ? 'away/toward' : 'z'}`;
+  } else {
+    const words = view.drawn ? jointTurnWords(view.drawn.arms[selectedArm], vp.activeCamera()) : null;
+    const names = jointNames(view.hello);
+    const pad = ['L stick ↔', 'L stick ↕', 'R stick ↕', 'd-pad ↕ (LB/RB + R stick ↕)', 'R stick ↔', 'd-pad ↔ (LB/RB + R stick ↔)'];
+    html = `<b>Joint mode</b> in ${camTitle}: ` + (words ? words.map((w, i) => `<span class="li">${pad[i]} +: ${names[i]} ${w}</span>`).join(' ') : '');
+  }
+  if (el.dataset.html !== html) { el.dataset.html = html; el.innerHTML = html; }
+}, 250);
+
+// a phone: the toolbar folds to one row; "☰ Controls" opens it with every control reachable
+$('btn-tools').addEventListener('click', () => {
+  const open = !document.body.classList.contains('tools-open');
+  document.body.classList.toggle('tools-open', open);
+  $('btn-tools').setAttribute('aria-expanded', String(open));
 });
 
 // on-screen sticks: shown on touch screens (?touch=1 / ?touch=0 override), a toolbar toggle
@@ -240,12 +301,22 @@ setInterval(() => {
 function renderHelp() {
   $('help').innerHTML = `<button type="button" class="help-close" data-close aria-label="Close help">✕ Close</button><h3>Keyboard and gamepad</h3>
 <p>The selected arm (toolbar, <kbd>1</kbd>/<kbd>2</kbd>, LB/RB) follows the sticks. Joint mode: axis i drives
-joint i's valve. Cartesian mode: the axes are the end-effector velocity [vx vy vz wx wy wz] (world frame).
+joint i's valve. Cartesian mode: the axes are the end-effector velocity [vx vy vz wx wy wz] in the frame chosen under "Sticks":
+the camera frame (default: the active view — the last one you pointed at, outlined — so stick right moves the jaw
+right on that view, stick up moves it up, the right stick's up pushes it away), the vehicle frame (x ahead, y left,
+z up) or the arm's base frame. Joint mode: the note at the top of the view says which way each axis turns the jaw in
+the active view. Hold LB or RB (arm select) for an analog wrist on the right stick.
 Closed loop: the axes move the object; both jaws grip together. Dead zone ${Math.round(DEAD_ZONE * 100)} % on sticks and triggers;
 input is sent at ${input.sendHz} Hz.</p>
 <table><tr><th>Function</th><th>Gamepad (standard mapping)</th><th>Keyboard</th></tr>
 ${mapping(jointNames(view.hello)).map(([f, g, k]) => `<tr><td>${f}</td><td>${g}</td><td><kbd>${k}</kbd></td></tr>`).join('')}</table>
-<p>Views: drag the perspective view to orbit, wheel to zoom; ⤢ or double-click shows one large view. Press <kbd>?</kbd> to close.</p>`;
+<p>Views: <b>engineering</b> (top, front, side, perspective: drag to orbit) or <b>pilot cameras</b> (the vehicle's pan-tilt
+camera — drag it or hold L3 and use the right stick or the arrow keys — the wrist cameras and a fixed overview, in
+water of the visibility set in the toolbar). The wheel zooms toward the cursor; <kbd>K</kbd> or "Work site" frames
+the exercise's work site; ⤢ or double-click shows one large view.</p>
+<p>Touch screens: "sticks" in the toolbar shows on-screen sticks — the left stick and the right stick are the
+gamepad's, the buttons beside them select the arm (L arm / R arm) and open or close the jaw, the arrows are the d-pad.
+On a phone, "☰ Controls" opens the toolbar. Press <kbd>?</kbd> to close.</p>`;
 }
 
 /** The scenario menu from `hello.scenarios` ([{name, description}], the server's list). */

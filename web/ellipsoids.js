@@ -11,7 +11,9 @@ const MIN_RADIUS = 1e-3;
 const _m = new THREE.Matrix4(), _p = new THREE.Matrix4();
 const _x = new THREE.Vector3(), _y = new THREE.Vector3(), _z = new THREE.Vector3();
 
-export const ELLIPSOID_COLOURS = { left: 0x33d17a, right: 0xc061cb, dual: 0xf6f5f4 };
+/** Okabe–Ito bluish green (left), reddish purple (right), light grey (dual): colour-blind
+ * safe and shared with no marker, zone or grasp colour (palette: web/markers.js, docs/views.md). */
+export const ELLIPSOID_COLOURS = { left: 0x009e73, right: 0xcc79a7, dual: 0xf6f5f4 };
 
 function ellipsoidMesh(colour, parent) {
   const mat = new THREE.MeshLambertMaterial({ color: colour, transparent: true, opacity: 0.35, depthWrite: false });

@@ -20,9 +20,15 @@ export const KEY_AXES = [
   ['KeyQ', 'KeyA'], ['KeyW', 'KeyS'], ['KeyE', 'KeyD'], ['KeyR', 'KeyF'], ['KeyT', 'KeyG'], ['KeyU', 'KeyJ'],
 ];
 /** Keys with an action in `onPress` (besides the axes and the grip). */
-const ACTION_KEYS = new Set(['Digit1', 'Digit2', 'KeyM', 'KeyL', 'Minus', 'Equal', 'KeyB', 'KeyI', 'KeyP', 'KeyV', 'KeyH']);
+const ACTION_KEYS = new Set(['Digit1', 'Digit2', 'KeyM', 'KeyL', 'Minus', 'Equal', 'KeyB', 'KeyI', 'KeyP', 'KeyV', 'KeyH',
+  'KeyO', 'KeyK', 'KeyC']);
 /** Keys that change only this page's view. */
-const VIEW_KEYS = new Set(['KeyV', 'KeyH']);
+const VIEW_KEYS = new Set(['KeyV', 'KeyH', 'KeyO', 'KeyK', 'KeyC']);
+/** Keys that drive the pan-tilt camera while held: [pan +/−, tilt +/−, zoom +/−]. */
+const CAMERA_KEYS = [['ArrowLeft', 'ArrowRight'], ['ArrowUp', 'ArrowDown'], ['PageUp', 'PageDown']];
+/** Standard-mapping buttons: LB, RB (arm select; held: the right stick drives the wrist) and
+ * L3 (held: the right stick and the d-pad drive the pan-tilt camera). */
+const LB = 4, RB = 5, L3 = 10;
 export const CART_NAMES = ['vx', 'vy', 'vz', 'wx', 'wy', 'wz'];
 
 /** Gamepad (standard mapping) → axis i: [source, sign]. Sources: axes a0..a3, d-pad pairs. */
@@ -54,6 +60,11 @@ const MAPPING = [
   ['Initial position (reset)', 'Back / Select', 'I'],
   ['Pause / resume', 'Start', 'P'],
   ['Slow (30 %) while held', 'A', 'Shift'],
+  ['Wrist on the right stick (analog pitch ↕, rotate ↔) while held', 'LB or RB held', '—'],
+  ['Pan-tilt camera: pan ↔, tilt ↕ / zoom', 'L3 held + right stick / + d-pad ↑↓', 'arrows / PgUp PgDn'],
+  ['Engineering ↔ pilot cameras', '—', 'C'],
+  ['Work-site view', '—', 'K'],
+  ['Ellipsoids on / off', '—', 'O'],
   ['Four views ↔ one view', '—', 'V'],
   ['Help overlay', '—', '? or H'],
 ];
@@ -77,6 +88,27 @@ export function deadZone(v) {
   const a = Math.abs(v);
   if (!(a > DEAD_ZONE)) return 0;
   return Math.sign(v) * Math.min(1, (a - DEAD_ZONE) / (1 - DEAD_ZONE));
+}
+
+/**
+ * Cartesian axes [vx vy vz wx wy wz] from the stick's frame into the world frame the server
+ * takes: `R` is the stick frame's rotation (rows, world ← stick) or null (the world's own axes).
+ * The camera frame's R (web/app.js stickFrame) has columns [screen right, screen up, into the
+ * screen], so stick right moves the jaw right on that view, stick up moves it up and the right
+ * stick's up pushes it away; the rotations turn about the same axes. Clamped to [−1, 1] each.
+ */
+export function toWorld(axes, R) {
+  if (!R) return axes;
+  const out = axes.slice();
+  for (const o of [0, 3]) {
+    for (let r = 0; r < 3; r++) out[o + r] = R[r][0] * axes[o] + R[r][1] * axes[o + 1] + R[r][2] * axes[o + 2];
+  }
+  // a diagonal command keeps its size in stick units, no axis beyond full speed
+  for (const o of [0, 3]) {
+    const m = Math.max(1, ...out.slice(o, o + 3).map(Math.abs));
+    for (let r = 0; r < 3; r++) out[o + r] /= m;
+  }
+  return out;
 }
 
 export class Input {
@@ -125,7 +157,7 @@ export class Input {
     }
     // the page's keys never reach a focused control (a menu would jump to the option
     // starting with the letter)
-    if (KEY_AXES.flat().includes(e.code) || e.code === 'KeyZ' || e.code === 'KeyX' ||
+    if (KEY_AXES.flat().includes(e.code) || CAMERA_KEYS.flat().includes(e.code) || e.code === 'KeyZ' || e.code === 'KeyX' ||
         (e.target?.tagName === 'SELECT' && ACTION_KEYS.has(e.code))) e.preventDefault();
   }
 
@@ -145,6 +177,9 @@ export class Input {
       case 'KeyP': a.pause(); break;
       case 'KeyV': a.layout(); break;
       case 'KeyH': a.help(); break;
+      case 'KeyO': a.ellipsoids?.(); break;
+      case 'KeyK': a.workSite?.(); break;
+      case 'KeyC': a.viewSet?.(); break;
       default:
         if (e.key === '?') a.help();
         else if (e.key === 'Escape') a.help(false);
@@ -177,14 +212,27 @@ export class Input {
     if (this.keys.has('KeyZ')) grip -= 1;
     if (this.keys.has('KeyX')) grip += 1;
     let slow = slowKey;
+    const cam = CAMERA_KEYS.map(([plus, minus]) => (this.keys.has(plus) ? 1 : 0) - (this.keys.has(minus) ? 1 : 0));
     for (const p of this.pads()) {
-      PAD_AXES.forEach((m, i) => { axes[i] += deadZone(m.get(p)); });
+      const v = PAD_AXES.map((m) => deadZone(m.get(p)));
+      const rx = deadZone(p.axes[2] ?? 0), ry = -deadZone(p.axes[3] ?? 0);
+      if (pressed(p, L3)) {
+        // the right stick and the d-pad's up/down drive the camera, not the arm
+        cam[0] -= rx; cam[1] += ry; cam[2] += v[3];
+        v[2] = v[4] = v[3] = 0;
+      } else if (pressed(p, LB) || pressed(p, RB)) {
+        // analog wrist: the right stick's ↕ is pitch (axis 4), its ↔ rotate (axis 6)
+        v[3] += ry; v[5] += rx;
+        v[2] = v[4] = 0;
+      }
+      v.forEach((x, i) => { axes[i] += x; });
       grip += deadZone(btn(p, 6)) - deadZone(btn(p, 7)); // LT opens, RT closes
       if (pressed(p, 0)) slow = true;
       this.padButtons(p);
     }
     const k = slow ? 0.3 : 1;
     for (let i = 0; i < 6; i++) axes[i] = Math.max(-1, Math.min(1, axes[i] * k));
+    this.ui.camera?.(...cam.map((c) => Math.max(-1, Math.min(1, c))));
     return { axes, grip: Math.max(-1, Math.min(1, grip)) };
   }
 
@@ -206,7 +254,9 @@ export class Input {
 
   tick() {
     if (!this.enabled) return;
-    const { axes, grip } = this.sample();
+    const sampled = this.sample();
+    const { grip } = sampled;
+    const axes = this.ui.mode() === 'cartesian' || this.ui.method() === 'closed' ? toWorld(sampled.axes, this.ui.stickFrame?.()) : sampled.axes;
     const arm = this.ui.arm();
     const still = [0, 0, 0, 0, 0, 0];
     let msg;

@@ -9,11 +9,20 @@ import { poseToMatrix } from './scene.js';
 import { Arm } from './arms.js';
 import { analysis } from './api.js';
 
-const HANDLE_COLOUR = 0x19c3d6; // cyan: far in hue from the arms' orange and the grasp colours
-const CAPTURE_COLOUR = 0x3cff6e; // green: a closing jaw would grasp
-const TARGET_COLOUR = 0xff4fd8;
-const ZONE_COLOUR = 0x3cff6e;
-const OBSTACLE_COLOUR = 0xd03030;
+// Palette (issue 28; docs/views.md): colour-blind safe, after Okabe & Ito's eight colours, each
+// readable on the dark water and none shared with an ellipsoid (web/ellipsoids.js: left
+// bluish green #009E73, right reddish purple #CC79A7, dual light grey) or a grasp state
+// (web/scene.js, Lim Fig. 4-4): handles sky blue, capture cue white, reach markers yellow
+// (the current one opaque with its letter and distance, the others faint), zones blue-outlined
+// sky blue, obstacles vermillion.
+const HANDLE_COLOUR = 0x56b4e9; // Okabe–Ito sky blue
+const CAPTURE_COLOUR = 0xffffff; // white: a closing jaw would grasp
+const TARGET_COLOUR = 0xf0e442; // Okabe–Ito yellow
+const ZONE_COLOUR = 0x56b4e9; // Okabe–Ito sky blue (fill) …
+const ZONE_EDGE_COLOUR = 0xf0f0f0; // … with a light outline
+const OBSTACLE_COLOUR = 0xd55e00; // Okabe–Ito vermillion
+/** Reach markers are drawn at least this radius (m: 5 cm across), whatever the tolerance. */
+const MIN_MARKER_RADIUS_M = 0.025;
 /** Handle bar drawn along the box's x (m); its thickness is the model's 4 cm bar. */
 const HANDLE_LENGTH_M = 0.12;
 const HANDLE_RADIUS_M = 0.02;
@@ -27,6 +36,37 @@ function translucent(colour, opacity) {
 function matrixToPose(m) {
   const e = m.elements; // column-major
   return { position: [e[12], e[13], e[14]], rotation: [[e[0], e[4], e[8]], [e[1], e[5], e[9]], [e[2], e[6], e[10]]] };
+}
+
+/** A text label that always faces the camera (a sprite with a canvas texture). */
+class Label {
+  constructor(text) {
+    this.canvas = document.createElement('canvas');
+    this.canvas.width = 256; this.canvas.height = 64;
+    this.texture = new THREE.CanvasTexture(this.canvas);
+    this.sprite = new THREE.Sprite(new THREE.SpriteMaterial({ map: this.texture, depthTest: false, transparent: true }));
+    this.sprite.renderOrder = 5;
+    this.sprite.scale.set(0.2, 0.05, 1);
+    this.text = null;
+    this.set(text, false);
+  }
+
+  set(text, current) {
+    const key = `${text}|${current}`;
+    if (key === this.text) return;
+    this.text = key;
+    const g = this.canvas.getContext('2d');
+    g.clearRect(0, 0, 256, 64);
+    g.font = 'bold 44px system-ui, sans-serif';
+    g.textAlign = 'center';
+    g.textBaseline = 'middle';
+    g.lineWidth = 8;
+    g.strokeStyle = '#000000';
+    g.strokeText(text, 128, 32);
+    g.fillStyle = current ? '#f0e442' : '#c8c08a';
+    g.fillText(text, 128, 32);
+    this.texture.needsUpdate = true;
+  }
 }
 
 export class Markers {
@@ -51,12 +91,36 @@ export class Markers {
     this.handles = [];
     this.ghosts = [];
     this.panel = null;
+    this.targets = [];
+    this.current = null;
+  }
+
+  /** The current reach marker: opaque, its letter and the step's jaw distance shown. */
+  updateTargets(state) {
+    if (!this.targets.length) return;
+    const ex = state.exercise;
+    const step = ex && !ex.done ? this.steps?.[ex.step] : null;
+    const want = step?.done_when?.kind === 'tool_at' ? step.done_when : null;
+    this.current = null;
+    for (const t of this.targets) {
+      const on = !!want && want.target === t.id;
+      t.material.opacity = on ? 0.75 : 0.22;
+      let text = t.id;
+      if (on) {
+        const p = state.arms[want.arm]?.pose.position;
+        const d = p ? Math.hypot(p[0] - t.at[0], p[1] - t.at[1], p[2] - t.at[2]) : NaN;
+        text = `${t.id}  ${(100 * d).toFixed(1)} cm`;
+        this.current = { id: t.id, distance_m: d };
+      }
+      t.label.set(text, on);
+    }
   }
 
   /** (Re)builds from a hello (after `World.setup`, which made the box these attach to). */
   setup(hello) {
     this.clear();
     const id = ++this.setupId;
+    this.steps = hello.exercise?.steps || null;
     const sc = hello.scene;
     if (!sc) return;
     const box = this.world.object;
@@ -81,17 +145,24 @@ export class Markers {
       box.add(g);
       this.handles.push({ group: g, sphere, material });
     });
+    this.targets = [];
     for (const t of sc.targets || []) {
-      const m = new THREE.Mesh(new THREE.SphereGeometry(t.radius_m, 20, 14), translucent(TARGET_COLOUR, 0.45));
+      const material = translucent(TARGET_COLOUR, 0.3);
+      const m = new THREE.Mesh(new THREE.SphereGeometry(Math.max(MIN_MARKER_RADIUS_M, t.radius_m), 20, 14), material);
       m.position.set(...t.position_m);
-      m.add(new THREE.Mesh(new THREE.SphereGeometry(Math.min(0.006, t.radius_m / 3), 8, 6), new THREE.MeshBasicMaterial({ color: TARGET_COLOUR })));
+      m.add(new THREE.Mesh(new THREE.SphereGeometry(0.008, 8, 6), new THREE.MeshBasicMaterial({ color: TARGET_COLOUR })));
+      const label = new Label(t.id);
+      label.sprite.position.set(0, 0, Math.max(MIN_MARKER_RADIUS_M, t.radius_m) + 0.05);
+      m.add(label.sprite);
       this.group.add(m);
+      this.targets.push({ id: t.id, at: t.position_m, mesh: m, material, label });
     }
+    this.current = null;
     for (const z of sc.zones || []) {
       const geom = new THREE.PlaneGeometry(2 * z.half_size_m[0], 2 * z.half_size_m[1]);
       const m = new THREE.Mesh(geom, translucent(ZONE_COLOUR, 0.3));
       m.position.set(z.center_m[0], z.center_m[1], hello.seabed_z_m + 0.004);
-      m.add(new THREE.LineSegments(new THREE.EdgesGeometry(geom), new THREE.LineBasicMaterial({ color: ZONE_COLOUR })));
+      m.add(new THREE.LineSegments(new THREE.EdgesGeometry(geom), new THREE.LineBasicMaterial({ color: ZONE_EDGE_COLOUR })));
       this.group.add(m);
     }
     for (const o of sc.obstacles || []) {
@@ -164,8 +235,11 @@ export class Markers {
     this.redraw();
   }
 
-  /** Capture cue from a state frame: a handle's sphere lights when a jaw can grasp it. */
+  /** Capture cue from a state frame: a handle's sphere lights when a jaw can grasp it. The
+   * current reach marker (the step's `tool_at` target) is highlighted with its distance to
+   * the step's jaw. */
   update(state) {
+    this.updateTargets(state);
     if (this.panel && state.panel) {
       this.panel.bar.rotation.x = state.panel.valve_angle_deg * Math.PI / 180;
       this.panel.stab.matrix.copy(poseToMatrix(state.panel.stab_pose));

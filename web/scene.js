@@ -16,6 +16,9 @@ export const GRASP_COLOURS = {
 };
 
 export const BACKGROUND = 0x0d2438;
+/** The box's edges: light, so the black grasp state (one holding, on surface) keeps its
+ * outline on the dark background (issue 28). */
+const BOX_EDGE_COLOUR = 0xd8d8d8;
 /** The water current's arrow: its colour, and its length per m/s of current speed. */
 export const CURRENT_COLOUR = 0x5fd0ff;
 export const CURRENT_ARROW_M_PER_M_S = 0.5;
@@ -89,13 +92,17 @@ export class World {
     this.renderer.setClearColor(BACKGROUND, 1);
     this.renderer.setScissorTest(true);
     this.scene = new THREE.Scene();
-    this.scene.add(new THREE.HemisphereLight(0xdfefff, 0x40352a, 1.6));
+    const hemi = new THREE.HemisphereLight(0xdfefff, 0x40352a, 1.6);
+    this.scene.add(hemi);
     const sun = new THREE.DirectionalLight(0xffffff, 1.6);
     sun.position.set(2, -3, 5);
     this.scene.add(sun);
     const fill = new THREE.DirectionalLight(0xffffff, 0.6);
     fill.position.set(-3, 2, 2);
     this.scene.add(fill);
+    // the engineering views' daylight; the pilot views (web/water.js) keep a faint glow from
+    // the surface and rely on the vehicle's lamps
+    this.daylight = { hemi, sun, fill, hemiIntensity: hemi.intensity };
     this.root = new THREE.Group();
     this.scene.add(this.root);
     this.seabed = null;
@@ -108,6 +115,13 @@ export class World {
     this.current.visible = false;
     this.currentKey = '';
     this.root.add(this.current);
+  }
+
+  /** Daylight on (engineering views) or down to a faint glow from above (pilot views). */
+  setDaylight(on) {
+    const d = this.daylight;
+    d.hemi.intensity = on ? d.hemiIntensity : 0.08;
+    d.sun.visible = d.fill.visible = on;
   }
 
   /** (Re)builds the static parts from a hello message. */
@@ -128,7 +142,7 @@ export class World {
     this.object.matrixAutoUpdate = false;
     this.root.add(this.object);
     const edges = new THREE.LineSegments(new THREE.EdgesGeometry(this.object.geometry),
-      new THREE.LineBasicMaterial({ color: 0x222222 }));
+      new THREE.LineBasicMaterial({ color: BOX_EDGE_COLOUR }));
     this.object.add(edges);
     const c = World.workCentre(hello);
     this.current.position.set(c.x, c.y, c.z + 0.6);

@@ -6,6 +6,8 @@ import { World, GRASP_COLOURS, CURRENT_COLOUR, CURRENT_ARROW_M_PER_M_S } from '.
 import { Arm, ARM_COLOUR } from './arms.js';
 import { Ellipsoids, ELLIPSOID_COLOURS } from './ellipsoids.js';
 import { Viewports } from './viewports.js';
+import { Water } from './water.js';
+import * as THREE from 'three';
 import { Markers } from './markers.js';
 import { waterText } from './status.js';
 import { analysis } from './api.js';
@@ -16,7 +18,8 @@ const POLYTOPE_PERIOD_MS = 1000;
 export class View {
   constructor({ canvas, viewportsEl, legendEl }) {
     this.world = new World(canvas);
-    this.viewports = new Viewports(this.world, viewportsEl);
+    this.water = new Water(this.world);
+    this.viewports = new Viewports(this.world, viewportsEl, this.water);
     this.ellipsoids = new Ellipsoids(this.world.root);
     this.markers = new Markers(this.world, () => { this.viewports.dirty = true; });
     this.selectedArm = null;
@@ -65,11 +68,43 @@ export class View {
     this.markers.setup(hello);
     if (this.selectedArm) this.setSelectedArm(this.selectedArm);
     this.viewports.setCentre(World.workCentre(hello));
+    this.viewports.setHello(hello);
+    this.water.setup(hello);
+    this.workSitePending = false;
     this.pending = null;
     for (const s of SIDES) this.ellipsoids.setPolytope(s, null);
   }
 
   setState(state) { this.pending = state; }
+
+  /** What an exercise works on, world (m): the box's handles, the panel's items, the targets
+   * and the zones (from the hello's scene and the newest frame's box pose); empty without a
+   * scene. */
+  workSiteBox() {
+    const box = new THREE.Box3();
+    const sc = this.hello?.scene;
+    if (!sc) return box;
+    const st = this.drawn;
+    for (const h of this.markers.handles) box.expandByPoint(h.group.getWorldPosition(new THREE.Vector3()));
+    if (sc.panel) {
+      for (const p of [sc.panel.valve_grip_m, sc.panel.receptacle_m, sc.panel.holster_m]) box.expandByPoint(new THREE.Vector3(...p));
+    }
+    for (const t of sc.targets || []) box.expandByPoint(new THREE.Vector3(...t.position_m));
+    for (const z of sc.zones || []) {
+      for (const s of [-1, 1]) box.expandByPoint(new THREE.Vector3(z.center_m[0] + s * z.half_size_m[0], z.center_m[1] + s * z.half_size_m[1], this.hello.seabed_z_m));
+    }
+    if (st && (sc.zones || []).length) box.expandByPoint(new THREE.Vector3(...st.object.pose.position));
+    return box;
+  }
+
+  /** The work-site preset once the next state frame is drawn (the handles ride on the box). */
+  frameWorkSiteSoon() { this.workSitePending = true; }
+
+  /** The "work site" camera preset (key K, toolbar button). */
+  frameWorkSite() {
+    this.world.object?.updateMatrixWorld(true);
+    this.viewports.frameWorkSite(this.workSiteBox());
+  }
 
   /** Highlights the arm the sticks drive ('left' or 'right'; null: none, e.g. an observer). */
   setSelectedArm(side) {
@@ -120,7 +155,11 @@ export class View {
     // page's input timer; ?maxfps=N overrides.
     const now = performance.now();
     if (now - this.lastFrameAt < 1000 / this.maxFps - 4) return;
+    const dt_s = Number.isFinite(this.lastFrameAt) ? (now - this.lastFrameAt) / 1000 : 0;
     this.lastFrameAt = now;
+    this.viewports.step(dt_s);
+    // the water's particles move by themselves: the pilot views redraw every frame
+    if (this.viewports.set === 'pilot' && this.water.step(dt_s)) this.viewports.dirty = true;
     const s = this.pending;
     if (s && this.arms) {
       this.pending = null;
@@ -130,7 +169,10 @@ export class View {
       if (waterText(s.current) !== waterText(this.current)) { this.current = s.current; this.legend(); }
       this.ellipsoids.update(s);
       this.markers.update(s);
+      this.water.update(s);
+      this.viewports.state = s;
       this.drawn = s;
+      if (this.workSitePending) { this.workSitePending = false; this.frameWorkSite(); }
       this.statesDrawn++;
       this.viewports.dirty = true;
     }
@@ -164,7 +206,28 @@ export class View {
       drawnObjectPosition() { return v.world.object ? [...v.world.object.matrix.elements.slice(12, 15)] : null; },
       drawnEllipsoidRadii(which) { return v.ellipsoids.drawnRadii(which); },
       project(view, p) { return v.viewports.project(view, p); },
-      viewports() { return v.viewports.views.map((x) => ({ name: x.name, rect: x.el.getBoundingClientRect().toJSON(), visible: !v.viewports.single || v.viewports.single === x.name })); },
+      /** The shown view set's viewports (web/viewports.js VIEW_SETS), each shown or not. */
+      viewports() {
+        const vp = v.viewports;
+        return vp.views.filter((x) => x.set === vp.set).map((x) => ({ name: x.name, set: x.set, rect: x.el.getBoundingClientRect().toJSON(),
+          visible: !vp.single || vp.single === x.name }));
+      },
+      /** View sets: the shown one, those allowed, the active view (the sticks follow it). */
+      viewSet() { const vp = v.viewports; return { set: vp.set, allowed: vp.allowedSets.slice(), active: vp.active, single: vp.single }; },
+      /** A view camera's world matrix (column-major 16) and projection, for tests. */
+      cameraOf(name) {
+        const x = v.viewports.view(name);
+        const b = x.el.getBoundingClientRect();
+        v.viewports.prepare(x, b.width / Math.max(1, b.height));
+        return { world: x.camera.matrixWorld.toArray(), projection: x.camera.projectionMatrix.toArray(), rect: b.toJSON() };
+      },
+      /** Pan-tilt unit: angles (deg) and zoom now and their targets. */
+      panTilt() { const p = v.viewports.panTilt; return { pan: p.pan, tilt: p.tilt, zoom: p.zoom, target: { ...p.target } }; },
+      /** The water: visibility (m), silt particles emitted so far and alive now. */
+      water() { return { colour: v.water.fog.color.getHex(), visibility_m: v.water.visibility_m, siltEmitted: v.water.siltEmitted, siltAlive: v.water.siltAlive() }; },
+      /** The work site's box (world, m): what the "work site" preset frames. */
+      workSite() { const b = v.workSiteBox(); return b.isEmpty() ? null : { min: b.min.toArray(), max: b.max.toArray() }; },
+      ellipsoidsShown() { return v.ellipsoids.showEllipsoids; },
       colours: { arm: ARM_COLOUR, grasp: GRASP_COLOURS },
       /** What the exercise scene draws: handles (world centres and capture cue), counts. */
       drawnScene() {

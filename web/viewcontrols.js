@@ -27,6 +27,9 @@ export function bindViewControls(view, plots) {
   };
   $('btn-layout').addEventListener('click', layout);
   $('chk-ell').addEventListener('change', (e) => view.setEllipsoidsVisible(e.target.checked));
+  $('sel-views')?.addEventListener('change', (e) => view.viewports.showSet(e.target.value));
+  $('sel-visibility')?.addEventListener('change', (e) => { view.water.setVisibility(+e.target.value); view.viewports.dirty = true; });
+  $('btn-worksite')?.addEventListener('click', () => view.frameWorkSite());
   $('chk-poly')?.addEventListener('change', (e) => view.setPolytopesVisible(e.target.checked));
   $('sel-ell-scale')?.addEventListener('change', (e) => view.setEllipsoidScale(+e.target.value));
   $('chk-plots').addEventListener('change', (e) => {

@@ -292,7 +292,13 @@ export function handleWorld(state, hello, i) {
  * `onState(state)` sees every state the controller reads.
  */
 export function padDriver(page, onState = () => {}) {
-  const setSticks = (v) => page.evaluate(([a0, a1, a3]) => { const p = window.__pad; p.axes[0] = a0; p.axes[1] = a1; p.axes[3] = a3; }, [stick(v[0]), -stick(v[1]), -stick(v[2])]);
+  // the controller works in world axes: the sticks in the vehicle frame (toolbar "Sticks";
+  // the built-in vehicle's axes are the world's), not the default camera frame
+  const setSticks = (v) => page.evaluate(([a0, a1, a3]) => {
+    const f = document.getElementById('sel-frame');
+    if (f.value !== 'vehicle') { f.value = 'vehicle'; f.dispatchEvent(new Event('change')); }
+    const p = window.__pad; p.axes[0] = a0; p.axes[1] = a1; p.axes[3] = a3;
+  }, [stick(v[0]), -stick(v[1]), -stick(v[2])]);
   /** Cartesian P control of one arm's tool point to `target(state, hello)` (world, m). */
   const driveTo = async (side, target, tol = 0.02, timeoutMs = 90000) => {
     const t0 = Date.now();

@@ -127,17 +127,18 @@ test('classroom: named roster, attempt history → debrief (seek to a marker, 4�
     assert.equal(await dp.locator('.tl-mark').count(), info.events.length, 'one marker per event');
     assert.equal(await dp.getAttribute('#rp-card [data-score]', 'data-score'), String(Math.round(recorded.score)));
     assert.match(await dp.textContent('#rp-card'), recorded.outcome === 'passed' ? /Passed/ : /Not passed/);
-    // click the grasp's marker: the replay seeks there (± one frame)
+    // pick the grasp's marker (a button: focused and pressed, since a marker a few ms away
+    // may be drawn over it): the replay seeks there (± one frame)
     const frame = 1 / info.hz;
     const marker = `.tl-mark[data-kind="grasp"][data-t="${grasp.t}"]`;
-    await dp.click(marker);
+    await dp.locator(marker).press('Enter');
     await until(dp, ([t, f]) => { const r = window.__seaarms.replay; return r.seeks === 1 && Math.abs(r.t - t) <= f + 1e-9; }, [grasp.t, frame]);
     assert.match(await dp.textContent('#rp-time'), /^\d+:\d\d\.\d \/ \d+:\d\d\.\d$/);
     // a click on the bar seeks too (to its fraction of the duration)
     const box = await dp.locator('.tl-track').boundingBox();
     await dp.mouse.click(box.x + box.width * 0.25, box.y + box.height - 2); // below the markers
     await until(dp, ([d, f]) => { const r = window.__seaarms.replay; return r.seeks === 2 && Math.abs(r.t - 0.25 * d) <= 0.01 * d + f; }, [info.d, frame]);
-    await dp.click(marker); // back to the grasp
+    await dp.locator(marker).press('Enter'); // back to the grasp
     await until(dp, ([t, f]) => Math.abs(window.__seaarms.replay.t - t) <= f + 1e-9, [grasp.t, frame]);
     // play at 4×: the replay's clock runs about four times the wall clock (loosely: over 2×)
     await dp.selectOption('#rp-speed', '4');

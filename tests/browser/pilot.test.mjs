@@ -31,7 +31,7 @@ async function pilotLarge(page, name = 'pilot') {
   await until(page, (n) => window.__seaarms.viewSet().single === n, name);
 }
 
-test('valve-turn through the pilot camera at 3 m visibility: the panel lit in the lamps\' cone, fog beyond (docs/pilot-view.png)', { timeout: 90000 }, async () => {
+test('valve-turn through the pilot camera at 3 m visibility: the panel lit in the lamps\' cone, fog beyond (artifacts/pilot-view.png, copied to docs by hand)', { timeout: 90000 }, async () => {
   const url = await server();
   const b = await openBrowser();
   try {
@@ -42,7 +42,7 @@ test('valve-turn through the pilot camera at 3 m visibility: the panel lit in th
     assert.equal((await b.page.evaluate(() => window.__seaarms.water())).visibility_m, 3);
     const n = await b.page.evaluate(() => window.__seaarms.framesRendered);
     await until(b.page, (k) => window.__seaarms.framesRendered > k + 5, n);
-    const png = await b.page.screenshot({ path: join(ROOT, 'docs', 'pilot-view.png') });
+    const png = await b.page.screenshot({ path: join(ARTIFACTS, 'pilot-view.png') });
     const img = await decodePng(b.page, png);
     const { hello, panel, far } = await b.page.evaluate(() => {
       const h = window.__seaarms.hello;

@@ -14,35 +14,11 @@
 
 mod common;
 
-use common::scenario_util::{run_while, start};
+use common::scenario_util::dual_grasp;
 use seaarms_core::control::teleop::cartesian_to_joint_velocity;
 use seaarms_core::grasp::GraspState;
 use seaarms_core::redundancy::{Redundancy, RedundancyParams};
 use seaarms_core::sim::{Arm, ControlMode, Environment, Input, Operator, Simulation, Sticks};
-
-/// Both jaws closed on the nominal box resting on the seabed (case study 3 stages A–B:
-/// joint-space reach, then the open-loop grasp), with the finite grip, in `env`.
-fn dual_grasp(env: Environment) -> Simulation {
-    let (mut sc, _) = start("case3-dual-open-loop");
-    sc.params.rigid_grasp = false;
-    sc.params.control.moment_free_share = true;
-    sc.params.step.environment = env;
-    let m = common::builtin("magnum");
-    let mut sim = Simulation::new(m.clone(), m, sc.params.clone()).expect("sim");
-    run_while(&sc, &mut sim, |_, s| {
-        !(s.arm(Arm::Left).holding && s.arm(Arm::Right).holding)
-    });
-    // The last grasp segment closes the left jaw; let the clamp force build.
-    let rest = Input {
-        speed_scale: 1.0,
-        ..Input::default()
-    };
-    for _ in 0..500 {
-        sim.step(&rest);
-    }
-    assert_eq!(sim.grasp_state(), GraspState::BothHolding);
-    sim
-}
 
 /// The core's operator (stage 0, as live sessions, exercises and replays drive the arms) in
 /// `mode` at full speed, open loop: joint mode puts the axes on the valves; Cartesian mode

@@ -10,7 +10,7 @@
 
 mod common;
 
-use common::scenario_util::{run_while, start};
+use common::scenario_util::{dual_grasp, start};
 use seaarms_core::grasp::GraspState;
 use seaarms_core::sim::{
     self, Arm, ControlMethod, ControlMode, Current, Environment, Input, Simulation, Sticks,
@@ -26,29 +26,6 @@ enum Mode {
     Cartesian,
     /// The object's twist through the cooperative controller (Lim case study 4).
     ClosedLoop,
-}
-
-/// Both jaws closed on the nominal box resting on the seabed (case study 3 stages A–B) with
-/// the finite grip, in `env`, the clamp force built.
-fn dual_grasp(env: Environment) -> Simulation {
-    let (mut sc, _) = start("case3-dual-open-loop");
-    sc.params.rigid_grasp = false;
-    sc.params.control.moment_free_share = true;
-    sc.params.step.environment = env;
-    let m = common::builtin("magnum");
-    let mut sim = Simulation::new(m.clone(), m, sc.params.clone()).expect("sim");
-    run_while(&sc, &mut sim, |_, s| {
-        !(s.arm(Arm::Left).holding && s.arm(Arm::Right).holding)
-    });
-    let rest = Input {
-        speed_scale: 1.0,
-        ..Input::default()
-    };
-    for _ in 0..500 {
-        sim.step(&rest);
-    }
-    assert_eq!(sim.grasp_state(), GraspState::BothHolding);
-    sim
 }
 
 /// The operator: the same stick on both arms (joint or Cartesian) or on the object, through

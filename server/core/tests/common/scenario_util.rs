@@ -1,8 +1,9 @@
 //! Helpers to advance a simulation through a scripted scenario.
 #![allow(dead_code)]
 
-use seaarms_core::sim::Simulation;
+use seaarms_core::grasp::GraspState;
 use seaarms_core::sim::scenario::{Scenario, scenario};
+use seaarms_core::sim::{Arm, Environment, Input, Simulation};
 
 /// Builds `name` and a simulation at its reset state.
 pub(crate) fn start(name: &str) -> (Scenario, Simulation) {
@@ -46,4 +47,28 @@ pub(crate) fn run_rows(
     println!("{}: {s:?}", sc.name);
     assert_eq!(s.numerical_faults, 0);
     (s, rows)
+}
+
+/// Both jaws closed on the nominal box resting on the seabed (case study 3 stages A–B:
+/// joint-space reach, then the open-loop grasp), with the finite grip, in `env`, the clamp
+/// force built (0.5 s at rest after the last grasp segment closes the left jaw).
+pub(crate) fn dual_grasp(env: Environment) -> Simulation {
+    let (mut sc, _) = start("case3-dual-open-loop");
+    sc.params.rigid_grasp = false;
+    sc.params.control.moment_free_share = true;
+    sc.params.step.environment = env;
+    let m = super::builtin("magnum");
+    let mut sim = Simulation::new(m.clone(), m, sc.params.clone()).expect("sim");
+    run_while(&sc, &mut sim, |_, s| {
+        !(s.arm(Arm::Left).holding && s.arm(Arm::Right).holding)
+    });
+    let rest = Input {
+        speed_scale: 1.0,
+        ..Input::default()
+    };
+    for _ in 0..500 {
+        sim.step(&rest);
+    }
+    assert_eq!(sim.grasp_state(), GraspState::BothHolding);
+    sim
 }

@@ -4,6 +4,7 @@
 
 use nalgebra::{Isometry3, Matrix6, Point3, Vector3, Vector6};
 
+use super::contact::ArmLoad;
 use super::{ArmInput, ArmParams, ArmState, ArmWork, StepParams, water};
 use crate::control::{self, ControlParams};
 use crate::dynamics;
@@ -150,7 +151,8 @@ pub(super) fn operator_spools(
 /// [`dynamics::step_terms`]), the actuator linkages, and the factor of H̃ with the implicit
 /// damping and end stops. `work` holds the kinematics of the state's q; `h` is the sub-step;
 /// `load`: a held panel item's load on the jaw, linearly implicit (h·JᵀCJ + h²·JᵀKJ and the
-/// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side).
+/// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side); `contact`: the
+/// arm's contacts, linearly implicit the same way (`contact.rs`).
 pub(super) fn arm_terms(
     model: &Model,
     ap: &ArmParams,
@@ -159,6 +161,7 @@ pub(super) fn arm_terms(
     a: &ArmState,
     h: f64,
     load: Option<&ToolLoad>,
+    contact: Option<&ArmLoad>,
 ) -> ArmTerms {
     let rho = sp.environment.density_kgm3();
     let terms =
@@ -207,6 +210,11 @@ pub(super) fn arm_terms(
             + jv.transpose() * jv * l.mass_kg;
         let qd = Vector6::from(a.qd);
         out.ext = Some(j.transpose() * (l.wrench - l.stiffness * (j * qd) * h));
+    }
+    if let Some(c) = contact {
+        // Contacts: their implicit terms (`contact.rs`).
+        m += c.matrix;
+        out.ext = Some(out.ext.unwrap_or_else(Vector6::zeros) + c.torque);
     }
     out.factor = Ldlt::factor(&m);
     if let (Some(f), true) = (&out.factor, a.holding) {

@@ -61,6 +61,7 @@
 
 mod arm;
 mod constraint;
+mod contact;
 mod object;
 mod panel;
 mod pipeline;
@@ -70,6 +71,7 @@ pub mod water;
 
 pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
 pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
+pub use contact::{ArmContact, ArmContacts, ContactParams, Contacts, Strike};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
 pub use water::{Current, Environment, Medium, Water};
 
@@ -186,6 +188,9 @@ pub struct SimParams {
     pub rigid_grasp: bool,
     /// The jaws' friction grip on the handles (used unless `rigid_grasp`).
     pub grip: GripParams,
+    /// Contacts of the links and jaws with the seabed, the box, the panel, the vehicle and
+    /// the other arm (`contact.rs`, [`crate::collision`]).
+    pub contact: ContactParams,
 }
 
 /// Control method (Lim §4.1 "control mode").
@@ -361,6 +366,8 @@ pub struct Simulation {
     work: [ArmWork; 2],
     /// Steps on which a non-finite value appeared and the state was rolled back (should stay 0).
     numerical_faults: u64,
+    /// The contact report of the last step.
+    contacts: Contacts,
 }
 
 impl Simulation {
@@ -428,6 +435,7 @@ impl Simulation {
             state,
             work,
             numerical_faults: 0,
+            contacts: Contacts::default(),
         };
         sim.reset();
         Ok(sim)
@@ -507,6 +515,7 @@ impl Simulation {
         };
         self.state.panel = self.params.panel.as_ref().map(PanelState::initial);
         self.numerical_faults = 0;
+        self.contacts = Contacts::default();
         self.update_kinematics();
         for i in 0..2 {
             self.state.arms[i].contact = self.in_contact(i);
@@ -588,6 +597,11 @@ impl Simulation {
                 reason: "the simulation is in air: there is no water current to set".into(),
             }),
         }
+    }
+    /// The contacts of the last step: per arm the strongest (what, where, force), counts and
+    /// the strike record ([`ContactParams`]).
+    pub fn contacts(&self) -> &Contacts {
+        &self.contacts
     }
     /// Steps rolled back because a value went non-finite (a safety net; 0 in every test).
     pub fn numerical_faults(&self) -> u64 {

@@ -9,12 +9,15 @@
 //!    damping and lumped mass ([`Simulation::panel_loads`]; only with a panel);
 //! 4. arm terms, per arm: H, C q̇ + G, J̇q̇, linkage levers and the factor of H̃, with the
 //!    panel load linearly implicit ([`arm::arm_terms`]);
-//! 5. object terms: inertia, weight, implicit seabed damping ([`ObjectTerms::new`]);
+//! 5. object terms: inertia, weight, implicit seabed damping ([`ObjectTerms::new`]); then
+//!    the contacts of links and jaws with everything, as implicit terms for each arm's H̃
+//!    (stage 4 takes them) and rows for the box ([`Simulation::contact_terms`]);
 //! 6. the grasp constraint system ([`Constraint::new`]) with each holding jaw's grip limits
 //!    ([`JawGrip::new`]);
 //! 7. the sub-steps ([`Simulation::substep`]): chamber pressures, free accelerations,
-//!    contact wrenches (a slipping jaw's capped at its kinetic friction limits), integration;
-//! 8. outputs: relief events, contact and internal wrenches, time, kinematics, then the slip
+//!    the box's contact forces ([`contact::box_acceleration`]), the grasp's contact wrenches
+//!    (a slipping jaw's capped at its kinetic friction limits), integration;
+//! 8. outputs: the contact report ([`Simulation::contact_report`]), relief events, contact and internal wrenches, time, kinematics, then the slip
 //!    stage: a slipping jaw's grasp frame follows the bar, and the grasp is lost when the bar
 //!    has slid out ([`Simulation::finish_step`], [`constraint::slip_stage`]);
 //! 9. panel items: the valve's 1-DOF step, the stab's pose, phase, depth and side load
@@ -25,6 +28,7 @@
 use nalgebra::{Point3, Vector3, Vector6};
 
 use super::arm::{self, ArmTerms};
+use super::contact::{self, ContactTerms};
 use super::constraint::{self, Constraint, GripOut, JawGrip};
 use super::object::{self, ObjectTerms};
 use super::{ControlMethod, Input, Simulation};
@@ -46,6 +50,8 @@ pub(super) struct StepScratch {
     object: ObjectTerms,
     /// Stage 6.
     constraint: Constraint,
+    /// Stage 5b: the contacts' implicit terms.
+    contacts: ContactTerms,
 }
 
 /// What the last sub-step leaves for the outputs.
@@ -153,6 +159,9 @@ impl Simulation {
         let sp = &self.params.step;
         let h = sp.dt_s / sp.substeps as f64;
         let st = &self.state;
+        let held = st.arms.iter().any(|a| a.holding);
+        let object = ObjectTerms::new(&self.params.object, sp, &st.object, held, h);
+        let contacts = self.contact_terms(h, &object);
         let arms = core::array::from_fn(|i| {
             arm::arm_terms(
                 &self.models[i],
@@ -162,10 +171,9 @@ impl Simulation {
                 &st.arms[i],
                 h,
                 loads[i].as_ref(),
+                contacts.load[i].as_ref(),
             )
         });
-        let held = st.arms.iter().any(|a| a.holding);
-        let object = ObjectTerms::new(&self.params.object, sp, &st.object, held, h);
         let grip = core::array::from_fn(|i| {
             st.arms[i]
                 .holding
@@ -184,6 +192,7 @@ impl Simulation {
             arms,
             object,
             constraint,
+            contacts,
         }
     }
 
@@ -202,6 +211,7 @@ impl Simulation {
         let o = &self.state.object;
         let (mut acc_o, seabed_normal_n) =
             s.object.free_acceleration(&self.params.object, o, first);
+        contact::box_acceleration(&s.contacts, &s.object, &object::twist(o), &mut acc_o, h);
         let arms = &self.state.arms;
         (out.contact, out.grip) = s.constraint.apply(
             [&s.arms[0], &s.arms[1]],
@@ -222,6 +232,7 @@ impl Simulation {
     /// Stage 8: relief events (rising edges), contact and internal wrenches, time, and the
     /// kinematics and contact flags for the new q.
     fn finish_step(&mut self, s: &StepScratch, out: &SubstepOutput) {
+        self.contact_report(&s.contacts, s.h);
         for (i, a) in self.state.arms.iter_mut().enumerate() {
             for j in 0..N_ACT {
                 if out.relief[i][j] && !a.relief_open[j] {

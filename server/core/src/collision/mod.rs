@@ -1,0 +1,563 @@
+//! Collision geometry of everything the arms can touch, and the narrow phase that finds the
+//! contacts, with dimforge's `parry3d-f64` (the geometric queries; the contact forces are
+//! `sim`'s, see its `contact` stage and docs/physics.md "Contacts").
+//!
+//! # Shapes
+//! * **Arm** (data beside the robot model: the `collision` section of a robot file,
+//!   [`CollisionSpec`]): each link a capsule along its link vector (joint origin to the next
+//!   joint's origin; the last link to a point in the tool frame), the wrist plate a cylinder
+//!   and the two jaw fingers boxes in the tool frame, the fingers at the jaw opening. The
+//!   Magnum's values are the drawing's (web/arms.js), so what the trainee sees is what
+//!   collides.
+//! * **World** ([`WorldGeometry`], with the simulation's parameters): the seabed (a half-space
+//!   at the seabed height), the box (a cuboid) and its two handle bars (capsules), the panel
+//!   plate (a cuboid), its valve stem and T-bar (capsules; the bar turns with the valve), the
+//!   hot stab (a capsule from its grip to its tip; holster and receptacle sit flush in the
+//!   plate face), the vehicle's front (a cuboid behind the arm bases) and each arm's pedestal
+//!   (a capsule below its base), and the other arm.
+//!
+//! # Queries
+//! Broad phase: an axis-aligned box per shape, recomputed every step; only overlapping pairs
+//! reach the narrow phase. Narrow phase: [`parry3d_f64::query::contact`] (deepest point pair,
+//! normal, signed distance) on every overlapping pair, except that a link capsule against the
+//! seabed is queried as its two end spheres (the deepest points of a capsule against a plane
+//! are its segment's ends; one query of the whole capsule gives only one of them, and a link
+//! lying on the seabed would rock between its ends).
+//!
+//! parry3d-f64 0.31 (the newest) works in glam types; no parry release uses our nalgebra 0.35
+//! (0.23–0.25 use nalgebra 0.34, 0.26 on glam), so poses are converted at this boundary
+//! ([`to_pose`], [`to_vec`]).
+
+use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
+use parry3d_f64::math::{Pose, Rotation, Vector};
+use parry3d_f64::query;
+use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder, HalfSpace, Shape};
+use serde::{Deserialize, Serialize};
+
+use crate::Error;
+
+/// Collision shapes of an arm (the `collision` section of a robot file). Points and sizes in
+/// metres; tool-frame values are in the end-effector frame (z along the jaw, y across the
+/// opening, as the drawing).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CollisionSpec {
+    /// Where the numbers come from.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub source: Option<String>,
+    /// Capsule radius of each link (one per joint), along its link vector.
+    pub link_radii_m: Vec<f64>,
+    /// End of the last link's capsule, tool frame (the back of the wrist plate).
+    pub last_link_end_m: [f64; 3],
+    /// Centre of the wrist plate, a cylinder along the tool z axis, tool frame.
+    pub wrist_centre_m: [f64; 3],
+    /// Wrist plate radius.
+    pub wrist_radius_m: f64,
+    /// Wrist plate half thickness (along tool z).
+    pub wrist_half_length_m: f64,
+    /// Half extents (x, y, z) of each finger, a box whose inner face is at ± half the jaw
+    /// opening along tool y, centred on the tool point along x and z.
+    pub finger_half_extents_m: [f64; 3],
+}
+
+impl CollisionSpec {
+    /// One radius per joint, all sizes finite and positive (radii and half extents up to 1 m),
+    /// points finite.
+    pub fn check(&self, joints: usize) -> Result<(), Error> {
+        let bad = |reason: &str| {
+            Err(Error::InvalidModel {
+                reason: format!("collision: {reason}"),
+            })
+        };
+        if self.link_radii_m.len() != joints {
+            return bad("link_radii_m needs one radius per joint");
+        }
+        let wrist = [self.wrist_radius_m, self.wrist_half_length_m];
+        let sizes = self
+            .link_radii_m
+            .iter()
+            .chain(&wrist)
+            .chain(&self.finger_half_extents_m);
+        for &s in sizes {
+            if !(s.is_finite() && s > 0.0 && s <= 1.0) {
+                return bad("radii and half sizes must be in (0, 1] m");
+            }
+        }
+        let points = self.last_link_end_m.iter().chain(&self.wrist_centre_m);
+        if points.into_iter().any(|v| !(v.is_finite() && v.abs() <= 10.0)) {
+            return bad("points must be finite and within ±10 m");
+        }
+        Ok(())
+    }
+}
+
+/// The part of an arm in a contact.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ArmPart {
+    /// Link `i` (0-based, the link moved by joint `i`).
+    Link(usize),
+    /// The wrist plate behind the jaw.
+    Wrist,
+    /// Jaw finger 0 (−y) or 1 (+y).
+    Finger(usize),
+}
+
+/// What an arm touches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Partner {
+    /// The seabed.
+    Seabed,
+    /// The box or one of its handles.
+    Object,
+    /// The panel: plate, valve or hot stab.
+    Panel,
+    /// The vehicle's front or an arm pedestal.
+    Vehicle,
+    /// The other arm.
+    OtherArm,
+}
+
+impl Partner {
+    /// Short name for events and logs.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Partner::Seabed => "seabed",
+            Partner::Object => "box",
+            Partner::Panel => "panel",
+            Partner::Vehicle => "vehicle",
+            Partner::OtherArm => "other-arm",
+        }
+    }
+}
+
+/// Which world item a shape is (for the grasp exclusions).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Item {
+    /// The box body.
+    BoxBody,
+    /// Box handle bar `k` (the arm index whose handle it is).
+    Handle(usize),
+    /// The panel plate.
+    Plate,
+    /// The valve stem and T-bar.
+    Valve,
+    /// The hot stab.
+    Stab,
+    /// The vehicle's front.
+    Vehicle,
+    /// The pedestal below arm `k`'s base.
+    Pedestal(usize),
+}
+
+impl Item {
+    fn partner(self) -> Partner {
+        match self {
+            Item::BoxBody | Item::Handle(_) => Partner::Object,
+            Item::Plate | Item::Valve | Item::Stab => Partner::Panel,
+            Item::Vehicle | Item::Pedestal(_) => Partner::Vehicle,
+        }
+    }
+}
+
+/// The fixed world geometry that is not in other parameters (sizes of the drawn handles,
+/// valve, vehicle and pedestals; m). Defaults in [`WorldGeometry::standard`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorldGeometry {
+    /// Handle bar radius: 0.02 (the jaws close on 0.04, `ObjectParams::handle_width_m`).
+    pub handle_radius_m: f64,
+    /// Handle bar half length along the box's x axis: 0.06 (web/markers.js draws 0.12).
+    pub handle_half_length_m: f64,
+    /// Valve stem radius: 0.012 (as drawn).
+    pub valve_stem_radius_m: f64,
+    /// T-bar radius: 0.015 (as drawn); its length is `ValveParams::bar_length_m`.
+    pub valve_bar_radius_m: f64,
+    /// Vehicle front, world frame: centre (−0.60, 0.50, 0.0) and half extents
+    /// (0.35, 1.10, 0.40) — a box from x = −0.95 to −0.25 behind both arm bases, y −0.6..1.6,
+    /// z −0.4..0.4 (assumed: the front of a work-class ROV's tool skid carrying the arms).
+    pub vehicle_centre_m: Vector3<f64>,
+    /// Half extents of the vehicle front (see `vehicle_centre_m`).
+    pub vehicle_half_extents_m: Vector3<f64>,
+    /// Pedestal below each arm base (as drawn): a capsule of radius 0.09 from 0.05 m to
+    /// 0.35 m below the base.
+    pub pedestal_radius_m: f64,
+    /// Pedestal top and bottom below the base (m): (0.05, 0.35); see `pedestal_radius_m`.
+    pub pedestal_span_m: [f64; 2],
+}
+
+impl WorldGeometry {
+    /// The values in the field docs.
+    pub fn standard() -> WorldGeometry {
+        WorldGeometry {
+            handle_radius_m: 0.02,
+            handle_half_length_m: 0.06,
+            valve_stem_radius_m: 0.012,
+            valve_bar_radius_m: 0.015,
+            vehicle_centre_m: Vector3::new(-0.60, 0.50, 0.0),
+            vehicle_half_extents_m: Vector3::new(0.35, 1.10, 0.40),
+            pedestal_radius_m: 0.09,
+            pedestal_span_m: [0.05, 0.35],
+        }
+    }
+}
+
+impl Default for WorldGeometry {
+    fn default() -> Self {
+        Self::standard()
+    }
+}
+
+/// nalgebra → parry (glam) vector.
+pub fn to_vec(v: &Vector3<f64>) -> Vector {
+    Vector::new(v.x, v.y, v.z)
+}
+
+/// parry (glam) → nalgebra vector.
+pub fn from_vec(v: Vector) -> Vector3<f64> {
+    Vector3::new(v.x, v.y, v.z)
+}
+
+/// nalgebra → parry (glam) pose.
+pub fn to_pose(p: &Isometry3<f64>) -> Pose {
+    let q = p.rotation.coords; // (i, j, k, w)
+    Pose::from_parts(
+        to_vec(&p.translation.vector),
+        Rotation::from_xyzw(q.x, q.y, q.z, q.w),
+    )
+}
+
+/// A convex shape of the scene.
+#[derive(Debug, Clone, Copy)]
+pub enum Solid {
+    /// Capsule (segment ends in world coordinates; its pose is the identity).
+    Capsule(Capsule),
+    /// Cylinder along its pose's y axis (parry's convention).
+    Cylinder(Cylinder),
+    /// Box.
+    Cuboid(Cuboid),
+}
+
+impl Solid {
+    fn shape(&self) -> &dyn Shape {
+        match self {
+            Solid::Capsule(c) => c,
+            Solid::Cylinder(c) => c,
+            Solid::Cuboid(c) => c,
+        }
+    }
+}
+
+/// A posed shape with its world bounding box.
+#[derive(Debug, Clone, Copy)]
+pub struct Posed {
+    /// The shape.
+    pub solid: Solid,
+    /// Its pose (world).
+    pub pose: Pose,
+    /// World axis-aligned bounding box.
+    pub aabb: Aabb,
+}
+
+impl Posed {
+    fn new(solid: Solid, pose: Pose) -> Posed {
+        let aabb = solid.shape().compute_aabb(&pose);
+        Posed { solid, pose, aabb }
+    }
+
+    /// A capsule between world points `a` and `b`.
+    pub fn capsule(a: &Vector3<f64>, b: &Vector3<f64>, r: f64) -> Posed {
+        Posed::new(
+            Solid::Capsule(Capsule::new(to_vec(a), to_vec(b), r)),
+            Pose::IDENTITY,
+        )
+    }
+
+    /// A box of half extents `half` at `pose`.
+    pub fn cuboid(half: &Vector3<f64>, pose: &Isometry3<f64>) -> Posed {
+        Posed::new(Solid::Cuboid(Cuboid::new(to_vec(half))), to_pose(pose))
+    }
+}
+
+/// Number of collision parts of an arm: six links, the wrist plate, two fingers.
+pub const ARM_PARTS: usize = 9;
+
+/// One arm's shapes at the current configuration.
+#[derive(Debug, Clone, Copy)]
+pub struct ArmShapes {
+    /// The parts, in [`ArmShapes::part`] order.
+    pub parts: [Posed; ARM_PARTS],
+    /// The bounding box of all parts.
+    pub aabb: Aabb,
+}
+
+impl ArmShapes {
+    /// The arm's shapes from its joint-frame origins `origins` (world, 6), the tool pose
+    /// `tool` (world) and the jaw opening (m).
+    pub fn new(
+        spec: &CollisionSpec,
+        origins: &[Vector3<f64>; 6],
+        tool: &Isometry3<f64>,
+        jaw_opening_m: f64,
+    ) -> ArmShapes {
+        let tp = |p: &[f64; 3]| (tool * Point3::new(p[0], p[1], p[2])).coords;
+        let last_end = tp(&spec.last_link_end_m);
+        let link = |i: usize| {
+            let b = if i + 1 < 6 { origins[i + 1] } else { last_end };
+            Posed::capsule(&origins[i], &b, spec.link_radii_m[i])
+        };
+        // parry's cylinder lies along y: turn it onto the tool z axis.
+        let wrist_pose = tool
+            * Isometry3::from_parts(
+                Vector3::from(spec.wrist_centre_m).into(),
+                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2),
+            );
+        let wrist = Posed::new(
+            Solid::Cylinder(Cylinder::new(spec.wrist_half_length_m, spec.wrist_radius_m)),
+            to_pose(&wrist_pose),
+        );
+        let h = Vector3::from(spec.finger_half_extents_m);
+        let finger = |side: f64| {
+            let y = side * (0.5 * jaw_opening_m.max(0.0) + h.y);
+            Posed::cuboid(&h, &(tool * Isometry3::translation(0.0, y, 0.0)))
+        };
+        let parts = [
+            link(0),
+            link(1),
+            link(2),
+            link(3),
+            link(4),
+            link(5),
+            wrist,
+            finger(-1.0),
+            finger(1.0),
+        ];
+        let aabb = parts[1..]
+            .iter()
+            .fold(parts[0].aabb, |acc, p| acc.merged(&p.aabb));
+        ArmShapes { parts, aabb }
+    }
+
+    /// What part index `k` is.
+    pub fn part(k: usize) -> ArmPart {
+        match k {
+            0..6 => ArmPart::Link(k),
+            6 => ArmPart::Wrist,
+            _ => ArmPart::Finger(k - 7),
+        }
+    }
+}
+
+/// A world obstacle at the current step.
+#[derive(Debug, Clone, Copy)]
+pub struct Obstacle {
+    /// What it is.
+    pub item: Item,
+    /// Its shape.
+    pub shape: Posed,
+}
+
+/// Obstacles of the world (not the seabed, not the arms): at most the box, two handles, the
+/// panel plate, valve stem and bar, the stab, the vehicle and two pedestals.
+pub const MAX_OBSTACLES: usize = 10;
+
+/// The world's obstacles at the current step.
+#[derive(Debug, Clone, Copy)]
+pub struct World {
+    /// Seabed height (m).
+    pub seabed_z_m: f64,
+    /// The obstacles, `len` of them.
+    pub obstacles: [Obstacle; MAX_OBSTACLES],
+    /// How many obstacles are set.
+    pub len: usize,
+}
+
+impl World {
+    /// An empty world over the seabed at `seabed_z_m`.
+    pub fn new(seabed_z_m: f64) -> World {
+        let blank = Obstacle {
+            item: Item::Vehicle,
+            shape: Posed::capsule(&Vector3::zeros(), &Vector3::zeros(), 0.0),
+        };
+        World {
+            seabed_z_m,
+            obstacles: [blank; MAX_OBSTACLES],
+            len: 0,
+        }
+    }
+
+    /// Adds an obstacle (ignored beyond [`MAX_OBSTACLES`]).
+    pub fn push(&mut self, item: Item, shape: Posed) {
+        if self.len < MAX_OBSTACLES {
+            self.obstacles[self.len] = Obstacle { item, shape };
+            self.len += 1;
+        }
+    }
+
+    /// The obstacles set.
+    pub fn obstacles(&self) -> &[Obstacle] {
+        &self.obstacles[..self.len]
+    }
+}
+
+/// A contact found by the narrow phase, arm-side.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Touch {
+    /// The arm's part.
+    pub part: ArmPart,
+    /// What it touches.
+    pub partner: Partner,
+    /// The world item (`None` for the seabed and the other arm).
+    pub item: Option<Item>,
+    /// The other arm's part (arm–arm contacts only).
+    pub other_part: Option<ArmPart>,
+    /// Deepest point of the arm's part inside the partner (world, m).
+    pub point_arm: Vector3<f64>,
+    /// Deepest point of the partner inside the arm's part (world, m).
+    pub point_other: Vector3<f64>,
+    /// Unit normal pointing from the partner into the arm (the direction the contact pushes
+    /// the arm).
+    pub normal: Vector3<f64>,
+    /// Penetration depth (m, > 0).
+    pub depth_m: f64,
+}
+
+/// parry's contact of `a` (the arm's part) and `b`, as a [`Touch`] when they overlap.
+fn touch(a: &Posed, b: &Posed, part: ArmPart, partner: Partner, item: Option<Item>) -> Option<Touch> {
+    if !a.aabb.intersects(&b.aabb) {
+        return None;
+    }
+    let c = query::contact(&a.pose, a.solid.shape(), &b.pose, b.solid.shape(), 0.0)
+        .ok()
+        .flatten()?;
+    if !(c.dist < 0.0) {
+        return None;
+    }
+    // normal1 points out of the arm's part towards the partner.
+    let n = -from_vec(c.normal1);
+    Some(Touch {
+        part,
+        partner,
+        item,
+        other_part: None,
+        point_arm: from_vec(c.point1),
+        point_other: from_vec(c.point2),
+        normal: n,
+        depth_m: -c.dist,
+    })
+}
+
+/// Contacts of one arm's part `k` with the seabed, pushed to `out`.
+fn seabed_touches(s: &Posed, k: usize, seabed_z: f64, out: &mut impl FnMut(Touch)) {
+    if s.aabb.mins.z >= seabed_z {
+        return;
+    }
+    let plane = HalfSpace::new(Vector::Z);
+    let plane_pose = Pose::translation(0.0, 0.0, seabed_z);
+    let part = ArmShapes::part(k);
+    // The half-space goes first: parry 0.31.1's shape–half-space order passes the relative
+    // pose un-inverted to the half-space–shape routine (wrong depths; tests/collisions.rs).
+    let mut query_one = |shape: &dyn Shape, pose: &Pose| {
+        if let Ok(Some(c)) = query::contact(&plane_pose, &plane, pose, shape, 0.0)
+            && c.dist < 0.0
+        {
+            out(Touch {
+                part,
+                partner: Partner::Seabed,
+                item: None,
+                other_part: None,
+                point_arm: from_vec(c.point2),
+                point_other: from_vec(c.point1),
+                normal: Vector3::z(),
+                depth_m: -c.dist,
+            });
+        }
+    };
+    match &s.solid {
+        Solid::Capsule(c) => {
+            let ball = Ball::new(c.radius);
+            for end in [c.segment.a, c.segment.b] {
+                query_one(&ball, &Pose::from_translation(end));
+            }
+        }
+        other => query_one(other.shape(), &s.pose),
+    }
+}
+
+/// Which (part, item) pairs an arm's contacts skip: the jaw on what it grasps or is about to.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Exclusions {
+    /// The arm's index: its first two links skip its own pedestal (they are mounted on it).
+    pub arm: usize,
+    /// The jaw (wrist and fingers) skips the whole box and its handles (the arm holds it).
+    pub jaw_box: bool,
+    /// The fingers skip handle bar `k` (within the capture radius of its grasp point).
+    pub fingers_handle: [bool; 2],
+    /// The jaw skips the valve (held, or the fingers within its capture radius).
+    pub jaw_valve: bool,
+    /// The jaw skips the stab (held, or the fingers within its capture radius).
+    pub jaw_stab: bool,
+}
+
+impl Exclusions {
+    fn skip(&self, part: ArmPart, item: Item) -> bool {
+        let jaw = matches!(part, ArmPart::Wrist | ArmPart::Finger(_));
+        let finger = matches!(part, ArmPart::Finger(_));
+        match item {
+            Item::BoxBody => jaw && self.jaw_box,
+            Item::Handle(k) => (jaw && self.jaw_box) || (finger && self.fingers_handle[k]),
+            Item::Valve => jaw && self.jaw_valve,
+            Item::Stab => jaw && self.jaw_stab,
+            Item::Pedestal(k) => k == self.arm && matches!(part, ArmPart::Link(0 | 1)),
+            Item::Plate | Item::Vehicle => false,
+        }
+    }
+}
+
+/// Every contact of `arm` with the seabed and the world's obstacles (not the other arm),
+/// passed to `out`.
+pub fn world_touches(arm: &ArmShapes, world: &World, ex: &Exclusions, mut out: impl FnMut(Touch)) {
+    for (k, s) in arm.parts.iter().enumerate() {
+        seabed_touches(s, k, world.seabed_z_m, &mut out);
+    }
+    for o in world.obstacles() {
+        if !arm.aabb.intersects(&o.shape.aabb) {
+            continue;
+        }
+        for (k, s) in arm.parts.iter().enumerate() {
+            let part = ArmShapes::part(k);
+            if ex.skip(part, o.item) {
+                continue;
+            }
+            if let Some(t) = touch(s, &o.shape, part, o.item.partner(), Some(o.item)) {
+                out(t);
+            }
+        }
+    }
+}
+
+/// Every contact between the two arms, as (left's touch, right's touch) with opposite normals.
+pub fn arm_touches(a: &ArmShapes, b: &ArmShapes, mut out: impl FnMut(Touch, Touch)) {
+    if !a.aabb.intersects(&b.aabb) {
+        return;
+    }
+    for (ka, sa) in a.parts.iter().enumerate() {
+        if !sa.aabb.intersects(&b.aabb) {
+            continue;
+        }
+        for (kb, sb) in b.parts.iter().enumerate() {
+            let (pa, pb) = (ArmShapes::part(ka), ArmShapes::part(kb));
+            if let Some(mut t) = touch(sa, sb, pa, Partner::OtherArm, None) {
+                t.other_part = Some(pb);
+                let mirrored = Touch {
+                    part: pb,
+                    other_part: Some(pa),
+                    point_arm: t.point_other,
+                    point_other: t.point_arm,
+                    normal: -t.normal,
+                    ..t
+                };
+                out(t, mirrored);
+            }
+        }
+    }
+}

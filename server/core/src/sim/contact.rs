@@ -1,0 +1,698 @@
+//! The contact stage: the arms' links and jaws against the seabed, the box, the panel, the
+//! vehicle and each other (geometry and narrow phase in [`crate::collision`]).
+//!
+//! # Contact law
+//! Each contact point is a compliant spring–damper along the normal with Coulomb friction
+//! across it ([`ContactParams`]): F_n = k·δ − c·v_n (δ the penetration, v_n the separation
+//! speed; never pulling), and a tangential force −c_t·v_t while that stays within μ·F_n
+//! (sticking), else μ·F_n against the sliding direction (sliding, kinetic).
+//!
+//! # Integration (stable at the 1 ms step)
+//! The stiff terms are linearly implicit, like the joint end stops (`sim` module docs): with
+//! J_p the 3×6 linear Jacobian of the arm's contact point, the arm's H̃ gains
+//! h·(c + h·k)·J_pᵀnnᵀJ_p (and h·c_t·J_pᵀ(I − nnᵀ)J_p while sticking) and its right-hand side
+//! J_pᵀ·n·(k·δ − (c + h·k)·v_n) (and −c_t·J_pᵀv_t): one term in the arm's implicit system,
+//! unconditionally stable for any stiffness. The box side is linearly implicit in the box's
+//! own velocity through its mobility M̃⁻¹ (a small system over its contact rows,
+//! [`box_acceleration`]). Each body treats its partner's velocity as held over the step (a
+//! block-Jacobi split: arm and box, or the two arms); for each body alone the update is
+//! contractive, and the sum of two contractive corrections of the same gap is too
+//! (|1 − a − b| < 1 for a, b ∈ (0, 1)), so the pair stays stable. Geometry (points, normals,
+//! depths, Jacobians) is evaluated once per 1 ms step, like every configuration-dependent term.
+//!
+//! # Exclusions (grasps are not collisions)
+//! A jaw holding the box skips the box and its handles; fingers within the capture radius of
+//! a handle's grasp point skip that handle bar; a jaw holding the valve or the stab, or within
+//! the capture radius of its grip, skips it; an arm's first two links skip its own pedestal.
+//! Links of the same arm do not collide with each other.
+
+use nalgebra::{Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, SMatrix, SVector, Vector3, Vector6};
+
+use super::object::ObjectTerms;
+use super::Simulation;
+use crate::collision::{
+    ArmPart, ArmShapes, CollisionSpec, Exclusions, Item, Partner, Posed, Touch, World,
+    WorldGeometry, arm_touches, world_touches,
+};
+use crate::linalg::Ldlt;
+
+/// The contact law and the world's extra geometry (each default in its doc).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ContactParams {
+    /// Contacts act (true) or the arms pass through everything (false, the thesis's
+    /// simulator without collision response).
+    pub enabled: bool,
+    /// Normal stiffness (N/m): 5·10⁶. Chosen so the hardest push the arm can make stays well
+    /// inside the 1 cm acceptance: the shoulder at its 5 kN·m stall (`StepParams`) on a link
+    /// 0.3 m from the axis is 17 kN, 3.3 mm of penetration; at the jaw (Table 1-1's 295 kg
+    /// lift, 2.9 kN) 0.6 mm. Far softer than steel on steel (10⁸–10⁹ N/m) — a penalty
+    /// contact's compromise — and stable at any value because it is treated implicitly.
+    pub stiffness_n_m: f64,
+    /// Normal damping (N·s/m): 2·10⁴, as the box's seabed corners (`ObjectParams`): damping
+    /// ratio ≈ 0.6 for 50 kg on 5·10⁶ N/m, so a strike at 0.2 m/s rebounds at a fraction of
+    /// its speed, as metal on metal under water does.
+    pub damping_n_s_m: f64,
+    /// Coulomb friction coefficient, arm on steel (box, panel, vehicle, other arm): 0.3
+    /// (assumed: steel on steel, wet; Engineering ToolBox lists 0.5–0.8 clean and dry,
+    /// 0.16 greasy).
+    pub friction: f64,
+    /// Coulomb friction coefficient, arm on the seabed: 0.5, the box's (`ObjectParams`).
+    pub seabed_friction: f64,
+    /// Tangential damping while sticking (N·s/m): 2·10⁴, the regularization of static
+    /// friction (creep below μ·F_n/c_t: 7.5 mm/s at 500 N on steel).
+    pub stick_damping_n_s_m: f64,
+    /// Impact speed from which a new contact counts as a strike (m/s): 0.02 (a tenth of the
+    /// jaw's nominal speed; slower touches are placements, not strikes).
+    pub strike_speed_m_s: f64,
+    /// The world's extra shapes (handles, valve, vehicle, pedestals).
+    pub geometry: WorldGeometry,
+}
+
+impl Default for ContactParams {
+    fn default() -> Self {
+        ContactParams {
+            enabled: true,
+            stiffness_n_m: 5.0e6,
+            damping_n_s_m: 2.0e4,
+            friction: 0.3,
+            seabed_friction: 0.5,
+            stick_damping_n_s_m: 2.0e4,
+            strike_speed_m_s: 0.02,
+            geometry: WorldGeometry::standard(),
+        }
+    }
+}
+
+/// Contact points per arm held over a step (the deepest are kept).
+const MAX_POINTS: usize = 8;
+/// Arm–box contact points the box's implicit solve takes (the deepest are kept).
+const MAX_BOX_POINTS: usize = 4;
+/// Rows of the box's implicit solve: normal and two tangents per point.
+const BOX_ROWS: usize = 3 * MAX_BOX_POINTS;
+
+/// One contact point of an arm, held over the step.
+#[derive(Debug, Clone, Copy)]
+struct Point {
+    touch: Touch,
+    /// Linear Jacobian of the arm's contact point (world).
+    jv: Matrix3x6<f64>,
+    /// Velocity of the partner's contact point at the start of the step (held).
+    v_partner: Vector3<f64>,
+    /// Velocity of the arm's contact point at the start of the step.
+    v_arm: Vector3<f64>,
+    /// Friction coefficient.
+    mu: f64,
+    /// The normal force acts this step (not separating at the start).
+    pressing: bool,
+    /// Normal force at the start of the step (N), the sliding friction's magnitude.
+    fn0: f64,
+    /// Friction branch: sticking (implicit viscous) or sliding (explicit μ·F_n).
+    stick: bool,
+    /// Sliding friction force on the arm (N, world; zero while sticking).
+    slide_force: Vector3<f64>,
+}
+
+/// One arm's contact points of this step.
+#[derive(Debug, Clone, Copy)]
+struct ArmPoints {
+    points: [Option<Point>; MAX_POINTS],
+}
+
+impl ArmPoints {
+    fn iter(&self) -> impl Iterator<Item = &Point> {
+        self.points.iter().flatten()
+    }
+
+    /// Adds `p`, replacing the shallowest point when full and `p` is deeper.
+    fn push(&mut self, p: Point) {
+        if let Some(slot) = self.points.iter_mut().find(|s| s.is_none()) {
+            *slot = Some(p);
+            return;
+        }
+        let (k, d) = self
+            .points
+            .iter()
+            .enumerate()
+            .map(|(k, s)| (k, s.map_or(0.0, |q| q.touch.depth_m)))
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+        if p.touch.depth_m > d {
+            self.points[k] = Some(p);
+        }
+    }
+}
+
+/// The arm's implicit contact terms: H̃ += `matrix`, right-hand side += `torque`.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ArmLoad {
+    pub(super) matrix: Matrix6<f64>,
+    pub(super) torque: Vector6<f64>,
+}
+
+/// One row of the box's implicit solve: a force on the box along `dir` at `lever` from its
+/// COM, f = e − C·s⁺ with s the box point's velocity along `dir` relative to the arm's point.
+#[derive(Debug, Clone, Copy)]
+struct BoxRow {
+    /// Unit wrench [d; r × d].
+    w: Vector6<f64>,
+    /// M̃⁻¹·w.
+    mw: Vector6<f64>,
+    /// The arm point's velocity along `dir` (held).
+    v_arm: f64,
+    /// Spring part e (N): k·δ on a normal row, 0 on a tangent.
+    e: f64,
+    /// Velocity coefficient C (N·s/m).
+    c: f64,
+}
+
+/// Everything the contacts need over the step's sub-steps.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct ContactTerms {
+    arms: [ArmPoints; 2],
+    /// Per arm, the implicit terms (`None`: no contact).
+    pub(super) load: [Option<ArmLoad>; 2],
+    /// The box's rows, `rows` of them.
+    box_rows: [Option<BoxRow>; BOX_ROWS],
+    /// Explicit sliding-friction wrench on the box (about its COM).
+    box_slide: Vector6<f64>,
+}
+
+impl ContactTerms {
+    /// No contacts.
+    pub(super) fn none() -> ContactTerms {
+        ContactTerms {
+            arms: [ArmPoints {
+                points: [None; MAX_POINTS],
+            }; 2],
+            load: [None; 2],
+            box_rows: [None; BOX_ROWS],
+            box_slide: Vector6::zeros(),
+        }
+    }
+}
+
+/// One arm's strongest contact of the last step.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArmContact {
+    /// What it touches.
+    pub partner: Partner,
+    /// Which part of the arm.
+    pub part: ArmPart,
+    /// Contact point on the arm (world, m).
+    pub point_m: [f64; 3],
+    /// Normal force (N).
+    pub normal_force_n: f64,
+    /// Friction force (N).
+    pub friction_force_n: f64,
+    /// Penetration (m).
+    pub depth_m: f64,
+    /// Approach speed at the start of the step (m/s, ≥ 0).
+    pub approach_speed_m_s: f64,
+}
+
+/// A strike: a contact with a partner that began at an approach speed of at least
+/// [`ContactParams::strike_speed_m_s`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Strike {
+    /// What was struck.
+    pub partner: Partner,
+    /// The arm's part that struck first.
+    pub part: ArmPart,
+    /// Where (world, m).
+    pub point_m: [f64; 3],
+    /// Approach speed at first contact (m/s).
+    pub impact_speed_m_s: f64,
+    /// Largest total normal force on the arm from this partner while the contact lasts (N).
+    pub peak_force_n: f64,
+    /// Simulated time of the first contact (s).
+    pub time_s: f64,
+    /// The contact still lasts (the peak may still grow).
+    pub ongoing: bool,
+}
+
+/// One arm's contact report.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ArmContacts {
+    /// The strongest contact (largest normal force) of the last step.
+    pub strongest: Option<ArmContact>,
+    /// Contact points in the last step.
+    pub points: usize,
+    /// Deepest penetration in the last step (m).
+    pub max_depth_m: f64,
+    /// Sum of the normal forces in the last step (N).
+    pub total_normal_force_n: f64,
+    /// Strikes since reset.
+    pub strikes: u64,
+    /// The latest strike.
+    pub last_strike: Option<Strike>,
+    /// Partners touched in the last step (indexed by [`partner_index`]).
+    touching: [bool; 5],
+}
+
+/// The contacts of both arms, per step ([`Simulation::contacts`]).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct Contacts {
+    /// Left (0) and right (1) arm.
+    pub arms: [ArmContacts; 2],
+    /// Total force of the arms on the box (N, world) in the last step.
+    pub box_force_n: [f64; 3],
+}
+
+fn partner_index(p: Partner) -> usize {
+    match p {
+        Partner::Seabed => 0,
+        Partner::Object => 1,
+        Partner::Panel => 2,
+        Partner::Vehicle => 3,
+        Partner::OtherArm => 4,
+    }
+}
+
+/// Linear Jacobian (world) of a point `p` moved by joints `0..=last` of an arm whose joint
+/// frames (after motion; z the axis) are `frames`.
+fn point_jacobian(
+    frames: &[nalgebra::IsometryMatrix3<f64>],
+    last: usize,
+    p: &Vector3<f64>,
+) -> Matrix3x6<f64> {
+    let mut j = Matrix3x6::zeros();
+    for (k, f) in frames.iter().enumerate().take(last + 1) {
+        let z = f.rotation.matrix().column(2).into_owned();
+        j.set_column(k, &z.cross(&(p - f.translation.vector)));
+    }
+    j
+}
+
+fn part_link(part: ArmPart) -> usize {
+    match part {
+        ArmPart::Link(i) => i,
+        ArmPart::Wrist | ArmPart::Finger(_) => 5,
+    }
+}
+
+/// Two unit vectors completing `n` to an orthonormal basis.
+fn tangents(n: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    let a = if n.x.abs() < 0.9 {
+        Vector3::x()
+    } else {
+        Vector3::y()
+    };
+    let t1 = n.cross(&a).normalize();
+    (t1, n.cross(&t1))
+}
+
+impl Simulation {
+    /// The world's obstacles at the current state.
+    fn collision_world(&self) -> World {
+        let g = &self.params.contact.geometry;
+        let op = &self.params.object;
+        let mut w = World::new(op.seabed_z_m);
+        let o = &self.state.object.pose;
+        w.push(Item::BoxBody, Posed::cuboid(&(op.size_m * 0.5), o));
+        for (k, h) in op.handles_m.iter().enumerate() {
+            let c = (o * Point3::from(*h)).coords;
+            let ax = o.rotation * Vector3::x() * g.handle_half_length_m;
+            w.push(
+                Item::Handle(k),
+                Posed::capsule(&(c - ax), &(c + ax), g.handle_radius_m),
+            );
+        }
+        if let (Some(p), Some(ps)) = (&self.params.panel, &self.state.panel) {
+            let plate = p.pose * Isometry3::translation(0.5 * p.size_m.x, 0.0, 0.0);
+            w.push(Item::Plate, Posed::cuboid(&(p.size_m * 0.5), &plate));
+            let grip = p.valve_grip_m();
+            let face = grip + p.normal() * p.valve.stem_length_m;
+            w.push(
+                Item::Valve,
+                Posed::capsule(&grip, &face, g.valve_stem_radius_m),
+            );
+            let bar = p.valve_frame(ps.valve_angle_rad).rotation
+                * Vector3::y()
+                * (0.5 * p.valve.bar_length_m);
+            w.push(
+                Item::Valve,
+                Posed::capsule(&(grip - bar), &(grip + bar), g.valve_bar_radius_m),
+            );
+            w.push(
+                Item::Stab,
+                Posed::capsule(
+                    &ps.stab_handle_m(),
+                    &ps.stab_tip_m(p),
+                    0.5 * p.stab.diameter_m,
+                ),
+            );
+        }
+        let vehicle = Isometry3::translation(
+            g.vehicle_centre_m.x,
+            g.vehicle_centre_m.y,
+            g.vehicle_centre_m.z,
+        );
+        w.push(
+            Item::Vehicle,
+            Posed::cuboid(&g.vehicle_half_extents_m, &vehicle),
+        );
+        for (k, a) in self.params.arms.iter().enumerate() {
+            let b = a.base.translation.vector;
+            let (top, bottom) = (g.pedestal_span_m[0], g.pedestal_span_m[1]);
+            w.push(
+                Item::Pedestal(k),
+                Posed::capsule(
+                    &(b - Vector3::z() * top),
+                    &(b - Vector3::z() * bottom),
+                    g.pedestal_radius_m,
+                ),
+            );
+        }
+        w
+    }
+
+    /// Arm `i`'s collision shapes at the current state (`None` without a collision spec).
+    fn arm_shapes(&self, i: usize, spec: &CollisionSpec) -> ArmShapes {
+        let w = &self.work[i];
+        let origins = core::array::from_fn(|k| w.kin.joint_frames[k].translation.vector);
+        ArmShapes::new(spec, &origins, &w.tool, self.state.arms[i].jaw_opening_m)
+    }
+
+    /// What arm `i`'s jaw skips (see the module docs).
+    fn exclusions(&self, i: usize) -> Exclusions {
+        let a = &self.state.arms[i];
+        let tool = self.work[i].tool.translation.vector;
+        let op = &self.params.object;
+        let o = &self.state.object.pose;
+        let near = |p: &Vector3<f64>, r: f64| (tool - p).norm() <= r;
+        let fingers_handle = core::array::from_fn(|k| {
+            near(&(o * Point3::from(op.handles_m[k])).coords, op.capture_radius_m)
+        });
+        let (mut jaw_valve, mut jaw_stab) = (false, false);
+        if let (Some(p), Some(ps)) = (&self.params.panel, &self.state.panel) {
+            let arm = super::Arm::BOTH[i];
+            jaw_valve =
+                ps.valve_holder == Some(arm) || near(&p.valve_grip_m(), p.capture_radius_m);
+            jaw_stab =
+                ps.stab_holder == Some(arm) || near(&ps.stab_handle_m(), p.capture_radius_m);
+        }
+        Exclusions {
+            arm: i,
+            jaw_box: a.holding,
+            fingers_handle,
+            jaw_valve,
+            jaw_stab,
+        }
+    }
+
+    /// The contact stage at the start of a step (kinematics current): finds every contact and
+    /// forms each arm's implicit terms and the box's rows, for sub-steps of length `h`.
+    pub(super) fn contact_terms(&self, h: f64, object: &ObjectTerms) -> ContactTerms {
+        let mut out = ContactTerms::none();
+        let cp = &self.params.contact;
+        if !cp.enabled {
+            return out;
+        }
+        let specs = [
+            self.models[0].spec.collision.as_ref(),
+            self.models[1].spec.collision.as_ref(),
+        ];
+        let shapes: [Option<ArmShapes>; 2] =
+            core::array::from_fn(|i| specs[i].map(|s| self.arm_shapes(i, s)));
+        let world = self.collision_world();
+        let mut touches: [[Option<Touch>; MAX_POINTS]; 2] = [[None; MAX_POINTS]; 2];
+        let keep = |list: &mut [Option<Touch>; MAX_POINTS], t: Touch| {
+            if let Some(s) = list.iter_mut().find(|s| s.is_none()) {
+                *s = Some(t);
+            } else if let Some(s) = list
+                .iter_mut()
+                .min_by(|a, b| {
+                    let da = a.map_or(0.0, |t| t.depth_m);
+                    let db = b.map_or(0.0, |t| t.depth_m);
+                    da.total_cmp(&db)
+                })
+                .filter(|s| s.is_some_and(|q| q.depth_m < t.depth_m))
+            {
+                *s = Some(t);
+            }
+        };
+        for i in 0..2 {
+            if let Some(s) = &shapes[i] {
+                let ex = self.exclusions(i);
+                world_touches(s, &world, &ex, |t| keep(&mut touches[i], t));
+            }
+        }
+        if let (Some(a), Some(b)) = (&shapes[0], &shapes[1]) {
+            let [t0, t1] = &mut touches;
+            arm_touches(a, b, |ta, tb| {
+                keep(t0, ta);
+                keep(t1, tb);
+            });
+        }
+        if touches.iter().all(|l| l.iter().all(Option::is_none)) {
+            return out;
+        }
+        let o = &self.state.object;
+        let com = o.pose.translation.vector;
+        let box_velocity = |p: &Vector3<f64>| o.velocity + o.angular_velocity.cross(&(p - com));
+        let (k, c, ct) = (cp.stiffness_n_m, cp.damping_n_s_m, cp.stick_damping_n_s_m);
+        let mut box_points: [Option<(usize, Point)>; MAX_BOX_POINTS] = [None; MAX_BOX_POINTS];
+        for i in 0..2 {
+            let frames = &self.work[i].kin.joint_frames;
+            let qd = Vector6::from(self.state.arms[i].qd);
+            let other = 1 - i;
+            let mut matrix = Matrix6::zeros();
+            let mut torque = Vector6::zeros();
+            for t in touches[i].iter().flatten() {
+                let jv = point_jacobian(frames, part_link(t.part), &t.point_arm);
+                let v_arm = jv * qd;
+                let v_partner = match t.partner {
+                    Partner::Object => box_velocity(&t.point_other),
+                    Partner::OtherArm => {
+                        let f = &self.work[other].kin.joint_frames;
+                        let link = t.other_part.map_or(5, part_link);
+                        let jo = point_jacobian(f, link, &t.point_other);
+                        jo * Vector6::from(self.state.arms[other].qd)
+                    }
+                    _ => Vector3::zeros(),
+                };
+                let n = t.normal;
+                let vrel = v_arm - v_partner;
+                let vn = n.dot(&vrel);
+                let fn0 = k * t.depth_m - c * vn;
+                let mu = if t.partner == Partner::Seabed {
+                    cp.seabed_friction
+                } else {
+                    cp.friction
+                };
+                let mut p = Point {
+                    touch: *t,
+                    jv,
+                    v_partner,
+                    v_arm,
+                    mu,
+                    pressing: fn0 > 0.0,
+                    fn0: fn0.max(0.0),
+                    stick: true,
+                    slide_force: Vector3::zeros(),
+                };
+                if p.pressing {
+                    let cn = c + h * k;
+                    let jn = jv.transpose() * n;
+                    matrix += jn * jn.transpose() * (h * cn);
+                    torque += jn * (k * t.depth_m - cn * vn);
+                    let vt = vrel - n * vn;
+                    if ct * vt.norm() <= mu * p.fn0 {
+                        let pt = Matrix3::identity() - n * n.transpose();
+                        matrix += jv.transpose() * pt * jv * (h * ct);
+                        torque -= jv.transpose() * vt * ct;
+                    } else {
+                        p.stick = false;
+                        p.slide_force = -vt.normalize() * (mu * p.fn0);
+                        torque += jv.transpose() * p.slide_force;
+                    }
+                }
+                if t.partner == Partner::Object && p.pressing {
+                    push_deepest(&mut box_points, (i, p));
+                }
+                out.arms[i].push(p);
+            }
+            if out.arms[i].iter().next().is_some() {
+                out.load[i] = Some(ArmLoad { matrix, torque });
+            }
+        }
+        // The box's rows: normal and (sticking) tangents, forces on the box = − the arm's.
+        let mut r = 0;
+        for (_, p) in box_points.iter().flatten() {
+            let t = &p.touch;
+            let lever = t.point_other - com;
+            let n = -t.normal;
+            let mut row = |d: Vector3<f64>, e: f64, cc: f64| {
+                let w = Vector6::new(d.x, d.y, d.z, 0.0, 0.0, 0.0);
+                let m = lever.cross(&d);
+                let w = Vector6::new(w[0], w[1], w[2], m.x, m.y, m.z);
+                out.box_rows[r] = Some(BoxRow {
+                    w,
+                    mw: object.mobility_times(&w),
+                    v_arm: d.dot(&p.v_arm),
+                    e,
+                    c: cc,
+                });
+                r += 1;
+            };
+            row(n, k * t.depth_m, c + h * k);
+            if p.stick {
+                let (t1, t2) = tangents(&n);
+                row(t1, 0.0, ct);
+                row(t2, 0.0, ct);
+            } else {
+                let f = -p.slide_force;
+                let m = lever.cross(&f);
+                out.box_slide += Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z);
+            }
+        }
+        out
+    }
+
+    /// After the sub-steps: each arm's contact forces at the new velocities, the report and
+    /// the strike records.
+    pub(super) fn contact_report(&mut self, terms: &ContactTerms, h: f64) {
+        let cp = self.params.contact;
+        let time = self.state.time_s;
+        let mut box_force = Vector3::zeros();
+        for i in 0..2 {
+            let qd = Vector6::from(self.state.arms[i].qd);
+            let rep = &mut self.contacts.arms[i];
+            let mut strongest: Option<ArmContact> = None;
+            let (mut n_points, mut max_depth, mut total) = (0, 0.0_f64, 0.0);
+            let mut per_partner = [0.0_f64; 5];
+            let mut onset: [Option<(f64, &Point)>; 5] = [None; 5];
+            for p in terms.arms[i].iter() {
+                let t = &p.touch;
+                let n = t.normal;
+                let vrel = p.jv * qd - p.v_partner;
+                let vn = n.dot(&vrel);
+                let (fnorm, ffric) = if p.pressing {
+                    let f = (cp.stiffness_n_m * t.depth_m
+                        - (cp.damping_n_s_m + h * cp.stiffness_n_m) * vn)
+                        .max(0.0);
+                    let ff = if p.stick {
+                        (cp.stick_damping_n_s_m * (vrel - n * vn).norm()).min(p.mu * f)
+                    } else {
+                        p.slide_force.norm()
+                    };
+                    (f, ff)
+                } else {
+                    (0.0, 0.0)
+                };
+                n_points += 1;
+                max_depth = max_depth.max(t.depth_m);
+                total += fnorm;
+                let k = partner_index(t.partner);
+                per_partner[k] += fnorm;
+                let approach = (-n.dot(&(p.v_arm - p.v_partner))).max(0.0);
+                if onset[k].is_none_or(|(s, _)| approach > s) {
+                    onset[k] = Some((approach, p));
+                }
+                if t.partner == Partner::Object {
+                    box_force -= n * fnorm;
+                }
+                if strongest.is_none_or(|s| fnorm > s.normal_force_n) {
+                    strongest = Some(ArmContact {
+                        partner: t.partner,
+                        part: t.part,
+                        point_m: t.point_arm.into(),
+                        normal_force_n: fnorm,
+                        friction_force_n: ffric,
+                        depth_m: t.depth_m,
+                        approach_speed_m_s: approach,
+                    });
+                }
+            }
+            let mut touching = [false; 5];
+            for k in 0..5 {
+                touching[k] = onset[k].is_some();
+                if let Some((speed, p)) = onset[k]
+                    && !rep.touching[k]
+                    && speed >= cp.strike_speed_m_s
+                {
+                    rep.strikes += 1;
+                    rep.last_strike = Some(Strike {
+                        partner: p.touch.partner,
+                        part: p.touch.part,
+                        point_m: p.touch.point_arm.into(),
+                        impact_speed_m_s: speed,
+                        peak_force_n: per_partner[k],
+                        time_s: time,
+                        ongoing: true,
+                    });
+                } else if let Some(s) = &mut rep.last_strike
+                    && s.ongoing
+                    && partner_index(s.partner) == k
+                {
+                    if touching[k] {
+                        s.peak_force_n = s.peak_force_n.max(per_partner[k]);
+                    } else {
+                        s.ongoing = false;
+                    }
+                }
+            }
+            rep.touching = touching;
+            rep.strongest = strongest;
+            rep.points = n_points;
+            rep.max_depth_m = max_depth;
+            rep.total_normal_force_n = total;
+        }
+        self.contacts.box_force_n = box_force.into();
+    }
+}
+
+fn push_deepest(list: &mut [Option<(usize, Point)>; MAX_BOX_POINTS], p: (usize, Point)) {
+    if let Some(s) = list.iter_mut().find(|s| s.is_none()) {
+        *s = Some(p);
+        return;
+    }
+    if let Some(s) = list
+        .iter_mut()
+        .min_by(|a, b| {
+            let da = a.map_or(0.0, |q| q.1.touch.depth_m);
+            let db = b.map_or(0.0, |q| q.1.touch.depth_m);
+            da.total_cmp(&db)
+        })
+        .filter(|s| s.is_some_and(|q| q.1.touch.depth_m < p.1.touch.depth_m))
+    {
+        *s = Some(p);
+    }
+}
+
+/// Sub-step: the box's acceleration `acc` (its free acceleration on entry) with the arms'
+/// contact forces, linearly implicit in the box's velocity (`twist`, at the sub-step's
+/// start): with rows f_r = e_r − C_r·s_r⁺ and s⁺ = s + h·Wᵀ·acc,
+/// (C⁻¹ + h·WᵀM̃⁻¹W)·f = C⁻¹e − s − h·Wᵀ·acc_free (SPD), then acc += M̃⁻¹W·f.
+pub(super) fn box_acceleration(
+    terms: &ContactTerms,
+    object: &ObjectTerms,
+    twist: &Vector6<f64>,
+    acc: &mut Vector6<f64>,
+    h: f64,
+) {
+    if terms.box_slide != Vector6::zeros() {
+        *acc += object.mobility_times(&terms.box_slide);
+    }
+    if terms.box_rows[0].is_none() {
+        return;
+    }
+    let mut a = SMatrix::<f64, BOX_ROWS, BOX_ROWS>::identity();
+    let mut b = SVector::<f64, BOX_ROWS>::zeros();
+    for (r, row) in terms.box_rows.iter().enumerate() {
+        let Some(x) = row else { continue };
+        for (q, col) in terms.box_rows.iter().enumerate().take(r + 1) {
+            let Some(y) = col else { continue };
+            a[(r, q)] = h * x.w.dot(&y.mw);
+        }
+        a[(r, r)] += 1.0 / x.c;
+        let s = x.w.dot(twist) - x.v_arm;
+        b[r] = x.e / x.c - s - h * x.w.dot(acc);
+    }
+    let Some(f) = Ldlt::factor(&a) else { return };
+    let f = f.solve(&b);
+    for (r, row) in terms.box_rows.iter().enumerate() {
+        if let Some(x) = row {
+            *acc += x.mw * f[r];
+        }
+    }
+}

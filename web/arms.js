@@ -188,7 +188,7 @@ export class Arm {
     for (let s = 0; s < 2; s++) {
       const f = this.fingers[s];
       f.matrix.copy(this.tool).multiply(_m.makeTranslation(0, s ? half : -half, 0))
-        .multiply(_rz.makeScale(0.035, 0.016, 0.1));
+        .multiply(_rz.makeScale(0.035, 0.016, 0.04)); // the collision shape's size (robots/magnum.json)
       f.matrixWorldNeedsUpdate = true;
     }
   }

@@ -117,3 +117,30 @@ fn probe3() {
         println!("z {z} swapped: {r:?}");
     }
 }
+
+#[test]
+fn probe4() {
+    // arms into each other
+    for wet in [false, true] {
+        let mut s = sim(wet, false);
+        let r = drive(&mut s, [valves([-1.0, 0.0, 0.0, 0.0, 0.0, 0.0]), valves([1.0, 0.0, 0.0, 0.0, 0.0, 0.0])], 5.0);
+        println!("swing together wet {wet}: {r:?} L {:?} R {:?}", s.contacts().arms[0].strongest, s.contacts().arms[1].strongest);
+        let mut s = sim(wet, false);
+        let r = drive(&mut s, [valves([-1.0, 0.0, 0.0, 0.0, -1.0, 0.0]), valves([1.0, 0.0, 0.0, 0.0, 1.0, 0.0])], 5.0);
+        println!("swing+yaw together wet {wet}: {r:?} L {:?} R {:?}", s.contacts().arms[0].strongest, s.contacts().arms[1].strongest);
+        // panel
+        for v in [[0.0, 1.0, 1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 0.0, 0.0, 0.0], [0.0, 0.0, 1.0, 1.0, 0.0, 0.0]] {
+            let mut s = sim(wet, true);
+            let r = drive(&mut s, [valves(v), valves(v)], 5.0);
+            println!("panel {v:?} wet {wet}: {r:?} L {:?}", s.contacts().arms[0].strongest);
+        }
+        // box push: right arm swing +
+        for v in [[1.0, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0, 0.0, 0.0, 0.0, 1.0, 0.0], [0.5, -0.3, 0.0, 0.0, 0.0, 0.0]] {
+            let mut s = sim(wet, false);
+            let p0 = s.object().pose.translation.vector;
+            let r = drive(&mut s, [valves([0.0; 6]), valves(v)], 5.0);
+            let p1 = s.object().pose.translation.vector;
+            println!("box push {v:?} wet {wet}: {r:?} moved {:.3} R {:?} box force {:?}", (p1 - p0).norm(), s.contacts().arms[1].strongest, s.contacts().box_force_n);
+        }
+    }
+}

@@ -490,8 +490,8 @@ pub struct Exclusions {
     pub arm: usize,
     /// The jaw (wrist and fingers) skips the whole box and its handles (the arm holds it).
     pub jaw_box: bool,
-    /// The fingers skip handle bar `k` (within the capture radius of its grasp point).
-    pub fingers_handle: [bool; 2],
+    /// The jaw skips handle bar `k` (it is closing on it).
+    pub jaw_handle: [bool; 2],
     /// The jaw skips the valve (held, or the fingers within its capture radius).
     pub jaw_valve: bool,
     /// The jaw skips the stab (held, or the fingers within its capture radius).
@@ -501,10 +501,9 @@ pub struct Exclusions {
 impl Exclusions {
     fn skip(&self, part: ArmPart, item: Item) -> bool {
         let jaw = matches!(part, ArmPart::Wrist | ArmPart::Finger(_));
-        let finger = matches!(part, ArmPart::Finger(_));
         match item {
             Item::BoxBody => jaw && self.jaw_box,
-            Item::Handle(k) => (jaw && self.jaw_box) || (finger && self.fingers_handle[k]),
+            Item::Handle(k) => jaw && (self.jaw_box || self.jaw_handle[k]),
             Item::Valve => jaw && self.jaw_valve,
             Item::Stab => jaw && self.jaw_stab,
             Item::Pedestal(k) => k == self.arm && matches!(part, ArmPart::Link(0 | 1)),

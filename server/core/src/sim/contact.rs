@@ -21,9 +21,11 @@
 //! depths, Jacobians) is evaluated once per 1 ms step, like every configuration-dependent term.
 //!
 //! # Exclusions (grasps are not collisions)
-//! A jaw holding the box skips the box and its handles; fingers within the capture radius of
-//! a handle's grasp point skip that handle bar; a jaw holding the valve or the stab, or within
-//! the capture radius of its grip, skips it; an arm's first two links skip its own pedestal.
+//! A jaw holding the box skips the box and its handles; a jaw (wrist plate and fingers) whose
+//! tool point is within the capture radius of a handle's grasp point, widened by the
+//! fingers' reach past the tool point (they close on the bar from there), skips that handle
+//! bar; a jaw holding the valve or the stab, or within that radius of its grip, skips it; an
+//! arm's first two links skip its own pedestal.
 //! Links of the same arm do not collide with each other.
 
 use nalgebra::{Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, SMatrix, SVector, Vector3, Vector6};
@@ -379,21 +381,29 @@ impl Simulation {
         let op = &self.params.object;
         let o = &self.state.object.pose;
         let near = |p: &Vector3<f64>, r: f64| (tool - p).norm() <= r;
-        let fingers_handle = core::array::from_fn(|k| {
-            near(&(o * Point3::from(op.handles_m[k])).coords, op.capture_radius_m)
+        // The jaw closes on a bar from as far as its fingers reach past the capture sphere.
+        let reach = self.models[i]
+            .spec
+            .collision
+            .as_ref()
+            .map_or(0.0, |c| c.finger_half_extents_m[2]);
+        let jaw_handle = core::array::from_fn(|k| {
+            near(
+                &(o * Point3::from(op.handles_m[k])).coords,
+                op.capture_radius_m + reach,
+            )
         });
         let (mut jaw_valve, mut jaw_stab) = (false, false);
         if let (Some(p), Some(ps)) = (&self.params.panel, &self.state.panel) {
             let arm = super::Arm::BOTH[i];
-            jaw_valve =
-                ps.valve_holder == Some(arm) || near(&p.valve_grip_m(), p.capture_radius_m);
-            jaw_stab =
-                ps.stab_holder == Some(arm) || near(&ps.stab_handle_m(), p.capture_radius_m);
+            let r = p.capture_radius_m + reach;
+            jaw_valve = ps.valve_holder == Some(arm) || near(&p.valve_grip_m(), r);
+            jaw_stab = ps.stab_holder == Some(arm) || near(&ps.stab_handle_m(), r);
         }
         Exclusions {
             arm: i,
             jaw_box: a.holding,
-            fingers_handle,
+            jaw_handle,
             jaw_valve,
             jaw_stab,
         }

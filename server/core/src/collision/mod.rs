@@ -18,9 +18,13 @@
 //!
 //! # Queries
 //! Broad phase: an axis-aligned box per shape, recomputed every step; only overlapping pairs
-//! reach the narrow phase. Narrow phase: [`parry3d_f64::query::contact`] (deepest point pair,
-//! normal, signed distance) on every overlapping pair, except that a link capsule against the
-//! seabed is queried as its two end spheres (the deepest points of a capsule against a plane
+//! reach the narrow phase. Narrow phase: parry's GJK and, for overlapping shapes, its EPA
+//! (deepest point pair, normal, depth) — what [`parry3d_f64::query::contact`] runs for convex
+//! shapes, but with one EPA kept warm ([`Epa`]) because that call allocates a new one per
+//! penetrating pair; against the seabed [`parry3d_f64::query::contact`] with the half-space
+//! first (parry 0.31.1 gets the depth wrong in the other order: its shape–half-space routine
+//! passes the relative pose un-inverted to the half-space–shape one), and a link capsule
+//! against the seabed is queried as its two end spheres (the deepest points of a capsule against a plane
 //! are its segment's ends; one query of the whole capsule gives only one of them, and a link
 //! lying on the seabed would rock between its ends).
 //!
@@ -32,7 +36,9 @@ use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
 use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::math::{Pose, Rotation, Vector};
 use parry3d_f64::query;
-use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder, HalfSpace, Shape};
+use parry3d_f64::query::epa::EPA;
+use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
+use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder, HalfSpace, Shape, SupportMap};
 use serde::{Deserialize, Serialize};
 
 use crate::Error;
@@ -245,6 +251,79 @@ impl Solid {
             Solid::Cuboid(c) => c,
         }
     }
+
+    fn support(&self) -> &dyn SupportMap {
+        match self {
+            Solid::Capsule(c) => c,
+            Solid::Cylinder(c) => c,
+            Solid::Cuboid(c) => c,
+        }
+    }
+}
+
+/// parry's EPA (penetration depth of two convex shapes) with its buffers kept between
+/// queries: `parry3d_f64::query::contact` builds a new one, which allocates, on every
+/// penetrating pair; this one is warmed up when made, so the step does not allocate.
+#[derive(Default)]
+pub struct Epa(EPA);
+
+impl Epa {
+    /// An EPA whose buffers have grown on deep overlaps of every pair of shape kinds here.
+    pub fn warm() -> Epa {
+        let mut e = Epa::default();
+        let shapes = [
+            Solid::Capsule(Capsule::new(Vector::ZERO, Vector::new(0.4, 0.1, 0.0), 0.05)),
+            Solid::Cylinder(Cylinder::new(0.01, 0.05)),
+            Solid::Cuboid(Cuboid::new(Vector::new(0.15, 0.2, 0.1))),
+        ];
+        for a in &shapes {
+            for b in &shapes {
+                for k in 0..8 {
+                    let t = 0.01 * k as f64;
+                    let axis = Vector::new(1.0, 2.0 + t, 3.0 - t).normalize();
+                    let pose = Pose::new(Vector::new(t, 0.5 * t, -t), axis * (0.3 * k as f64));
+                    let pa = Posed::new(*a, Pose::IDENTITY);
+                    let pb = Posed::new(*b, pose);
+                    let _ = convex_contact(&pa, &pb, &mut e);
+                }
+            }
+        }
+        e
+    }
+}
+
+impl Clone for Epa {
+    fn clone(&self) -> Self {
+        Epa::warm()
+    }
+}
+
+impl core::fmt::Debug for Epa {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str("Epa")
+    }
+}
+
+/// Contact of two convex shapes by parry's GJK and, when they overlap, its EPA (as
+/// `query::contact` does for support maps, with a kept EPA): (point on `a`, point on `b`,
+/// unit normal out of `a`, signed distance), world frame; `None` when apart.
+fn convex_contact(a: &Posed, b: &Posed, epa: &mut Epa) -> Option<(Vector, Vector, Vector, f64)> {
+    let pos12 = a.pose.inv_mul(&b.pose);
+    let (g1, g2) = (a.solid.support(), b.solid.support());
+    let dir = pos12.translation.try_normalize().unwrap_or(Vector::X);
+    let mut simplex = VoronoiSimplex::new();
+    simplex.reset(CsoPoint::from_shapes(&pos12, g1, g2, dir));
+    if gjk::closest_points(&pos12, g1, g2, 0.0, true, &mut simplex) != GJKResult::Intersection {
+        return None;
+    }
+    let (p1, p2, n1) = epa.0.closest_points(&pos12, g1, g2, &simplex)?;
+    let dist = (p2 - p1).dot(n1);
+    Some((
+        a.pose * p1,
+        a.pose * p2,
+        a.pose.rotation * n1,
+        dist,
+    ))
 }
 
 /// A posed shape with its world bounding box.
@@ -422,27 +501,31 @@ pub struct Touch {
 }
 
 /// parry's contact of `a` (the arm's part) and `b`, as a [`Touch`] when they overlap.
-fn touch(a: &Posed, b: &Posed, part: ArmPart, partner: Partner, item: Option<Item>) -> Option<Touch> {
+fn touch(
+    a: &Posed,
+    b: &Posed,
+    epa: &mut Epa,
+    part: ArmPart,
+    partner: Partner,
+    item: Option<Item>,
+) -> Option<Touch> {
     if !a.aabb.intersects(&b.aabb) {
         return None;
     }
-    let c = query::contact(&a.pose, a.solid.shape(), &b.pose, b.solid.shape(), 0.0)
-        .ok()
-        .flatten()?;
-    if !(c.dist < 0.0) {
+    let (p1, p2, n1, dist) = convex_contact(a, b, epa)?;
+    if !(dist < 0.0 && n1.is_finite()) {
         return None;
     }
-    // normal1 points out of the arm's part towards the partner.
-    let n = -from_vec(c.normal1);
+    // n1 points out of the arm's part towards the partner.
     Some(Touch {
         part,
         partner,
         item,
         other_part: None,
-        point_arm: from_vec(c.point1),
-        point_other: from_vec(c.point2),
-        normal: n,
-        depth_m: -c.dist,
+        point_arm: from_vec(p1),
+        point_other: from_vec(p2),
+        normal: -from_vec(n1),
+        depth_m: -dist,
     })
 }
 
@@ -514,7 +597,13 @@ impl Exclusions {
 
 /// Every contact of `arm` with the seabed and the world's obstacles (not the other arm),
 /// passed to `out`.
-pub fn world_touches(arm: &ArmShapes, world: &World, ex: &Exclusions, mut out: impl FnMut(Touch)) {
+pub fn world_touches(
+    arm: &ArmShapes,
+    world: &World,
+    ex: &Exclusions,
+    epa: &mut Epa,
+    mut out: impl FnMut(Touch),
+) {
     for (k, s) in arm.parts.iter().enumerate() {
         seabed_touches(s, k, world.seabed_z_m, &mut out);
     }
@@ -527,7 +616,7 @@ pub fn world_touches(arm: &ArmShapes, world: &World, ex: &Exclusions, mut out: i
             if ex.skip(part, o.item) {
                 continue;
             }
-            if let Some(t) = touch(s, &o.shape, part, o.item.partner(), Some(o.item)) {
+            if let Some(t) = touch(s, &o.shape, epa, part, o.item.partner(), Some(o.item)) {
                 out(t);
             }
         }
@@ -535,7 +624,7 @@ pub fn world_touches(arm: &ArmShapes, world: &World, ex: &Exclusions, mut out: i
 }
 
 /// Every contact between the two arms, as (left's touch, right's touch) with opposite normals.
-pub fn arm_touches(a: &ArmShapes, b: &ArmShapes, mut out: impl FnMut(Touch, Touch)) {
+pub fn arm_touches(a: &ArmShapes, b: &ArmShapes, epa: &mut Epa, mut out: impl FnMut(Touch, Touch)) {
     if !a.aabb.intersects(&b.aabb) {
         return;
     }
@@ -545,7 +634,7 @@ pub fn arm_touches(a: &ArmShapes, b: &ArmShapes, mut out: impl FnMut(Touch, Touc
         }
         for (kb, sb) in b.parts.iter().enumerate() {
             let (pa, pb) = (ArmShapes::part(ka), ArmShapes::part(kb));
-            if let Some(mut t) = touch(sa, sb, pa, Partner::OtherArm, None) {
+            if let Some(mut t) = touch(sa, sb, epa, pa, Partner::OtherArm, None) {
                 t.other_part = Some(pb);
                 let mirrored = Touch {
                     part: pb,

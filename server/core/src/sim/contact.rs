@@ -33,7 +33,7 @@ use nalgebra::{Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, SMatrix, SVector,
 use super::object::ObjectTerms;
 use super::Simulation;
 use crate::collision::{
-    ArmPart, ArmShapes, CollisionSpec, Exclusions, Item, Partner, Posed, Touch, World,
+    ArmPart, ArmShapes, CollisionSpec, Epa, Exclusions, Item, Partner, Posed, Touch, World,
     WorldGeometry, arm_touches, world_touches,
 };
 use crate::linalg::Ldlt;
@@ -411,7 +411,12 @@ impl Simulation {
 
     /// The contact stage at the start of a step (kinematics current): finds every contact and
     /// forms each arm's implicit terms and the box's rows, for sub-steps of length `h`.
-    pub(super) fn contact_terms(&self, h: f64, object: &ObjectTerms) -> ContactTerms {
+    pub(super) fn contact_terms(
+        &self,
+        h: f64,
+        object: &ObjectTerms,
+        epa: &mut Epa,
+    ) -> ContactTerms {
         let mut out = ContactTerms::none();
         let cp = &self.params.contact;
         if !cp.enabled {
@@ -443,12 +448,12 @@ impl Simulation {
         for i in 0..2 {
             if let Some(s) = &shapes[i] {
                 let ex = self.exclusions(i);
-                world_touches(s, &world, &ex, |t| keep(&mut touches[i], t));
+                world_touches(s, &world, &ex, epa, |t| keep(&mut touches[i], t));
             }
         }
         if let (Some(a), Some(b)) = (&shapes[0], &shapes[1]) {
             let [t0, t1] = &mut touches;
-            arm_touches(a, b, |ta, tb| {
+            arm_touches(a, b, epa, |ta, tb| {
                 keep(t0, ta);
                 keep(t1, tb);
             });

@@ -368,6 +368,8 @@ pub struct Simulation {
     numerical_faults: u64,
     /// The contact report of the last step.
     contacts: Contacts,
+    /// The narrow phase's kept EPA buffers ([`crate::collision::Epa`]).
+    epa: crate::collision::Epa,
 }
 
 impl Simulation {
@@ -436,6 +438,7 @@ impl Simulation {
             work,
             numerical_faults: 0,
             contacts: Contacts::default(),
+            epa: crate::collision::Epa::warm(),
         };
         sim.reset();
         Ok(sim)

@@ -32,6 +32,7 @@ use super::contact::{self, ContactTerms};
 use super::constraint::{self, Constraint, GripOut, JawGrip};
 use super::object::{self, ObjectTerms};
 use super::{ControlMethod, Input, Simulation};
+use crate::collision::Epa;
 use crate::control::{self, ControlParams, CoopInputs};
 use crate::finite_or;
 use crate::hydraulics::N_ACT;
@@ -90,7 +91,10 @@ impl Simulation {
         let r = self.grasp_radii();
         self.spool_commands(input, speed, &r);
         let loads = self.panel_loads();
-        let scratch = self.step_scratch(&r, &loads);
+        // The narrow phase's kept EPA, out of `self` while the step's terms borrow it.
+        let mut epa = core::mem::take(&mut self.epa);
+        let scratch = self.step_scratch(&r, &loads, &mut epa);
+        self.epa = epa;
         let mut out = SubstepOutput::default();
         for k in 0..self.params.step.substeps {
             out = self.substep(&scratch, k == 0);
@@ -155,13 +159,18 @@ impl Simulation {
     }
 
     /// Stages 4–6: the terms held over the step's sub-steps (`loads`: stage 3's).
-    fn step_scratch(&self, r: &[Vector3<f64>; 2], loads: &[Option<ToolLoad>; 2]) -> StepScratch {
+    fn step_scratch(
+        &self,
+        r: &[Vector3<f64>; 2],
+        loads: &[Option<ToolLoad>; 2],
+        epa: &mut Epa,
+    ) -> StepScratch {
         let sp = &self.params.step;
         let h = sp.dt_s / sp.substeps as f64;
         let st = &self.state;
         let held = st.arms.iter().any(|a| a.holding);
         let object = ObjectTerms::new(&self.params.object, sp, &st.object, held, h);
-        let contacts = self.contact_terms(h, &object);
+        let contacts = self.contact_terms(h, &object, epa);
         let arms = core::array::from_fn(|i| {
             arm::arm_terms(
                 &self.models[i],

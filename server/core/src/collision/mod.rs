@@ -5,8 +5,8 @@
 //! # Shapes
 //! * **Arm** (data beside the robot model: the `collision` section of a robot file,
 //!   [`CollisionSpec`]): each link a capsule along its link vector (joint origin to the next
-//!   joint's origin; the last link to a point in the tool frame), the wrist plate a cylinder
-//!   and the two jaw fingers boxes in the tool frame, the fingers at the jaw opening. The
+//!   joint's origin; the last link to a point in the tool frame), the wrist plate and the two
+//!   jaw fingers boxes in the tool frame, the fingers at the jaw opening. The
 //!   Magnum's values are the drawing's (web/arms.js), so what the trainee sees is what
 //!   collides.
 //! * **World** ([`WorldGeometry`], with the simulation's parameters): the seabed (a half-space
@@ -18,10 +18,12 @@
 //!
 //! # Queries
 //! Broad phase: an axis-aligned box per shape, recomputed every step; only overlapping pairs
-//! reach the narrow phase. Narrow phase: parry's GJK and, for overlapping shapes, its EPA
-//! (deepest point pair, normal, depth) — what [`parry3d_f64::query::contact`] runs for convex
-//! shapes, but with one EPA kept warm ([`Epa`]) because that call allocates a new one per
-//! penetrating pair; against the seabed [`parry3d_f64::query::contact`] with the half-space
+//! reach the narrow phase. Narrow phase: parry's GJK and, for overlapping cores, its EPA
+//! (deepest point pair, normal, depth) on the shapes' polyhedral cores (a capsule's segment, a
+//! box), the capsule radii added after — what [`parry3d_f64::query::contact`] runs for convex
+//! shapes, but on cores (EPA on a round shape iterates towards a tolerance, and its buffers
+//! grow with the iterations) and with one EPA kept warm ([`Epa`]) because that call allocates
+//! a new one per penetrating pair; against the seabed [`parry3d_f64::query::contact`] with the half-space
 //! first (parry 0.31.1 gets the depth wrong in the other order: its shape–half-space routine
 //! passes the relative pose un-inverted to the half-space–shape one), and a link capsule
 //! against the seabed is queried as its two end spheres (the deepest points of a capsule against a plane
@@ -32,13 +34,13 @@
 //! (0.23–0.25 use nalgebra 0.34, 0.26 on glam), so poses are converted at this boundary
 //! ([`to_pose`], [`to_vec`]).
 
-use nalgebra::{Isometry3, Point3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Point3, Vector3};
 use parry3d_f64::bounding_volume::{Aabb, BoundingVolume};
 use parry3d_f64::math::{Pose, Rotation, Vector};
 use parry3d_f64::query;
 use parry3d_f64::query::epa::EPA;
 use parry3d_f64::query::gjk::{self, CsoPoint, GJKResult, VoronoiSimplex};
-use parry3d_f64::shape::{Ball, Capsule, Cuboid, Cylinder, HalfSpace, Shape, SupportMap};
+use parry3d_f64::shape::{Ball, Capsule, Cuboid, HalfSpace, Shape, SupportMap};
 use serde::{Deserialize, Serialize};
 
 use crate::Error;
@@ -56,12 +58,10 @@ pub struct CollisionSpec {
     pub link_radii_m: Vec<f64>,
     /// End of the last link's capsule, tool frame (the back of the wrist plate).
     pub last_link_end_m: [f64; 3],
-    /// Centre of the wrist plate, a cylinder along the tool z axis, tool frame.
+    /// Centre of the wrist plate, a box square to the tool z axis, tool frame.
     pub wrist_centre_m: [f64; 3],
-    /// Wrist plate radius.
-    pub wrist_radius_m: f64,
-    /// Wrist plate half thickness (along tool z).
-    pub wrist_half_length_m: f64,
+    /// Half extents (x, y, z) of the wrist plate, tool axes.
+    pub wrist_half_extents_m: [f64; 3],
     /// Half extents (x, y, z) of each finger, a box whose inner face is at ± half the jaw
     /// opening along tool y, centred on the tool point along x and z.
     pub finger_half_extents_m: [f64; 3],
@@ -79,11 +79,10 @@ impl CollisionSpec {
         if self.link_radii_m.len() != joints {
             return bad("link_radii_m needs one radius per joint");
         }
-        let wrist = [self.wrist_radius_m, self.wrist_half_length_m];
         let sizes = self
             .link_radii_m
             .iter()
-            .chain(&wrist)
+            .chain(&self.wrist_half_extents_m)
             .chain(&self.finger_half_extents_m);
         for &s in sizes {
             if !(s.is_finite() && s > 0.0 && s <= 1.0) {
@@ -232,31 +231,56 @@ pub fn to_pose(p: &Isometry3<f64>) -> Pose {
     )
 }
 
-/// A convex shape of the scene.
+/// A convex shape of the scene: a polyhedral core with a round margin, so that the usual
+/// shallow contact is GJK's closest points of the cores (exact, robust, cheap) and EPA —
+/// which fails on degenerate overlaps (e.g. parallel faces of two thin boxes) — only sees
+/// deep ones.
 #[derive(Debug, Clone, Copy)]
 pub enum Solid {
-    /// Capsule (segment ends in world coordinates; its pose is the identity).
+    /// Capsule (segment ends in world coordinates; its pose is the identity): a segment core
+    /// with the radius as margin.
     Capsule(Capsule),
-    /// Cylinder along its pose's y axis (parry's convention).
-    Cylinder(Cylinder),
-    /// Box.
-    Cuboid(Cuboid),
+    /// Box: `full` is the box; `core` the box shrunk by `margin` on every side (a box with
+    /// edges rounded by `margin`, [`box_margin`]).
+    Cuboid {
+        /// The whole box.
+        full: Cuboid,
+        /// The core.
+        core: Cuboid,
+        /// Rounding radius (m).
+        margin: f64,
+    },
+}
+
+/// Rounding of a box's edges for the narrow phase (m): three quarters of its smallest half
+/// extent, at most 2 cm (a finger 1.6 cm thick: 6 mm; the box: 2 cm) — well beyond the
+/// millimetre penetrations of the contacts, and small against the shapes.
+pub fn box_margin(half: &Vector3<f64>) -> f64 {
+    (0.75 * half.min()).min(0.02)
 }
 
 impl Solid {
     fn shape(&self) -> &dyn Shape {
         match self {
             Solid::Capsule(c) => c,
-            Solid::Cylinder(c) => c,
-            Solid::Cuboid(c) => c,
+            Solid::Cuboid { full, .. } => full,
         }
     }
 
-    fn support(&self) -> &dyn SupportMap {
+    /// The polyhedral core and the margin around it.
+    fn core(&self) -> (&dyn SupportMap, f64) {
         match self {
-            Solid::Capsule(c) => c,
-            Solid::Cylinder(c) => c,
-            Solid::Cuboid(c) => c,
+            Solid::Capsule(c) => (&c.segment, c.radius),
+            Solid::Cuboid { core, margin, .. } => (core, *margin),
+        }
+    }
+
+    fn cuboid(half: &Vector3<f64>) -> Solid {
+        let margin = box_margin(half);
+        Solid::Cuboid {
+            full: Cuboid::new(to_vec(half)),
+            core: Cuboid::new(to_vec(&half.add_scalar(-margin))),
+            margin,
         }
     }
 }
@@ -273,8 +297,8 @@ impl Epa {
         let mut e = Epa::default();
         let shapes = [
             Solid::Capsule(Capsule::new(Vector::ZERO, Vector::new(0.4, 0.1, 0.0), 0.05)),
-            Solid::Cylinder(Cylinder::new(0.01, 0.05)),
-            Solid::Cuboid(Cuboid::new(Vector::new(0.15, 0.2, 0.1))),
+            Solid::cuboid(&Vector3::new(0.045, 0.045, 0.01)),
+            Solid::cuboid(&Vector3::new(0.15, 0.2, 0.1)),
         ];
         for a in &shapes {
             for b in &shapes {
@@ -304,23 +328,44 @@ impl core::fmt::Debug for Epa {
     }
 }
 
-/// Contact of two convex shapes by parry's GJK and, when they overlap, its EPA (as
-/// `query::contact` does for support maps, with a kept EPA): (point on `a`, point on `b`,
-/// unit normal out of `a`, signed distance), world frame; `None` when apart.
+/// Contact of two convex shapes by parry's GJK on their polyhedral cores and, when the cores
+/// overlap, its EPA (what `query::contact` runs for support maps, with a kept EPA and the
+/// margins added after): (point on `a`, point on `b`, unit normal out of `a`, signed
+/// distance), world frame; `None` when apart.
 fn convex_contact(a: &Posed, b: &Posed, epa: &mut Epa) -> Option<(Vector, Vector, Vector, f64)> {
     let pos12 = a.pose.inv_mul(&b.pose);
-    let (g1, g2) = (a.solid.support(), b.solid.support());
+    let ((g1, r1), (g2, r2)) = (a.solid.core(), b.solid.core());
+    let margin = r1 + r2;
     let dir = pos12.translation.try_normalize().unwrap_or(Vector::X);
     let mut simplex = VoronoiSimplex::new();
     simplex.reset(CsoPoint::from_shapes(&pos12, g1, g2, dir));
-    if gjk::closest_points(&pos12, g1, g2, 0.0, true, &mut simplex) != GJKResult::Intersection {
+    // Points and normal in a's frame; the core distance (negative: core penetration).
+    let (p1, p2, n1, core_dist) =
+        match gjk::closest_points(&pos12, g1, g2, margin, true, &mut simplex) {
+            GJKResult::ClosestPoints(p1, p2, n1) => (p1, p2, n1, (p2 - p1).dot(n1)),
+            GJKResult::Intersection => {
+                // Cores overlap (a penetration deeper than the margins): EPA, or for two
+                // boxes, whose overlap EPA may find degenerate, parry's SAT.
+                if let (Solid::Cuboid { core: c1, .. }, Solid::Cuboid { core: c2, .. }) =
+                    (&a.solid, &b.solid)
+                {
+                    let c = query::details::contact_cuboid_cuboid(&pos12, c1, c2, 0.0)?;
+                    let p2 = pos12 * c.point2;
+                    (c.point1, p2, c.normal1, c.dist)
+                } else {
+                    let (p1, p2, n1) = epa.0.closest_points(&pos12, g1, g2, &simplex)?;
+                    (p1, p2, n1, (p2 - p1).dot(n1))
+                }
+            }
+            GJKResult::NoIntersection(_) | GJKResult::Proximity(_) => return None,
+        };
+    let dist = core_dist - margin;
+    if dist >= 0.0 {
         return None;
     }
-    let (p1, p2, n1) = epa.0.closest_points(&pos12, g1, g2, &simplex)?;
-    let dist = (p2 - p1).dot(n1);
     Some((
-        a.pose * p1,
-        a.pose * p2,
+        a.pose * (p1 + n1 * r1),
+        a.pose * (p2 - n1 * r2),
         a.pose.rotation * n1,
         dist,
     ))
@@ -353,7 +398,7 @@ impl Posed {
 
     /// A box of half extents `half` at `pose`.
     pub fn cuboid(half: &Vector3<f64>, pose: &Isometry3<f64>) -> Posed {
-        Posed::new(Solid::Cuboid(Cuboid::new(to_vec(half))), to_pose(pose))
+        Posed::new(Solid::cuboid(half), to_pose(pose))
     }
 }
 
@@ -384,15 +429,10 @@ impl ArmShapes {
             let b = if i + 1 < 6 { origins[i + 1] } else { last_end };
             Posed::capsule(&origins[i], &b, spec.link_radii_m[i])
         };
-        // parry's cylinder lies along y: turn it onto the tool z axis.
-        let wrist_pose = tool
-            * Isometry3::from_parts(
-                Vector3::from(spec.wrist_centre_m).into(),
-                UnitQuaternion::from_axis_angle(&Vector3::x_axis(), std::f64::consts::FRAC_PI_2),
-            );
-        let wrist = Posed::new(
-            Solid::Cylinder(Cylinder::new(spec.wrist_half_length_m, spec.wrist_radius_m)),
-            to_pose(&wrist_pose),
+        let c = spec.wrist_centre_m;
+        let wrist = Posed::cuboid(
+            &Vector3::from(spec.wrist_half_extents_m),
+            &(tool * Isometry3::translation(c[0], c[1], c[2])),
         );
         let h = Vector3::from(spec.finger_half_extents_m);
         let finger = |side: f64| {

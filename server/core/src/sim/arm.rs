@@ -50,8 +50,11 @@ pub(super) struct ArmTerms {
     /// Fault-adjusted cross-piston leakage per actuator (m³/s per Pa).
     pub(super) leak: [f64; N_ACT],
     /// Joint torques of a held panel item's load, Jᵀ·(F − h·K·J·q̇) (the linearly implicit
-    /// form; its h·JᵀCJ + h²·JᵀKJ and lumped mass are in H̃); `None` without one.
+    /// form; its h·JᵀCJ + h²·JᵀKJ and lumped mass are in H̃), and of the contacts; `None`
+    /// without either.
     pub(super) ext: Option<Vector6<f64>>,
+    /// H̃ itself (what `factor` factors).
+    pub(super) matrix: Matrix6<f64>,
 }
 
 /// Stage 1 (per arm): the jaw opens or closes at its rated speed (`cmd` ∈ [−1, 1], already
@@ -151,8 +154,8 @@ pub(super) fn operator_spools(
 /// [`dynamics::step_terms`]), the actuator linkages, and the factor of H̃ with the implicit
 /// damping and end stops. `work` holds the kinematics of the state's q; `h` is the sub-step;
 /// `load`: a held panel item's load on the jaw, linearly implicit (h·JᵀCJ + h²·JᵀKJ and the
-/// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side); `contact`: the
-/// arm's contacts, linearly implicit the same way (`contact.rs`).
+/// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side). The contacts
+/// come after, from this factor ([`add_contacts`]).
 pub(super) fn arm_terms(
     model: &Model,
     ap: &ArmParams,
@@ -161,7 +164,6 @@ pub(super) fn arm_terms(
     a: &ArmState,
     h: f64,
     load: Option<&ToolLoad>,
-    contact: Option<&ArmLoad>,
 ) -> ArmTerms {
     let rho = sp.environment.density_kgm3();
     let terms =
@@ -180,6 +182,7 @@ pub(super) fn arm_terms(
         bulk_modulus_pa: ap.faults.bulk_modulus_pa(hp),
         leak: core::array::from_fn(|j| ap.faults.leak_m3_s_pa(j)),
         ext: None,
+        matrix: Matrix6::zeros(),
     };
     // H̃ = H + h·(damping, end stops) on the diagonal.
     let mut m = terms.mass_matrix;
@@ -211,17 +214,26 @@ pub(super) fn arm_terms(
         let qd = Vector6::from(a.qd);
         out.ext = Some(j.transpose() * (l.wrench - l.stiffness * (j * qd) * h));
     }
-    if let Some(c) = contact {
-        // Contacts: their implicit terms (`contact.rs`).
-        m += c.matrix;
-        out.ext = Some(out.ext.unwrap_or_else(Vector6::zeros) + c.torque);
-    }
+    out.matrix = m;
     out.factor = Ldlt::factor(&m);
     if let (Some(f), true) = (&out.factor, a.holding) {
         // Only a holding arm enters the constraint solve.
         out.z = f.forward_columns(&work.jw.transpose());
     }
     out
+}
+
+/// Stage 5b (per arm in contact): the contacts' implicit terms into H̃ (`contact.rs`: their
+/// h·(c + h·k)·J_pᵀnnᵀJ_p and friction damping) and onto the right-hand side, and the factor
+/// (and Z, for a holding arm, whose tool Jacobian is `jw`) again.
+pub(super) fn add_contacts(t: &mut ArmTerms, load: &ArmLoad, jw: &Matrix6<f64>, holding: bool) {
+    t.matrix += load.matrix;
+    t.ext = Some(t.ext.unwrap_or_else(Vector6::zeros) + load.torque);
+    t.factor = Ldlt::factor(&t.matrix);
+    t.z = match (&t.factor, holding) {
+        (Some(f), true) => f.forward_columns(&jw.transpose()),
+        _ => Matrix6::zeros(),
+    };
 }
 
 /// How far `q` is past its limits (rad; negative below the lower one), 0 within them.

@@ -10,15 +10,20 @@
 //! # Integration (stable at the 1 ms step)
 //! The stiff terms are linearly implicit, like the joint end stops (`sim` module docs): with
 //! J_p the 3×6 linear Jacobian of the arm's contact point, the arm's H̃ gains
-//! h·(c + h·k)·J_pᵀnnᵀJ_p (and h·c_t·J_pᵀ(I − nnᵀ)J_p while sticking) and its right-hand side
-//! J_pᵀ·n·(k·δ − (c + h·k)·v_n) (and −c_t·J_pᵀv_t): one term in the arm's implicit system,
-//! unconditionally stable for any stiffness. The box side is linearly implicit in the box's
-//! own velocity through its mobility M̃⁻¹ (a small system over its contact rows,
-//! [`box_acceleration`]). Each body treats its partner's velocity as held over the step (a
-//! block-Jacobi split: arm and box, or the two arms); for each body alone the update is
-//! contractive, and the sum of two contractive corrections of the same gap is too
-//! (|1 − a − b| < 1 for a, b ∈ (0, 1)), so the pair stays stable. Geometry (points, normals,
-//! depths, Jacobians) is evaluated once per 1 ms step, like every configuration-dependent term.
+//! h·C·J_pᵀnnᵀJ_p (C = c + h·k; and h·c_t·J_pᵀ(I − nnᵀ)J_p while sticking) and its right-hand
+//! side J_pᵀ·n·(k·δ − C·v_n) (and −c_t·J_pᵀv_t): one term in the arm's implicit system,
+//! unconditionally stable for any stiffness against a fixed partner (seabed, panel, vehicle).
+//! A moving partner (the box, the other arm) is integrated in its own step, its velocity held
+//! in the arm's: two bodies that each close the whole gap as if the other stood still would
+//! together overshoot it (twice, for two light wrists: an oscillation that grows). So each
+//! side takes its share: with w_a, w_b the two bodies' mobilities along n at the contact
+//! (nᵀJ_pH̃⁻¹J_pᵀn for an arm, gᵀM̃⁻¹g for the box, g = [n; r × n]), the exact implicit
+//! force of the pair is f = (k·δ − C·v_n)/(1 + h·C·(w_a + w_b)), and an arm that scales its
+//! k·δ and C by 1/(1 + h·C·w_b) and then solves alone reproduces it; the box's rows
+//! ([`box_acceleration`]) add the arm's h·w_a to their compliance, the same thing. Together
+//! the two corrections of the gap sum to h·C·(w_a + w_b)/(1 + h·C·(w_a + w_b)) < 1: stable.
+//! Geometry (points, normals, depths, Jacobians, mobilities) is evaluated once per 1 ms
+//! step, like every configuration-dependent term.
 //!
 //! # Exclusions (grasps are not collisions)
 //! A jaw holding the box skips the box and its handles; a jaw (wrist plate and fingers) whose
@@ -30,6 +35,7 @@
 
 use nalgebra::{Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, SMatrix, SVector, Vector3, Vector6};
 
+use super::arm::ArmTerms;
 use super::object::ObjectTerms;
 use super::Simulation;
 use crate::collision::{
@@ -112,6 +118,11 @@ struct Point {
     stick: bool,
     /// Sliding friction force on the arm (N, world; zero while sticking).
     slide_force: Vector3<f64>,
+    /// Share of the normal law this arm takes, 1/(1 + h·(c + h·k)·w) with w the partner's
+    /// mobility at the contact (0 for the seabed, panel and vehicle; see the module docs).
+    share_n: f64,
+    /// The same for the sticking friction, 1/(1 + h·c_t·w).
+    share_t: f64,
 }
 
 /// One arm's contact points of this step.
@@ -150,20 +161,21 @@ pub(super) struct ArmLoad {
     pub(super) torque: Vector6<f64>,
 }
 
-/// One row of the box's implicit solve: a force on the box along `dir` at `lever` from its
-/// COM, f = e − C·s⁺ with s the box point's velocity along `dir` relative to the arm's point.
+/// One row of the box's implicit solve: a force on the box along a direction d at a lever
+/// r from its COM, f = e − C·s⁺ with s the box point's velocity along d relative to the
+/// arm's point, the arm's own response included through its mobility w_arm along d.
 #[derive(Debug, Clone, Copy)]
 struct BoxRow {
     /// Unit wrench [d; r × d].
     w: Vector6<f64>,
     /// M̃⁻¹·w.
     mw: Vector6<f64>,
-    /// The arm point's velocity along `dir` (held).
+    /// The arm point's velocity along d (held).
     v_arm: f64,
-    /// Spring part e (N): k·δ on a normal row, 0 on a tangent.
-    e: f64,
-    /// Velocity coefficient C (N·s/m).
-    c: f64,
+    /// e/C (m/s): k·δ/(c + h·k) on a normal row, 0 on a tangent.
+    e_over_c: f64,
+    /// 1/C + h·w_arm (s/kg).
+    compliance: f64,
 }
 
 /// Everything the contacts need over the step's sub-steps.
@@ -282,6 +294,19 @@ fn point_jacobian(
         j.set_column(k, &z.cross(&(p - f.translation.vector)));
     }
     j
+}
+
+/// An arm's mobility along `d` at a point with linear Jacobian `jv`: dᵀJ_p·H̃⁻¹·J_pᵀd (1/kg;
+/// 0 if its H̃ did not factor: then it does not move).
+fn arm_mobility(t: &ArmTerms, jv: &Matrix3x6<f64>, d: &Vector3<f64>) -> f64 {
+    let b = jv.transpose() * d;
+    t.factor.as_ref().map_or(0.0, |f| b.dot(&f.solve(&b)))
+}
+
+/// The unit wrench [d; r × d] of a force along `d` at lever `r`.
+fn unit_wrench(d: &Vector3<f64>, r: &Vector3<f64>) -> Vector6<f64> {
+    let m = r.cross(d);
+    Vector6::new(d.x, d.y, d.z, m.x, m.y, m.z)
 }
 
 fn part_link(part: ArmPart) -> usize {
@@ -415,6 +440,7 @@ impl Simulation {
         &self,
         h: f64,
         object: &ObjectTerms,
+        arms: &[ArmTerms; 2],
         epa: &mut Epa,
     ) -> ContactTerms {
         let mut out = ContactTerms::none();
@@ -475,20 +501,28 @@ impl Simulation {
             for t in touches[i].iter().flatten() {
                 let jv = point_jacobian(frames, part_link(t.part), &t.point_arm);
                 let v_arm = jv * qd;
-                let v_partner = match t.partner {
-                    Partner::Object => box_velocity(&t.point_other),
+                let n = t.normal;
+                // The partner's point velocity (held over the step) and its mobility along n.
+                let (v_partner, w_partner) = match t.partner {
+                    Partner::Object => {
+                        let g = unit_wrench(&-n, &(t.point_other - com));
+                        (box_velocity(&t.point_other), g.dot(&object.mobility_times(&g)))
+                    }
                     Partner::OtherArm => {
                         let f = &self.work[other].kin.joint_frames;
                         let link = t.other_part.map_or(5, part_link);
                         let jo = point_jacobian(f, link, &t.point_other);
-                        jo * Vector6::from(self.state.arms[other].qd)
+                        let v = jo * Vector6::from(self.state.arms[other].qd);
+                        (v, arm_mobility(&arms[other], &jo, &n))
                     }
-                    _ => Vector3::zeros(),
+                    _ => (Vector3::zeros(), 0.0),
                 };
-                let n = t.normal;
                 let vrel = v_arm - v_partner;
                 let vn = n.dot(&vrel);
-                let fn0 = k * t.depth_m - c * vn;
+                let cn = c + h * k;
+                let share_n = 1.0 / (1.0 + h * cn * w_partner);
+                let share_t = 1.0 / (1.0 + h * ct * w_partner);
+                let fn0 = share_n * (k * t.depth_m - c * vn);
                 let mu = if t.partner == Partner::Seabed {
                     cp.seabed_friction
                 } else {
@@ -504,17 +538,19 @@ impl Simulation {
                     fn0: fn0.max(0.0),
                     stick: true,
                     slide_force: Vector3::zeros(),
+                    share_n,
+                    share_t,
                 };
                 if p.pressing {
-                    let cn = c + h * k;
                     let jn = jv.transpose() * n;
-                    matrix += jn * jn.transpose() * (h * cn);
-                    torque += jn * (k * t.depth_m - cn * vn);
+                    matrix += jn * jn.transpose() * (h * cn * share_n);
+                    torque += jn * (share_n * (k * t.depth_m - cn * vn));
                     let vt = vrel - n * vn;
-                    if ct * vt.norm() <= mu * p.fn0 {
+                    let ctt = ct * share_t;
+                    if ctt * vt.norm() <= mu * p.fn0 {
                         let pt = Matrix3::identity() - n * n.transpose();
-                        matrix += jv.transpose() * pt * jv * (h * ct);
-                        torque -= jv.transpose() * vt * ct;
+                        matrix += jv.transpose() * pt * jv * (h * ctt);
+                        torque -= jv.transpose() * vt * ctt;
                     } else {
                         p.stick = false;
                         p.slide_force = -vt.normalize() * (mu * p.fn0);
@@ -532,20 +568,18 @@ impl Simulation {
         }
         // The box's rows: normal and (sticking) tangents, forces on the box = − the arm's.
         let mut r = 0;
-        for (_, p) in box_points.iter().flatten() {
+        for (i, p) in box_points.iter().flatten() {
             let t = &p.touch;
             let lever = t.point_other - com;
             let n = -t.normal;
             let mut row = |d: Vector3<f64>, e: f64, cc: f64| {
-                let w = Vector6::new(d.x, d.y, d.z, 0.0, 0.0, 0.0);
-                let m = lever.cross(&d);
-                let w = Vector6::new(w[0], w[1], w[2], m.x, m.y, m.z);
+                let w = unit_wrench(&d, &lever);
                 out.box_rows[r] = Some(BoxRow {
                     w,
                     mw: object.mobility_times(&w),
                     v_arm: d.dot(&p.v_arm),
-                    e,
-                    c: cc,
+                    e_over_c: e / cc,
+                    compliance: 1.0 / cc + h * arm_mobility(&arms[*i], &p.jv, &d),
                 });
                 r += 1;
             };
@@ -556,8 +590,7 @@ impl Simulation {
                 row(t2, 0.0, ct);
             } else {
                 let f = -p.slide_force;
-                let m = lever.cross(&f);
-                out.box_slide += Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z);
+                out.box_slide += unit_wrench(&f, &lever);
             }
         }
         out
@@ -582,11 +615,13 @@ impl Simulation {
                 let vrel = p.jv * qd - p.v_partner;
                 let vn = n.dot(&vrel);
                 let (fnorm, ffric) = if p.pressing {
-                    let f = (cp.stiffness_n_m * t.depth_m
-                        - (cp.damping_n_s_m + h * cp.stiffness_n_m) * vn)
+                    let f = (p.share_n
+                        * (cp.stiffness_n_m * t.depth_m
+                            - (cp.damping_n_s_m + h * cp.stiffness_n_m) * vn))
                         .max(0.0);
                     let ff = if p.stick {
-                        (cp.stick_damping_n_s_m * (vrel - n * vn).norm()).min(p.mu * f)
+                        (p.share_t * cp.stick_damping_n_s_m * (vrel - n * vn).norm())
+                            .min(p.mu * f)
                     } else {
                         p.slide_force.norm()
                     };
@@ -676,8 +711,9 @@ fn push_deepest(list: &mut [Option<(usize, Point)>; MAX_BOX_POINTS], p: (usize, 
 
 /// Sub-step: the box's acceleration `acc` (its free acceleration on entry) with the arms'
 /// contact forces, linearly implicit in the box's velocity (`twist`, at the sub-step's
-/// start): with rows f_r = e_r − C_r·s_r⁺ and s⁺ = s + h·Wᵀ·acc,
-/// (C⁻¹ + h·WᵀM̃⁻¹W)·f = C⁻¹e − s − h·Wᵀ·acc_free (SPD), then acc += M̃⁻¹W·f.
+/// start): with rows f_r = e_r − C_r·s_r⁺ and s⁺ = s + h·Wᵀ·acc (+ the arm's own response
+/// h·w_arm·f along the row), (C⁻¹ + h·w_arm + h·WᵀM̃⁻¹W)·f = C⁻¹e − s − h·Wᵀ·acc_free (SPD),
+/// then acc += M̃⁻¹W·f.
 pub(super) fn box_acceleration(
     terms: &ContactTerms,
     object: &ObjectTerms,
@@ -699,9 +735,9 @@ pub(super) fn box_acceleration(
             let Some(y) = col else { continue };
             a[(r, q)] = h * x.w.dot(&y.mw);
         }
-        a[(r, r)] += 1.0 / x.c;
+        a[(r, r)] += x.compliance;
         let s = x.w.dot(twist) - x.v_arm;
-        b[r] = x.e / x.c - s - h * x.w.dot(acc);
+        b[r] = x.e_over_c - s - h * x.w.dot(acc);
     }
     let Some(f) = Ldlt::factor(&a) else { return };
     let f = f.solve(&b);

@@ -10,8 +10,9 @@
 //! 4. arm terms, per arm: H, C q̇ + G, J̇q̇, linkage levers and the factor of H̃, with the
 //!    panel load linearly implicit ([`arm::arm_terms`]);
 //! 5. object terms: inertia, weight, implicit seabed damping ([`ObjectTerms::new`]); then
-//!    the contacts of links and jaws with everything, as implicit terms for each arm's H̃
-//!    (stage 4 takes them) and rows for the box ([`Simulation::contact_terms`]);
+//!    the contacts of links and jaws with everything ([`Simulation::contact_terms`], from
+//!    the arms' and the object's mobilities), as implicit terms into each arm's H̃
+//!    ([`arm::add_contacts`]) and rows for the box;
 //! 6. the grasp constraint system ([`Constraint::new`]) with each holding jaw's grip limits
 //!    ([`JawGrip::new`]);
 //! 7. the sub-steps ([`Simulation::substep`]): chamber pressures, free accelerations,
@@ -170,8 +171,7 @@ impl Simulation {
         let st = &self.state;
         let held = st.arms.iter().any(|a| a.holding);
         let object = ObjectTerms::new(&self.params.object, sp, &st.object, held, h);
-        let contacts = self.contact_terms(h, &object, epa);
-        let arms = core::array::from_fn(|i| {
+        let mut arms: [ArmTerms; 2] = core::array::from_fn(|i| {
             arm::arm_terms(
                 &self.models[i],
                 &self.params.arms[i],
@@ -180,9 +180,14 @@ impl Simulation {
                 &st.arms[i],
                 h,
                 loads[i].as_ref(),
-                contacts.load[i].as_ref(),
             )
         });
+        let contacts = self.contact_terms(h, &object, &arms, epa);
+        for (i, t) in arms.iter_mut().enumerate() {
+            if let Some(l) = &contacts.load[i] {
+                arm::add_contacts(t, l, &self.work[i].jw, st.arms[i].holding);
+            }
+        }
         let grip = core::array::from_fn(|i| {
             st.arms[i]
                 .holding

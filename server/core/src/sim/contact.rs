@@ -5,13 +5,14 @@
 //! Each contact point is a compliant spring–damper along the normal with Coulomb friction
 //! across it ([`ContactParams`]): F_n = k·δ − c·v_n (δ the penetration, v_n the separation
 //! speed; never pulling), and a tangential force −c_t·v_t while that stays within μ·F_n
-//! (sticking), else μ·F_n against the sliding direction (sliding, kinetic).
+//! (sticking), else a damper −(μ·F_n/|v_t|)·v_t of magnitude μ·F_n against the sliding
+//! (kinetic), both implicit.
 //!
 //! # Integration (stable at the 1 ms step)
 //! The stiff terms are linearly implicit, like the joint end stops (`sim` module docs): with
 //! J_p the 3×6 linear Jacobian of the arm's contact point, the arm's H̃ gains
-//! h·C·J_pᵀnnᵀJ_p (C = c + h·k; and h·c_t·J_pᵀ(I − nnᵀ)J_p while sticking) and its right-hand
-//! side J_pᵀ·n·(k·δ − C·v_n) (and −c_t·J_pᵀv_t): one term in the arm's implicit system,
+//! h·C·J_pᵀnnᵀJ_p (C = c + h·k; and h·c_f·J_pᵀ(I − nnᵀ)J_p for the friction's damper c_f)
+//! and its right-hand side J_pᵀ·n·(k·δ − C·v_n) (and −c_f·J_pᵀv_t): one term in the arm's implicit system,
 //! unconditionally stable for any stiffness against a fixed partner (seabed, panel, vehicle).
 //! A moving partner (the box, the other arm) is integrated in its own step, its velocity held
 //! in the arm's: two bodies that each close the whole gap as if the other stood still would
@@ -114,10 +115,13 @@ struct Point {
     pressing: bool,
     /// Normal force at the start of the step (N), the sliding friction's magnitude.
     fn0: f64,
-    /// Friction branch: sticking (implicit viscous) or sliding (explicit μ·F_n).
+    /// Friction branch: sticking (c_t·|v_t| within μ·F_n) or sliding.
     stick: bool,
-    /// Sliding friction force on the arm (N, world; zero while sticking).
-    slide_force: Vector3<f64>,
+    /// The friction's implicit damping coefficient for this arm (N·s/m): its share of c_t
+    /// while sticking, μ·F_n/|v_t| while sliding (so the force is at most μ·F_n and, being
+    /// implicit, never reverses the sliding; an explicit μ·F_n on the light wrist rotate
+    /// overshot and grew).
+    c_fric: f64,
     /// Share of the normal law this arm takes, 1/(1 + h·(c + h·k)·w) with w the partner's
     /// mobility at the contact (0 for the seabed, panel and vehicle; see the module docs).
     share_n: f64,
@@ -184,10 +188,8 @@ pub(super) struct ContactTerms {
     arms: [ArmPoints; 2],
     /// Per arm, the implicit terms (`None`: no contact).
     pub(super) load: [Option<ArmLoad>; 2],
-    /// The box's rows, `rows` of them.
+    /// The box's rows.
     box_rows: [Option<BoxRow>; BOX_ROWS],
-    /// Explicit sliding-friction wrench on the box (about its COM).
-    box_slide: Vector6<f64>,
 }
 
 impl ContactTerms {
@@ -199,7 +201,6 @@ impl ContactTerms {
             }; 2],
             load: [None; 2],
             box_rows: [None; BOX_ROWS],
-            box_slide: Vector6::zeros(),
         }
     }
 }
@@ -392,7 +393,7 @@ impl Simulation {
         w
     }
 
-    /// Arm `i`'s collision shapes at the current state (`None` without a collision spec).
+    /// Arm `i`'s collision shapes (of `spec`) at the current state.
     fn arm_shapes(&self, i: usize, spec: &CollisionSpec) -> ArmShapes {
         let w = &self.work[i];
         let origins = core::array::from_fn(|k| w.kin.joint_frames[k].translation.vector);
@@ -537,7 +538,7 @@ impl Simulation {
                     pressing: fn0 > 0.0,
                     fn0: fn0.max(0.0),
                     stick: true,
-                    slide_force: Vector3::zeros(),
+                    c_fric: 0.0,
                     share_n,
                     share_t,
                 };
@@ -545,17 +546,18 @@ impl Simulation {
                     let jn = jv.transpose() * n;
                     matrix += jn * jn.transpose() * (h * cn * share_n);
                     torque += jn * (share_n * (k * t.depth_m - cn * vn));
+                    // Coulomb friction as an implicit damper capped at μ·F_n.
                     let vt = vrel - n * vn;
                     let ctt = ct * share_t;
-                    if ctt * vt.norm() <= mu * p.fn0 {
-                        let pt = Matrix3::identity() - n * n.transpose();
-                        matrix += jv.transpose() * pt * jv * (h * ctt);
-                        torque -= jv.transpose() * vt * ctt;
+                    p.stick = ctt * vt.norm() <= mu * p.fn0;
+                    p.c_fric = if p.stick {
+                        ctt
                     } else {
-                        p.stick = false;
-                        p.slide_force = -vt.normalize() * (mu * p.fn0);
-                        torque += jv.transpose() * p.slide_force;
-                    }
+                        mu * p.fn0 / vt.norm()
+                    };
+                    let pt = Matrix3::identity() - n * n.transpose();
+                    matrix += jv.transpose() * pt * jv * (h * p.c_fric);
+                    torque -= jv.transpose() * vt * p.c_fric;
                 }
                 if t.partner == Partner::Object && p.pressing {
                     push_deepest(&mut box_points, (i, p));
@@ -584,13 +586,13 @@ impl Simulation {
                 r += 1;
             };
             row(n, k * t.depth_m, c + h * k);
-            if p.stick {
+            // The friction's damper, undoing the arm's share (the rows add the arm's own
+            // mobility instead).
+            let cf = p.c_fric / p.share_t;
+            if cf > 0.0 {
                 let (t1, t2) = tangents(&n);
-                row(t1, 0.0, ct);
-                row(t2, 0.0, ct);
-            } else {
-                let f = -p.slide_force;
-                out.box_slide += unit_wrench(&f, &lever);
+                row(t1, 0.0, cf);
+                row(t2, 0.0, cf);
             }
         }
         out
@@ -619,12 +621,7 @@ impl Simulation {
                         * (cp.stiffness_n_m * t.depth_m
                             - (cp.damping_n_s_m + h * cp.stiffness_n_m) * vn))
                         .max(0.0);
-                    let ff = if p.stick {
-                        (p.share_t * cp.stick_damping_n_s_m * (vrel - n * vn).norm())
-                            .min(p.mu * f)
-                    } else {
-                        p.slide_force.norm()
-                    };
+                    let ff = (p.c_fric * (vrel - n * vn).norm()).min(p.mu * f);
                     (f, ff)
                 } else {
                     (0.0, 0.0)
@@ -716,14 +713,10 @@ fn push_deepest(list: &mut [Option<(usize, Point)>; MAX_BOX_POINTS], p: (usize, 
 /// then acc += M̃⁻¹W·f.
 pub(super) fn box_acceleration(
     terms: &ContactTerms,
-    object: &ObjectTerms,
     twist: &Vector6<f64>,
     acc: &mut Vector6<f64>,
     h: f64,
 ) {
-    if terms.box_slide != Vector6::zeros() {
-        *acc += object.mobility_times(&terms.box_slide);
-    }
     if terms.box_rows[0].is_none() {
         return;
     }

@@ -25,7 +25,10 @@
 //!    treated implicitly through the object's mass matrix, M̃ = M_o + h·C
 //!    ([`crate::grasp::seabed_contact`]), because a box touching on one corner has an effective mass
 //!    of a few kg there and an explicit 2·10⁴ N·s/m dashpot would inject energy; the corner
-//!    springs stay explicit (k·h²/m_eff ≈ 0.3).
+//!    springs stay explicit (k·h²/m_eff ≈ 0.3);
+//! 6. contacts of links and jaws (`contact.rs`): penalty spring–dampers with Coulomb
+//!    friction, linearly implicit in the same (H + hD + h²K) matrix of each arm (and in the
+//!    box's M̃), each side of a moving pair taking its share of the law.
 //!
 //! Configuration-dependent quantities (H, C q̇ + G, J, J̇q̇, the constraint matrix, the seabed
 //! damping) are computed
@@ -38,10 +41,12 @@
 //!   force, not a chamber model; its grip on a handle is rigid up to the friction limits of
 //!   the clamp force and slips beyond them (`constraint.rs`, "Finite grip"), or rigid
 //!   whatever the load with [`SimParams::rigid_grasp`].
-//! * Contact is jaw–handle only (capture radius) and box–seabed (corner penalty springs with
-//!   friction); links do not collide with the object, the seabed or each other. With a panel
-//!   ([`SimParams::panel`]) the jaws also take its valve T-bar and hot stab, whose loads act
-//!   on the arms as JᵀF (see [`crate::panel`]); links do not collide with the panel either.
+//! * Grasping is jaw–handle (capture radius); the box rests on the seabed on corner penalty
+//!   springs with friction. With a panel ([`SimParams::panel`]) the jaws also take its valve
+//!   T-bar and hot stab, whose loads act on the arms as JᵀF (see [`crate::panel`]). Links
+//!   and jaws collide with the seabed, the box, the panel, the vehicle and the other arm
+//!   (`contact.rs`, [`crate::collision`]), not with their own arm; the box does not collide
+//!   with the panel or the vehicle.
 //! * Valves are ideal critically lapped spools with instantaneous response (Lim eq. 3.51);
 //!   no valve leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
 //! * Water ([`StepParams::environment`], [`water`]): buoyancy from the links' mean density and

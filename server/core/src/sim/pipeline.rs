@@ -225,7 +225,7 @@ impl Simulation {
         let o = &self.state.object;
         let (mut acc_o, seabed_normal_n) =
             s.object.free_acceleration(&self.params.object, o, first);
-        contact::box_acceleration(&s.contacts, &s.object, &object::twist(o), &mut acc_o, h);
+        contact::box_acceleration(&s.contacts, &object::twist(o), &mut acc_o, h);
         let arms = &self.state.arms;
         (out.contact, out.grip) = s.constraint.apply(
             [&s.arms[0], &s.arms[1]],

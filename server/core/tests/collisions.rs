@@ -108,13 +108,19 @@ fn full_stick_into_the_seabed_stalls_on_it_and_the_pressures_show_it() {
                 dp_free / 1e6,
                 dp_stall / 1e6
             );
-            assert!(r.max_depth_m < MAX_DEPTH_M, "joint {j}: {} m", r.max_depth_m);
+            assert!(
+                r.max_depth_m < MAX_DEPTH_M,
+                "joint {j}: {} m",
+                r.max_depth_m
+            );
             let st = c.strongest.expect("resting on the seabed");
             assert_eq!(st.partner, Partner::Seabed);
             assert!(st.normal_force_n > 100.0, "{st:?}");
             let strike = c.last_strike.expect("a strike");
             assert_eq!(strike.partner, Partner::Seabed);
-            assert!(strike.impact_speed_m_s > 0.02 && strike.peak_force_n > st.normal_force_n * 0.5);
+            assert!(
+                strike.impact_speed_m_s > 0.02 && strike.peak_force_n > st.normal_force_n * 0.5
+            );
             // Stalled at full stick, the valve connects the driving side to supply and the
             // other to tank: the pressure difference across the actuator approaches the
             // supply pressure (orifice law with no flow), far from its free-motion value.
@@ -238,7 +244,10 @@ fn the_box_on_the_seabed_carries_its_wet_weight_and_a_dropped_box_settles() {
     let op = s.params().object;
     let wet = (op.mass_kg - 1025.0 * op.size_m.x * op.size_m.y * op.size_m.z) * 9.81;
     let f = s.object().seabed_force_n;
-    assert!((f - wet).abs() < 0.01 * wet, "seabed carries {f} N of {wet} N");
+    assert!(
+        (f - wet).abs() < 0.01 * wet,
+        "seabed carries {f} N of {wet} N"
+    );
     // Dropped from 0.3 m (in air and water): after 3 s at rest, no motion and a steady
     // seabed force over the last second (no jitter).
     let m = common::builtin("magnum");
@@ -263,7 +272,10 @@ fn the_box_on_the_seabed_carries_its_wet_weight_and_a_dropped_box_settles() {
         }
         println!("dropped (water {env}): seabed force {lo:.2}..{hi:.2} N, speed ≤ {vmax:.2e} m/s");
         assert!(vmax < 1e-4, "still moving: {vmax} m/s");
-        assert!(lo > 0.99 * weight && hi < 1.01 * weight, "{lo}..{hi} N of {weight} N");
+        assert!(
+            lo > 0.99 * weight && hi < 1.01 * weight,
+            "{lo}..{hi} N of {weight} N"
+        );
     }
 }
 
@@ -291,7 +303,13 @@ fn start_postures_and_the_case_studies_grasp_approach_touch_nothing() {
                 let input = sc.input_at(&s, seg, s.time_s());
                 s.step(&input);
                 for c in &s.contacts().arms {
-                    assert_eq!(c.points, 0, "{name} stage {} at {} s: {c:?}", seg.stage, s.time_s());
+                    assert_eq!(
+                        c.points,
+                        0,
+                        "{name} stage {} at {} s: {c:?}",
+                        seg.stage,
+                        s.time_s()
+                    );
                 }
                 grasped |= s.arm(Arm::Left).holding;
             }
@@ -351,7 +369,9 @@ fn straight_arm(z: f64, y: f64, r: f64) -> ArmShapes {
 fn touches(arm: &ArmShapes, world: &World) -> Vec<Touch> {
     let mut out = Vec::new();
     let mut epa = Epa::warm();
-    world_touches(arm, world, &Exclusions::default(), &mut epa, |t| out.push(t));
+    world_touches(arm, world, &Exclusions::default(), &mut epa, |t| {
+        out.push(t)
+    });
     out
 }
 
@@ -409,4 +429,3 @@ fn narrow_phase_agrees_with_closed_form_geometry() {
         assert_eq!(ta.partner, Partner::OtherArm);
     }
 }
-

@@ -90,7 +90,10 @@ impl CollisionSpec {
             }
         }
         let points = self.last_link_end_m.iter().chain(&self.wrist_centre_m);
-        if points.into_iter().any(|v| !(v.is_finite() && v.abs() <= 10.0)) {
+        if points
+            .into_iter()
+            .any(|v| !(v.is_finite() && v.abs() <= 10.0))
+        {
             return bad("points must be finite and within ±10 m");
         }
         Ok(())
@@ -390,10 +393,14 @@ impl Posed {
 
     /// A capsule between world points `a` and `b`.
     pub fn capsule(a: &Vector3<f64>, b: &Vector3<f64>, r: f64) -> Posed {
-        Posed::new(
-            Solid::Capsule(Capsule::new(to_vec(a), to_vec(b), r)),
-            Pose::IDENTITY,
-        )
+        let (a, b) = (to_vec(a), to_vec(b));
+        let m = Vector::splat(r);
+        Posed {
+            solid: Solid::Capsule(Capsule::new(a, b, r)),
+            pose: Pose::IDENTITY,
+            // Directly: parry's `compute_aabb` would first copy the capsule through the pose.
+            aabb: Aabb::new(a.min(b) - m, a.max(b) + m),
+        }
     }
 
     /// A box of half extents `half` at `pose`.
@@ -454,6 +461,15 @@ impl ArmShapes {
             .iter()
             .fold(parts[0].aabb, |acc, p| acc.merged(&p.aabb));
         ArmShapes { parts, aabb }
+    }
+
+    /// Placeholder shapes (all at the origin), to be overwritten.
+    pub fn empty() -> ArmShapes {
+        let p = Posed::capsule(&Vector3::zeros(), &Vector3::zeros(), 0.0);
+        ArmShapes {
+            parts: [p; ARM_PARTS],
+            aabb: p.aabb,
+        }
     }
 
     /// What part index `k` is.

@@ -34,11 +34,13 @@
 //! arm's first two links skip its own pedestal.
 //! Links of the same arm do not collide with each other.
 
-use nalgebra::{Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, SMatrix, SVector, Vector3, Vector6};
+use nalgebra::{
+    Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, SMatrix, SVector, Vector3, Vector6,
+};
 
+use super::Simulation;
 use super::arm::ArmTerms;
 use super::object::ObjectTerms;
-use super::Simulation;
 use crate::collision::{
     ArmPart, ArmShapes, CollisionSpec, Epa, Exclusions, Item, Partner, Posed, Touch, World,
     WorldGeometry, arm_touches, world_touches,
@@ -182,25 +184,59 @@ struct BoxRow {
     compliance: f64,
 }
 
-/// Everything the contacts need over the step's sub-steps.
+/// Everything the contacts need over the step's sub-steps and for the report.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct ContactTerms {
     arms: [ArmPoints; 2],
-    /// Per arm, the implicit terms (`None`: no contact).
-    pub(super) load: [Option<ArmLoad>; 2],
     /// The box's rows.
     box_rows: [Option<BoxRow>; BOX_ROWS],
+    /// Anything set since the last clear.
+    dirty: bool,
 }
 
 impl ContactTerms {
     /// No contacts.
-    pub(super) fn none() -> ContactTerms {
+    fn none() -> ContactTerms {
         ContactTerms {
             arms: [ArmPoints {
                 points: [None; MAX_POINTS],
             }; 2],
-            load: [None; 2],
             box_rows: [None; BOX_ROWS],
+            dirty: false,
+        }
+    }
+
+    fn clear(&mut self) {
+        if self.dirty {
+            *self = ContactTerms::none();
+        }
+    }
+}
+
+/// The contact stage's workspace, kept in the simulation (boxed, so the step moves a
+/// pointer, not the ~10 kB of points): the narrow phase's kept EPA, the touches found and
+/// the terms formed from them.
+#[derive(Debug, Clone)]
+pub(super) struct ContactWork {
+    epa: Epa,
+    /// Each arm's shapes (meaningful for an arm with a collision spec).
+    shapes: [ArmShapes; 2],
+    /// The world's obstacles.
+    world: World,
+    touches: [[Option<Touch>; MAX_POINTS]; 2],
+    /// The terms of the current step.
+    pub(super) terms: ContactTerms,
+}
+
+impl ContactWork {
+    /// A workspace with a warm EPA and nothing found.
+    pub(super) fn new() -> ContactWork {
+        ContactWork {
+            epa: Epa::warm(),
+            shapes: [ArmShapes::empty(); 2],
+            world: World::new(0.0),
+            touches: [[None; MAX_POINTS]; 2],
+            terms: ContactTerms::none(),
         }
     }
 }
@@ -437,26 +473,41 @@ impl Simulation {
 
     /// The contact stage at the start of a step (kinematics current): finds every contact and
     /// forms each arm's implicit terms and the box's rows, for sub-steps of length `h`.
+    /// Returns each arm's implicit terms (`None`: no contact); the rest goes into `work`.
     pub(super) fn contact_terms(
         &self,
         h: f64,
         object: &ObjectTerms,
         arms: &[ArmTerms; 2],
-        epa: &mut Epa,
-    ) -> ContactTerms {
-        let mut out = ContactTerms::none();
+        work: &mut ContactWork,
+    ) -> [Option<ArmLoad>; 2] {
+        let mut load = [None; 2];
+        work.terms.clear();
         let cp = &self.params.contact;
         if !cp.enabled {
-            return out;
+            return load;
         }
         let specs = [
             self.models[0].spec.collision.as_ref(),
             self.models[1].spec.collision.as_ref(),
         ];
-        let shapes: [Option<ArmShapes>; 2] =
-            core::array::from_fn(|i| specs[i].map(|s| self.arm_shapes(i, s)));
-        let world = self.collision_world();
-        let mut touches: [[Option<Touch>; MAX_POINTS]; 2] = [[None; MAX_POINTS]; 2];
+        let ContactWork {
+            epa,
+            touches,
+            terms: out,
+            shapes,
+            world,
+        } = work;
+        // Written in place (each arm's shapes and the world are ~2 kB).
+        for (i, (sh, sp)) in shapes.iter_mut().zip(specs).enumerate() {
+            if let Some(sp) = sp {
+                *sh = self.arm_shapes(i, sp);
+            }
+        }
+        *world = self.collision_world();
+        if touches.iter().flatten().any(Option::is_some) {
+            *touches = [[None; MAX_POINTS]; 2];
+        }
         let keep = |list: &mut [Option<Touch>; MAX_POINTS], t: Touch| {
             if let Some(s) = list.iter_mut().find(|s| s.is_none()) {
                 *s = Some(t);
@@ -473,21 +524,22 @@ impl Simulation {
             }
         };
         for i in 0..2 {
-            if let Some(s) = &shapes[i] {
+            if specs[i].is_some() {
                 let ex = self.exclusions(i);
-                world_touches(s, &world, &ex, epa, |t| keep(&mut touches[i], t));
+                world_touches(&shapes[i], world, &ex, epa, |t| keep(&mut touches[i], t));
             }
         }
-        if let (Some(a), Some(b)) = (&shapes[0], &shapes[1]) {
-            let [t0, t1] = &mut touches;
+        if let ([a, b], true) = (&*shapes, specs.iter().all(Option::is_some)) {
+            let [t0, t1] = touches;
             arm_touches(a, b, epa, |ta, tb| {
                 keep(t0, ta);
                 keep(t1, tb);
             });
         }
         if touches.iter().all(|l| l.iter().all(Option::is_none)) {
-            return out;
+            return load;
         }
+        out.dirty = true;
         let o = &self.state.object;
         let com = o.pose.translation.vector;
         let box_velocity = |p: &Vector3<f64>| o.velocity + o.angular_velocity.cross(&(p - com));
@@ -507,7 +559,10 @@ impl Simulation {
                 let (v_partner, w_partner) = match t.partner {
                     Partner::Object => {
                         let g = unit_wrench(&-n, &(t.point_other - com));
-                        (box_velocity(&t.point_other), g.dot(&object.mobility_times(&g)))
+                        (
+                            box_velocity(&t.point_other),
+                            g.dot(&object.mobility_times(&g)),
+                        )
                     }
                     Partner::OtherArm => {
                         let f = &self.work[other].kin.joint_frames;
@@ -550,11 +605,7 @@ impl Simulation {
                     let vt = vrel - n * vn;
                     let ctt = ct * share_t;
                     p.stick = ctt * vt.norm() <= mu * p.fn0;
-                    p.c_fric = if p.stick {
-                        ctt
-                    } else {
-                        mu * p.fn0 / vt.norm()
-                    };
+                    p.c_fric = if p.stick { ctt } else { mu * p.fn0 / vt.norm() };
                     let pt = Matrix3::identity() - n * n.transpose();
                     matrix += jv.transpose() * pt * jv * (h * p.c_fric);
                     torque -= jv.transpose() * vt * p.c_fric;
@@ -565,7 +616,7 @@ impl Simulation {
                 out.arms[i].push(p);
             }
             if out.arms[i].iter().next().is_some() {
-                out.load[i] = Some(ArmLoad { matrix, torque });
+                load[i] = Some(ArmLoad { matrix, torque });
             }
         }
         // The box's rows: normal and (sticking) tangents, forces on the box = − the arm's.
@@ -595,7 +646,7 @@ impl Simulation {
                 row(t2, 0.0, cf);
             }
         }
-        out
+        load
     }
 
     /// After the sub-steps: each arm's contact forces at the new velocities, the report and

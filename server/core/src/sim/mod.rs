@@ -373,8 +373,8 @@ pub struct Simulation {
     numerical_faults: u64,
     /// The contact report of the last step.
     contacts: Contacts,
-    /// The narrow phase's kept EPA buffers ([`crate::collision::Epa`]).
-    epa: crate::collision::Epa,
+    /// The contact stage's workspace (`contact.rs`; taken out during a step).
+    contact_work: Option<Box<contact::ContactWork>>,
 }
 
 impl Simulation {
@@ -443,7 +443,7 @@ impl Simulation {
             work,
             numerical_faults: 0,
             contacts: Contacts::default(),
-            epa: crate::collision::Epa::warm(),
+            contact_work: Some(Box::new(contact::ContactWork::new())),
         };
         sim.reset();
         Ok(sim)

@@ -29,11 +29,10 @@
 use nalgebra::{Point3, Vector3, Vector6};
 
 use super::arm::{self, ArmTerms};
-use super::contact::{self, ContactTerms};
 use super::constraint::{self, Constraint, GripOut, JawGrip};
+use super::contact::{self, ContactTerms, ContactWork};
 use super::object::{self, ObjectTerms};
 use super::{ControlMethod, Input, Simulation};
-use crate::collision::Epa;
 use crate::control::{self, ControlParams, CoopInputs};
 use crate::finite_or;
 use crate::hydraulics::N_ACT;
@@ -52,8 +51,6 @@ pub(super) struct StepScratch {
     object: ObjectTerms,
     /// Stage 6.
     constraint: Constraint,
-    /// Stage 5b: the contacts' implicit terms.
-    contacts: ContactTerms,
 }
 
 /// What the last sub-step leaves for the outputs.
@@ -92,15 +89,18 @@ impl Simulation {
         let r = self.grasp_radii();
         self.spool_commands(input, speed, &r);
         let loads = self.panel_loads();
-        // The narrow phase's kept EPA, out of `self` while the step's terms borrow it.
-        let mut epa = core::mem::take(&mut self.epa);
-        let scratch = self.step_scratch(&r, &loads, &mut epa);
-        self.epa = epa;
+        // The contact workspace, out of `self` while the step borrows it (a pointer moves).
+        let mut cw = self
+            .contact_work
+            .take()
+            .unwrap_or_else(|| Box::new(ContactWork::new()));
+        let scratch = self.step_scratch(&r, &loads, &mut cw);
         let mut out = SubstepOutput::default();
         for k in 0..self.params.step.substeps {
-            out = self.substep(&scratch, k == 0);
+            out = self.substep(&scratch, &cw.terms, k == 0);
         }
-        self.finish_step(&scratch, &out);
+        self.finish_step(&scratch, &cw.terms, &out);
+        self.contact_work = Some(cw);
         self.panel_update();
     }
 
@@ -164,7 +164,7 @@ impl Simulation {
         &self,
         r: &[Vector3<f64>; 2],
         loads: &[Option<ToolLoad>; 2],
-        epa: &mut Epa,
+        contacts: &mut ContactWork,
     ) -> StepScratch {
         let sp = &self.params.step;
         let h = sp.dt_s / sp.substeps as f64;
@@ -182,9 +182,9 @@ impl Simulation {
                 loads[i].as_ref(),
             )
         });
-        let contacts = self.contact_terms(h, &object, &arms, epa);
+        let contact_loads = self.contact_terms(h, &object, &arms, contacts);
         for (i, t) in arms.iter_mut().enumerate() {
-            if let Some(l) = &contacts.load[i] {
+            if let Some(l) = &contact_loads[i] {
                 arm::add_contacts(t, l, &self.work[i].jw, st.arms[i].holding);
             }
         }
@@ -206,14 +206,13 @@ impl Simulation {
             arms,
             object,
             constraint,
-            contacts,
         }
     }
 
     /// Stage 7, one sub-step of length h: chamber pressures (backward Euler), the arms' and
     /// the object's free accelerations, the contact wrenches of the closed chain, then
     /// semi-implicit Euler for arms and object. `first`: the step's first sub-step.
-    fn substep(&mut self, s: &StepScratch, first: bool) -> SubstepOutput {
+    fn substep(&mut self, s: &StepScratch, contacts: &ContactTerms, first: bool) -> SubstepOutput {
         let h = s.h;
         let mut out = SubstepOutput::default();
         let mut qdd = [Vector6::zeros(); 2];
@@ -225,7 +224,7 @@ impl Simulation {
         let o = &self.state.object;
         let (mut acc_o, seabed_normal_n) =
             s.object.free_acceleration(&self.params.object, o, first);
-        contact::box_acceleration(&s.contacts, &object::twist(o), &mut acc_o, h);
+        contact::box_acceleration(contacts, &object::twist(o), &mut acc_o, h);
         let arms = &self.state.arms;
         (out.contact, out.grip) = s.constraint.apply(
             [&s.arms[0], &s.arms[1]],
@@ -245,8 +244,8 @@ impl Simulation {
 
     /// Stage 8: relief events (rising edges), contact and internal wrenches, time, and the
     /// kinematics and contact flags for the new q.
-    fn finish_step(&mut self, s: &StepScratch, out: &SubstepOutput) {
-        self.contact_report(&s.contacts, s.h);
+    fn finish_step(&mut self, s: &StepScratch, contacts: &ContactTerms, out: &SubstepOutput) {
+        self.contact_report(contacts, s.h);
         for (i, a) in self.state.arms.iter_mut().enumerate() {
             for j in 0..N_ACT {
                 if out.relief[i][j] && !a.relief_open[j] {

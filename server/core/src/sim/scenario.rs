@@ -172,7 +172,7 @@ fn approach(
     model: &Model,
     arm: Arm,
     above_m: f64,
-) -> Result<([f64; N_ACT], [f64; N_ACT], [f64; N_ACT]), Error> {
+) -> Result<[[f64; N_ACT]; 3], Error> {
     let op = &params.object;
     let arm = arm.index();
     let base = &params.arms[arm].base;
@@ -190,7 +190,7 @@ fn approach(
     let mut up = kinematics::end_effector_pose(model, q0).translation.vector;
     up.z = local.z + above_m;
     let up = ik_position(model, &up, q0)?;
-    Ok((up, pre, at))
+    Ok([up, pre, at])
 }
 
 /// Jaw command that opens the jaw fully.
@@ -267,7 +267,7 @@ fn joint_sweep() -> Vec<Segment> {
 /// Case study 2: the left arm reaches the handle (A), grabs (B), lifts with the shoulder open
 /// loop and holds (C), releases (D).
 fn single_arm_load(params: &SimParams, left: &Model) -> Result<Vec<Segment>, Error> {
-    let (up, pre, at) = approach(params, left, Arm::Left, 0.10)?;
+    let [up, pre, at] = approach(params, left, Arm::Left, 0.10)?;
     Ok(vec![
         Segment::open("A", 3.0, ArmCommand::JointTarget { q: up, jaw: OPEN }, REST),
         Segment::open(
@@ -289,8 +289,8 @@ fn single_arm_load(params: &SimParams, left: &Model) -> Result<Vec<Segment>, Err
 /// Case studies 3 and 4, stages A–B: the right arm reaches and grabs its handle, then the
 /// left arm.
 fn dual_grasp(params: &SimParams, left: &Model, right: &Model) -> Result<Vec<Segment>, Error> {
-    let (lup, lpre, lat) = approach(params, left, Arm::Left, 0.10)?;
-    let (rup, rpre, rat) = approach(params, right, Arm::Right, 0.10)?;
+    let [lup, lpre, lat] = approach(params, left, Arm::Left, 0.10)?;
+    let [rup, rpre, rat] = approach(params, right, Arm::Right, 0.10)?;
     let tgt = |q: [f64; N_ACT], jaw: f64| ArmCommand::JointTarget { q, jaw };
     Ok(vec![
         Segment::open("A", 3.0, tgt(lup, OPEN), tgt(rup, OPEN)),

@@ -97,7 +97,7 @@ export class Arm {
     this.ring = ghost ? null : partOf(new THREE.TorusGeometry(0.16, 0.018, 8, 32), 0, this.group,
       new THREE.MeshBasicMaterial({ color: 0xffd700 }));
     if (this.ring) this.ring.visible = false;
-    this.wrist = part(UNIT_CYL, JAW_COLOUR, this.group);
+    this.wrist = part(UNIT_BOX, JAW_COLOUR, this.group);
     this.fingers = [part(UNIT_BOX, JAW_COLOUR, this.group), part(UNIT_BOX, JAW_COLOUR, this.group)];
     this.frames = [];
     for (let i = 0; i < this.n; i++) this.frames.push(new THREE.Matrix4());
@@ -182,13 +182,13 @@ export class Arm {
     this.rotMark.matrixWorldNeedsUpdate = true;
     // wrist plate and jaws in the tool frame (z along the jaw, y across the opening)
     this.wrist.matrix.copy(this.tool).multiply(_m.makeTranslation(0, 0, -0.055))
-      .multiply(_rz.makeRotationX(Math.PI / 2)).multiply(_inv.makeScale(0.05, 0.02, 0.05));
+      .multiply(_rz.makeScale(0.09, 0.09, 0.02)); // the collision shape (robots/magnum.json)
     this.wrist.matrixWorldNeedsUpdate = true;
     const half = Math.max(af.jaw_opening_m, 0) / 2 + 0.008;
     for (let s = 0; s < 2; s++) {
       const f = this.fingers[s];
       f.matrix.copy(this.tool).multiply(_m.makeTranslation(0, s ? half : -half, 0))
-        .multiply(_rz.makeScale(0.035, 0.016, 0.1));
+        .multiply(_rz.makeScale(0.035, 0.016, 0.04)); // the collision shape's size (robots/magnum.json)
       f.matrixWorldNeedsUpdate = true;
     }
   }

@@ -24,6 +24,14 @@ models = {
     j(a=L["l5"], alpha=90, twist="y", lim=(-60, 60), vel=30, name="yaw"),
     j(d=L["l6"], vel=150, name="rotate"),
   ],
+  "collision": {
+   "source": "The drawing's shapes (web/arms.js), so what the trainee sees is what collides: each link a capsule along its link vector with the drawn tube radius (0.06, 0.045, 0.04, 0.035, 0.032, 0.03 m; the joint housings and hydraulic cylinders beside the links are not included), the last link's capsule ending inside the wrist plate (its end cap reaching 5 cm behind the tool point, where the drawn tube ends) (a 9 x 9 x 2 cm plate 5.5 cm behind the tool point, the area of the 5 cm radius disc drawn before), and two 3.5 x 1.6 x 4 cm fingers on either side of the jaw opening, centred on the tool point (their tips reach the far side of the 4 cm handle bar they close on, which sits 3 cm above the box's top face, so a jaw on a handle clears the box)",
+   "link_radii_m": [0.06, 0.045, 0.04, 0.035, 0.032, 0.03],
+   "last_link_end_m": [0.0, 0.0, -0.08],
+   "wrist_centre_m": [0.0, 0.0, -0.055],
+   "wrist_half_extents_m": [0.045, 0.045, 0.01],
+   "finger_half_extents_m": [0.0175, 0.008, 0.02],
+  },
   "notes": "The thesis prints no link lengths. Chosen (docs/physics.md 'Link lengths', server/core/robots/search_lengths.py): l1=0.10 (swing axis to shoulder), l2=0.60 (shoulder to elbow, cf. the comparable Oberon 7 arm's 0.556 m), l3=0.40 (elbow to pitch), l4=0.25 (pitch to yaw), l5=0.10 (yaw to rotate), l6=0.16 (rotate to jaw centre) m: 1.51 m from the shoulder pivot to the jaw centre, our reading of the Table 1-1 reach of 1.5 m. With the translational Yoshikawa measure of Lim 4.3.1 these put the X-sweep maximum at 1.27-1.33 m at every Z level (thesis: approximately 1.3 m) and the Z-sweep maximum at X = 1.4 m at Z = 0.40 m (thesis: 0.42 m); l4 takes most of the pitch-to-jaw length so the jaw can face the intervention panel midway between the arms within the swing range. Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg), placed by a grid search (5 deg steps, docs/physics.md 'Joint-range placement') so that the Table 1-1 full-extension posture q = 0 is inside and the Lim 4.3.1.3 points are reachable at the 90/90 start pose with most rows of the pitch (75-135 deg) and yaw (60-120 deg) studies: swing -25..25, shoulder 0..90 (horizontal to vertical; the straight arm lies on its lower limit), elbow -130..0 (straight at its upper limit), pitch -55..60, yaw -60..60 deg; rotate is continuous (no limits)",
  },
  "orion": {

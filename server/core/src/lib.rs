@@ -16,6 +16,7 @@
 //! * [`grasp`]: the object, seabed contact, grasp matrices W, W⁺, V, grasp state (Lim eqs 3.39–3.47).
 //! * [`control`]: open loop, joint-velocity servo, closed-loop cooperative control.
 //! * [`sim`]: the whole-system [`sim::Simulation`] stepped at 1 ms, and scripted scenarios.
+//! * [`collision`]: collision shapes of the arms and the world, narrow phase (parry3d-f64).
 //! * [`panel`]: the intervention panel: T-bar valve (stick–slip, end stops) and hot stab
 //!   (holster, aligned insertion, seating, side load).
 //! * [`optimize`]: TOMM/JLM objective and gradients; optimal posture by multi-start SLSQP (Jun §3).
@@ -26,6 +27,7 @@
 //!   workspace map of translational measures.
 
 pub mod analysis;
+pub mod collision;
 pub mod error;
 pub mod exercise;
 pub mod ik;

@@ -228,6 +228,9 @@ impl Model {
             }
             None => Vector3::zeros(),
         };
+        if let Some(c) = &spec.collision {
+            c.check(spec.joints.len())?;
+        }
         let (flange, flange_rotation) = FixedRotation::of(&as_matrix_isometry(&pending));
         Ok(Model {
             name: spec.name.clone(),
@@ -384,6 +387,10 @@ pub struct ModelSpec {
     /// Free-form notes (how values were chosen).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub notes: Option<String>,
+    /// Collision shapes of the links and the jaw ([`crate::collision`]); a model without them
+    /// collides with nothing.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub collision: Option<crate::collision::CollisionSpec>,
 }
 
 /// One row of a DH table.

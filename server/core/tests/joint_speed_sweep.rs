@@ -5,7 +5,8 @@
 //! Setting (the thesis's, Lim §4.2.1 case 1): in air, no payload, the arm's own weight, the
 //! left arm of the case-study pair; the joint under test starts 0.5° inside one limit and runs
 //! at full command to the other; the other joints hold the neutral posture [`NEUTRAL`] (their
-//! valves shut). Samples are the joint speed after every 1 ms step. Excluded, and why:
+//! valves shut), and nothing to collide with (contacts off: some of these postures put the
+//! jaw below the seabed). Samples are the joint speed after every 1 ms step. Excluded, and why:
 //! * the first [`STARTUP_S`] after the command: the spool and the oil columns accelerating the
 //!   link (checked separately: the peak over that window ≤ 1.1 × the steady speed, taken as
 //!   the mean over the next [`STEADY_S`]);
@@ -57,6 +58,10 @@ fn sweep(j: usize, dir: f64) -> Sweep {
     let m = common::builtin("magnum");
     let mut p = SimParams::case_study(&m, &m).expect("params");
     p.step.environment = Environment::Air;
+    // The arm alone, as on a test bench: with the shoulder near horizontal and the elbow at
+    // −65° the jaw is below the seabed, so the sweep runs with contacts off (a speed, not a
+    // collision, is measured; tests/collisions.rs covers contacts).
+    p.contact.enabled = false;
     let left = Arm::Left.index();
     let joint = &m.joints[j];
     let (start, end) = if joint.is_limited() {

@@ -287,7 +287,12 @@ impl Assessor {
         for arm in Arm::BOTH {
             let i = arm.index();
             arm_points(sim, arm, &mut self.kin[i], &mut self.points);
-            let below = self.points.iter().any(|p| p.z < seabed);
+            // Below the seabed plane, or (now that the seabed is solid and the contacts keep
+            // every point out of it) pressing on it.
+            let on_seabed = sim.contacts().arms[i]
+                .strongest
+                .is_some_and(|c| c.partner == crate::collision::Partner::Seabed);
+            let below = on_seabed || self.points.iter().any(|p| p.z < seabed);
             if below && !self.in_seabed[i] {
                 m.seabed_strikes += 1.0;
                 events.push(Event {

@@ -811,19 +811,21 @@ mod tests {
             "{} vs {expected}",
             d.supply_ratio
         );
-        // At its stop (wrist pitch at 21°/s reaches −57.5° from −20° within the 3 s) …
-        let (a, d) = diagnose_with(|f| f.stuck_valve[3] = Some(-0.7));
+        // At its stop (wrist yaw at 21°/s reaches −60° from 0° within the 3 s; the wrist
+        // pitch, the joint used before, now runs its jaw onto the seabed short of its stop) …
+        let (a, d) = diagnose_with(|f| f.stuck_valve[4] = Some(-0.7));
         assert_eq!(a, STUCK_VALVE);
         assert!(
             d.tested == [false; 6]
                 && matches!(
                     d.phase,
                     Phase::Jog {
-                        joint: 3,
+                        joint: 4,
                         at_limit: true,
                         ..
                     }
-                )
+                ),
+            "{d:?}"
         );
         // … and still running (swing at 4°/s is 12° from 0 after 3 s, 25° is its stop).
         let (a, d) = diagnose_with(|f| f.stuck_valve[0] = Some(-0.2));

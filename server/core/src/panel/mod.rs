@@ -38,7 +38,8 @@
 //!   whose tip enters the holster mouth aligned (same tolerances) is back in its sleeve and,
 //!   released there, holstered; released anywhere else outside the receptacle it drops to
 //!   the seabed ([`StabPhase::Dropped`]) where it can be picked up again.
-//! * Links and jaws do not collide with the panel (as with the box: only jaw–item contact).
+//! * Links and jaws collide with the plate, the valve and the stab as fixed shapes
+//!   (`sim`'s contacts, [`crate::collision`]): a link pushing the T-bar does not turn it.
 //!
 //! # Sources
 //! Lim 2005 (seeds: `lim2005-dual-hydraulic-manipulator-simulator.txt`): Table 1-1 (jaw

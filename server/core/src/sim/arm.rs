@@ -4,6 +4,7 @@
 
 use nalgebra::{Isometry3, Matrix6, Point3, Vector3, Vector6};
 
+use super::contact::ArmLoad;
 use super::{ArmInput, ArmParams, ArmState, ArmWork, StepParams, water};
 use crate::control::{self, ControlParams};
 use crate::dynamics;
@@ -49,8 +50,11 @@ pub(super) struct ArmTerms {
     /// Fault-adjusted cross-piston leakage per actuator (m³/s per Pa).
     pub(super) leak: [f64; N_ACT],
     /// Joint torques of a held panel item's load, Jᵀ·(F − h·K·J·q̇) (the linearly implicit
-    /// form; its h·JᵀCJ + h²·JᵀKJ and lumped mass are in H̃); `None` without one.
+    /// form; its h·JᵀCJ + h²·JᵀKJ and lumped mass are in H̃), and of the contacts; `None`
+    /// without either.
     pub(super) ext: Option<Vector6<f64>>,
+    /// H̃ itself (what `factor` factors).
+    pub(super) matrix: Matrix6<f64>,
 }
 
 /// Stage 1 (per arm): the jaw opens or closes at its rated speed (`cmd` ∈ [−1, 1], already
@@ -218,7 +222,8 @@ fn rate_control(
 /// damping and end stops. `work` holds the kinematics of the state's q; `flow` is the water's
 /// motion (unused in air); `h` is the sub-step;
 /// `load`: a held panel item's load on the jaw, linearly implicit (h·JᵀCJ + h²·JᵀKJ and the
-/// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side).
+/// lumped mass m·J_vᵀJ_v in H̃, Jᵀ·(F − h·K·J·q̇) on the right-hand side). The contacts
+/// come after, from this factor ([`add_contacts`]).
 #[allow(clippy::too_many_arguments)]
 pub(super) fn arm_terms(
     model: &Model,
@@ -247,6 +252,7 @@ pub(super) fn arm_terms(
         bulk_modulus_pa: ap.faults.bulk_modulus_pa(hp),
         leak: core::array::from_fn(|j| ap.faults.leak_m3_s_pa(j)),
         ext: None,
+        matrix: Matrix6::zeros(),
     };
     // H̃ = H + h·(damping, end stops) on the diagonal.
     let mut m = terms.mass_matrix;
@@ -278,6 +284,7 @@ pub(super) fn arm_terms(
         let qd = Vector6::from(a.qd);
         out.ext = Some(j.transpose() * (l.wrench - l.stiffness * (j * qd) * h));
     }
+    out.matrix = m;
     out.factor = Ldlt::factor(&m);
     if let (Some(f), true) = (&out.factor, a.holding) {
         // Only a holding arm enters the constraint solve.
@@ -289,6 +296,19 @@ pub(super) fn arm_terms(
 /// Per joint: `q` past its limits (at its end stop; [`super::Event::EndStop`]).
 pub(super) fn at_end_stops(model: &Model, q: &[f64; N_ACT]) -> [bool; N_ACT] {
     core::array::from_fn(|j| end_stop_penetration(q[j], model.joints[j].limits) != 0.0)
+}
+
+/// Stage 5b (per arm in contact): the contacts' implicit terms into H̃ (`contact.rs`: their
+/// h·(c + h·k)·J_pᵀnnᵀJ_p and friction damping) and onto the right-hand side, and the factor
+/// (and Z, for a holding arm, whose tool Jacobian is `jw`) again.
+pub(super) fn add_contacts(t: &mut ArmTerms, load: &ArmLoad, jw: &Matrix6<f64>, holding: bool) {
+    t.matrix += load.matrix;
+    t.ext = Some(t.ext.unwrap_or_else(Vector6::zeros) + load.torque);
+    t.factor = Ldlt::factor(&t.matrix);
+    t.z = match (&t.factor, holding) {
+        (Some(f), true) => f.forward_columns(&jw.transpose()),
+        _ => Matrix6::zeros(),
+    };
 }
 
 /// How far `q` is past its limits (rad; negative below the lower one), 0 within them.

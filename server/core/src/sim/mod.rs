@@ -25,7 +25,10 @@
 //!    treated implicitly through the object's mass matrix, M̃ = M_o + h·C
 //!    ([`crate::grasp::seabed_contact`]), because a box touching on one corner has an effective mass
 //!    of a few kg there and an explicit 2·10⁴ N·s/m dashpot would inject energy; the corner
-//!    springs stay explicit (k·h²/m_eff ≈ 0.3).
+//!    springs stay explicit (k·h²/m_eff ≈ 0.3);
+//! 6. contacts of links and jaws (`contact.rs`): penalty spring–dampers with Coulomb
+//!    friction, linearly implicit in the same (H + hD + h²K) matrix of each arm (and in the
+//!    box's M̃), each side of a moving pair taking its share of the law.
 //!
 //! Configuration-dependent quantities (H, C q̇ + G, J, J̇q̇, the constraint matrix, the seabed
 //! damping) are computed
@@ -38,10 +41,12 @@
 //!   force, not a chamber model; its grip on a handle is rigid up to the friction limits of
 //!   the clamp force and slips beyond them (`constraint.rs`, "Finite grip"), or rigid
 //!   whatever the load with [`SimParams::rigid_grasp`].
-//! * Contact is jaw–handle only (capture radius) and box–seabed (corner penalty springs with
-//!   friction); links do not collide with the object, the seabed or each other. With a panel
-//!   ([`SimParams::panel`]) the jaws also take its valve T-bar and hot stab, whose loads act
-//!   on the arms as JᵀF (see [`crate::panel`]); links do not collide with the panel either.
+//! * Grasping is jaw–handle (capture radius); the box rests on the seabed on corner penalty
+//!   springs with friction. With a panel ([`SimParams::panel`]) the jaws also take its valve
+//!   T-bar and hot stab, whose loads act on the arms as JᵀF (see [`crate::panel`]). Links
+//!   and jaws collide with the seabed, the box, the panel, the vehicle and the other arm
+//!   (`contact.rs`, [`crate::collision`]), not with their own arm; the box does not collide
+//!   with the panel or the vehicle.
 //! * Valves are ideal critically lapped spools (Lim eq. 3.51) whose spool follows its command
 //!   with a first-order lag ([`crate::hydraulics::SPOOL_TIME_CONSTANT_S`], 25 ms); no valve
 //!   leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
@@ -69,6 +74,7 @@ mod arm;
 mod constraint;
 mod events;
 pub mod measures;
+mod contact;
 mod object;
 mod operator;
 mod panel;
@@ -81,6 +87,7 @@ pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
 pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
 pub use events::{Event, MAX_EVENTS_PER_STEP};
 pub use operator::{ControlMode, Operator, Sticks};
+pub use contact::{ArmContact, ArmContacts, ContactParams, Contacts, Strike};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
 pub use water::{Current, Environment, Flow, Medium, Water};
 
@@ -198,6 +205,9 @@ pub struct SimParams {
     pub rigid_grasp: bool,
     /// The jaws' friction grip on the handles (used unless `rigid_grasp`).
     pub grip: GripParams,
+    /// Contacts of the links and jaws with the seabed, the box, the panel, the vehicle and
+    /// the other arm (`contact.rs`, [`crate::collision`]).
+    pub contact: ContactParams,
 }
 
 /// Control method (Lim §4.1 "control mode"; Lim case studies 3 and 4). Wire and
@@ -394,6 +404,10 @@ pub struct Simulation {
     /// The last step's events ([`Simulation::events`]; preallocated to
     /// [`MAX_EVENTS_PER_STEP`]).
     events: Vec<Event>,
+    /// The contact report of the last step.
+    contacts: Contacts,
+    /// The contact stage's workspace (`contact.rs`; taken out during a step).
+    contact_work: Option<Box<contact::ContactWork>>,
 }
 
 impl Simulation {
@@ -466,6 +480,8 @@ impl Simulation {
             work,
             numerical_faults: 0,
             events: Vec::with_capacity(MAX_EVENTS_PER_STEP),
+            contacts: Contacts::default(),
+            contact_work: Some(Box::new(contact::ContactWork::new())),
         };
         sim.reset();
         Ok(sim)
@@ -555,6 +571,7 @@ impl Simulation {
             .map_or(Flow::default(), |w| Flow::steady(&w.current));
         self.numerical_faults = 0;
         self.events.clear();
+        self.contacts = Contacts::default();
         self.update_kinematics();
         for i in 0..2 {
             self.state.arms[i].contact = self.in_contact(i);
@@ -669,6 +686,11 @@ impl Simulation {
                 reason: "the simulation is in air: there is no water current to set".into(),
             }),
         }
+    }
+    /// The contacts of the last step: per arm the strongest (what, where, force), counts and
+    /// the strike record ([`ContactParams`]).
+    pub fn contacts(&self) -> &Contacts {
+        &self.contacts
     }
     /// Steps rolled back because a value went non-finite (a safety net; 0 in every test).
     pub fn numerical_faults(&self) -> u64 {

@@ -11,14 +11,19 @@
 //!    damping and lumped mass ([`Simulation::panel_loads`]; only with a panel);
 //! 4. arm terms, per arm: H, C q̇ + G, J̇q̇, linkage levers and the factor of H̃, with the
 //!    panel load linearly implicit ([`arm::arm_terms`]);
-//! 5. object terms: inertia, weight, implicit seabed damping ([`ObjectTerms::new`]);
+//! 5. object terms: inertia, weight, implicit seabed damping ([`ObjectTerms::new`]); then
+//!    the contacts of links and jaws with everything ([`Simulation::contact_terms`], from
+//!    the arms' and the object's mobilities), as implicit terms into each arm's H̃
+//!    ([`arm::add_contacts`]) and rows for the box;
 //! 6. the grasp constraint system ([`Constraint::new`]) with each holding jaw's grip limits
 //!    ([`JawGrip::new`]);
 //! 7. the sub-steps ([`Simulation::substep`]): chamber pressures, free accelerations,
-//!    contact wrenches (a slipping jaw's capped at its kinetic friction limits), integration;
-//! 8. outputs: relief openings, contact and internal wrenches, time, kinematics, end stops,
-//!    then the slip stage: a slipping jaw's grasp frame follows the bar, and the grasp is lost
-//!    when the bar has slid out ([`Simulation::finish_step`], [`constraint::slip_stage`]);
+//!    the box's contact forces ([`contact::box_acceleration`]), the grasp's contact wrenches
+//!    (a slipping jaw's capped at its kinetic friction limits), integration;
+//! 8. outputs: the contact report and strikes ([`Simulation::contact_report`]), relief
+//!    openings, contact and internal wrenches, time, kinematics, end stops, then the slip
+//!    stage: a slipping jaw's grasp frame follows the bar, and the grasp is lost when the bar
+//!    has slid out ([`Simulation::finish_step`], [`constraint::slip_stage`]);
 //! 9. panel items: the valve's 1-DOF step, the stab's pose, phase, depth and side load
 //!    ([`Simulation::panel_update`]; only with a panel).
 //!
@@ -30,6 +35,7 @@ use nalgebra::{Point3, Vector3, Vector6};
 
 use super::arm::{self, ArmTerms};
 use super::constraint::{self, Constraint, GripOut, JawGrip};
+use super::contact::{self, ContactTerms, ContactWork};
 use super::object::{self, ObjectTerms};
 use super::{Arm, ControlMethod, Event, Input, Simulation};
 use crate::control::{self, ControlParams, CoopInputs};
@@ -89,12 +95,18 @@ impl Simulation {
         let r = self.grasp_radii();
         self.spool_commands(input, speed, &r);
         let loads = self.panel_loads();
-        let scratch = self.step_scratch(&r, &loads);
+        // The contact workspace, out of `self` while the step borrows it (a pointer moves).
+        let mut cw = self
+            .contact_work
+            .take()
+            .unwrap_or_else(|| Box::new(ContactWork::new()));
+        let scratch = self.step_scratch(&r, &loads, &mut cw);
         let mut out = SubstepOutput::default();
         for k in 0..self.params.step.substeps {
-            out = self.substep(&scratch, k == 0);
+            out = self.substep(&scratch, &cw.terms, k == 0);
         }
-        self.finish_step(&scratch, &out);
+        self.finish_step(&scratch, &cw.terms, &out);
+        self.contact_work = Some(cw);
         self.panel_update();
     }
 
@@ -163,11 +175,18 @@ impl Simulation {
     }
 
     /// Stages 4–6: the terms held over the step's sub-steps (`loads`: stage 3's).
-    fn step_scratch(&self, r: &[Vector3<f64>; 2], loads: &[Option<ToolLoad>; 2]) -> StepScratch {
+    fn step_scratch(
+        &self,
+        r: &[Vector3<f64>; 2],
+        loads: &[Option<ToolLoad>; 2],
+        contacts: &mut ContactWork,
+    ) -> StepScratch {
         let sp = &self.params.step;
         let h = sp.dt_s / sp.substeps as f64;
         let st = &self.state;
-        let arms = core::array::from_fn(|i| {
+        let held = st.arms.iter().any(|a| a.holding);
+        let object = ObjectTerms::new(&self.params.object, sp, &st.object, &st.flow, held, h);
+        let mut arms: [ArmTerms; 2] = core::array::from_fn(|i| {
             arm::arm_terms(
                 &self.models[i],
                 &self.params.arms[i],
@@ -179,8 +198,12 @@ impl Simulation {
                 loads[i].as_ref(),
             )
         });
-        let held = st.arms.iter().any(|a| a.holding);
-        let object = ObjectTerms::new(&self.params.object, sp, &st.object, &st.flow, held, h);
+        let contact_loads = self.contact_terms(h, &object, &arms, contacts);
+        for (i, t) in arms.iter_mut().enumerate() {
+            if let Some(l) = &contact_loads[i] {
+                arm::add_contacts(t, l, &self.work[i].jw, st.arms[i].holding);
+            }
+        }
         let grip = core::array::from_fn(|i| {
             st.arms[i]
                 .holding
@@ -205,7 +228,7 @@ impl Simulation {
     /// Stage 7, one sub-step of length h: chamber pressures (backward Euler), the arms' and
     /// the object's free accelerations, the contact wrenches of the closed chain, then
     /// semi-implicit Euler for arms and object. `first`: the step's first sub-step.
-    fn substep(&mut self, s: &StepScratch, first: bool) -> SubstepOutput {
+    fn substep(&mut self, s: &StepScratch, contacts: &ContactTerms, first: bool) -> SubstepOutput {
         let h = s.h;
         let mut out = SubstepOutput::default();
         let mut qdd = [Vector6::zeros(); 2];
@@ -216,6 +239,7 @@ impl Simulation {
         }
         let o = &self.state.object;
         let (mut acc_o, seabed) = s.object.free_acceleration(&self.params.object, o, first);
+        contact::box_acceleration(contacts, &object::twist(o), &mut acc_o, h);
         let arms = &self.state.arms;
         (out.contact, out.grip) = s.constraint.apply(
             [&s.arms[0], &s.arms[1]],
@@ -233,10 +257,11 @@ impl Simulation {
         out
     }
 
-    /// Stage 8: relief openings (rising edges), contact and internal wrenches, time, the
-    /// kinematics, end stops (rising edges) and contact flags for the new q, and the slip
-    /// stage; each detection is pushed to the step's events.
-    fn finish_step(&mut self, s: &StepScratch, out: &SubstepOutput) {
+    /// Stage 8: the contact report and strikes, relief openings (rising edges), contact and
+    /// internal wrenches, time, the kinematics, end stops (rising edges) and contact flags for
+    /// the new q, and the slip stage; each detection is pushed to the step's events.
+    fn finish_step(&mut self, s: &StepScratch, contacts: &ContactTerms, out: &SubstepOutput) {
+        self.contact_report(contacts, s.h);
         for (i, a) in self.state.arms.iter_mut().enumerate() {
             for j in 0..N_ACT {
                 if out.relief[i][j] && !a.relief_open[j] {

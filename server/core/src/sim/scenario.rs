@@ -163,13 +163,16 @@ pub fn ik_position(
     })
 }
 
-/// Postures of `arm` above its handle (`above_m` higher) and at it.
+/// Postures of `arm` on the way to its handle: its reset tool point raised to `above_m` over
+/// the handle (clear of the box: a joint-space move straight from the reset posture, whose jaw
+/// is beside the box and below its top, would sweep the jaw through the box's side), then
+/// `above_m` over the handle, then at it.
 fn approach(
     params: &SimParams,
     model: &Model,
     arm: Arm,
     above_m: f64,
-) -> Result<([f64; N_ACT], [f64; N_ACT]), Error> {
+) -> Result<[[f64; N_ACT]; 3], Error> {
     let op = &params.object;
     let arm = arm.index();
     let base = &params.arms[arm].base;
@@ -183,7 +186,11 @@ fn approach(
         &params.arms[arm].initial_q,
     )?;
     let at = ik_position(model, &local.coords, &pre)?;
-    Ok((pre, at))
+    let q0 = &params.arms[arm].initial_q;
+    let mut up = kinematics::end_effector_pose(model, q0).translation.vector;
+    up.z = local.z + above_m;
+    let up = ik_position(model, &up, q0)?;
+    Ok([up, pre, at])
 }
 
 /// Jaw command that opens the jaw fully.
@@ -260,11 +267,12 @@ fn joint_sweep() -> Vec<Segment> {
 /// Case study 2: the left arm reaches the handle (A), grabs (B), lifts with the shoulder open
 /// loop and holds (C), releases (D).
 fn single_arm_load(params: &SimParams, left: &Model) -> Result<Vec<Segment>, Error> {
-    let (pre, at) = approach(params, left, Arm::Left, 0.10)?;
+    let [up, pre, at] = approach(params, left, Arm::Left, 0.10)?;
     Ok(vec![
+        Segment::open("A", 3.0, ArmCommand::JointTarget { q: up, jaw: OPEN }, REST),
         Segment::open(
             "A",
-            6.0,
+            3.0,
             ArmCommand::JointTarget { q: pre, jaw: OPEN },
             REST,
         ),
@@ -281,11 +289,12 @@ fn single_arm_load(params: &SimParams, left: &Model) -> Result<Vec<Segment>, Err
 /// Case studies 3 and 4, stages A–B: the right arm reaches and grabs its handle, then the
 /// left arm.
 fn dual_grasp(params: &SimParams, left: &Model, right: &Model) -> Result<Vec<Segment>, Error> {
-    let (lpre, lat) = approach(params, left, Arm::Left, 0.10)?;
-    let (rpre, rat) = approach(params, right, Arm::Right, 0.10)?;
+    let [lup, lpre, lat] = approach(params, left, Arm::Left, 0.10)?;
+    let [rup, rpre, rat] = approach(params, right, Arm::Right, 0.10)?;
     let tgt = |q: [f64; N_ACT], jaw: f64| ArmCommand::JointTarget { q, jaw };
     Ok(vec![
-        Segment::open("A", 6.0, tgt(lpre, OPEN), tgt(rpre, OPEN)),
+        Segment::open("A", 3.0, tgt(lup, OPEN), tgt(rup, OPEN)),
+        Segment::open("A", 3.0, tgt(lpre, OPEN), tgt(rpre, OPEN)),
         Segment::open("A", 4.0, tgt(lpre, OPEN), tgt(rat, OPEN)),
         Segment::open("A", 1.5, REST, ArmCommand::jaw(CLOSE)),
         Segment::open("A", 2.5, REST, REST),

@@ -4,7 +4,7 @@
 
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
-use super::{ArmParams, Environment, SimParams, StepParams};
+use super::{ArmParams, ContactParams, Environment, SimParams, StepParams};
 use crate::Error;
 use crate::control::ControlParams;
 use crate::dynamics::Inertials;
@@ -138,6 +138,7 @@ impl SimParams {
             panel: None,
             rigid_grasp: false,
             grip: GripParams::default(),
+            contact: ContactParams::default(),
         })
     }
 

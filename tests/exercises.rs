@@ -108,17 +108,20 @@ fn a_scripted_overload_is_counted() {
     assert!(b["overloads"].as_f64().expect("overloads") >= 2.0, "{b}");
 }
 
-/// A scripted seabed strike: an arm started with its tool below the seabed surface is counted
-/// once (a rising edge), however long it stays there.
+/// A scripted seabed strike: the right wrist pitched down from a low posture drives the jaw
+/// into the seabed, where the contacts stop it (issue 27); it strikes once and stays pressed,
+/// and the strike is counted once (the core's `Event::Strike`, not every sample it presses).
 #[test]
 fn a_scripted_seabed_strike_is_counted_once() {
     let mut spec = (*EXERCISES.get("familiarisation").expect("familiarisation")).clone();
-    // Shoulder at −5°, elbow −30°, wrist pitch −57°: the right tool point is at
-    // (1.07, 0, −0.67) m (forward kinematics, GET /api/analysis), 22 cm below the seabed.
-    spec.scene.initial_q_deg = Some([
-        [0.0, 30.0, -70.0, -20.0, 0.0, 0.0],
-        [0.0, -5.0, -30.0, -57.0, 0.0, 0.0],
-    ]);
-    let a = run(Arc::new(spec), Driver::Idle);
+    // The start posture (`sim::INITIAL_Q`, jaw 10 cm above the seabed); pitching the wrist
+    // down to −60° would take the jaw below the seabed.
+    spec.scene.initial_q_deg = Some([[0.0, 30.0, -70.0, -10.0, 0.0, 0.0]; 2]);
+    spec.autopilot = serde_json::from_value(serde_json::json!([
+        {"do": "settings", "mode": "joint"},
+        {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -60, "tolerance_deg": 1},
+    ]))
+    .expect("script");
+    let a = run(Arc::new(spec), Driver::Autopilot);
     assert_eq!(a["seabed_strikes"], 1.0, "{a}");
 }

@@ -593,6 +593,28 @@ pub struct ArmFrame {
     /// What this jaw would grasp if it closed now (`handle-0`, `handle-1`, `valve`, `stab`),
     /// or `null`: the page's capture cue.
     pub capture: Option<&'static str>,
+    /// The arm's strongest contact with the world in the last step (links and jaw on the
+    /// seabed, the box, the panel, the vehicle, the other arm; not the grasp), or `null`.
+    pub touch: Option<TouchOut>,
+    /// The arm's strikes since reset, all partners (`sim::Event::Strike`).
+    pub strikes: u64,
+}
+
+/// An arm's strongest contact with the world ([`ArmFrame::touch`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct TouchOut {
+    /// `seabed`, `box`, `panel`, `vehicle` or `other-arm`.
+    pub partner: &'static str,
+    /// `link-0` … `link-5`, `wrist`, `finger-0`, `finger-1`.
+    pub part: String,
+    /// Contact point on the arm, world (m).
+    pub point_m: [f64; 3],
+    /// Normal force (N) of this point.
+    pub force_n: f64,
+    /// Sum of the normal forces of all the arm's contact points (N).
+    pub total_force_n: f64,
+    /// Penetration (m) of this point.
+    pub depth_m: f64,
 }
 
 /// The dual-arm ellipsoid (Lim eq. 3.68), present while both jaws hold the object.

@@ -15,7 +15,9 @@ use seaarms_core::collision::{
 };
 use seaarms_core::control::teleop::cartesian_to_joint_velocity;
 use seaarms_core::redundancy::{Redundancy, RedundancyParams};
-use seaarms_core::sim::{Arm, ArmInput, Input, PanelParams, SimParams, Simulation};
+use seaarms_core::sim::{
+    Arm, ArmInput, Event, Input, PanelParams, STRIKE_WINDOW_S, SimParams, Simulation, Strike,
+};
 
 use common::scenario_util::start;
 
@@ -51,6 +53,8 @@ struct Run {
     max_force_n: f64,
     /// Partners of the strongest contacts seen, per arm.
     partners: [Vec<Partner>; 2],
+    /// The strike events of the step's event stream, with the time they came.
+    strikes: Vec<(Arm, Strike, f64)>,
 }
 
 /// Steps `s` for `seconds` with `input(s)` each step.
@@ -59,6 +63,11 @@ fn drive(s: &mut Simulation, seconds: f64, mut input: impl FnMut(&Simulation) ->
     for _ in 0..(seconds / 1e-3).round() as usize {
         let inp = input(s);
         s.step(&inp);
+        for e in s.events() {
+            if let Event::Strike { arm, strike } = e {
+                r.strikes.push((*arm, *strike, s.time_s()));
+            }
+        }
         for (i, c) in s.contacts().arms.iter().enumerate() {
             r.max_depth_m = r.max_depth_m.max(c.max_depth_m);
             if let Some(st) = c.strongest {
@@ -121,6 +130,19 @@ fn full_stick_into_the_seabed_stalls_on_it_and_the_pressures_show_it() {
             assert!(
                 strike.impact_speed_m_s > 0.02 && strike.peak_force_n > st.normal_force_n * 0.5
             );
+            // The event stream carries the same strike once, closed after the impact window
+            // with its peak force.
+            let seabed: Vec<_> = r
+                .strikes
+                .iter()
+                .filter(|(a, s, _)| *a == arm && s.partner == Partner::Seabed)
+                .collect();
+            assert_eq!(seabed.len(), 1, "joint {j}: {:?}", r.strikes);
+            let (_, ev, came) = seabed[0];
+            assert_eq!(*ev, strike, "the report's record, closed");
+            // (pushed in the step after the window closed: one 1 ms step late at most)
+            assert!(!ev.ongoing && came - ev.time_s <= STRIKE_WINDOW_S + 1.0e-3 + 1e-9);
+            assert_eq!(c.strikes.iter().sum::<u64>(), 1, "joint {j}");
             // Stalled at full stick, the valve connects the driving side to supply and the
             // other to tank: the pressure difference across the actuator approaches the
             // supply pressure (orifice law with no flow), far from its free-motion value.

@@ -209,6 +209,18 @@ impl Live {
                     json!({"arm": arm_name(arm), "load_fraction": load_fraction}),
                 ),
                 Event::SlidOut { arm } => ("slid_out", json!({"arm": arm_name(arm)})),
+                Event::Strike { arm, strike } => (
+                    "strike",
+                    json!({
+                        "arm": arm_name(arm),
+                        "partner": strike.partner.as_str(),
+                        "part": super::snapshot::part_name(strike.part),
+                        "point_m": strike.point_m,
+                        "t": strike.time_s,
+                        "impact_speed_m_s": strike.impact_speed_m_s,
+                        "peak_force_n": strike.peak_force_n,
+                    }),
+                ),
                 Event::Relief { arm, actuator } => {
                     self.tally.relief += 1;
                     self.tally.relief_first.get_or_insert((arm, actuator));

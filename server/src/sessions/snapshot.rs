@@ -3,14 +3,14 @@
 //! per arm and dual (Lim eqs 3.62, 3.68; Hong eq. 4.1), JLM (Jun eq. 16), forces, warnings.
 
 use seaarms_core::manipulability::Measures;
-use seaarms_core::sim::Arm;
+use seaarms_core::sim::{Arm, ArmContacts, ArmPart};
 use seaarms_core::sim::measures::measures;
 
 use super::Live;
 use crate::protocol::PoseOut;
 use crate::protocol::{
     ArmFrame, ArmsFrame, DualFrame, EllipsoidFrame, MeasuresFrame, ObjectFrame, StateFrame,
-    arm_name,
+    TouchOut, arm_name,
 };
 
 fn ellipsoid(m: &Measures) -> EllipsoidFrame {
@@ -102,6 +102,30 @@ fn arm_frame(live: &Live, arm: Arm, warnings: &mut Vec<String>) -> ArmFrame {
         } else {
             sim.in_capture_range(arm).map(|g| g.as_str())
         },
+        touch: touch_out(&sim.contacts().arms[arm.index()]),
+        strikes: sim.contacts().arms[arm.index()].strikes.iter().sum(),
+    }
+}
+
+/// The strongest contact of an arm's report, for the frame.
+fn touch_out(c: &ArmContacts) -> Option<TouchOut> {
+    let s = c.strongest.filter(|s| s.normal_force_n > 0.0)?;
+    Some(TouchOut {
+        partner: s.partner.as_str(),
+        part: part_name(s.part),
+        point_m: s.point_m,
+        force_n: s.normal_force_n,
+        total_force_n: c.total_normal_force_n,
+        depth_m: s.depth_m,
+    })
+}
+
+/// `link-0` … `link-5`, `wrist`, `finger-0`, `finger-1`.
+pub fn part_name(p: ArmPart) -> String {
+    match p {
+        ArmPart::Link(i) => format!("link-{i}"),
+        ArmPart::Wrist => "wrist".into(),
+        ArmPart::Finger(i) => format!("finger-{i}"),
     }
 }
 

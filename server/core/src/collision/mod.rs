@@ -127,6 +127,26 @@ pub enum Partner {
 }
 
 impl Partner {
+    /// Every partner, in [`Partner::index`] order.
+    pub const ALL: [Partner; 5] = [
+        Partner::Seabed,
+        Partner::Object,
+        Partner::Panel,
+        Partner::Vehicle,
+        Partner::OtherArm,
+    ];
+
+    /// Index into per-partner tables ([`Partner::ALL`] order).
+    pub const fn index(self) -> usize {
+        match self {
+            Partner::Seabed => 0,
+            Partner::Object => 1,
+            Partner::Panel => 2,
+            Partner::Vehicle => 3,
+            Partner::OtherArm => 4,
+        }
+    }
+
     /// Short name for events and logs.
     pub fn as_str(self) -> &'static str {
         match self {

@@ -16,12 +16,14 @@
 //! `pass.limits` entry holds, and, in a fault drill, the named fault is the injected one.
 //!
 //! # Events
-//! The sampler detects what depends on the exercise (its obstacles and thresholds): seabed
-//! and obstacle strikes, jaw overloads, joint-limit hits (within `limit_hit_deg` of a limit)
-//! and drops (the last jaw lets go of the box above the seabed, [`DROP_HEIGHT_M`]). Slips
-//! and relief openings are detected once, by the step ([`crate::sim::Event`]); the sampler
-//! counts them from the step's tallies ([`crate::sim::GripState::slips`],
-//! [`Simulation::relief_events`]) and tells the trainee ([`Event`]) when they grow.
+//! The sampler detects what depends on the exercise (its obstacles and thresholds): strikes
+//! of the exercise's obstacles, jaw overloads, joint-limit hits (within `limit_hit_deg` of a
+//! limit) and drops (the last jaw lets go of the box above the seabed, [`DROP_HEIGHT_M`]).
+//! Slips, relief openings and strikes are detected once, by the step ([`crate::sim::Event`]);
+//! the sampler counts them from the step's tallies ([`crate::sim::GripState::slips`],
+//! [`Simulation::relief_events`], [`crate::sim::ArmContacts::strikes`]: the seabed's as
+//! seabed strikes, the vehicle's and the other arm's as obstacle strikes; the box and the
+//! panel are the work) and tells the trainee ([`Event`]) when they grow.
 
 use nalgebra::Vector3;
 use serde::Serialize;
@@ -30,7 +32,7 @@ use super::spec::{ExerciseSpec, Obstacle, Thresholds};
 use crate::kinematics::{KinData, forward_kinematics};
 use crate::model::Model;
 use crate::sim::measures::{arm_measures, near_limits};
-use crate::sim::{Arm, Simulation};
+use crate::sim::{Arm, Partner, Simulation};
 
 /// Interval between assessment samples (s): 0.01 (100 Hz, the record rate).
 pub const SAMPLE_INTERVAL_S: f64 = 0.01;
@@ -227,6 +229,8 @@ pub struct Assessor {
     kin: [KinData; 2],
     points: Vec<Vector3<f64>>,
     in_seabed: [bool; 2],
+    /// The core's strike counts per arm and partner at the last sample.
+    strikes_at_start: [[u64; 5]; 2],
     in_obstacle: [bool; 2],
     overloaded: [bool; 2],
     slips_at_start: [u64; 2],
@@ -257,6 +261,7 @@ impl Assessor {
             ],
             points: Vec::with_capacity(32),
             in_seabed: [false; 2],
+            strikes_at_start: Arm::BOTH.map(|a| sim.contacts().arms[a.index()].strikes),
             in_obstacle: [false; 2],
             overloaded: [false; 2],
             slips_at_start: Arm::BOTH.map(|a| sim.arm(a).grip.slips),
@@ -287,21 +292,38 @@ impl Assessor {
         for arm in Arm::BOTH {
             let i = arm.index();
             arm_points(sim, arm, &mut self.kin[i], &mut self.points);
-            // Below the seabed plane, or (now that the seabed is solid and the contacts keep
-            // every point out of it) pressing on it.
-            let on_seabed = sim.contacts().arms[i]
-                .strongest
-                .is_some_and(|c| c.partner == crate::collision::Partner::Seabed);
-            let below = on_seabed || self.points.iter().any(|p| p.z < seabed);
-            if below && !self.in_seabed[i] {
-                m.seabed_strikes += 1.0;
+            // Strikes on the seabed, the vehicle and the other arm: the core's (counted per
+            // partner at first contact, `sim::Event::Strike`); with contacts off, a point of
+            // the arm going below the seabed plane.
+            let contacts = &sim.contacts().arms[i];
+            let new_strikes = |p: Partner, at_start: &[[u64; 5]; 2]| {
+                contacts.strikes[p.index()].saturating_sub(at_start[i][p.index()])
+            };
+            let speed = contacts.last_strike.map_or(0.0, |s| s.impact_speed_m_s);
+            let below = !sim.params().contact.enabled && self.points.iter().any(|p| p.z < seabed);
+            let seabed_now = new_strikes(Partner::Seabed, &self.strikes_at_start) as f64
+                + f64::from(below && !self.in_seabed[i]);
+            if seabed_now > 0.0 {
+                m.seabed_strikes += seabed_now;
                 events.push(Event {
                     kind: "strike",
                     t,
-                    text: format!("{} arm struck the seabed", side(arm)),
+                    text: format!("{} arm struck the seabed at {speed:.2} m/s", side(arm)),
                 });
             }
             self.in_seabed[i] = below;
+            for p in [Partner::Vehicle, Partner::OtherArm] {
+                if new_strikes(p, &self.strikes_at_start) > 0 {
+                    m.obstacle_strikes += new_strikes(p, &self.strikes_at_start) as f64;
+                    let what = if p == Partner::Vehicle { "the vehicle" } else { "the other arm" };
+                    events.push(Event {
+                        kind: "obstacle",
+                        t,
+                        text: format!("{} arm struck {what} at {speed:.2} m/s", side(arm)),
+                    });
+                }
+            }
+            self.strikes_at_start[i] = contacts.strikes;
             let hit = self
                 .points
                 .iter()

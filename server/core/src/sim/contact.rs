@@ -38,7 +38,7 @@ use nalgebra::{
     Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, SMatrix, SVector, Vector3, Vector6,
 };
 
-use super::Simulation;
+use super::{Arm, Event, Simulation};
 use super::arm::ArmTerms;
 use super::object::ObjectTerms;
 use crate::collision::{
@@ -93,6 +93,11 @@ impl Default for ContactParams {
         }
     }
 }
+
+/// A strike's peak force is taken over at most this long after its first contact (s): the
+/// impact transient of the 5·10⁶ N/m contact on the arm's effective mass (tens of kg) lasts a
+/// few milliseconds; after 0.2 s the contact is a press, not a strike.
+pub const STRIKE_WINDOW_S: f64 = 0.2;
 
 /// Contact points per arm held over a step (the deepest are kept).
 const MAX_POINTS: usize = 8;
@@ -261,7 +266,9 @@ pub struct ArmContact {
 }
 
 /// A strike: a contact with a partner that began at an approach speed of at least
-/// [`ContactParams::strike_speed_m_s`].
+/// [`ContactParams::strike_speed_m_s`]. It is pushed to the step's events
+/// ([`super::Event::Strike`]) once its peak force is known: when the contact ends, or
+/// [`STRIKE_WINDOW_S`] after it began (the impact's peak; a contact that lasts is a press).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Strike {
     /// What was struck.
@@ -291,11 +298,11 @@ pub struct ArmContacts {
     pub max_depth_m: f64,
     /// Sum of the normal forces in the last step (N).
     pub total_normal_force_n: f64,
-    /// Strikes since reset.
-    pub strikes: u64,
-    /// The latest strike.
+    /// Strikes since reset, per partner ([`Partner::index`]).
+    pub strikes: [u64; 5],
+    /// The latest strike (`ongoing` until it is pushed to the events).
     pub last_strike: Option<Strike>,
-    /// Partners touched in the last step (indexed by [`partner_index`]).
+    /// Partners touched in the last step (indexed by [`Partner::index`]).
     touching: [bool; 5],
 }
 
@@ -306,16 +313,6 @@ pub struct Contacts {
     pub arms: [ArmContacts; 2],
     /// Total force of the arms on the box (N, world) in the last step.
     pub box_force_n: [f64; 3],
-}
-
-fn partner_index(p: Partner) -> usize {
-    match p {
-        Partner::Seabed => 0,
-        Partner::Object => 1,
-        Partner::Panel => 2,
-        Partner::Vehicle => 3,
-        Partner::OtherArm => 4,
-    }
 }
 
 /// Linear Jacobian (world) of a point `p` moved by joints `0..=last` of an arm whose joint
@@ -680,7 +677,7 @@ impl Simulation {
                 n_points += 1;
                 max_depth = max_depth.max(t.depth_m);
                 total += fnorm;
-                let k = partner_index(t.partner);
+                let k = t.partner.index();
                 per_partner[k] += fnorm;
                 let approach = (-n.dot(&(p.v_arm - p.v_partner))).max(0.0);
                 if onset[k].is_none_or(|(s, _)| approach > s) {
@@ -708,7 +705,12 @@ impl Simulation {
                     && !rep.touching[k]
                     && speed >= cp.strike_speed_m_s
                 {
-                    rep.strikes += 1;
+                    // A new strike; one still open on another partner is reported first.
+                    if let Some(s) = rep.last_strike.as_mut().filter(|s| s.ongoing) {
+                        s.ongoing = false;
+                        self.events.push(Event::Strike { arm: Arm::BOTH[i], strike: *s });
+                    }
+                    rep.strikes[k] += 1;
                     rep.last_strike = Some(Strike {
                         partner: p.touch.partner,
                         part: p.touch.part,
@@ -720,12 +722,12 @@ impl Simulation {
                     });
                 } else if let Some(s) = &mut rep.last_strike
                     && s.ongoing
-                    && partner_index(s.partner) == k
+                    && s.partner.index() == k
                 {
-                    if touching[k] {
-                        s.peak_force_n = s.peak_force_n.max(per_partner[k]);
-                    } else {
+                    s.peak_force_n = s.peak_force_n.max(per_partner[k]);
+                    if !touching[k] || time - s.time_s >= STRIKE_WINDOW_S {
                         s.ongoing = false;
+                        self.events.push(Event::Strike { arm: Arm::BOTH[i], strike: *s });
                     }
                 }
             }

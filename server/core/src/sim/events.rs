@@ -15,20 +15,26 @@
 //!   [`crate::exercise::assess::DROP_HEIGHT_M`]);
 //! * [`Event::Relief`]: an actuator's relief valve opened (a rising edge) — the outputs stage,
 //!   counted in [`super::ArmState::relief_events`];
+//! * [`Event::Strike`]: a part of an arm struck something (the seabed, the box, the panel, the
+//!   vehicle, the other arm) at [`super::ContactParams::strike_speed_m_s`] or faster — the
+//!   contact report (`contact.rs`), pushed once the strike's peak force is known (the contact
+//!   ended, or [`super::STRIKE_WINDOW_S`] passed), counted per partner in
+//!   [`super::ArmContacts::strikes`];
 //! * [`Event::EndStop`]: a joint reached its end stop (the cylinder bottoming out: the joint
 //!   angle left its limits) — the outputs stage. The assessment's *limit hit* is a different,
 //!   exercise-set threshold (`thresholds.limit_hit_deg` before the stop).
 //!
 //! The exercise sampler ([`crate::exercise::ExerciseRun::sample`], 100 Hz) detects what needs
-//! the exercise: seabed and obstacle strikes, jaw overloads, limit hits, drops, steps
-//! reached; it reads this stream's counts (slips, relief) instead of detecting them again.
+//! the exercise: exercise obstacles, jaw overloads, limit hits, drops, steps reached; it reads
+//! this stream's counts (slips, relief, strikes) instead of detecting them again.
 
-use super::Arm;
+use super::{Arm, Strike};
 use crate::grasp::GraspState;
 
 /// Most events one step can push: a grasp change, and per arm a slip, a slide-out, six
-/// relief openings and six end stops (the list never grows past its preallocation).
-pub const MAX_EVENTS_PER_STEP: usize = 1 + 2 * (1 + 1 + 6 + 6);
+/// relief openings, six end stops and two strikes per partner (one closing, one reported
+/// early when another begins) (the list never grows past its preallocation).
+pub const MAX_EVENTS_PER_STEP: usize = 1 + 2 * (1 + 1 + 6 + 6 + 2 * 5);
 
 /// One thing that happened in a step (see the module docs for each detector).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -53,6 +59,13 @@ pub enum Event {
         arm: Arm,
         /// Actuator (joint) index, 0-based.
         actuator: usize,
+    },
+    /// `arm` struck something: partner, part, point, impact speed and peak force.
+    Strike {
+        /// The arm.
+        arm: Arm,
+        /// What, where, how fast and how hard.
+        strike: Strike,
     },
     /// `arm`'s `joint` (0-based) reached its end stop.
     EndStop {

@@ -87,7 +87,8 @@ pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
 pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
 pub use events::{Event, MAX_EVENTS_PER_STEP};
 pub use operator::{ControlMode, Operator, Sticks};
-pub use contact::{ArmContact, ArmContacts, ContactParams, Contacts, Strike};
+pub use crate::collision::{ArmPart, Partner};
+pub use contact::{ArmContact, ArmContacts, ContactParams, Contacts, STRIKE_WINDOW_S, Strike};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
 pub use water::{Current, Environment, Flow, Medium, Water};
 

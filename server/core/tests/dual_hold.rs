@@ -314,7 +314,8 @@ fn cartesian_pair_lift(
 /// about the commanded 2.5 cm in 1.5 s without a slip; the two servos' errors still twist the
 /// bars (the roll about the bar axis grows; in air the jaws slip about 0.4 s later).
 /// With the translational rows only, each arm's null-space motion (Jun eq. 21) turns its jaw
-/// against the other through the box: the jaws slip within 0.15 s and lose part of the lift.
+/// against the other through the box: the jaws lose part of the lift, slipping in air (at
+/// 1.2 s) and creeping in water.
 /// Other stick speeds and ramps sit just as close to the grip's limit, some slipping and some
 /// not (docs/physics.md, "Moving the pair in Cartesian mode"); trainees lift the pair in closed
 /// loop (the `dual-lift` exercise).
@@ -336,11 +337,18 @@ fn a_cartesian_lift_of_the_pair_keeps_the_box_only_with_the_orientation_held() {
         println!(
             "{env:?} translational rows only: rose {dz:.4} m, {slips} slips, first at {first:?} s"
         );
-        assert!(
-            slips > 0,
-            "{env:?}: the null-space twist must make the jaws slip"
-        );
-        // Sliding, the jaws lose part of the lift (air 0.012 m, water 0.018 m of 0.025 m).
+        // In air the twist makes the jaws slip. In water it did too while the grip's limits
+        // were taken in the jaw's frame; written in the bar's frame (issue 27: the bar lies
+        // 27° across these jaws, and the moment about the bar frame's z axis is a pry limit
+        // of N·w = 73.6 N·m) the pads creep under the slip notice there instead of slipping.
+        if env == Environment::Air {
+            assert!(
+                slips > 0,
+                "{env:?}: the null-space twist must make the jaws slip"
+            );
+        }
+        // Creeping or sliding, the jaws lose part of the lift (air 0.018 m, water 0.020 m of
+        // 0.025 m).
         assert!(dz < 0.9 * dz_held, "{env:?}: rose {dz} m");
     }
 }

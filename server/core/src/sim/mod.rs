@@ -72,9 +72,9 @@
 
 mod arm;
 mod constraint;
+mod contact;
 mod events;
 pub mod measures;
-mod contact;
 mod object;
 mod operator;
 mod panel;
@@ -83,12 +83,12 @@ pub mod scenario;
 mod setup;
 pub mod water;
 
+pub use crate::collision::{ArmPart, Partner};
 pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
 pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
+pub use contact::{ArmContact, ArmContacts, ContactParams, Contacts, STRIKE_WINDOW_S, Strike};
 pub use events::{Event, MAX_EVENTS_PER_STEP};
 pub use operator::{ControlMode, Operator, Sticks};
-pub use crate::collision::{ArmPart, Partner};
-pub use contact::{ArmContact, ArmContacts, ContactParams, Contacts, STRIKE_WINDOW_S, Strike};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
 pub use water::{Current, Environment, Flow, Medium, Water};
 
@@ -336,7 +336,7 @@ struct State {
     coop_active: bool,
     coop_ref: Isometry3<f64>,
     internal: [f64; 6],
-    /// Whether the object rests on the seabed, as the grasp state reports it.
+    /// Whether the object rests on the seabed, as the grasp state reports it (with hysteresis).
     surface: SurfaceLatch,
     /// The grasp state at the end of the last step ([`Event::Grasp`] on change).
     grasp: GraspState,
@@ -346,37 +346,48 @@ struct State {
     flow: Flow,
 }
 
-/// Seconds the seabed contact must persist, or stay lost, before the grasp state follows it:
-/// a box dragged or pivoted on one corner makes and breaks contact many times a second
-/// (measured: 35 grasp-state changes in the `pick-and-place` autopilot with the finite grip,
-/// gaps of 10–200 ms), and each change is an event the trainee sees and the record keeps.
-/// 0.3 s is longer than those gaps and short enough for the colour (Lim §4.1) to follow a
-/// deliberate lift or set-down at once to the eye.
-pub const SURFACE_DWELL_S: f64 = 0.3;
+/// The grasp state's "on the seabed" turns on when the seabed carries more than this normal
+/// force (N): 10 — 4 % of the box's weight in water (249 N), 2 % in air; a box set down
+/// crosses it within a millisecond of touching (the corner springs take 10 N at 5 µm).
+pub const SURFACE_ON_N: f64 = 10.0;
 
-/// The debounced "object on the seabed" flag of the grasp state ([`SURFACE_DWELL_S`]).
+/// … and off only when the box's lowest corner is this far clear of the seabed (m): 0.005.
+/// A box pivoting on a corner under a jaw, or bouncing as it is lifted off, makes and breaks
+/// contact many times a second (measured: 44 contact changes in a dragged one-arm pick, gaps
+/// of 1–130 ms) with its corner lifting well under a millimetre between touches; each change
+/// would be an event the trainee sees and the record keeps. 5 mm is clear of that and far
+/// below any deliberate lift (the exercises lift 10 cm), so the colour (Lim §4.1) follows a
+/// lift or a set-down at once to the eye.
+pub const SURFACE_OFF_GAP_M: f64 = 0.005;
+
+/// The "object on the seabed" flag of the grasp state, from the contact with hysteresis: on
+/// when the seabed's normal force exceeds [`SURFACE_ON_N`], off when the lowest corner is
+/// more than [`SURFACE_OFF_GAP_M`] above the seabed, unchanged in between.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 struct SurfaceLatch {
     /// The reported flag.
     on: bool,
-    /// How long the raw contact has disagreed with `on` (s).
-    pending_s: f64,
 }
 
 impl SurfaceLatch {
-    /// One step of `dt_s` with the raw contact `touching`.
-    fn update(&mut self, touching: bool, dt_s: f64) {
-        if touching == self.on {
-            self.pending_s = 0.0;
-            return;
-        }
-        self.pending_s += dt_s;
-        // Half a step of tolerance: the dwell counts whole steps despite rounding.
-        if self.pending_s >= SURFACE_DWELL_S - 0.5 * dt_s {
-            self.on = touching;
-            self.pending_s = 0.0;
+    /// One step with the seabed's normal force `normal_n` (N) and the lowest corner's height
+    /// above the seabed `gap_m` (m; negative while pressed in).
+    fn update(&mut self, normal_n: f64, gap_m: f64) {
+        if normal_n > SURFACE_ON_N {
+            self.on = true;
+        } else if gap_m > SURFACE_OFF_GAP_M {
+            self.on = false;
         }
     }
+}
+
+/// Height of the object's lowest corner above the seabed (m; negative while pressed in).
+fn lowest_corner_gap_m(op: &ObjectParams, pose: &Isometry3<f64>) -> f64 {
+    op.corners()
+        .iter()
+        .map(|c| (pose * nalgebra::Point3::from(*c)).z)
+        .fold(f64::INFINITY, f64::min)
+        - op.seabed_z_m
 }
 
 /// Per-arm workspace (Data): preallocated kinematics/dynamics results.
@@ -559,8 +570,7 @@ impl Simulation {
         self.state.coop_ref = pose;
         self.state.internal = [0.0; 6];
         self.state.surface = SurfaceLatch {
-            on: self.state.object.seabed_force_n > 0.0,
-            pending_s: 0.0,
+            on: self.state.object.seabed_force_n > SURFACE_ON_N,
         };
         self.state.panel = self.params.panel.as_ref().map(PanelState::initial);
         // The set current has been flowing all along: no ramp after a reset.
@@ -575,7 +585,7 @@ impl Simulation {
         self.contacts = Contacts::default();
         self.update_kinematics();
         for i in 0..2 {
-            self.state.arms[i].contact = self.in_contact(i);
+            self.state.arms[i].contact = self.reach(i).is_some();
             self.state.arms[i].at_end_stop =
                 arm::at_end_stops(&self.models[i], &self.state.arms[i].q);
         }
@@ -745,8 +755,9 @@ impl Simulation {
             self.numerical_faults += 1;
             self.update_kinematics();
         }
-        let touching = self.state.object.seabed_force_n > 0.0;
-        self.state.surface.update(touching, self.params.step.dt_s);
+        let o = &self.state.object;
+        let gap = lowest_corner_gap_m(&self.params.object, &o.pose);
+        self.state.surface.update(o.seabed_force_n, gap);
         let grasp = self.grasp_state();
         if grasp != self.state.grasp {
             self.state.grasp = grasp;

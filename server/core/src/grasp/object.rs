@@ -44,7 +44,7 @@ pub struct ObjectParams {
 
 /// Height of the lifting point's bar above the box's top face (m): 0.10 (assumed: it stands
 /// clear of the side handles, 3 cm up, so a jaw on it does not foul them).
-pub const LIFTING_POINT_RISE_M: f64 = 0.10;
+pub const LIFTING_POINT_RISE_M: f64 = 0.04;
 
 /// Index of the lifting point in [`ObjectParams::handles`].
 pub const LIFTING_POINT: usize = 2;

@@ -163,6 +163,13 @@ pub fn ik_position(
     })
 }
 
+/// Height of the tool point over a side handle bar's centre at the case studies' grasp (m):
+/// 0.01. The jaw, turned onto the bar by the wrist rotate alone, keeps the tilt the position
+/// IK gives it; its fingers (4 cm tall, centred on the tool point) then reach down past the bar
+/// (3 cm above the top face) far enough to touch the face. 1 cm up they clear it, and the pads
+/// still cover 3 of the bar's 4 cm.
+const GRIP_ABOVE_CENTRE_M: f64 = 0.01;
+
 /// Postures of `arm` on the way to its handle: its reset tool point raised to `above_m` over
 /// the handle (clear of the box: a joint-space move straight from the reset posture, whose jaw
 /// is beside the box and below its top, would sweep the jaw through the box's side), then
@@ -184,7 +191,9 @@ fn approach(
     let mut obj = op.initial_pose;
     obj.translation.vector.z -= op.mass_kg * 9.81 / (4.0 * op.contact_stiffness_n_m);
     let handle = &op.handles[arm];
-    let local = (base.inverse() * obj * Point3::from(handle.centre_m)).coords;
+    // The tool point GRIP_ABOVE_CENTRE_M over the bar's centre (the pads take its upper part).
+    let grip = handle.centre_m + Vector3::z() * GRIP_ABOVE_CENTRE_M;
+    let local = (base.inverse() * obj * Point3::from(grip)).coords;
     let mut pre = ik_position(
         model,
         &(local + Vector3::new(0.0, 0.0, above_m)),

@@ -408,6 +408,9 @@ pub struct SceneOut {
     pub handles_m: Vec<[f64; 3]>,
     /// Each handle bar's axis in the box's frame (unit).
     pub handle_axes: Vec<[f64; 3]>,
+    /// How each handle's bar stands on the box: "ends" (a grab handle on two end posts) or
+    /// "centre" (the lifting point's T-handle on one post down to the top face).
+    pub handle_posts: Vec<&'static str>,
     /// Radius around a handle's bar within which a closing jaw aligned with it grasps it (m).
     pub capture_radius_m: f64,
     /// Floating markers.
@@ -461,6 +464,13 @@ impl SceneOut {
         SceneOut {
             handles_m: h.iter().map(|h| v(&h.centre_m)).collect(),
             handle_axes: h.iter().map(|h| v(&h.axis)).collect(),
+            handle_posts: h
+                .iter()
+                .map(|h| match h.posts {
+                    seaarms_core::grasp::Posts::Ends => "ends",
+                    seaarms_core::grasp::Posts::Centre => "centre",
+                })
+                .collect(),
             capture_radius_m: params.object.capture_radius_m,
             targets: scene.targets,
             zones: scene.zones,

@@ -162,3 +162,80 @@ fn a_jaw_skewed_30_degrees_off_the_bar_does_not_grasp_it_aligned_it_does() {
         assert!(sim.in_capture_range(Arm::Left).is_none(), "no capture cue");
     }
 }
+
+/// A Cartesian P controller on the left arm's tool through the joint servo (J⁻¹·(3·pose
+/// error)), the tool speed capped at `max_m_s` and 0.1 rad/s, the jaw closing.
+fn lift_toward(sim: &Simulation, target: &nalgebra::Isometry3<f64>, max_m_s: f64) -> Input {
+    let t = sim.end_effector(Arm::Left);
+    let dp = (target.translation.vector - t.translation.vector) * 3.0;
+    let dp = dp * (max_m_s / dp.norm().max(max_m_s));
+    let dr = seaarms_core::control::rotation_error(&target.rotation, &t.rotation) * 3.0;
+    let dr = dr * (0.1 / dr.norm().max(0.1));
+    let v = nalgebra::Vector6::new(dp.x, dp.y, dp.z, dr.x, dr.y, dr.z);
+    let qd = sim
+        .jacobian_world(Arm::Left)
+        .try_inverse()
+        .map(|ji| ji * v)
+        .unwrap_or_else(nalgebra::Vector6::zeros);
+    let mut input = Input::default();
+    input.arms[0].joint_velocity_ref = Some(qd.into());
+    input.arms[0].jaw = -1.0;
+    input
+}
+
+/// A one-arm lift by the lifting point (issue 27: "a one-arm lift by the top lifting point
+/// holds with the finite grip"), in air and in water: the left jaw, aligned, takes the T-bar
+/// over the centre of mass, and a Cartesian controller raises the tool 0.10 m with its attitude
+/// held (as a trainee lifts in Cartesian mode) and holds it there. The bar sits over the centre
+/// of mass, so the jaw carries the box's weight (490 N in air, 249 N in water) as a force
+/// across the bar and almost no moment: within the pads' friction (2 μ_s N = 883 N at full
+/// clamp: Lim Table 1-1's 1 471 N with μ_s = 0.30), so the jaw does not slip. (A joint-space
+/// move to the lifted posture turns the jaw about its closing axis on the way while the box
+/// still sits on the seabed, which resists that turn with up to W·L/2 = 74 N·m against the
+/// pads' 15 N·m torsion limit: the bar slips at lift-off — the slip the first lifting-point
+/// runs showed.)
+#[test]
+#[ignore = "issue 27, open: the jaw slips at lift-off (air and water). Measured: the torsion about \
+            the closing axis grows with the lift force (14 N·m at 85 N) while the box still sits \
+            on the seabed, reaches the 15.2 N·m static limit, and the radial kinetic scaling then \
+            cuts the lift force too; the bar slides out. The rigid jaw-bar constraint cancels the \
+            wrist's angular acceleration against a seated box (seabed rotational stiffness \
+            ~1.8e5 N·m/rad); pads with torsional compliance are the likely fix (docs/physics.md)"]
+fn a_one_arm_lift_by_the_lifting_point_holds_on_the_finite_grip() {
+    for env in [Environment::Air, Environment::subsea()] {
+        let sim0 = sim_in(env);
+        let init = sim0.params().arms[0].initial_q;
+        let at = lifting_point_posture(&sim0, &init, 0.0);
+        let above = lifting_point_posture(&sim0, &at, 0.15);
+        let mut sim = sim_in(env);
+        assert!(close_on_lifting_point(&mut sim, &at, &above), "{env:?}");
+        assert_eq!(sim.arm(Arm::Left).grip.handle, LIFTING_POINT);
+        let z0 = sim.object().pose.translation.vector.z;
+        let mut target = sim.end_effector(Arm::Left);
+        target.translation.vector.z += 0.10;
+        let (mut peak, mut states) = (0.0_f64, vec![sim.grasp_state()]);
+        for k in 0..6000 {
+            let input = lift_toward(&sim, &target, (k as f64 * 1e-3).min(1.0) * 0.03);
+            sim.step(&input);
+            peak = peak.max(sim.arm(Arm::Left).grip.load_fraction);
+            if states.last() != Some(&sim.grasp_state()) {
+                states.push(sim.grasp_state());
+            }
+        }
+        let a = sim.arm(Arm::Left);
+        let dz = sim.object().pose.translation.vector.z - z0;
+        println!(
+            "{env:?}: rose {dz:.4} m, λ {:.3} (peak {peak:.3}), slips {}, states {states:?}",
+            a.grip.load_fraction, a.grip.slips
+        );
+        assert!(a.holding, "{env:?}: dropped");
+        assert_eq!((a.grip.slips, a.grip.slid_out), (0, 0), "{env:?}: slipped");
+        assert!(peak < 1.0, "{env:?}: peak λ {peak}");
+        assert!((0.09..=0.11).contains(&dz), "{env:?}: rose {dz} m");
+        assert_eq!(
+            states,
+            [GraspState::OneOnSurface, GraspState::OneLifted],
+            "{env:?}"
+        );
+    }
+}

@@ -783,3 +783,68 @@ impl Simulation {
         !probe.is_nan() && s.panel.as_ref().is_none_or(PanelState::is_finite)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The latch against chatter like the issue's (issue 27: a box pivoting on a corner under a
+    /// slipping jaw toggled its seabed contact 48 times in 0.5 s, gaps of 1–130 ms, the corner
+    /// lifting well under a millimetre between touches): 10 s of a corner bouncing on the
+    /// seabed — touching (normal force up to 200 N, 5 µm pressed in) and lifting (0 N, up to
+    /// 0.8 mm clear) with a pseudo-random rhythm of 1–130 ms — after a firm set-down, then a
+    /// lift 10 cm clear. The raw contact changes hundreds of times; the latch changes twice
+    /// (on at the set-down, off at the lift), well under one change a second.
+    #[test]
+    fn the_seabed_latch_ignores_a_bouncing_corner_and_follows_a_lift() {
+        let dt = 1e-3;
+        let mut latch = SurfaceLatch::default();
+        let (mut raw, mut raw_changes, mut latch_changes) = (false, 0u32, 0u32);
+        let mut on = latch.on;
+        let mut step = |latch: &mut SurfaceLatch, n: f64, gap: f64| {
+            latch.update(n, gap);
+            let touching = n > 0.0;
+            if touching != raw {
+                raw = touching;
+                raw_changes += 1;
+            }
+            if latch.on != on {
+                on = latch.on;
+                latch_changes += 1;
+            }
+        };
+        // Set down: pressed in, carrying the weight in water.
+        for _ in 0..500 {
+            step(&mut latch, 249.0, -6e-5);
+        }
+        // Bouncing: a linear congruential sequence picks each phase's length (1–130 ms).
+        let mut seed: u64 = 27;
+        let mut next = || {
+            seed = seed.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1);
+            1 + (seed >> 33) % 130
+        };
+        let mut t = 0.0;
+        let mut touching = true;
+        while t < 10.0 {
+            let n_steps = next();
+            for k in 0..n_steps {
+                let s = k as f64 / n_steps as f64;
+                let (n, gap) = if touching {
+                    (200.0 * (std::f64::consts::PI * s).sin(), -5e-6)
+                } else {
+                    (0.0, 8e-4 * (std::f64::consts::PI * s).sin())
+                };
+                step(&mut latch, n, gap);
+                t += dt;
+            }
+            touching = !touching;
+        }
+        // Lifted clear.
+        for k in 0..2000 {
+            step(&mut latch, 0.0, 0.1 * f64::from(k) / 2000.0);
+        }
+        assert!(raw_changes > 100, "the corner bounced only {raw_changes} times");
+        assert_eq!(latch_changes, 2, "{raw_changes} raw contact changes");
+        assert!(!latch.on, "lifted 10 cm: off the seabed");
+    }
+}

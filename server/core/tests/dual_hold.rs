@@ -265,7 +265,8 @@ fn cartesian_pair_lift(
 /// bars (the roll about the bar axis grows; in air the jaws slip about 0.4 s later).
 /// With the translational rows only, each arm's null-space motion (Jun eq. 21, scaled by the
 /// stick's deflection) turns its jaw against the other through the box: the pair loses part of
-/// the lift, and in air the jaws slip.
+/// the lift, and the pads slide at their limit (in air under the slip notice, in water
+/// slipping at 1.23 s).
 /// Other stick speeds and ramps sit just as close to the grip's limit, some slipping and some
 /// not (docs/physics.md, "Moving the pair in Cartesian mode"); trainees lift the pair in closed
 /// loop (the `dual-lift` exercise).
@@ -283,17 +284,20 @@ fn a_cartesian_lift_of_the_pair_keeps_the_box_only_with_the_orientation_held() {
         // The onset and the growing twist take λ to ≈ 1: the pads creep, under the slip notice
         // (2 mm / 2°), and grip again.
         assert!(peak <= 1.1, "{env:?}: peak λ {peak}");
-        let (dz, slips, first, _) = cartesian_pair_lift(env, false, 0.5, 1.5);
+        let (dz, slips, first, peak_rows) = cartesian_pair_lift(env, false, 0.5, 1.5);
         println!(
-            "{env:?} translational rows only: rose {dz:.4} m, {slips} slips, first at {first:?} s"
+            "{env:?} translational rows only: rose {dz:.4} m, {slips} slips, first at {first:?} s, peak λ {peak_rows:.3}"
         );
-        // The null-space twist scales with the stick (ε × 0.1 here, issue 27): in air it still
-        // slips the jaws (first at 1.46 s), in water it no longer does; both lose part of the
-        // lift to it (air 0.0085 m, water 0.018 m of the held 0.0245 / 0.0247 m).
+        // The null-space twist scales with the stick (ε × 0.1 here, issue 27). With the jaws
+        // square to the bars and the grip's limits in the bar frame (issue 27 item 4) it loads
+        // the pads to their limit — they slide (λ reported as 1): in air in steps under the
+        // slip notice (0 slips, peak λ 1.000; before item 4 it slipped at 1.46 s), in water
+        // with a slip at 1.23 s — and both lose part of the lift to it (air 0.0158 m, water
+        // 0.0209 m of the held 0.0245 / 0.0247 m).
         if env == Environment::Air {
             assert!(
-                slips > 0,
-                "{env:?}: the null-space twist must make the jaws slip"
+                slips > 0 || peak_rows >= 1.0,
+                "{env:?}: the null-space twist must take the pads to their limit (λ {peak_rows})"
             );
         }
         assert!(dz < 0.9 * dz_held, "{env:?}: rose {dz} m");

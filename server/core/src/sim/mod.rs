@@ -843,7 +843,10 @@ mod tests {
         for k in 0..2000 {
             step(&mut latch, 0.0, 0.1 * f64::from(k) / 2000.0);
         }
-        assert!(raw_changes > 100, "the corner bounced only {raw_changes} times");
+        assert!(
+            raw_changes > 100,
+            "the corner bounced only {raw_changes} times"
+        );
         assert_eq!(latch_changes, 2, "{raw_changes} raw contact changes");
         assert!(!latch.on, "lifted 10 cm: off the seabed");
     }

@@ -135,7 +135,7 @@ impl Handle {
         };
         let np = n - a * n.dot(&a);
         let norm = np.norm();
-        if !(norm > 1e-9) {
+        if norm.is_nan() || norm <= 1e-9 {
             return *jaw;
         }
         let np = np / norm;

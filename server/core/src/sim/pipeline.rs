@@ -342,7 +342,7 @@ impl Simulation {
             .enumerate()
             .map(|(k, h)| (k, h.distance_m(&p.coords)))
             .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
-        if !(d <= op.capture_radius_m) {
+        if d.is_nan() || d > op.capture_radius_m {
             return None;
         }
         let jaw = (o.rotation.inverse() * tool.rotation).to_rotation_matrix();

@@ -122,6 +122,28 @@ fn a_scripted_seabed_strike_is_counted_once() {
         {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -60, "tolerance_deg": 1},
     ]))
     .expect("script");
-    let a = run(Arc::new(spec), Driver::Autopilot);
+    let r = seaarms::exercises::run_recorded(
+        Arc::new(spec),
+        &magnum(),
+        Driver::Autopilot,
+        1,
+        &mut |_| {},
+    )
+    .expect("headless run");
+    let a = serde_json::to_value(&r.assessment).expect("assessment JSON");
     assert_eq!(a["seabed_strikes"], 1.0, "{a}");
+    // The record has the core's strike event once, with its partner, impact speed and peak
+    // force (sim::Event::Strike), beside the assessment's own "strike" exercise event.
+    let strikes: Vec<_> = r.events.iter().filter(|e| e.kind == "strike").collect();
+    assert_eq!(strikes.len(), 1, "{:?}", r.events);
+    let d = &strikes[0].detail;
+    assert_eq!(
+        (d["arm"].as_str(), d["partner"].as_str()),
+        (Some("right"), Some("seabed"))
+    );
+    assert!(
+        d["impact_speed_m_s"].as_f64().expect("speed") >= 0.02,
+        "{d}"
+    );
+    assert!(d["peak_force_n"].as_f64().expect("force") > 100.0, "{d}");
 }

@@ -102,6 +102,8 @@ pub struct HeadlessRun {
     pub inputs: Vec<u8>,
     /// Simulated seconds it ran.
     pub sim_seconds: f64,
+    /// The events it recorded (physics events, exercise events, commands), in order.
+    pub events: Vec<crate::db::attempt::EventRecord>,
 }
 
 /// [`run_headless`], calling `observe` after every step, and keeping the attempt's record.
@@ -167,11 +169,12 @@ pub fn run_recorded(
         .ok_or_else(|| anyhow::anyhow!("no exercise"))?;
     let sim_seconds = live.sim().time_s();
     live.end_attempt(crate::sessions::AttemptStop::Left);
-    let (mut init, mut inputs) = (None, Vec::new());
+    let (mut init, mut inputs, mut events) = (None, Vec::new(), Vec::new());
     for msg in live.take_records(false) {
         match msg {
             RecordMsg::AttemptStarted(a) => init = Some(serde_json::from_value(a.init)?),
             RecordMsg::AttemptInputs { bytes, .. } => inputs.extend(bytes),
+            RecordMsg::Event(e) => events.push(*e),
             _ => {}
         }
     }
@@ -180,5 +183,6 @@ pub fn run_recorded(
         init: init.ok_or_else(|| anyhow::anyhow!("the attempt recorded no start"))?,
         inputs,
         sim_seconds,
+        events,
     })
 }

@@ -3,8 +3,8 @@
 //! per arm and dual (Lim eqs 3.62, 3.68; Hong eq. 4.1), JLM (Jun eq. 16), forces, warnings.
 
 use seaarms_core::manipulability::Measures;
-use seaarms_core::sim::{Arm, ArmContacts, ArmPart};
 use seaarms_core::sim::measures::measures;
+use seaarms_core::sim::{Arm, ArmContacts, ArmPart};
 
 use super::Live;
 use crate::protocol::PoseOut;

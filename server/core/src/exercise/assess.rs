@@ -315,7 +315,11 @@ impl Assessor {
             for p in [Partner::Vehicle, Partner::OtherArm] {
                 if new_strikes(p, &self.strikes_at_start) > 0 {
                     m.obstacle_strikes += new_strikes(p, &self.strikes_at_start) as f64;
-                    let what = if p == Partner::Vehicle { "the vehicle" } else { "the other arm" };
+                    let what = if p == Partner::Vehicle {
+                        "the vehicle"
+                    } else {
+                        "the other arm"
+                    };
                     events.push(Event {
                         kind: "obstacle",
                         t,

@@ -38,9 +38,9 @@ use nalgebra::{
     Isometry3, Matrix3, Matrix3x6, Matrix6, Point3, SMatrix, SVector, Vector3, Vector6,
 };
 
-use super::{Arm, Event, Simulation};
 use super::arm::ArmTerms;
 use super::object::ObjectTerms;
+use super::{Arm, Event, Simulation};
 use crate::collision::{
     ArmPart, ArmShapes, CollisionSpec, Epa, Exclusions, Item, Partner, Posed, Touch, World,
     WorldGeometry, arm_touches, world_touches,
@@ -708,7 +708,10 @@ impl Simulation {
                     // A new strike; one still open on another partner is reported first.
                     if let Some(s) = rep.last_strike.as_mut().filter(|s| s.ongoing) {
                         s.ongoing = false;
-                        self.events.push(Event::Strike { arm: Arm::BOTH[i], strike: *s });
+                        self.events.push(Event::Strike {
+                            arm: Arm::BOTH[i],
+                            strike: *s,
+                        });
                     }
                     rep.strikes[k] += 1;
                     rep.last_strike = Some(Strike {
@@ -727,7 +730,10 @@ impl Simulation {
                     s.peak_force_n = s.peak_force_n.max(per_partner[k]);
                     if !touching[k] || time - s.time_s >= STRIKE_WINDOW_S {
                         s.ongoing = false;
-                        self.events.push(Event::Strike { arm: Arm::BOTH[i], strike: *s });
+                        self.events.push(Event::Strike {
+                            arm: Arm::BOTH[i],
+                            strike: *s,
+                        });
                     }
                 }
             }

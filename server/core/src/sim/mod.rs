@@ -72,9 +72,9 @@
 
 mod arm;
 mod constraint;
+mod contact;
 mod events;
 pub mod measures;
-mod contact;
 mod object;
 mod operator;
 mod panel;
@@ -83,12 +83,12 @@ pub mod scenario;
 mod setup;
 pub mod water;
 
+pub use crate::collision::{ArmPart, Partner};
 pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
 pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
+pub use contact::{ArmContact, ArmContacts, ContactParams, Contacts, STRIKE_WINDOW_S, Strike};
 pub use events::{Event, MAX_EVENTS_PER_STEP};
 pub use operator::{ControlMode, Operator, Sticks};
-pub use crate::collision::{ArmPart, Partner};
-pub use contact::{ArmContact, ArmContacts, ContactParams, Contacts, STRIKE_WINDOW_S, Strike};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
 pub use water::{Current, Environment, Flow, Medium, Water};
 

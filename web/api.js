@@ -183,7 +183,8 @@ export const messages = {
   /** Stick input: `arms` {left, right: {axes[6], grip}}, `object` the object's twist
    * sticks in closed loop (else absent). */
   input: (seq, arms, object) => (object ? { type: 'input', seq, arms, object } : { type: 'input', seq, arms }),
-  /** A change of settings ({control_mode, control_method, arm_speed}, any of them). */
+  /** A change of settings ({control_mode, control_method, arm_speed, hold_orientation}, any
+   * of them). */
   settings: (patch) => ({ type: 'settings', ...patch }),
   reset: () => ({ type: 'reset' }),
   release: () => ({ type: 'release' }),

@@ -19,7 +19,7 @@ const { view, status, plots, controls: viewControls } = mountViews();
 const banner = new Banner($('banner'));
 const showBanner = (kind, text, ms = 0) => banner.show(kind, text, ms);
 let selectedArm = localStorage.getItem('seaarms.arm') === 'right' ? 'right' : 'left';
-let settings = { control_mode: 'joint', control_method: 'open', arm_speed: 1 };
+let settings = { control_mode: 'joint', control_method: 'open', arm_speed: 1, hold_orientation: true };
 
 const params = new URLSearchParams(location.search);
 let lastEnded = null; // the last `ended` message ({reason, text}), for tests
@@ -79,7 +79,7 @@ const conn = new Connection({
     followScenario(s);
     plots.add(s, selectedArm);
     if (s.settings.control_mode !== settings.control_mode || s.settings.control_method !== settings.control_method ||
-        s.settings.arm_speed !== settings.arm_speed) {
+        s.settings.arm_speed !== settings.arm_speed || s.settings.hold_orientation !== settings.hold_orientation) {
       settings = { ...s.settings };
       syncControls();
     }
@@ -158,7 +158,7 @@ async function chooseAndStart() {
 }
 
 function syncControls() {
-  $('sel-mode').value = settings.control_mode;
+  $('sel-mode').value = settings.control_mode === 'cartesian' && !settings.hold_orientation ? 'cartesian-free' : settings.control_mode;
   $('sel-method').value = settings.control_method;
   const sp = SPEEDS.reduce((a, b) => (Math.abs(b - settings.arm_speed) < Math.abs(a - settings.arm_speed) ? b : a));
   $('sel-speed').value = String(sp);
@@ -266,7 +266,8 @@ $('chk-touch').checked = touch.visible;
 $('chk-touch').addEventListener('change', (e) => { touch.visible = e.target.checked; });
 
 $('sel-arm').addEventListener('change', (e) => setArm(e.target.value));
-$('sel-mode').addEventListener('change', (e) => sendSettings({ control_mode: e.target.value }));
+$('sel-mode').addEventListener('change', (e) => sendSettings(e.target.value === 'joint' ? { control_mode: 'joint' }
+  : { control_mode: 'cartesian', hold_orientation: e.target.value === 'cartesian' }));
 $('sel-method').addEventListener('change', (e) => sendSettings({ control_method: e.target.value }));
 $('sel-speed').addEventListener('change', (e) => sendSettings({ arm_speed: +e.target.value }));
 $('btn-reset').addEventListener('click', actions.reset);

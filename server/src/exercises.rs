@@ -136,7 +136,7 @@ pub fn run_recorded(
                 pilot.tick(live.sim(), &run.facts())
             };
             if let Some((mode, method)) = out.settings {
-                live.apply(&Command::settings(mode, method, None)?)?;
+                live.apply(&Command::settings(mode, method, None, None)?)?;
             }
             if let Some(answer) = out.answer {
                 live.apply(&Command::Diagnose {

@@ -210,6 +210,10 @@ pub enum ClientMessage {
         /// Arm speed in (0, 1] (Lim Fig. 4-3).
         #[serde(default)]
         arm_speed: Option<f64>,
+        /// Cartesian translation holds the jaw's orientation (true) or leaves the spare DOF
+        /// to the redundancy resolution (false, "translation only").
+        #[serde(default)]
+        hold_orientation: Option<bool>,
     },
     /// Back to the initial position (Lim §4.1 "Initial Position").
     Reset,
@@ -293,6 +297,11 @@ pub struct Settings {
     pub control_method: ControlMethod,
     /// Arm speed in (0, 1].
     pub arm_speed: f64,
+    /// Cartesian translation holds the jaw's orientation (the default for a new session;
+    /// false: translation only, the spare DOF to the redundancy resolution). Absent in
+    /// records made before the hold existed: false, as they ran.
+    #[serde(default)]
+    pub hold_orientation: bool,
 }
 
 impl Default for Settings {
@@ -301,6 +310,7 @@ impl Default for Settings {
             control_mode: ControlMode::Joint,
             control_method: ControlMethod::Open,
             arm_speed: 1.0,
+            hold_orientation: true,
         }
     }
 }

@@ -186,6 +186,8 @@ impl Live {
             false,
         )?;
         live.operator.set_speed(settings.arm_speed);
+        live.operator
+            .set_hold_orientation(settings.hold_orientation);
         for f in faults {
             live.inject_fault(*f);
         }
@@ -218,6 +220,7 @@ impl Live {
         let mut operator = Operator::new(&models[0], &models[1]);
         operator.set_mode(mode.or(control.map(|c| c.mode)).unwrap_or_default());
         operator.set_method(method.or(control.map(|c| c.method)).unwrap_or_default());
+        operator.set_hold_orientation(control.and_then(|c| c.hold_orientation).unwrap_or(true));
         let now = Instant::now();
         let mut live = Live {
             measures: measures(&sim),
@@ -386,6 +389,7 @@ impl Live {
                 control_mode: Some(c.mode),
                 control_method: Some(c.method),
                 arm_speed: None,
+                hold_orientation: Some(c.hold_orientation.unwrap_or(true)),
             });
         }
         self.reset();
@@ -423,6 +427,7 @@ impl Live {
             control_mode: self.operator.mode(),
             control_method: self.operator.method(),
             arm_speed: self.operator.speed(),
+            hold_orientation: self.operator.hold_orientation(),
         }
     }
 
@@ -462,6 +467,9 @@ impl Live {
         }
         if let Some(m) = change.control_method {
             self.operator.set_method(m);
+        }
+        if let Some(h) = change.hold_orientation {
+            self.operator.set_hold_orientation(h);
         }
     }
 

@@ -102,6 +102,10 @@ pub struct ControlSpec {
     /// Control method.
     #[serde(default)]
     pub method: ControlMethod,
+    /// Cartesian translation holds the jaw's orientation ([`crate::sim::Operator`]); absent:
+    /// held, as in a new session. An attempt starts with this setting whatever came before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_orientation: Option<bool>,
     /// The working arm(s): their posture and smoothness are assessed.
     pub arm: ArmSel,
 }

@@ -11,10 +11,11 @@
 //! that drives both jaws open. The live session, the headless exercises, the replay and the
 //! tests all drive the simulation through it ([`Operator::step`]).
 
+use nalgebra::UnitQuaternion;
 use serde::{Deserialize, Serialize};
 
 use super::{Arm, ControlMethod, Input, Simulation};
-use crate::control::teleop::cartesian_to_joint_velocity;
+use crate::control::teleop::{MAX_ANGULAR_SPEED_RAD_S, cartesian_to_joint_velocity};
 use crate::grasp::GraspState;
 use crate::hydraulics::N_ACT;
 use crate::model::Model;
@@ -34,6 +35,25 @@ pub enum ControlMode {
     /// the joint velocities.
     Cartesian,
 }
+
+/// Gain of the orientation hold (1/s): the angular rate commanded per radian of orientation
+/// error while a Cartesian translation holds the jaw's orientation ([`Operator::input`]). A
+/// time constant of 0.125 s, five times the valve spool's lag
+/// ([`crate::hydraulics::SPOOL_TIME_CONSTANT_S`], 25 ms), so the correction does not excite
+/// the servo; measured on 20 cm moves from the start posture (tests/orientation_hold.rs), the
+/// jaw turns by at most 1.13° at K = 4 s⁻¹, 0.66° at 8 s⁻¹ and 0.40° at 12 s⁻¹ (the joint
+/// servo's per-joint lag, caught up after the stick is centred, is what turns it).
+pub const ORIENTATION_HOLD_GAIN_PER_S: f64 = 8.0;
+
+/// How long the hold goes on after the translation stick is centred (s): the joints come to
+/// rest at different rates (spool lag, inertia) and would turn the jaw by a degree or two
+/// as they stop; the hold keeps correcting while they do.
+pub const ORIENTATION_SETTLE_S: f64 = 0.5;
+
+/// Orientation error (rad) above which the hold is reported lost (a joint limit or a
+/// singularity keeps the resolver from turning the jaw back): 2°, twice the acceptance's 1°
+/// over a 20 cm move.
+pub const ORIENTATION_LOST_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
 
 /// One arm's sticks: six axes and the grip, each in [−1, 1] (fractions of full stick).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -61,6 +81,14 @@ pub struct Operator {
     redundancy: [Redundancy; 2],
     /// The arm models (left, right) in their own base frames, as the resolvers use them.
     models: [Model; 2],
+    /// Cartesian translation holds the jaw's orientation (default) or leaves the three spare
+    /// DOF to the redundancy resolution (the translational-only option).
+    hold_orientation: bool,
+    /// Per arm: the jaw orientation (world) held during the current translation, and the
+    /// simulated time until which it is held after the stick is centred.
+    held: [Option<(UnitQuaternion<f64>, f64)>; 2],
+    /// Per arm: the held orientation's error at the last input (rad; 0 when not holding).
+    orientation_error_rad: [f64; 2],
     /// The next step's input: method and speed are the settings; valves, jaws, joint-velocity
     /// references and the object twist are filled by [`Operator::input`].
     input: Input,
@@ -80,8 +108,31 @@ impl Operator {
                 Redundancy::new(right, RedundancyParams::default()),
             ],
             models: [left.clone(), right.clone()],
+            hold_orientation: true,
+            held: [None; 2],
+            orientation_error_rad: [0.0; 2],
             input: Input::default(),
         }
+    }
+
+    /// Whether a Cartesian translation holds the jaw's orientation (the default).
+    pub fn hold_orientation(&self) -> bool {
+        self.hold_orientation
+    }
+
+    /// Cartesian translation holds the jaw's orientation (`true`, the default) or resolves
+    /// only the three translational rows, leaving the spare DOF to the redundancy resolution
+    /// (`false`).
+    pub fn set_hold_orientation(&mut self, hold: bool) {
+        self.hold_orientation = hold;
+        self.held = [None; 2];
+        self.orientation_error_rad = [0.0; 2];
+    }
+
+    /// `arm`'s orientation error while a translation holds it (rad; 0 otherwise): above
+    /// [`ORIENTATION_LOST_RAD`] the hold is lost (a limit or a singularity).
+    pub fn orientation_error_rad(&self, arm: Arm) -> f64 {
+        self.orientation_error_rad[arm.index()]
     }
 
     /// The control mode.
@@ -103,6 +154,7 @@ impl Operator {
     /// not drive the arm the other way).
     pub fn set_mode(&mut self, mode: ControlMode) {
         self.mode = mode;
+        self.held = [None; 2];
         for s in &mut self.sticks {
             s.axes = [0.0; N_ACT];
         }
@@ -145,6 +197,8 @@ impl Operator {
         ];
         self.input.arms = Default::default();
         self.input.object_velocity = [0.0; 6];
+        self.held = [None; 2];
+        self.orientation_error_rad = [0.0; 2];
     }
 
     /// No stick, grip or object input: every axis and grip below `threshold` in magnitude
@@ -159,10 +213,15 @@ impl Operator {
 
     /// Stage 0: the input of `sim`'s next step. While a release runs both jaws are driven
     /// open. Joint mode puts each axis on its valve; Cartesian mode turns each arm's axes
-    /// into a joint-velocity reference for the joint servo, holding the tool's orientation
-    /// while both jaws hold the object (their closed chain fixes it,
-    /// [`cartesian_to_joint_velocity`]). The object twist is scaled to the controller's
-    /// maximum speeds.
+    /// into a joint-velocity reference for the joint servo ([`cartesian_to_joint_velocity`]),
+    /// holding the tool's orientation while both jaws hold the object (their closed chain
+    /// fixes it) and, with [`Operator::hold_orientation`], during a translation: the jaw's
+    /// orientation when the translation began is held by an angular-rate command
+    /// ω = K·θ (θ the rotation vector from the jaw's orientation to the held one, world;
+    /// K = [`ORIENTATION_HOLD_GAIN_PER_S`]) on the six-row resolution, and for
+    /// [`ORIENTATION_SETTLE_S`] after the stick is centred. Turning the jaw (an angular axis)
+    /// ends the hold. The object twist is scaled to the
+    /// controller's maximum speeds.
     pub fn input(&mut self, sim: &Simulation) -> &Input {
         let releasing = sim.time_s() < self.release_until_s;
         let chain = sim.grasp_state() == GraspState::BothHolding;
@@ -177,18 +236,44 @@ impl Operator {
             // The control-mode decision (the only one).
             (a.valves, a.joint_velocity_ref) = match self.mode {
                 ControlMode::Joint => (self.sticks[i].axes, None),
-                ControlMode::Cartesian => (
-                    [0.0; N_ACT],
-                    Some(cartesian_to_joint_velocity(
-                        &mut self.redundancy[i],
-                        &self.models[i],
-                        &sim.params().arms[i].base.rotation,
-                        &sim.arm(arm).q,
-                        &self.sticks[i].axes,
-                        chain,
-                        dt_s,
-                    )),
-                ),
+                ControlMode::Cartesian => {
+                    let mut axes = self.sticks[i].axes;
+                    let translating = axes[..3].iter().any(|v| *v != 0.0);
+                    let turning = axes[3..].iter().any(|v| *v != 0.0);
+                    let t = sim.time_s();
+                    let settling = self.held[i].is_some_and(|(_, until)| t < until);
+                    let hold =
+                        self.hold_orientation && (translating || settling) && !turning && !chain;
+                    self.orientation_error_rad[i] = 0.0;
+                    if hold {
+                        let now = sim.end_effector(arm).rotation;
+                        let (held, _) = *self.held[i].get_or_insert((now, 0.0));
+                        if translating {
+                            self.held[i] = Some((held, t + ORIENTATION_SETTLE_S));
+                        }
+                        let theta = (held * now.inverse()).scaled_axis();
+                        self.orientation_error_rad[i] = theta.norm();
+                        for k in 0..3 {
+                            axes[3 + k] = (ORIENTATION_HOLD_GAIN_PER_S * theta[k]
+                                / MAX_ANGULAR_SPEED_RAD_S)
+                                .clamp(-1.0, 1.0);
+                        }
+                    } else {
+                        self.held[i] = None;
+                    }
+                    (
+                        [0.0; N_ACT],
+                        Some(cartesian_to_joint_velocity(
+                            &mut self.redundancy[i],
+                            &self.models[i],
+                            &sim.params().arms[i].base.rotation,
+                            &sim.arm(arm).q,
+                            &axes,
+                            chain || hold,
+                            dt_s,
+                        )),
+                    )
+                }
             };
         }
         let cp = &sim.params().control;

@@ -178,7 +178,8 @@ impl Command {
                 control_mode,
                 control_method,
                 arm_speed,
-            } => Command::settings(control_mode, control_method, arm_speed)
+                hold_orientation,
+            } => Command::settings(control_mode, control_method, arm_speed, hold_orientation)
                 .map_err(|e| e.to_string())?,
             ClientMessage::Reset => Command::Reset,
             ClientMessage::Pause => Command::Pause,
@@ -371,8 +372,8 @@ mod tests {
         }
         assert!(!Command::ClearFaults.permitted(Actor::Trainee));
         assert!(!Command::Message("x".into()).permitted(Actor::Trainee));
-        assert!(Command::settings(None, None, Some(0.0)).is_err());
-        assert!(Command::settings(None, None, Some(1.0)).is_ok());
+        assert!(Command::settings(None, None, Some(0.0), None).is_err());
+        assert!(Command::settings(None, None, Some(1.0), None).is_ok());
         assert!(Command::scenario("nope").is_err());
     }
 }

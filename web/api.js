@@ -183,6 +183,9 @@ export const messages = {
   /** Stick input: `arms` {left, right: {axes[6], grip}}, `object` the object's twist
    * sticks in closed loop (else absent). */
   input: (seq, arms, object) => (object ? { type: 'input', seq, arms, object } : { type: 'input', seq, arms }),
+  /** A keyboard tap: `arm` moves a bounded amount along `axes` (six values in [−1, 1], world
+   * frame in Cartesian mode) and stops (docs/api.md). */
+  jog: (arm, axes) => ({ type: 'jog', arm, axes }),
   /** A change of settings ({control_mode, control_method, arm_speed, hold_orientation}, any
    * of them). */
   settings: (patch) => ({ type: 'settings', ...patch }),

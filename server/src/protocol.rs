@@ -199,6 +199,14 @@ pub enum ClientMessage {
         #[serde(default)]
         object: Option<Vec<f64>>,
     },
+    /// A keyboard tap: `arm` (`left`, `right`) moves a bounded amount along `axes` (six
+    /// values in [−1, 1], as a stick's) and stops (docs/api.md).
+    Jog {
+        /// `left` or `right`.
+        arm: String,
+        /// Joint mode: per joint; Cartesian mode: [vx vy vz wx wy wz] (world frame).
+        axes: Vec<f64>,
+    },
     /// Change settings; absent fields are unchanged.
     Settings {
         /// Joint or Cartesian.

@@ -489,6 +489,11 @@ impl Live {
         self.paused = by;
     }
 
+    /// A keyboard tap on `arm` (`seaarms_core::sim::Operator::jog`).
+    pub fn jog(&mut self, arm: seaarms_core::sim::Arm, axes: &[f64; 6]) {
+        self.operator.jog(&self.sim, arm, axes);
+    }
+
     /// Drives both jaws open for `duration_s` of simulated time, whatever the sticks say.
     pub fn release(&mut self, duration_s: f64) {
         self.operator.release(self.sim.time_s() + duration_s);

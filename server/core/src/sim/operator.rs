@@ -11,11 +11,13 @@
 //! that drives both jaws open. The live session, the headless exercises, the replay and the
 //! tests all drive the simulation through it ([`Operator::step`]).
 
-use nalgebra::UnitQuaternion;
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::{Arm, ControlMethod, Input, Simulation};
-use crate::control::teleop::{MAX_ANGULAR_SPEED_RAD_S, cartesian_to_joint_velocity};
+use crate::control::teleop::{
+    MAX_ANGULAR_SPEED_RAD_S, MAX_LINEAR_SPEED_M_S, cartesian_to_joint_velocity,
+};
 use crate::grasp::GraspState;
 use crate::hydraulics::N_ACT;
 use crate::model::Model;
@@ -55,6 +57,33 @@ pub const ORIENTATION_SETTLE_S: f64 = 0.5;
 /// over a 20 cm move.
 pub const ORIENTATION_LOST_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
 
+/// A jog at full arm speed and a full axis (the amounts scale with both): a joint turns by 2°
+/// (joint mode); the jaw moves by 1 cm or turns by 2° (Cartesian mode). A keyboard tap is a
+/// jog (issue 28: a tap moves a bounded, repeatable amount at every arm speed), small enough
+/// to line a jaw up within the exercises' ±3° and 1 cm tolerances in a few taps.
+pub const JOG_JOINT_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
+/// See [`JOG_JOINT_RAD`].
+pub const JOG_LINEAR_M: f64 = 0.01;
+/// See [`JOG_JOINT_RAD`].
+pub const JOG_ANGLE_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
+/// Gain of a jog's approach to its target (1/s; rate ∝ remaining distance, at most the
+/// joints' nominal speeds or the Cartesian maxima, times the arm speed).
+pub const JOG_GAIN_PER_S: f64 = 8.0;
+/// A jog gives up after this long (s): a target behind an obstacle or a limit.
+pub const JOG_TIMEOUT_S: f64 = 3.0;
+/// A jog is done within these of its target: 0.01° per joint; 0.1 mm and 0.01° for the jaw.
+const JOG_DONE_RAD: f64 = 0.01 * std::f64::consts::PI / 180.0;
+const JOG_DONE_M: f64 = 1.0e-4;
+
+/// A jog under way: its target, and when it gives up.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Jog {
+    /// Joint angles (rad), joint mode.
+    Joints([f64; N_ACT], f64),
+    /// The jaw's pose (world), Cartesian mode.
+    Pose(Isometry3<f64>, f64),
+}
+
 /// One arm's sticks: six axes and the grip, each in [−1, 1] (fractions of full stick).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Sticks {
@@ -89,6 +118,8 @@ pub struct Operator {
     held: [Option<(UnitQuaternion<f64>, f64)>; 2],
     /// Per arm: the held orientation's error at the last input (rad; 0 when not holding).
     orientation_error_rad: [f64; 2],
+    /// Per arm: the jog under way ([`Operator::jog`]).
+    jogs: [Option<Jog>; 2],
     /// The next step's input: method and speed are the settings; valves, jaws, joint-velocity
     /// references and the object twist are filled by [`Operator::input`].
     input: Input,
@@ -111,6 +142,7 @@ impl Operator {
             hold_orientation: true,
             held: [None; 2],
             orientation_error_rad: [0.0; 2],
+            jogs: [None; 2],
             input: Input::default(),
         }
     }
@@ -155,6 +187,7 @@ impl Operator {
     pub fn set_mode(&mut self, mode: ControlMode) {
         self.mode = mode;
         self.held = [None; 2];
+        self.jogs = [None; 2];
         for s in &mut self.sticks {
             s.axes = [0.0; N_ACT];
         }
@@ -199,6 +232,59 @@ impl Operator {
         self.input.object_velocity = [0.0; 6];
         self.held = [None; 2];
         self.orientation_error_rad = [0.0; 2];
+        self.jogs = [None; 2];
+    }
+
+    /// A jog of `arm` (a keyboard tap): `axes` (each in [−1, 1], as a stick's; clamped,
+    /// non-finite read as 0) times the arm speed times [`JOG_JOINT_RAD`] per joint in joint
+    /// mode, or [`JOG_LINEAR_M`] along and [`JOG_ANGLE_RAD`] about the world axes at the jaw in
+    /// Cartesian mode. The target is taken from `sim` now (joint targets within the limits);
+    /// the arm goes there by the joint servo and stops, whatever the tap's length. A stick
+    /// on that arm, a mode change or a reset cancels it; it gives up after
+    /// [`JOG_TIMEOUT_S`]. Nothing in closed loop while both jaws hold (the object is driven
+    /// then).
+    pub fn jog(&mut self, sim: &Simulation, arm: Arm, axes: &[f64; N_ACT]) {
+        let a: [f64; N_ACT] =
+            core::array::from_fn(|k| crate::finite_or(axes[k], 0.0).clamp(-1.0, 1.0));
+        let i = arm.index();
+        let speed = crate::finite_or(self.input.speed_scale, 0.0).clamp(0.0, 1.0);
+        if a.iter().all(|v| *v == 0.0) || speed == 0.0 {
+            return;
+        }
+        let until = sim.time_s() + JOG_TIMEOUT_S;
+        self.jogs[i] = Some(match self.mode {
+            ControlMode::Joint => {
+                let q = sim.arm(arm).q;
+                let joints = &sim.model(arm).joints;
+                Jog::Joints(
+                    core::array::from_fn(|j| {
+                        let t = q[j] + a[j] * speed * JOG_JOINT_RAD;
+                        let [lo, hi] = joints[j].limits;
+                        t.clamp(lo.min(q[j]), hi.max(q[j]))
+                    }),
+                    until,
+                )
+            }
+            ControlMode::Cartesian => {
+                let now = sim.end_effector(arm);
+                let d = Vector3::new(a[0], a[1], a[2]) * (speed * JOG_LINEAR_M);
+                let r = UnitQuaternion::from_scaled_axis(
+                    Vector3::new(a[3], a[4], a[5]) * (speed * JOG_ANGLE_RAD),
+                );
+                Jog::Pose(
+                    Isometry3::from_parts(
+                        Translation3::from(now.translation.vector + d),
+                        r * now.rotation,
+                    ),
+                    until,
+                )
+            }
+        });
+    }
+
+    /// Whether `arm` has a jog under way.
+    pub fn jogging(&self, arm: Arm) -> bool {
+        self.jogs[arm.index()].is_some()
     }
 
     /// No stick, grip or object input: every axis and grip below `threshold` in magnitude
@@ -233,6 +319,29 @@ impl Operator {
             }
             let a = &mut self.input.arms[i];
             a.jaw = self.sticks[i].grip;
+            // A jog runs while its arm's sticks are centred (a stick takes over).
+            if self.sticks[i].axes.iter().any(|v| *v != 0.0)
+                || self.jogs[i].is_some_and(|j| match j {
+                    Jog::Joints(_, until) | Jog::Pose(_, until) => sim.time_s() >= until,
+                })
+            {
+                self.jogs[i] = None;
+            }
+            if let Some(jog) = self.jogs[i] {
+                let (valves, qd_ref, done) = jog_step(
+                    &jog,
+                    sim,
+                    arm,
+                    &mut self.redundancy[i],
+                    &self.models[i],
+                    dt_s,
+                );
+                (a.valves, a.joint_velocity_ref) = (valves, Some(qd_ref));
+                if done {
+                    self.jogs[i] = None;
+                }
+                continue;
+            }
             // The control-mode decision (the only one).
             (a.valves, a.joint_velocity_ref) = match self.mode {
                 ControlMode::Joint => (self.sticks[i].axes, None),
@@ -298,6 +407,58 @@ impl Operator {
     pub fn step(&mut self, sim: &mut Simulation) {
         let input = self.input(sim);
         sim.step(input);
+    }
+}
+
+/// One input of a jog: centred valves and the servo's joint-velocity reference towards the
+/// target (rate = [`JOG_GAIN_PER_S`] × the remaining distance, capped at the nominal joint
+/// speeds or the Cartesian maxima), and whether the target is reached.
+fn jog_step(
+    jog: &Jog,
+    sim: &Simulation,
+    arm: Arm,
+    resolver: &mut Redundancy,
+    model: &Model,
+    dt_s: f64,
+) -> ([f64; N_ACT], [f64; N_ACT], bool) {
+    match jog {
+        Jog::Joints(target, _) => {
+            let q = sim.arm(arm).q;
+            let hp = &sim.params().arms[arm.index()].hydraulics;
+            let done = (0..N_ACT).all(|j| (target[j] - q[j]).abs() < JOG_DONE_RAD);
+            let qd = core::array::from_fn(|j| {
+                let max = hp.actuators[j].nominal_speed_rad_s;
+                (JOG_GAIN_PER_S * (target[j] - q[j])).clamp(-max, max)
+            });
+            ([0.0; N_ACT], if done { [0.0; N_ACT] } else { qd }, done)
+        }
+        Jog::Pose(target, _) => {
+            let now = sim.end_effector(arm);
+            let dp = target.translation.vector - now.translation.vector;
+            let theta = (target.rotation * now.rotation.inverse()).scaled_axis();
+            let done = dp.norm() < JOG_DONE_M && theta.norm() < JOG_DONE_RAD;
+            if done {
+                return ([0.0; N_ACT], [0.0; N_ACT], true);
+            }
+            let axes: [f64; N_ACT] = core::array::from_fn(|k| {
+                let v = if k < 3 {
+                    dp[k] / MAX_LINEAR_SPEED_M_S
+                } else {
+                    theta[k - 3] / MAX_ANGULAR_SPEED_RAD_S
+                };
+                (JOG_GAIN_PER_S * v).clamp(-1.0, 1.0)
+            });
+            let qd = cartesian_to_joint_velocity(
+                resolver,
+                model,
+                &sim.params().arms[arm.index()].base.rotation,
+                &sim.arm(arm).q,
+                &axes,
+                true,
+                dt_s,
+            );
+            ([0.0; N_ACT], qd, false)
+        }
     }
 }
 

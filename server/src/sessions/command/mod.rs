@@ -14,6 +14,7 @@
 //! | file | command | wire (`type`) | who | logged (`c`) |
 //! | --- | --- | --- | --- | --- |
 //! | [`input`] | [`Command::Input`] | WS `input` | trainee | `input` (quanta) |
+//! | [`jog`] | [`Command::Jog`] | WS `jog` | trainee | `jog` |
 //! | [`settings`] | [`Command::Settings`] | WS `settings` | trainee | `settings` |
 //! | [`reset`] | [`Command::Reset`] | WS, REST `reset` | trainee | — (a new attempt) |
 //! | [`pause`] | [`Command::Pause`], [`Command::Resume`] | WS, REST `pause`, `resume` | trainee | — (no steps pass) |
@@ -34,6 +35,7 @@ pub mod diagnose;
 pub mod end;
 pub mod fault;
 pub mod input;
+pub mod jog;
 pub mod log;
 pub mod message;
 pub mod pause;
@@ -74,6 +76,8 @@ pub use settings::SettingsChange;
 pub enum Command {
     /// New stick input ([`input`]).
     Input(StickInput),
+    /// A keyboard tap: move a bounded amount and stop ([`jog`]).
+    Jog(jog::Jog),
     /// Change settings ([`settings`]).
     Settings(SettingsChange),
     /// Back to the initial position, Lim §4.1 ([`reset`]).
@@ -132,6 +136,7 @@ impl Command {
     pub fn name(&self) -> &'static str {
         match self {
             Command::Input(_) => "input",
+            Command::Jog(_) => "jog",
             Command::Settings(_) => "settings",
             Command::Reset => "reset",
             Command::Pause => "pause",
@@ -154,6 +159,7 @@ impl Command {
             Actor::Trainee => matches!(
                 self,
                 Command::Input(_)
+                    | Command::Jog(_)
                     | Command::Settings(_)
                     | Command::Reset
                     | Command::Pause
@@ -173,6 +179,9 @@ impl Command {
         Ok(match msg {
             ClientMessage::Input { seq, arms, object } => {
                 Command::input(seq, &arms, object.as_deref(), notes)?
+            }
+            ClientMessage::Jog { arm, axes } => {
+                Command::jog(&arm, &axes, notes).map_err(|e| e.to_string())?
             }
             ClientMessage::Settings {
                 control_mode,
@@ -205,6 +214,7 @@ impl Command {
         matches!(
             self,
             Command::Input(_)
+                | Command::Jog(_)
                 | Command::Settings(_)
                 | Command::Release
                 | Command::Diagnose { .. }
@@ -292,7 +302,7 @@ pub fn apply(
             if let Command::Scenario(_) = &command {
                 scenario::announce(session, &live);
             }
-            if let Command::Input(_) = &command {
+            if let Command::Input(_) | Command::Jog(_) = &command {
                 return Ok(());
             }
             detail
@@ -323,6 +333,7 @@ impl Live {
         let command = command.applied_form();
         let detail = match &command {
             Command::Input(input) => input::apply(self, input),
+            Command::Jog(j) => jog::apply(self, j),
             Command::Settings(change) => settings::apply(self, change),
             Command::Reset => reset::apply(self),
             // Without an actor (headless attempts), pause and resume act as the trainee's.

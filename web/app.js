@@ -6,7 +6,7 @@ import { TouchPad, touchDevice } from './touch.js';
 import { TabGuard } from './tabs.js';
 import { StartScreen } from './start.js';
 import { TaskPanel } from './task.js';
-import { mountViews } from './viewcontrols.js';
+import { mountViews, followVisibility } from './viewcontrols.js';
 import { $, Banner, statusLoop } from './page.js';
 import { messages, exercises, jointNames } from './api.js';
 import { ForceCues } from './rumble.js';
@@ -58,7 +58,6 @@ const conn = new Connection({
     status.message(endedNote);
   },
   onHello(h) {
-    window.__seaarmsHelloPatch?.(h); // tests only: a field the server cannot send yet (issue 28 `views`)
     setRole(h.role, h.session);
     if (endedNote) { showBanner('info', `${endedNote} This is a new session.`, 8000); endedNote = null; }
     view.setHello(h);
@@ -75,6 +74,7 @@ const conn = new Connection({
   },
   onState(s) {
     view.setState(s);
+    followVisibility(view, s.visibility_m);
     if (driving) cues.update(s, selectedArm);
     followScenario(s);
     plots.add(s, selectedArm);

@@ -289,6 +289,11 @@ pub enum Action {
         /// Heading (degrees).
         heading_deg: f64,
     },
+    /// Set how far one sees in the water on every page of the session (m, in [0.5, 50]).
+    SetVisibility {
+        /// Visibility (m).
+        visibility_m: f64,
+    },
     /// Show a message on the trainee's page.
     Message {
         /// Up to 500 characters.
@@ -698,6 +703,8 @@ pub struct StateFrame {
     /// The water's current `{speed_m_s, heading_deg}` (heading: the direction it flows
     /// towards, degrees from +x towards +y) in a subsea session; `null` in air.
     pub current: Option<seaarms_core::sim::Current>,
+    /// The water's visibility the instructor set (m), or `null`: each page's own choice.
+    pub visibility_m: Option<f64>,
 }
 
 /// Left and right arm frames.

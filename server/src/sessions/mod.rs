@@ -121,6 +121,8 @@ pub struct Live {
     origin: Instant,
     /// Frames published.
     frame_seq: u64,
+    /// The water's visibility the instructor set (m; `set_visibility`), for every page.
+    visibility_m: Option<f64>,
     /// When the next frame is due.
     next_frame: Instant,
     /// The measures of the last published frame ([`snapshot::build_frame`]).
@@ -232,6 +234,7 @@ impl Live {
             steps_since_origin: 0,
             origin: now,
             frame_seq: 0,
+            visibility_m: None,
             next_frame: now,
             tally: Default::default(),
             models: models.clone(),
@@ -487,6 +490,11 @@ impl Live {
     /// is [`Live::pause_as`]'s rule.
     pub fn set_paused(&mut self, by: Option<Actor>) {
         self.paused = by;
+    }
+
+    /// Sets the water's visibility every page draws (m).
+    pub fn set_visibility(&mut self, visibility_m: f64) {
+        self.visibility_m = Some(visibility_m);
     }
 
     /// A keyboard tap on `arm` (`seaarms_core::sim::Operator::jog`).

@@ -180,5 +180,6 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
             side_load_n: p.side_load_n,
         }),
         current: sim.environment().water().map(|w| w.current),
+        visibility_m: live.visibility_m,
     }
 }

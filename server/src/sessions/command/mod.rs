@@ -23,6 +23,7 @@
 //! | [`diagnose`] | [`Command::Diagnose`] | WS `diagnose` | trainee | `diagnose` |
 //! | [`fault`] | [`Command::InjectFault`], [`Command::ClearFaults`] | REST `fault`, `clear_faults` | instructor | `fault`, `clear_faults` |
 //! | [`current`] | [`Command::SetCurrent`] | REST `set_current` | instructor | `current` |
+//! | [`visibility`] | [`Command::SetVisibility`] | REST `set_visibility` | instructor | — (drawing only) |
 //! | [`message`] | [`Command::Message`] | REST `message` | instructor | — |
 //! | [`end`] | [`Command::End`] | `DELETE /api/sessions/{id}` | trainee | — |
 //!
@@ -43,6 +44,7 @@ pub mod release;
 pub mod reset;
 pub mod scenario;
 pub mod settings;
+pub mod visibility;
 
 use std::sync::atomic::Ordering;
 
@@ -112,6 +114,9 @@ pub enum Command {
     /// Set the water's current: instructor only, a subsea session ([`current`]).
     #[serde(rename = "current")]
     SetCurrent(Current),
+    /// Set the water's visibility for every page: instructor only ([`visibility`]).
+    #[serde(skip)]
+    SetVisibility(f64),
     /// Show an instructor's message on every client of the session ([`message`]).
     #[serde(skip)]
     Message(String),
@@ -147,6 +152,7 @@ impl Command {
             Command::InjectFault { .. } => "fault",
             Command::ClearFaults => "clear_faults",
             Command::SetCurrent(_) => "set_current",
+            Command::SetVisibility(_) => "set_visibility",
             Command::Message(_) => "message",
             Command::End => "end",
         }
@@ -249,6 +255,7 @@ impl TryFrom<Action> for Command {
                 speed_m_s,
                 heading_deg,
             } => Command::current(speed_m_s, heading_deg)?,
+            Action::SetVisibility { visibility_m } => Command::visibility(visibility_m)?,
             Action::Message { text } => Command::message(&text)?,
         })
     }
@@ -345,6 +352,7 @@ impl Live {
             Command::InjectFault { fault } => fault::inject(self, fault),
             Command::ClearFaults => fault::clear(self),
             Command::SetCurrent(current) => current::apply(self, current)?,
+            Command::SetVisibility(v) => visibility::apply(self, *v),
             Command::Message(_) | Command::End => json!({}),
         };
         if command.logged() {
@@ -362,7 +370,11 @@ impl Live {
             && !matches!(
                 command,
                 // The current is the exercise's conditions, not help given to the trainee.
-                Command::Input(_) | Command::Message(_) | Command::End | Command::SetCurrent(_)
+                Command::Input(_)
+                    | Command::Message(_)
+                    | Command::End
+                    | Command::SetCurrent(_)
+                    | Command::SetVisibility(_)
             )
         {
             self.intervene();

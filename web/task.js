@@ -11,7 +11,14 @@ import * as api from './api.js';
 
 /** Event kinds shown as a warning banner (the rest, e.g. `step`, as information). */
 const BAD_EVENTS = new Set(['strike', 'obstacle', 'drop', 'overload', 'relief', 'limit', 'fault']);
-const COUNTERS = [['strikes', 'strikes'], ['drops', 'drops'], ['overloads', 'overloads'], ['relief', 'relief'], ['limit_hits', 'limit hits']];
+const COUNTERS = [['strikes', 'strikes'], ['slips', 'slips'], ['drops', 'drops'], ['overloads', 'overloads'], ['relief', 'relief'], ['limit_hits', 'limit hits']];
+/** The scored metrics' names in the cost line (the rest by their metric name). */
+const COST_LABELS = {
+  time_s: 'time', slips: 'slips', seabed_strikes: 'seabed strikes', obstacle_strikes: 'obstacle strikes',
+  joint_limit_hits: 'limit hits', jerk_rms_m_s3: 'jerky motion', mean_jlm: 'posture near limits',
+  mean_yoshikawa: 'posture (manipulability)', peak_side_load_n: 'stab side load', overloads: 'overloads',
+  relief_events: 'relief valve', drops: 'drops', peak_internal_force_n: 'internal force', idle_s: 'idle time',
+};
 
 /** The fault drill's answers (FaultKind::NAMES in the core) and their labels. */
 const DIAGNOSES = [['supply_drop', 'Supply pressure drop'], ['stuck_valve', 'Stuck valve'],
@@ -52,6 +59,7 @@ export class TaskPanel {
       <ol class="task-steps">${spec.steps.map((s, i) => `<li data-step="${i}">${esc(s.text)}</li>`).join('')}</ol>
       <div class="task-readouts"></div>
       <div class="task-counters">${COUNTERS.map(([k, label]) => `<span data-c="${k}">${label} <b>0</b></span>`).join('')}</div>
+      <div class="task-costs" title="Points each penalty takes off the score so far (a completed attempt scores 100 less these)"></div>
       ${spec.fault_drill ? `<div class="task-diagnose"><p>Name the fault:</p>${DIAGNOSES.map(([a, label]) =>
         `<button type="button" data-answer="${a}">${label}</button>`).join(' ')}</div>` : ''}`;
     for (const b of this.panel.querySelectorAll('[data-answer]')) {
@@ -66,6 +74,8 @@ export class TaskPanel {
     this.items = [...this.panel.querySelectorAll('[data-step]')];
     this.t = Object.fromEntries([...this.panel.querySelectorAll('[data-t]')].map((n) => [n.dataset.t, n]));
     this.counters = Object.fromEntries([...this.panel.querySelectorAll('[data-c]')].map((n) => [n.dataset.c, n]));
+    this.costs = this.panel.querySelector('.task-costs');
+    this.costsText = '';
   }
 
   /** A state frame's `exercise` (null outside exercises). */
@@ -93,6 +103,12 @@ export class TaskPanel {
       const b = this.counters[k].firstElementChild;
       if (b.textContent !== String(v)) b.textContent = String(v);
       this.counters[k].classList.toggle('bad', v > 0);
+    }
+    const costs = (ex.costs || []).map((c) => `${COST_LABELS[c.metric] ?? c.metric.replaceAll('_', ' ')} −${c.points.toFixed(c.points < 10 ? 1 : 0)}`);
+    const text = costs.length ? `costs: ${costs.join(' · ')}` : '';
+    if (text !== this.costsText) {
+      this.costsText = text;
+      this.costs.textContent = text;
     }
     const e = ex.last_event;
     if (e && (!this.lastEvent || e.t !== this.lastEvent.t || e.kind !== this.lastEvent.kind)) {

@@ -163,7 +163,11 @@ fn the_costs_add_up_to_what_the_score_lost() {
         let terms = spec.scoring.len() as f64 + 1.0;
         println!("{id}: score {:.2}, costs {c:?}", a.score);
         if a.completed && a.score > 0.0 {
-            assert!((100.0 - a.score - lost).abs() <= 0.5 * terms, "{id}: 100 − {} vs {lost}", a.score);
+            assert!(
+                (100.0 - a.score - lost).abs() <= 0.5 * terms,
+                "{id}: 100 − {} vs {lost}",
+                a.score
+            );
         }
         c
     };
@@ -181,10 +185,21 @@ fn the_costs_add_up_to_what_the_score_lost() {
     ]))
     .expect("script");
     let c = check("familiarisation, struck", &spec, Driver::Autopilot);
-    let strike = c.iter().find(|c| c.metric == "seabed_strikes").expect("a seabed-strike cost");
+    let strike = c
+        .iter()
+        .find(|c| c.metric == "seabed_strikes")
+        .expect("a seabed-strike cost");
     assert_eq!(strike.value, 1.0);
     let w: f64 = spec.scoring.iter().map(|t| t.weight).sum();
-    let t = spec.scoring.iter().find(|t| t.metric == "seabed_strikes").expect("term");
+    let t = spec
+        .scoring
+        .iter()
+        .find(|t| t.metric == "seabed_strikes")
+        .expect("term");
     let want = 100.0 * t.weight * (1.0 / (t.bad - t.good)) / w;
-    assert!((strike.points - want).abs() < 1e-9, "{} vs {want}", strike.points);
+    assert!(
+        (strike.points - want).abs() < 1e-9,
+        "{} vs {want}",
+        strike.points
+    );
 }

@@ -195,6 +195,8 @@ export const messages = {
   resume: () => ({ type: 'resume' }),
   /** The fault drill's answer (a fault kind's name). */
   diagnose: (answer) => ({ type: 'diagnose', answer }),
+  /** The trainee has read the goal: the exercise attempt's clock starts. */
+  ready: () => ({ type: 'ready' }),
   /** Latency probe: the server answers `pong` with the same `t`. */
   ping: (t) => ({ type: 'ping', t }),
   play: () => ({ type: 'play' }),

@@ -96,13 +96,14 @@ const conn = new Connection({
   },
 });
 
-statusLoop(view, status, () => selectedArm, (s) => task.update(s.exercise));
+statusLoop(view, status, () => selectedArm, (s) => task.update(s.exercise, s.awaiting_ready));
 
 const startScreen = new StartScreen($('start'));
 const task = new TaskPanel($('task'), $('card'), {
   banner: showBanner,
   tryAgain: () => conn.send(messages.reset()), // a new attempt (docs/exercises.md)
   diagnose: (answer) => conn.send(messages.diagnose(answer)), // fault drill
+  ready: () => conn.send(messages.ready()), // the goal is read: the attempt's clock starts
   nextTitle: () => startScreen.next(task.spec?.id)?.title,
   next: () => { const n = startScreen.next(task.spec?.id); if (n) newSession({ exercise: n.id }); },
   choose: () => chooseAndStart(),

@@ -53,6 +53,7 @@ export class TaskPanel {
     if (!spec) { this.panel.replaceChildren(); return; }
     this.panel.innerHTML = `<h3 class="task-title">${esc(spec.title)}</h3>
       <p class="task-goal">${esc(spec.goal)}</p>
+      <button type="button" class="task-ready" data-act="ready" hidden title="Start the attempt's clock (Enter)">Ready — start</button>
       <div class="task-bar"><span class="task-fill"></span></div>
       <div class="task-time"><span class="k">time</span> <b data-t="elapsed">0.0</b> / ${Math.round(spec.time_limit_s)} s
         <span class="k">score</span> <b data-t="score">—</b></div>
@@ -75,12 +76,20 @@ export class TaskPanel {
     this.t = Object.fromEntries([...this.panel.querySelectorAll('[data-t]')].map((n) => [n.dataset.t, n]));
     this.counters = Object.fromEntries([...this.panel.querySelectorAll('[data-c]')].map((n) => [n.dataset.c, n]));
     this.costs = this.panel.querySelector('.task-costs');
+    this.readyBtn = this.panel.querySelector('.task-ready');
+    this.readyBtn.addEventListener('click', () => this.ui.ready?.());
     this.costsText = '';
   }
 
-  /** A state frame's `exercise` (null outside exercises). */
-  update(ex) {
+  /** A state frame's `exercise` (null outside exercises) and whether the attempt waits for
+   * the trainee's "Ready" (`awaiting_ready`: its clock reads 0 until then). */
+  update(ex, awaitingReady = false) {
     if (!this.spec || !ex) return;
+    if (this.readyBtn.hidden === awaitingReady) {
+      this.readyBtn.hidden = !awaitingReady;
+      this.panel.classList.toggle('awaiting-ready', awaitingReady);
+      if (awaitingReady) this.readyBtn.focus({ preventScroll: true });
+    }
     if (this.shownDone && !ex.done) this.restarted(); // "try again" (here or from another tab)
     if (ex.step !== this.step) {
       this.step = ex.step;

@@ -231,6 +231,9 @@ pub enum ClientMessage {
     Resume,
     /// Open both jaws (drop the object).
     Release,
+    /// The trainee has read the goal: the exercise attempt's clock starts (a session created
+    /// with `wait_for_ready`; otherwise nothing).
+    Ready,
     /// Fault-diagnosis drill: name the fault (`supply_drop`, `stuck_valve`, `leak`, `air`).
     Diagnose {
         /// The answer.
@@ -671,6 +674,9 @@ pub struct StateFrame {
     pub paused: bool,
     /// Who paused it (`instructor`, `trainee`), `null` while running.
     pub paused_by: Option<crate::auth::Actor>,
+    /// The exercise attempt waits for the trainee's `ready` (the session was created with
+    /// `wait_for_ready`): no steps pass and its clock reads 0.
+    pub awaiting_ready: bool,
     /// Current settings.
     pub settings: Settings,
     /// Left and right arm.

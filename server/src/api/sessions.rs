@@ -88,6 +88,11 @@ pub struct CreateRequest {
     /// The class join code, when the server requires one (or send `X-Join-Code`).
     #[serde(default)]
     pub join_code: Option<String>,
+    /// Each exercise attempt waits for the trainee's `ready` before its clock starts (the
+    /// trainee's page asks for it: the goal is read first); absent or false: it starts at
+    /// once (scripts, the HTTP API).
+    #[serde(default)]
+    pub wait_for_ready: bool,
 }
 
 /// Answer of `POST /api/sessions`.
@@ -183,6 +188,7 @@ pub async fn create(
             req.control_method,
             label,
             req.group,
+            req.wait_for_ready,
         )
     })
     .await

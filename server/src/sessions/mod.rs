@@ -123,6 +123,10 @@ pub struct Live {
     frame_seq: u64,
     /// The water's visibility the instructor set (m; `set_visibility`), for every page.
     visibility_m: Option<f64>,
+    /// Each exercise attempt waits for the trainee's `ready` ([`Live::wait_for_ready`]).
+    ready_gate: bool,
+    /// The running attempt waits for `ready`: no steps pass, its clock reads 0.
+    awaiting_ready: bool,
     /// When the next frame is due.
     next_frame: Instant,
     /// The measures of the last published frame ([`snapshot::build_frame`]).
@@ -235,6 +239,8 @@ impl Live {
             origin: now,
             frame_seq: 0,
             visibility_m: None,
+            ready_gate: false,
+            awaiting_ready: false,
             next_frame: now,
             tally: Default::default(),
             models: models.clone(),
@@ -255,6 +261,7 @@ impl Live {
     /// state).
     fn start_attempt(&mut self) {
         self.attempt_id = random_hex(8);
+        self.awaiting_ready = self.ready_gate && self.scenario.exercise().is_some();
         let seed = self.next_seed;
         self.exercise = self.scenario.exercise().map(|spec| {
             self.next_seed = self.next_seed.wrapping_add(1);
@@ -437,6 +444,28 @@ impl Live {
     /// Whether the clock is paused.
     pub fn paused(&self) -> bool {
         self.paused.is_some()
+    }
+
+    /// Whether no steps pass: paused, or an attempt waiting for `ready`.
+    pub fn clock_stopped(&self) -> bool {
+        self.paused.is_some() || self.awaiting_ready
+    }
+
+    /// From now on (this attempt included) each exercise attempt waits for the trainee's
+    /// `ready` before its clock starts (`true`), or starts at once (`false`).
+    pub fn wait_for_ready(&mut self, on: bool) {
+        self.ready_gate = on;
+        self.awaiting_ready = on && self.scenario.exercise().is_some();
+    }
+
+    /// The running attempt waits for `ready`.
+    pub fn awaiting_ready(&self) -> bool {
+        self.awaiting_ready
+    }
+
+    /// The trainee has read the goal: the attempt's clock starts.
+    pub fn ready(&mut self) {
+        self.awaiting_ready = false;
     }
 
     /// Who paused the clock, while it is paused.
@@ -686,6 +715,7 @@ impl SessionManager {
         method: Option<ControlMethod>,
         label: Option<String>,
         group: Option<String>,
+        wait_for_ready: bool,
     ) -> Result<Arc<Session>, CreateError> {
         let name = scenario.unwrap_or_else(|| "training".to_string());
         let scenario = Scenario::resolve(&name).ok_or(CreateError::UnknownScenario(name))?;
@@ -693,8 +723,9 @@ impl SessionManager {
         self.recorder.admit().map_err(CreateError::Recording)?;
         let models = [self.magnum.clone(), self.magnum.clone()];
         let id = random_hex(8);
-        let live = Live::new(&id, &models, &scenario, mode, method, random_seed())
+        let mut live = Live::new(&id, &models, &scenario, mode, method, random_seed())
             .map_err(|e| CreateError::Sim(e.to_string()))?;
+        live.wait_for_ready(wait_for_ready);
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);
         let label = label.unwrap_or_default().chars().take(64).collect();

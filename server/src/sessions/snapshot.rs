@@ -155,6 +155,7 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
         seq: live.frame_seq,
         input_seq: live.input_seq,
         paused: live.paused(),
+        awaiting_ready: live.awaiting_ready(),
         paused_by: live.paused_by(),
         settings: live.settings(),
         arms: ArmsFrame { left, right },

@@ -16,6 +16,7 @@
 //! | [`input`] | [`Command::Input`] | WS `input` | trainee | `input` (quanta) |
 //! | [`jog`] | [`Command::Jog`] | WS `jog` | trainee | `jog` |
 //! | [`settings`] | [`Command::Settings`] | WS `settings` | trainee | `settings` |
+//! | [`ready`] | [`Command::Ready`] | WS `ready` | trainee | — (no steps pass while waiting) |
 //! | [`reset`] | [`Command::Reset`] | WS, REST `reset` | trainee | — (a new attempt) |
 //! | [`pause`] | [`Command::Pause`], [`Command::Resume`] | WS, REST `pause`, `resume` | trainee | — (no steps pass) |
 //! | [`release`] | [`Command::Release`] | WS, REST `release` | trainee | `release` |
@@ -40,6 +41,7 @@ pub mod jog;
 pub mod log;
 pub mod message;
 pub mod pause;
+pub mod ready;
 pub mod release;
 pub mod reset;
 pub mod scenario;
@@ -93,6 +95,9 @@ pub enum Command {
     Resume,
     /// Open both jaws for [`RELEASE_DURATION_S`] ([`release`]).
     Release,
+    /// The trainee has read the goal: the attempt's clock starts ([`ready`]).
+    #[serde(skip)]
+    Ready,
     /// Switch scenario (a fresh simulation): free play, a case-study set-up or an exercise
     /// ([`scenario`]).
     #[serde(skip)]
@@ -147,6 +152,7 @@ impl Command {
             Command::Pause => "pause",
             Command::Resume => "resume",
             Command::Release => "release",
+            Command::Ready => "ready",
             Command::Scenario(_) => "scenario",
             Command::Diagnose { .. } => "diagnose",
             Command::InjectFault { .. } => "fault",
@@ -171,6 +177,7 @@ impl Command {
                     | Command::Pause
                     | Command::Resume
                     | Command::Release
+                    | Command::Ready
                     | Command::Diagnose { .. }
                     | Command::End
             ),
@@ -200,6 +207,7 @@ impl Command {
             ClientMessage::Pause => Command::Pause,
             ClientMessage::Resume => Command::Resume,
             ClientMessage::Release => Command::Release,
+            ClientMessage::Ready => Command::Ready,
             ClientMessage::Diagnose { answer } => Command::Diagnose { answer },
             ClientMessage::Ping { .. } => return Err("ping is not a command".into()),
         })
@@ -353,6 +361,7 @@ impl Live {
             Command::ClearFaults => fault::clear(self),
             Command::SetCurrent(current) => current::apply(self, current)?,
             Command::SetVisibility(v) => visibility::apply(self, *v),
+            Command::Ready => ready::apply(self),
             Command::Message(_) | Command::End => json!({}),
         };
         if command.logged() {
@@ -375,6 +384,7 @@ impl Live {
                     | Command::End
                     | Command::SetCurrent(_)
                     | Command::SetVisibility(_)
+                    | Command::Ready
             )
         {
             self.intervene();

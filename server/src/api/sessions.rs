@@ -183,12 +183,14 @@ pub async fn create(
     let session = tokio::task::spawn_blocking(move || {
         sessions.create(
             client,
-            scenario,
-            req.control_mode,
-            req.control_method,
-            label,
-            req.group,
-            req.wait_for_ready,
+            crate::sessions::NewSession {
+                scenario,
+                mode: req.control_mode,
+                method: req.control_method,
+                label,
+                group: req.group,
+                wait_for_ready: req.wait_for_ready,
+            },
         )
     })
     .await

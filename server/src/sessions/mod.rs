@@ -675,6 +675,23 @@ pub struct SessionManager {
     magnum: Arc<Model>,
 }
 
+/// What a new session is created with ([`SessionManager::create`]).
+#[derive(Debug, Clone, Default)]
+pub struct NewSession {
+    /// Scenario or exercise name; `training` when absent.
+    pub scenario: Option<String>,
+    /// Control mode (else the exercise's, else joint).
+    pub mode: Option<ControlMode>,
+    /// Control method (else the exercise's, else open).
+    pub method: Option<ControlMethod>,
+    /// Trainee label.
+    pub label: Option<String>,
+    /// Trainee group.
+    pub group: Option<String>,
+    /// Exercise attempts wait for the trainee's `ready` ([`Live::wait_for_ready`]).
+    pub wait_for_ready: bool,
+}
+
 impl SessionManager {
     /// Starts the physics workers and the recorder.
     pub fn start(
@@ -707,16 +724,15 @@ impl SessionManager {
     }
 
     /// Creates a session for `client` and starts stepping it.
-    pub fn create(
-        &self,
-        client: ClientKey,
-        scenario: Option<String>,
-        mode: Option<ControlMode>,
-        method: Option<ControlMethod>,
-        label: Option<String>,
-        group: Option<String>,
-        wait_for_ready: bool,
-    ) -> Result<Arc<Session>, CreateError> {
+    pub fn create(&self, client: ClientKey, new: NewSession) -> Result<Arc<Session>, CreateError> {
+        let NewSession {
+            scenario,
+            mode,
+            method,
+            label,
+            group,
+            wait_for_ready,
+        } = new;
         let name = scenario.unwrap_or_else(|| "training".to_string());
         let scenario = Scenario::resolve(&name).ok_or(CreateError::UnknownScenario(name))?;
         self.check_caps(&self.map(), client)?;

@@ -53,7 +53,9 @@ export class ForceCues {
       gaugeEl.innerHTML = `<div class="g-row"><span class="k">contact force</span> <b data-g="force">0</b> N
         <span class="g-bar"><span class="g-fill" data-g="force-bar"></span></span></div>
         <div class="g-row"><span class="k">line pressure</span> <b data-g="p">0.0</b> MPa
-        <span class="g-bar"><span class="g-fill" data-g="p-bar"></span><span class="g-mark" data-g="supply" title="supply ${(SUPPLY_PA / 1e6).toFixed(2)} MPa"></span><span class="g-mark relief" data-g="relief" title="relief ${(RELIEF_PA / 1e6).toFixed(2)} MPa"></span></span></div>`;
+        <span class="g-bar"><span class="g-fill" data-g="p-bar"></span><span class="g-mark" data-g="supply" title="supply ${(SUPPLY_PA / 1e6).toFixed(2)} MPa"></span><span class="g-mark relief" data-g="relief" title="relief ${(RELIEF_PA / 1e6).toFixed(2)} MPa"></span></span></div>
+        <div class="g-row" title="Grip load: the share of the friction the jaw's clamp can hold that the load uses (100 %: it slips)"><span class="k">grip load</span> <b data-g="grip">—</b>
+        <span class="g-bar"><span class="g-fill" data-g="grip-bar"></span></span></div>`;
       this.g = Object.fromEntries([...gaugeEl.querySelectorAll('[data-g]')].map((n) => [n.dataset.g, n]));
       this.g.supply.style.left = `${(100 * SUPPLY_PA / PRESSURE_FULL_PA).toFixed(1)}%`;
       this.g.relief.style.left = `${(100 * RELIEF_PA / PRESSURE_FULL_PA).toFixed(1)}%`;
@@ -100,5 +102,10 @@ export class ForceCues {
     this.g.p.textContent = (p / 1e6).toFixed(1);
     this.g['p-bar'].style.width = `${Math.min(100, 100 * p / PRESSURE_FULL_PA).toFixed(1)}%`;
     this.el.classList.toggle('relief', arm.relief_open.some(Boolean));
+    // λ against the static friction limits, capped at 100 % (a sliding jaw is at its limit)
+    const grip = arm.holding ? Math.min(1, arm.grip_load) : null;
+    this.g.grip.textContent = grip === null ? '—' : arm.slipping ? 'slipping' : `${Math.round(100 * grip)} %`;
+    this.g['grip-bar'].style.width = `${grip === null ? 0 : (100 * (arm.slipping ? 1 : grip)).toFixed(1)}%`;
+    this.el.classList.toggle('slipping', !!arm.slipping);
   }
 }

@@ -120,8 +120,10 @@ function setExercise(h) {
   // the list behind "next exercise" (the start screen fills it when it was shown)
   if (ex && !startScreen.exercises.length) exercises().then((l) => { startScreen.exercises = l; });
   if (ex && (ex.control?.arm === 'left' || ex.control?.arm === 'right')) setArm(ex.control.arm);
-  if (!!ex !== was) {
-    $('chk-plots').checked = !ex && !matchMedia(NARROW_SCREEN).matches;
+  // a fault drill is diagnosed from the line pressures: its plots are on (not on a phone)
+  const drill = !!ex?.fault_drill;
+  if (!!ex !== was || drill) {
+    $('chk-plots').checked = (!ex || drill) && !matchMedia(NARROW_SCREEN).matches;
     $('chk-plots').dispatchEvent(new Event('change'));
     // an exercise starts with the work site in sight: no ellipsoids over the jaws (O shows them)
     $('chk-ell').checked = !ex;

@@ -52,17 +52,19 @@ export class TaskPanel {
     this.panel.hidden = !spec;
     if (!spec) { this.panel.replaceChildren(); return; }
     this.panel.innerHTML = `<h3 class="task-title">${esc(spec.title)}</h3>
-      <p class="task-goal">${esc(spec.goal)}</p>
+      ${spec.fault_drill ? `<details class="task-goal" open><summary>${esc(spec.goal.split(/(?<=[.:])\s/)[0])}</summary>${esc(spec.goal)}</details>`
+        : `<p class="task-goal">${esc(spec.goal)}</p>`}
       <button type="button" class="task-ready" data-act="ready" hidden title="Start the attempt's clock (Enter)">Ready — start</button>
       <div class="task-bar"><span class="task-fill"></span></div>
       <div class="task-time"><span class="k">time</span> <b data-t="elapsed">0.0</b> / ${Math.round(spec.time_limit_s)} s
         <span class="k">score</span> <b data-t="score">—</b></div>
+      ${spec.fault_drill ? `<div class="task-diagnose"><p>Name the fault:</p>${DIAGNOSES.map(([a, label]) =>
+        `<button type="button" data-answer="${a}">${label}</button>`).join(' ')}</div>` : ''}
       <ol class="task-steps">${spec.steps.map((s, i) => `<li data-step="${i}">${esc(s.text)}</li>`).join('')}</ol>
       <div class="task-readouts"></div>
       <div class="task-counters">${COUNTERS.map(([k, label]) => `<span data-c="${k}">${label} <b>0</b></span>`).join('')}</div>
       <div class="task-costs" title="Points each penalty takes off the score so far (a completed attempt scores 100 less these)"></div>
-      ${spec.fault_drill ? `<div class="task-diagnose"><p>Name the fault:</p>${DIAGNOSES.map(([a, label]) =>
-        `<button type="button" data-answer="${a}">${label}</button>`).join(' ')}</div>` : ''}`;
+`;
     for (const b of this.panel.querySelectorAll('[data-answer]')) {
       b.addEventListener('click', () => {
         this.ui.diagnose?.(b.dataset.answer);
@@ -89,6 +91,9 @@ export class TaskPanel {
       this.readyBtn.hidden = !awaitingReady;
       this.panel.classList.toggle('awaiting-ready', awaitingReady);
       if (awaitingReady) this.readyBtn.focus({ preventScroll: true });
+      // a long goal (the fault drill's) folds once the clock runs: the answers stay in sight
+      const goal = this.panel.querySelector('details.task-goal');
+      if (goal) goal.open = awaitingReady;
     }
     if (this.shownDone && !ex.done) this.restarted(); // "try again" (here or from another tab)
     if (ex.step !== this.step) {

@@ -127,8 +127,19 @@ test('fault drill: the page offers the four answers and the server records the o
     await page.goto(`${url}/?exercise=fault-diagnosis`);
     await until(page, () => window.__seaarms?.hello?.exercise?.id === 'fault-diagnosis');
     await untilDrawn(page, { open: false });
+    await pressReady(page);
     const buttons = await page.$$eval('#task [data-answer]', (bs) => bs.map((b) => b.dataset.answer));
     assert.deepEqual(buttons, ['supply_drop', 'stuck_valve', 'leak', 'air']);
+    // at 1280×800 the answers are in sight without scrolling, beside the line-pressure plots
+    // and the gauges the drill is diagnosed from (issue 28 item 6)
+    const layout = await page.evaluate(() => ({
+      answers: [...document.querySelectorAll('#task [data-answer]')].map((b) => b.getBoundingClientRect().bottom),
+      plots: !document.getElementById('plots').hidden && document.getElementById('plots').getBoundingClientRect().height > 200,
+      gauges: document.getElementById('gauges').getBoundingClientRect().bottom <= innerHeight,
+      vh: innerHeight,
+    }));
+    assert.ok(layout.answers.every((y) => y <= layout.vh), `answers at ${layout.answers} of ${layout.vh}`);
+    assert.ok(layout.plots && layout.gauges, JSON.stringify(layout));
     await page.click('#task [data-answer="leak"]');
     const sid = await page.evaluate(() => window.__seaarms.connection.session);
     let a = null;

@@ -2,7 +2,9 @@
 //! their valves and chambers, jaws, object, grasp constraint, control), in three situations:
 //! arms moving open loop, both jaws holding the object open loop, and closed-loop cooperative
 //! (the thesis's in-air setting of the case studies); and the arms moving open loop in sea
-//! water, the training default (buoyancy, drag and added mass, docs/physics.md).
+//! water, the training default (buoyancy, drag and added mass, docs/physics.md); and both arms
+//! pressed into the seabed in water at full stick, every contact of the step in use (issue
+//! 27's budget: ≤ 10 µs).
 
 use std::hint::black_box;
 
@@ -39,6 +41,29 @@ fn bench_step(c: &mut Criterion) {
                 wet.reset();
             }
             wet.step(black_box(&moving));
+        })
+    });
+    // Both shoulders driven down at full stick: after 1.5 s every link and jaw that can
+    // reaches the seabed, the stall holds them there (docs/physics.md "Contacts").
+    let mut down = Input::default();
+    down.arms[0].valves = [0.0, -1.0, 0.0, 0.0, 0.0, 0.0];
+    down.arms[1].valves = [0.0, -1.0, 0.0, 0.0, 0.0, 0.0];
+    let mut pressed = wet.clone();
+    pressed.reset();
+    for _ in 0..1500 {
+        pressed.step(&down);
+    }
+    assert!(
+        pressed.contacts().arms.iter().all(|c| c.points > 0),
+        "both arms on the seabed"
+    );
+    let pressed_base = pressed.clone();
+    c.bench_function("step_in_contact_subsea", |b| {
+        b.iter(|| {
+            if pressed.time_s() > pressed_base.time_s() + 2.0 {
+                pressed = pressed_base.clone();
+            }
+            pressed.step(black_box(&down));
         })
     });
     let base = holding_sim(&m);

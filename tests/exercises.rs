@@ -122,6 +122,84 @@ fn a_scripted_seabed_strike_is_counted_once() {
         {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -60, "tolerance_deg": 1},
     ]))
     .expect("script");
-    let a = run(Arc::new(spec), Driver::Autopilot);
+    let r = seaarms::exercises::run_recorded(
+        Arc::new(spec),
+        &magnum(),
+        Driver::Autopilot,
+        1,
+        &mut |_| {},
+    )
+    .expect("headless run");
+    let a = serde_json::to_value(&r.assessment).expect("assessment JSON");
     assert_eq!(a["seabed_strikes"], 1.0, "{a}");
+    // The record has the core's strike event once, with its partner, impact speed and peak
+    // force (sim::Event::Strike), beside the assessment's own "strike" exercise event.
+    let strikes: Vec<_> = r.events.iter().filter(|e| e.kind == "strike").collect();
+    assert_eq!(strikes.len(), 1, "{:?}", r.events);
+    let d = &strikes[0].detail;
+    assert_eq!(
+        (d["arm"].as_str(), d["partner"].as_str()),
+        (Some("right"), Some("seabed"))
+    );
+    assert!(
+        d["impact_speed_m_s"].as_f64().expect("speed") >= 0.02,
+        "{d}"
+    );
+    assert!(d["peak_force_n"].as_f64().expect("force") > 100.0, "{d}");
+}
+
+/// The task panel's costs (issue 28 item 6: every penalty visible with its cost) account for
+/// the score: a completed attempt scores 100 less what its costs take (`assess::costs`: each
+/// scoring term's share 100·wₖ(1 − sₖ)/Σw and the slips' penalty; `assess::score`'s
+/// formula), up to the costs under half a point the panel leaves out. Checked on a
+/// scripted seabed strike (familiarisation, its seabed-strike term) and on the autopilots.
+#[test]
+fn the_costs_add_up_to_what_the_score_lost() {
+    use seaarms_core::exercise::assess::costs;
+    let check = |id: &str, spec: &ExerciseSpec, driver: Driver| {
+        let a = run_headless(Arc::new(spec.clone()), &magnum(), driver, 1).expect("run");
+        let c = costs(spec, &a.metrics);
+        let lost: f64 = c.iter().map(|c| c.points).sum();
+        let terms = spec.scoring.len() as f64 + 1.0;
+        println!("{id}: score {:.2}, costs {c:?}", a.score);
+        if a.completed && a.score > 0.0 {
+            assert!(
+                (100.0 - a.score - lost).abs() <= 0.5 * terms,
+                "{id}: 100 − {} vs {lost}",
+                a.score
+            );
+        }
+        c
+    };
+    for id in SEVEN {
+        let spec = EXERCISES.get(id).expect(id);
+        check(id, &spec, Driver::Autopilot);
+    }
+    // A strike costs what its term says: familiarisation's seabed-strike term (bad 2, good 0,
+    // weight 1 of 5) takes 10 points for one strike.
+    let mut spec = (*EXERCISES.get("familiarisation").expect("familiarisation")).clone();
+    spec.scene.initial_q_deg = Some([[0.0, 30.0, -70.0, -10.0, 0.0, 0.0]; 2]);
+    spec.autopilot = serde_json::from_value(serde_json::json!([
+        {"do": "settings", "mode": "joint"},
+        {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -60, "tolerance_deg": 1},
+    ]))
+    .expect("script");
+    let c = check("familiarisation, struck", &spec, Driver::Autopilot);
+    let strike = c
+        .iter()
+        .find(|c| c.metric == "seabed_strikes")
+        .expect("a seabed-strike cost");
+    assert_eq!(strike.value, 1.0);
+    let w: f64 = spec.scoring.iter().map(|t| t.weight).sum();
+    let t = spec
+        .scoring
+        .iter()
+        .find(|t| t.metric == "seabed_strikes")
+        .expect("term");
+    let want = 100.0 * t.weight * (1.0 / (t.bad - t.good)) / w;
+    assert!(
+        (strike.points - want).abs() < 1e-9,
+        "{} vs {want}",
+        strike.points
+    );
 }

@@ -557,3 +557,54 @@ async fn openapi_lists_every_route() {
     }
     s.stop().await;
 }
+
+/// Issue 28 item 6: "the exercise clock starts when the trainee presses Ready after reading
+/// the goal". A session created with `wait_for_ready` on an exercise streams frames with
+/// `awaiting_ready` and the attempt's clock at 0 (no steps pass) until the trainee's
+/// `ready`; then it runs. A reset ("try again") waits again.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn an_exercise_waits_for_ready_before_its_clock_starts() {
+    let s = start().await;
+    let (st, c) = create(
+        &s,
+        json!({"exercise": "reach-targets", "wait_for_ready": true}),
+    )
+    .await;
+    assert_eq!(st, 201, "{c}");
+    let (id, token) = (
+        c["id"].as_str().unwrap(),
+        c["control_token"].as_str().unwrap(),
+    );
+    let mut ws = trainee(&s, id, token).await;
+    tokio::time::sleep(Duration::from_millis(600)).await;
+    let f = next_of(&mut ws, "state", Duration::from_secs(5)).await;
+    let f = state_after(&mut ws, f["t"].as_f64().unwrap()).await;
+    assert_eq!(f["awaiting_ready"], true, "{}", f["awaiting_ready"]);
+    assert_eq!(f["t"], 0.0);
+    assert_eq!(f["exercise"]["elapsed_s"], 0.0);
+    send(&mut ws, json!({"type": "ready"})).await;
+    let f = state_after(&mut ws, 0.3).await;
+    assert_eq!(f["awaiting_ready"], false);
+    assert!(f["exercise"]["elapsed_s"].as_f64().unwrap() >= 0.3);
+    send(&mut ws, json!({"type": "reset"})).await;
+    tokio::time::sleep(Duration::from_millis(300)).await;
+    let mut f = next_of(&mut ws, "state", Duration::from_secs(5)).await;
+    while f["awaiting_ready"] != true {
+        f = next_of(&mut ws, "state", Duration::from_secs(5)).await;
+    }
+    assert_eq!(
+        f["exercise"]["elapsed_s"], 0.0,
+        "try again waits for ready again"
+    );
+    // Without `wait_for_ready` (scripts, the HTTP API) the attempt starts at once.
+    let (_, c) = create(&s, json!({"exercise": "reach-targets"})).await;
+    let mut ws = trainee(
+        &s,
+        c["id"].as_str().unwrap(),
+        c["control_token"].as_str().unwrap(),
+    )
+    .await;
+    let f = state_after(&mut ws, 0.2).await;
+    assert_eq!(f["awaiting_ready"], false);
+    s.stop().await;
+}

@@ -163,3 +163,54 @@ async fn the_instructor_sets_the_current_and_the_trainee_sees_it() {
     assert!(frame["current"].is_null(), "in air: {}", frame["current"]);
     s.stop().await;
 }
+
+/// The instructor's visibility (issue 28 item 1: "distance fog/turbidity the instructor can
+/// set"): frames carry `visibility_m` once set (null before: each page's own); the trainee's
+/// token gets 403; outside [0.5, 50] m or not a number, 400 with a JSON error and no change.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_instructor_sets_the_visibility_and_every_page_gets_it() {
+    let s = start().await;
+    let (id, token) = new_session(&s).await;
+    let mut ws = trainee(&s, &id, &token).await;
+    let first = next_of(&mut ws, "state", Duration::from_secs(5)).await;
+    assert!(first["visibility_m"].is_null(), "{}", first["visibility_m"]);
+    let (st, body) = act_json(
+        &s,
+        &id,
+        &token,
+        json!({"type": "set_visibility", "visibility_m": 3}),
+    )
+    .await;
+    assert_eq!(st, 403, "{body}");
+    for bad in [
+        json!(0.1),
+        json!(51),
+        json!(-3),
+        json!("murky"),
+        json!(null),
+    ] {
+        let (st, body) = act_json(
+            &s,
+            &id,
+            TEACHER,
+            json!({"type": "set_visibility", "visibility_m": bad}),
+        )
+        .await;
+        assert_eq!(st, 400, "{bad} → {body}");
+        assert!(body["error"].is_string(), "{bad}: {body}");
+    }
+    let f = next_of(&mut ws, "state", Duration::from_secs(5)).await;
+    assert!(f["visibility_m"].is_null());
+    let (st, body) = act_json(
+        &s,
+        &id,
+        TEACHER,
+        json!({"type": "set_visibility", "visibility_m": 3}),
+    )
+    .await;
+    assert_eq!(st, 204, "{body}");
+    let t = f["t"].as_f64().unwrap();
+    let f = state_after(&mut ws, t + 0.1).await;
+    assert_eq!(f["visibility_m"], 3.0);
+    s.stop().await;
+}

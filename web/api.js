@@ -183,7 +183,11 @@ export const messages = {
   /** Stick input: `arms` {left, right: {axes[6], grip}}, `object` the object's twist
    * sticks in closed loop (else absent). */
   input: (seq, arms, object) => (object ? { type: 'input', seq, arms, object } : { type: 'input', seq, arms }),
-  /** A change of settings ({control_mode, control_method, arm_speed}, any of them). */
+  /** A keyboard tap: `arm` moves a bounded amount along `axes` (six values in [−1, 1], world
+   * frame in Cartesian mode) and stops (docs/api.md). */
+  jog: (arm, axes) => ({ type: 'jog', arm, axes }),
+  /** A change of settings ({control_mode, control_method, arm_speed, hold_orientation}, any
+   * of them). */
   settings: (patch) => ({ type: 'settings', ...patch }),
   reset: () => ({ type: 'reset' }),
   release: () => ({ type: 'release' }),
@@ -191,6 +195,8 @@ export const messages = {
   resume: () => ({ type: 'resume' }),
   /** The fault drill's answer (a fault kind's name). */
   diagnose: (answer) => ({ type: 'diagnose', answer }),
+  /** The trainee has read the goal: the exercise attempt's clock starts. */
+  ready: () => ({ type: 'ready' }),
   /** Latency probe: the server answers `pong` with the same `t`. */
   ping: (t) => ({ type: 'ping', t }),
   play: () => ({ type: 'play' }),

@@ -6,7 +6,7 @@ import { TouchPad, touchDevice } from './touch.js';
 import { TabGuard } from './tabs.js';
 import { StartScreen } from './start.js';
 import { TaskPanel } from './task.js';
-import { mountViews } from './viewcontrols.js';
+import { mountViews, followVisibility } from './viewcontrols.js';
 import { $, Banner, statusLoop } from './page.js';
 import { messages, exercises, jointNames } from './api.js';
 import { ForceCues } from './rumble.js';
@@ -19,7 +19,7 @@ const { view, status, plots, controls: viewControls } = mountViews();
 const banner = new Banner($('banner'));
 const showBanner = (kind, text, ms = 0) => banner.show(kind, text, ms);
 let selectedArm = localStorage.getItem('seaarms.arm') === 'right' ? 'right' : 'left';
-let settings = { control_mode: 'joint', control_method: 'open', arm_speed: 1 };
+let settings = { control_mode: 'joint', control_method: 'open', arm_speed: 1, hold_orientation: true };
 
 const params = new URLSearchParams(location.search);
 let lastEnded = null; // the last `ended` message ({reason, text}), for tests
@@ -58,7 +58,6 @@ const conn = new Connection({
     status.message(endedNote);
   },
   onHello(h) {
-    window.__seaarmsHelloPatch?.(h); // tests only: a field the server cannot send yet (issue 28 `views`)
     setRole(h.role, h.session);
     if (endedNote) { showBanner('info', `${endedNote} This is a new session.`, 8000); endedNote = null; }
     view.setHello(h);
@@ -75,11 +74,12 @@ const conn = new Connection({
   },
   onState(s) {
     view.setState(s);
+    followVisibility(view, s.visibility_m);
     if (driving) cues.update(s, selectedArm);
     followScenario(s);
     plots.add(s, selectedArm);
     if (s.settings.control_mode !== settings.control_mode || s.settings.control_method !== settings.control_method ||
-        s.settings.arm_speed !== settings.arm_speed) {
+        s.settings.arm_speed !== settings.arm_speed || s.settings.hold_orientation !== settings.hold_orientation) {
       settings = { ...s.settings };
       syncControls();
     }
@@ -96,13 +96,14 @@ const conn = new Connection({
   },
 });
 
-statusLoop(view, status, () => selectedArm, (s) => task.update(s.exercise));
+statusLoop(view, status, () => selectedArm, (s) => task.update(s.exercise, s.awaiting_ready));
 
 const startScreen = new StartScreen($('start'));
 const task = new TaskPanel($('task'), $('card'), {
   banner: showBanner,
   tryAgain: () => conn.send(messages.reset()), // a new attempt (docs/exercises.md)
   diagnose: (answer) => conn.send(messages.diagnose(answer)), // fault drill
+  ready: () => conn.send(messages.ready()), // the goal is read: the attempt's clock starts
   nextTitle: () => startScreen.next(task.spec?.id)?.title,
   next: () => { const n = startScreen.next(task.spec?.id); if (n) newSession({ exercise: n.id }); },
   choose: () => chooseAndStart(),
@@ -119,8 +120,10 @@ function setExercise(h) {
   // the list behind "next exercise" (the start screen fills it when it was shown)
   if (ex && !startScreen.exercises.length) exercises().then((l) => { startScreen.exercises = l; });
   if (ex && (ex.control?.arm === 'left' || ex.control?.arm === 'right')) setArm(ex.control.arm);
-  if (!!ex !== was) {
-    $('chk-plots').checked = !ex && !matchMedia(NARROW_SCREEN).matches;
+  // a fault drill is diagnosed from the line pressures: its plots are on (not on a phone)
+  const drill = !!ex?.fault_drill;
+  if (!!ex !== was || drill) {
+    $('chk-plots').checked = (!ex || drill) && !matchMedia(NARROW_SCREEN).matches;
     $('chk-plots').dispatchEvent(new Event('change'));
     // an exercise starts with the work site in sight: no ellipsoids over the jaws (O shows them)
     $('chk-ell').checked = !ex;
@@ -158,7 +161,7 @@ async function chooseAndStart() {
 }
 
 function syncControls() {
-  $('sel-mode').value = settings.control_mode;
+  $('sel-mode').value = settings.control_mode === 'cartesian' && !settings.hold_orientation ? 'cartesian-free' : settings.control_mode;
   $('sel-method').value = settings.control_method;
   const sp = SPEEDS.reduce((a, b) => (Math.abs(b - settings.arm_speed) < Math.abs(a - settings.arm_speed) ? b : a));
   $('sel-speed').value = String(sp);
@@ -266,7 +269,8 @@ $('chk-touch').checked = touch.visible;
 $('chk-touch').addEventListener('change', (e) => { touch.visible = e.target.checked; });
 
 $('sel-arm').addEventListener('change', (e) => setArm(e.target.value));
-$('sel-mode').addEventListener('change', (e) => sendSettings({ control_mode: e.target.value }));
+$('sel-mode').addEventListener('change', (e) => sendSettings(e.target.value === 'joint' ? { control_mode: 'joint' }
+  : { control_mode: 'cartesian', hold_orientation: e.target.value === 'cartesian' }));
 $('sel-method').addEventListener('change', (e) => sendSettings({ control_method: e.target.value }));
 $('sel-speed').addEventListener('change', (e) => sendSettings({ arm_speed: +e.target.value }));
 $('btn-reset').addEventListener('click', actions.reset);

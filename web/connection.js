@@ -138,7 +138,8 @@ export class Connection {
   /** POST /api/sessions; returns false (and retries later) when the server is full, busy or
    * down. A 403 (join code missing or wrong) asks `onJoinCode` for the code and tries again. */
   async create(extra = {}) {
-    const body = { ...this.createOpts, ...extra };
+    // the trainee's page: an exercise attempt waits for "Ready" (the goal is read first)
+    const body = { wait_for_ready: true, ...this.createOpts, ...extra };
     if (this.joinCode) body.join_code = this.joinCode;
     let resp;
     try {

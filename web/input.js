@@ -15,6 +15,10 @@ export const DEAD_ZONE = 0.12;
 /** Other messages per second the page sends besides input (the 1 Hz latency ping). */
 const OTHER_MESSAGES_HZ = 1;
 
+/** A key held this long (ms) drives its axis continuously; a shorter tap is only the jog
+ * sent when it went down (a bounded, repeatable move whatever the tap's length: 2° of a joint,
+ * or 1 cm / 2° of the jaw, times the arm speed; sim::Operator::jog). */
+export const TAP_HOLD_MS = 250;
 /** Keyboard: each pair drives axis i (+, −). */
 export const KEY_AXES = [
   ['KeyQ', 'KeyA'], ['KeyW', 'KeyS'], ['KeyE', 'KeyD'], ['KeyR', 'KeyF'], ['KeyT', 'KeyG'], ['KeyU', 'KeyJ'],
@@ -60,6 +64,7 @@ const MAPPING = [
   ['Initial position (reset)', 'Back / Select', 'I'],
   ['Pause / resume', 'Start', 'P'],
   ['Slow (30 %) while held', 'A', 'Shift'],
+  ['Tap an axis key: a fixed step (2° of a joint, or 1 cm / 2° of the jaw, × arm speed); hold it to move', '—', 'tap / hold'],
   ['Wrist on the right stick (analog pitch ↕, rotate ↔) while held', 'LB or RB held', '—'],
   ['Pan-tilt camera: pan ↔, tilt ↕ / zoom', 'L3 held + right stick / + d-pad ↑↓', 'arrows / PgUp PgDn'],
   ['Engineering ↔ pilot cameras', '—', 'C'],
@@ -123,6 +128,7 @@ export class Input {
     this.ui = ui;
     this.seq = 0;
     this.keys = new Set();
+    this.keyDownAt = new Map(); // axis key → when it went down (ms)
     this.padIndex = null;
     this.prevButtons = new Map(); // per pad index: its buttons at the last sample (edges)
     this.virtualPads = []; // standard-mapping pads drawn on the page (web/touch.js)
@@ -130,7 +136,7 @@ export class Input {
     this.enabled = true;
     window.addEventListener('keydown', (e) => this.onKey(e, true));
     window.addEventListener('keyup', (e) => this.onKey(e, false));
-    window.addEventListener('blur', () => this.keys.clear());
+    window.addEventListener('blur', () => { this.keys.clear(); this.keyDownAt.clear(); });
     window.addEventListener('gamepadconnected', (e) => { this.padIndex = e.gamepad.index; ui.onPad?.(e.gamepad.id); });
     window.addEventListener('gamepaddisconnected', (e) => { if (this.padIndex === e.gamepad.index) this.padIndex = null; ui.onPad?.(null); });
     this.sendHz = SEND_HZ;
@@ -150,10 +156,17 @@ export class Input {
     if (isTextEntry(e.target)) return;
     if (e.ctrlKey || e.metaKey || e.altKey) return;
     if (down) {
-      if (!this.keys.has(e.code)) this.onPress(e);
+      if (!this.keys.has(e.code)) {
+        this.onPress(e);
+        if (KEY_AXES.flat().includes(e.code)) {
+          this.keyDownAt.set(e.code, performance.now());
+          this.jogKey(e.code, e.shiftKey);
+        }
+      }
       this.keys.add(e.code);
     } else {
       this.keys.delete(e.code);
+      this.keyDownAt.delete(e.code);
     }
     // the page's keys never reach a focused control (a menu would jump to the option
     // starting with the letter)
@@ -186,6 +199,23 @@ export class Input {
     }
   }
 
+  /** A tap on an axis key: one jog of the selected arm (open loop; in closed loop the keys
+   * drive the object continuously). Shift makes it fine (0.3×, as for the sticks). */
+  jogKey(code, fine) {
+    if (!this.enabled || this.ui.method() === 'closed') return;
+    const i = KEY_AXES.findIndex((pair) => pair.includes(code));
+    if (i < 0) return;
+    const axes = [0, 0, 0, 0, 0, 0];
+    axes[i] = (KEY_AXES[i][0] === code ? 1 : -1) * (fine ? 0.3 : 1);
+    const world = this.ui.mode() === 'cartesian' ? toWorld(axes, this.ui.stickFrame?.()) : axes;
+    this.conn.send(messages.jog(this.ui.arm(), world));
+  }
+
+  /** Whether an axis key counts as held (down for TAP_HOLD_MS or more). */
+  held(code, now) {
+    return this.keys.has(code) && now - (this.keyDownAt.get(code) ?? -Infinity) >= TAP_HOLD_MS;
+  }
+
   pad() {
     if (this.padIndex === null || !navigator.getGamepads) return null;
     const pads = navigator.getGamepads();
@@ -208,7 +238,11 @@ export class Input {
     const axes = [0, 0, 0, 0, 0, 0];
     let grip = 0;
     const slowKey = this.keys.has('ShiftLeft') || this.keys.has('ShiftRight');
-    KEY_AXES.forEach(([plus, minus], i) => { axes[i] += (this.keys.has(plus) ? 1 : 0) - (this.keys.has(minus) ? 1 : 0); });
+    const now = performance.now();
+    // in closed loop the keys drive the object at once; in open loop a tap is a jog and the
+    // axis follows only a held key
+    const hold = (code) => (this.ui.method() === 'closed' ? this.keys.has(code) : this.held(code, now));
+    KEY_AXES.forEach(([plus, minus], i) => { axes[i] += (hold(plus) ? 1 : 0) - (hold(minus) ? 1 : 0); });
     if (this.keys.has('KeyZ')) grip -= 1;
     if (this.keys.has('KeyX')) grip += 1;
     let slow = slowKey;

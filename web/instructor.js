@@ -5,6 +5,7 @@
 // histories, a comparison on one exercise and the class results export.
 
 import { View } from './view.js';
+import { followVisibility } from './viewcontrols.js';
 import { Connection } from './connection.js';
 import { StatusBar } from './status.js';
 import { Classroom, faultText } from './classroom.js';
@@ -136,7 +137,7 @@ function observe(id) {
   conn = new Connection({
     role: 'observer', sessionId: id, token, base: observedBase,
     onHello(h) { view.setHello(h); status.role(h.role); if (h.scenario) $('act-scenario').value = h.scenario; },
-    onState(s) { view.setState(s); showCurrent(s.current); },
+    onState(s) { view.setState(s); followVisibility(view, s.visibility_m); showCurrent(s.current); },
     onPong(ms) { status.latency(ms); },
     onMessage(m) { status.message(`✉ ${m.from}: ${m.text}`); },
     onError(msg) { banner.show('error', msg); },
@@ -169,6 +170,10 @@ async function act(type) {
     const num = (id) => { const v = $(id).value.trim(); return v === '' ? 0 : Number(v); };
     body.speed_m_s = num('act-cur-speed');
     body.heading_deg = num('act-cur-heading');
+  }
+  if (type === 'set_visibility') {
+    const v = $('act-visibility').value.trim();
+    body.visibility_m = v === '' ? 6 : Number(v);
   }
   const out = $('act-result');
   const r = await postAction(observed, body);

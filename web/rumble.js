@@ -1,11 +1,13 @@
 // Force cues (issue 28): the real Magnum arms are master/slave with force reflection (Lim
 // §1.1); a gamepad can at least rumble. Each state frame's selected arm drives the pad's
-// `vibrationActuator.playEffect('dual-rumble', …)`: the strong motor scales with the jaw's
-// contact force (`arms.*.contact_force_n`), the weak one buzzes while the load slips
-// (`arms.*.slipping`) or a relief valve is open (`relief_open`), and a strike (the exercise's
-// strike counter rising, or a `strike` warning) gives a full jolt. A pad without an actuator
-// (or a browser without the API) gets nothing, without an error. Beside the task panel, a
-// gauge shows the same jaw force and the arm's highest line pressure.
+// `vibrationActuator.playEffect('dual-rumble', …)`: the strong motor scales with the arm's
+// contact force — the held load on the jaw (`arms.*.contact_force_n`) or the arm pressing on
+// the world (`arms.*.touch.total_force_n`: seabed, box, panel, vehicle, other arm), whichever
+// is larger — the weak one buzzes while the load slips (`arms.*.slipping`) or a relief valve
+// is open (`relief_open`), and a strike (the arm's `strikes` count rising: the server's
+// strike events) gives a full jolt. A pad without an actuator (or a browser without the API)
+// gets nothing, without an error. Beside the task panel, a gauge shows the same contact force
+// and the arm's highest line pressure.
 
 /** Jaw force (N) that gives full rumble and fills the gauge: the Magnum jaw's clamp force,
  * 150 kgf (Lim Table 1-1; server/core hydraulics JawParams `clamp_force_n`). */
@@ -22,10 +24,15 @@ const EFFECT_PERIOD_MS = 100;
 const EFFECT_MS = 140;
 const STRIKE_MS = 300;
 
+/** An arm frame's contact force (N): its held load or its push on the world, the larger. */
+export function contactForce(arm) {
+  return Math.max(Math.hypot(...arm.contact_force_n), arm.touch?.total_force_n ?? 0);
+}
+
 /** Rumble magnitudes {strong, weak} in [0, 1] for one arm's frame and whether a strike just
  * happened (pure; the page and the tests use it). */
 export function rumbleFor(arm, strike) {
-  const f = Math.hypot(...arm.contact_force_n) / JAW_FORCE_FULL_N;
+  const f = contactForce(arm) / JAW_FORCE_FULL_N;
   let strong = f > FORCE_FLOOR ? Math.min(1, 0.25 + 0.75 * f) : 0;
   let weak = 0;
   if (arm.slipping) weak = Math.max(weak, 0.8);
@@ -43,10 +50,12 @@ export class ForceCues {
     this.strikes = null;
     this.played = []; // the effects asked for, for tests: {strong, weak, ms}
     if (gaugeEl) {
-      gaugeEl.innerHTML = `<div class="g-row"><span class="k">jaw force</span> <b data-g="force">0</b> N
+      gaugeEl.innerHTML = `<div class="g-row"><span class="k">contact force</span> <b data-g="force">0</b> N
         <span class="g-bar"><span class="g-fill" data-g="force-bar"></span></span></div>
         <div class="g-row"><span class="k">line pressure</span> <b data-g="p">0.0</b> MPa
-        <span class="g-bar"><span class="g-fill" data-g="p-bar"></span><span class="g-mark" data-g="supply" title="supply ${(SUPPLY_PA / 1e6).toFixed(2)} MPa"></span><span class="g-mark relief" data-g="relief" title="relief ${(RELIEF_PA / 1e6).toFixed(2)} MPa"></span></span></div>`;
+        <span class="g-bar"><span class="g-fill" data-g="p-bar"></span><span class="g-mark" data-g="supply" title="supply ${(SUPPLY_PA / 1e6).toFixed(2)} MPa"></span><span class="g-mark relief" data-g="relief" title="relief ${(RELIEF_PA / 1e6).toFixed(2)} MPa"></span></span></div>
+        <div class="g-row" title="Grip load: the share of the friction the jaw's clamp can hold that the load uses (100 %: it slips)"><span class="k">grip load</span> <b data-g="grip">—</b>
+        <span class="g-bar"><span class="g-fill" data-g="grip-bar"></span></span></div>`;
       this.g = Object.fromEntries([...gaugeEl.querySelectorAll('[data-g]')].map((n) => [n.dataset.g, n]));
       this.g.supply.style.left = `${(100 * SUPPLY_PA / PRESSURE_FULL_PA).toFixed(1)}%`;
       this.g.relief.style.left = `${(100 * RELIEF_PA / PRESSURE_FULL_PA).toFixed(1)}%`;
@@ -56,10 +65,10 @@ export class ForceCues {
   /** A state frame and the arm the sticks drive. */
   update(state, side) {
     const arm = state.arms[side];
-    const strikes = state.exercise?.counters?.strikes ?? null;
-    const strike = (strikes !== null && this.strikes !== null && strikes > this.strikes) ||
-      state.warnings.some((w) => w.startsWith('strike'));
-    this.strikes = strikes;
+    // a strike of this arm since the last frame (a new side starts from its own count)
+    const strike = this.side === side && this.strikes !== null && arm.strikes > this.strikes;
+    this.side = side;
+    this.strikes = arm.strikes;
     this.gauge(arm);
     const { strong, weak } = rumbleFor(arm, strike);
     const now = performance.now();
@@ -86,12 +95,17 @@ export class ForceCues {
 
   gauge(arm) {
     if (!this.g) return;
-    const f = Math.hypot(...arm.contact_force_n);
+    const f = contactForce(arm);
     const p = Math.max(...arm.p_in, ...arm.p_out);
     this.g.force.textContent = f.toFixed(0);
     this.g['force-bar'].style.width = `${Math.min(100, 100 * f / JAW_FORCE_FULL_N).toFixed(1)}%`;
     this.g.p.textContent = (p / 1e6).toFixed(1);
     this.g['p-bar'].style.width = `${Math.min(100, 100 * p / PRESSURE_FULL_PA).toFixed(1)}%`;
     this.el.classList.toggle('relief', arm.relief_open.some(Boolean));
+    // λ against the static friction limits, capped at 100 % (a sliding jaw is at its limit)
+    const grip = arm.holding ? Math.min(1, arm.grip_load) : null;
+    this.g.grip.textContent = grip === null ? '—' : arm.slipping ? 'slipping' : `${Math.round(100 * grip)} %`;
+    this.g['grip-bar'].style.width = `${grip === null ? 0 : (100 * (arm.slipping ? 1 : grip)).toFixed(1)}%`;
+    this.el.classList.toggle('slipping', !!arm.slipping);
   }
 }

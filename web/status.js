@@ -56,7 +56,8 @@ export class StatusBar {
       this.f.graspchip.style.background = `#${c.toString(16).padStart(6, '0')}`;
     }
     this.set('grasp', state.grasp.replaceAll('_', ' '));
-    this.set('mode', state.settings.control_mode);
+    this.set('mode', state.settings.control_mode === 'cartesian' && !state.settings.hold_orientation
+      ? 'cartesian, translation only' : state.settings.control_mode);
     this.set('method', state.settings.control_method);
     this.set('speed', `${Math.round(state.settings.arm_speed * 100)} %`);
     this.set('arm', ui.arm);
@@ -102,6 +103,7 @@ export function waterText(c) {
 export function describeWarning(w) {
   const [kind, arm, joint] = w.split(':');
   if (kind === 'slip') return `load slipping in jaw (${arm})`;
+  if (kind === 'orientation_lost') return `jaw orientation not held: limit or singularity (${arm})`;
   const k = kind.replaceAll('_', ' ');
   if (joint !== undefined && /^\d+$/.test(joint)) return `${k} (${arm} joint ${+joint + 1})`;
   return arm ? `${k} (${arm})` : k;

@@ -11,7 +11,14 @@ import * as api from './api.js';
 
 /** Event kinds shown as a warning banner (the rest, e.g. `step`, as information). */
 const BAD_EVENTS = new Set(['strike', 'obstacle', 'drop', 'overload', 'relief', 'limit', 'fault']);
-const COUNTERS = [['strikes', 'strikes'], ['drops', 'drops'], ['overloads', 'overloads'], ['relief', 'relief'], ['limit_hits', 'limit hits']];
+const COUNTERS = [['strikes', 'strikes'], ['slips', 'slips'], ['drops', 'drops'], ['overloads', 'overloads'], ['relief', 'relief'], ['limit_hits', 'limit hits']];
+/** The scored metrics' names in the cost line (the rest by their metric name). */
+const COST_LABELS = {
+  time_s: 'time', slips: 'slips', seabed_strikes: 'seabed strikes', obstacle_strikes: 'obstacle strikes',
+  joint_limit_hits: 'limit hits', jerk_rms_m_s3: 'jerky motion', mean_jlm: 'posture near limits',
+  mean_yoshikawa: 'posture (manipulability)', peak_side_load_n: 'stab side load', overloads: 'overloads',
+  relief_events: 'relief valve', drops: 'drops', peak_internal_force_n: 'internal force', idle_s: 'idle time',
+};
 
 /** The fault drill's answers (FaultKind::NAMES in the core) and their labels. */
 const DIAGNOSES = [['supply_drop', 'Supply pressure drop'], ['stuck_valve', 'Stuck valve'],
@@ -45,15 +52,19 @@ export class TaskPanel {
     this.panel.hidden = !spec;
     if (!spec) { this.panel.replaceChildren(); return; }
     this.panel.innerHTML = `<h3 class="task-title">${esc(spec.title)}</h3>
-      <p class="task-goal">${esc(spec.goal)}</p>
+      ${spec.fault_drill ? `<details class="task-goal" open><summary>${esc(spec.goal.split(/(?<=[.:])\s/)[0])}</summary>${esc(spec.goal)}</details>`
+        : `<p class="task-goal">${esc(spec.goal)}</p>`}
+      <button type="button" class="task-ready" data-act="ready" hidden title="Start the attempt's clock (Enter)">Ready — start</button>
       <div class="task-bar"><span class="task-fill"></span></div>
       <div class="task-time"><span class="k">time</span> <b data-t="elapsed">0.0</b> / ${Math.round(spec.time_limit_s)} s
         <span class="k">score</span> <b data-t="score">—</b></div>
+      ${spec.fault_drill ? `<div class="task-diagnose"><p>Name the fault:</p>${DIAGNOSES.map(([a, label]) =>
+        `<button type="button" data-answer="${a}">${label}</button>`).join(' ')}</div>` : ''}
       <ol class="task-steps">${spec.steps.map((s, i) => `<li data-step="${i}">${esc(s.text)}</li>`).join('')}</ol>
       <div class="task-readouts"></div>
       <div class="task-counters">${COUNTERS.map(([k, label]) => `<span data-c="${k}">${label} <b>0</b></span>`).join('')}</div>
-      ${spec.fault_drill ? `<div class="task-diagnose"><p>Name the fault:</p>${DIAGNOSES.map(([a, label]) =>
-        `<button type="button" data-answer="${a}">${label}</button>`).join(' ')}</div>` : ''}`;
+      <div class="task-costs" title="Points each penalty takes off the score so far (a completed attempt scores 100 less these)"></div>
+`;
     for (const b of this.panel.querySelectorAll('[data-answer]')) {
       b.addEventListener('click', () => {
         this.ui.diagnose?.(b.dataset.answer);
@@ -66,11 +77,24 @@ export class TaskPanel {
     this.items = [...this.panel.querySelectorAll('[data-step]')];
     this.t = Object.fromEntries([...this.panel.querySelectorAll('[data-t]')].map((n) => [n.dataset.t, n]));
     this.counters = Object.fromEntries([...this.panel.querySelectorAll('[data-c]')].map((n) => [n.dataset.c, n]));
+    this.costs = this.panel.querySelector('.task-costs');
+    this.readyBtn = this.panel.querySelector('.task-ready');
+    this.readyBtn.addEventListener('click', () => this.ui.ready?.());
+    this.costsText = '';
   }
 
-  /** A state frame's `exercise` (null outside exercises). */
-  update(ex) {
+  /** A state frame's `exercise` (null outside exercises) and whether the attempt waits for
+   * the trainee's "Ready" (`awaiting_ready`: its clock reads 0 until then). */
+  update(ex, awaitingReady = false) {
     if (!this.spec || !ex) return;
+    if (this.readyBtn.hidden === awaitingReady) {
+      this.readyBtn.hidden = !awaitingReady;
+      this.panel.classList.toggle('awaiting-ready', awaitingReady);
+      if (awaitingReady) this.readyBtn.focus({ preventScroll: true });
+      // a long goal (the fault drill's) folds once the clock runs: the answers stay in sight
+      const goal = this.panel.querySelector('details.task-goal');
+      if (goal) goal.open = awaitingReady;
+    }
     if (this.shownDone && !ex.done) this.restarted(); // "try again" (here or from another tab)
     if (ex.step !== this.step) {
       this.step = ex.step;
@@ -93,6 +117,12 @@ export class TaskPanel {
       const b = this.counters[k].firstElementChild;
       if (b.textContent !== String(v)) b.textContent = String(v);
       this.counters[k].classList.toggle('bad', v > 0);
+    }
+    const costs = (ex.costs || []).map((c) => `${COST_LABELS[c.metric] ?? c.metric.replaceAll('_', ' ')} −${c.points.toFixed(c.points < 10 ? 1 : 0)}`);
+    const text = costs.length ? `costs: ${costs.join(' · ')}` : '';
+    if (text !== this.costsText) {
+      this.costsText = text;
+      this.costs.textContent = text;
     }
     const e = ex.last_event;
     if (e && (!this.lastEvent || e.t !== this.lastEvent.t || e.kind !== this.lastEvent.kind)) {

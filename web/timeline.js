@@ -38,6 +38,10 @@ export function eventText(e) {
   const d = e.detail && typeof e.detail === 'object' ? e.detail : {};
   if (e.kind === 'exercise') return d.text || String(d.kind || 'exercise event');
   if (e.kind === 'grasp') return `grasp: ${String(d.state ?? '').replaceAll('_', ' ')}`;
+  if (e.kind === 'strike' && d.partner) {
+    const what = String(d.partner).replaceAll('-', ' ');
+    return `${d.arm} arm struck the ${what} (${d.part}) at ${(+d.impact_speed_m_s).toFixed(2)} m/s, peak ${(+d.peak_force_n).toFixed(0)} N`;
+  }
   if (e.kind === 'relief') return `relief valve opened${d.arm ? ` (${d.arm}${d.joint !== undefined ? ` joint ${+d.joint + 1}` : ''})` : ''}`;
   const who = e.actor ? `${e.actor}: ` : '';
   if (e.kind === 'fault' && d.fault) return `${who}fault ${d.fault}${d.arm ? ` (${d.arm} arm${d.joint !== undefined && d.joint !== null ? `, joint ${+d.joint + 1}` : ''})` : ''}${d.silent ? ', silent' : ''}`;

@@ -18,6 +18,27 @@ export function mountViews() {
   return { view, status, plots, controls: bindViewControls(view, plots) };
 }
 
+/** The instructor's visibility (a state frame's `visibility_m`, m, or null): applied to the
+ * water, shown in the visibility menu and locked there while set. */
+export function followVisibility(view, visibility_m) {
+  const sel = $('sel-visibility');
+  const set = typeof visibility_m === 'number' && visibility_m > 0;
+  if (set && view.water.visibility_m !== visibility_m) {
+    view.water.setVisibility(visibility_m);
+    view.viewports.dirty = true;
+  }
+  if (!sel) return;
+  if (set) {
+    const v = String(visibility_m);
+    if (![...sel.options].some((o) => o.value === v)) sel.add(new Option(`${visibility_m} m`, v));
+    sel.value = v;
+  }
+  if (sel.disabled !== set) {
+    sel.disabled = set;
+    sel.title = set ? 'Water visibility, set by the instructor' : 'Water visibility in the pilot cameras';
+  }
+}
+
 /** Binds the controls to `view` (web/view.js) and `plots` (web/plots.js, its panel #plots);
  * returns {layout()} (the keyboard's V). */
 export function bindViewControls(view, plots) {

@@ -19,7 +19,7 @@ export const WATER_COLOUR = 0x0d3338;
  * visibility, Koschmieder): three's FogExp2 fades as 1 − exp(−(d·r)²), so
  * d = sqrt(−ln 0.02) / visibility. */
 const CONTRAST_AT_VISIBILITY = 0.02;
-/** A point of the arm or the box this close to the seabed (m) touches it. */
+/** A corner of the box this close to the seabed (m) touches it. */
 export const SILT_CONTACT_M = 0.01;
 /** Speed along the seabed (m/s) above which a touching point keeps stirring silt up. */
 const STIR_SPEED_M_S = 0.02;
@@ -45,13 +45,14 @@ function currentVelocity(cur, out) {
   return out.set(Math.cos(a) * cur.speed_m_s, Math.sin(a) * cur.speed_m_s, 0);
 }
 
-const _m = new THREE.Matrix4(), _v = new THREE.Vector3(), _w = new THREE.Vector3();
+const _m = new THREE.Matrix4(), _v = new THREE.Vector3();
 
 /**
  * Points of a state frame that touch the seabed: [{key, at: [x, y, z], moving}] — the box's
- * corners (pose and `size_m`), every arm's joint-frame origins, jaw centre and jaw tips —
- * each within SILT_CONTACT_M of `seabed_z_m`. `prev` (the previous frame's points by key)
- * gives the arm points' speed; the box's comes from the frame's `object.velocity`.
+ * corners (pose and `size_m`) within SILT_CONTACT_M of `seabed_z_m`, and each arm's contact
+ * with the seabed as the server reports it (`arms.*.touch`). `prev` (the previous frame's
+ * points by key) gives the arm points' speed; the box's comes from the frame's
+ * `object.velocity`.
  */
 export function seabedContacts(state, hello, prev = new Map()) {
   const z0 = hello.seabed_z_m;
@@ -68,21 +69,16 @@ export function seabedContacts(state, hello, prev = new Map()) {
     points.set(key, p.toArray());
     if (p.z - z0 < SILT_CONTACT_M) out.push({ key, at: p.toArray(), moving: boxMoving });
   }
+  // an arm on the seabed: the server's contact (`arms.*.touch`, the strongest of the arm's
+  // contact points; sim/contact.rs)
   for (const side of ['left', 'right']) {
-    const a = state.arms[side];
-    const pts = a.joint_frames.map((f) => f.position);
-    poseToMatrix(a.pose, _m);
-    const half = Math.max(a.jaw_opening_m, 0) / 2;
-    pts.push(a.pose.position,
-      _v.set(0, half, 0.05).applyMatrix4(_m).toArray(), _w.set(0, -half, 0.05).applyMatrix4(_m).toArray());
-    pts.forEach((p, i) => {
-      const key = `${side}${i}`;
-      points.set(key, p);
-      if (p[2] - z0 >= SILT_CONTACT_M) return;
-      const q = prev.get(key);
-      const moving = !!q && Math.hypot(p[0] - q[0], p[1] - q[1]) > 0.002; // a frame apart
-      out.push({ key, at: p.slice(), moving });
-    });
+    const t = state.arms[side].touch;
+    if (!t || t.partner !== 'seabed') continue;
+    const key = side;
+    points.set(key, t.point_m);
+    const q = prev.get(key);
+    const moving = !!q && Math.hypot(t.point_m[0] - q[0], t.point_m[1] - q[1]) > 0.002; // a frame apart
+    out.push({ key, at: t.point_m.slice(), moving });
   }
   out.points = points;
   return out;

@@ -33,13 +33,17 @@ pub enum Command {
     },
     /// Run a training exercise headless (`exercises/<id>.json`) and print its assessment JSON:
     /// `--autopilot` drives it with the exercise's scripted controller through the trainee's
-    /// controls, `--idle` gives no input at all.
+    /// controls, `--human` with a human-paced operator following the script's intent (a
+    /// decision every 0.25 s, two axes at most, rest / slow / full), `--idle` gives no input.
     Exercise {
         /// Exercise id (see `GET /api/exercises`).
         id: String,
         /// Drive with the exercise's autopilot script.
-        #[arg(long, conflicts_with = "idle")]
+        #[arg(long, conflicts_with_all = ["idle", "human"])]
         autopilot: bool,
+        /// Drive with a human-paced operator (`exercises::Driver::HumanPaced`).
+        #[arg(long, conflicts_with = "idle")]
+        human: bool,
         /// Give no input (the default).
         #[arg(long)]
         idle: bool,

@@ -77,8 +77,78 @@ pub async fn get(Path(id): Path<String>) -> Result<Json<Arc<ExerciseSpec>>, ApiE
 pub enum Driver {
     /// The exercise file's autopilot script.
     Autopilot,
+    /// A human-paced operator following the autopilot's intent ([`HumanPace`]): decides
+    /// every [`HUMAN_DECISION_S`], at most two axes at a time, each at rest, slow (30 %,
+    /// Shift) or full — a keyboard user's choices, with a reaction time.
+    HumanPaced,
     /// Nobody: no input at all.
     Idle,
+}
+
+/// How often the human-paced operator decides (s): 0.25, a choice reaction time (Hick's
+/// law puts a two-alternative choice at 0.3–0.4 s; a practised operator tracking a moving
+/// target re-decides about every 0.2–0.3 s) — above the issue's ≥ 150 ms between decisions.
+pub const HUMAN_DECISION_S: f64 = 0.25;
+/// Below this deflection of the autopilot's intent the human leaves the axis at rest (or taps
+/// it, below [`HUMAN_TAP`]); below [`HUMAN_FULL`] the slow (30 %) deflection, above it full.
+const HUMAN_REST: f64 = 0.08;
+const HUMAN_FULL: f64 = 0.6;
+/// An intent this small on the strongest arm axis (and above 0.01) is a fine tap (a jog at
+/// 0.3 of a full one, Shift) rather than a held key: the last few degrees or millimetres.
+const HUMAN_TAP: f64 = 0.25;
+
+/// The human-paced operator's limits on an intent ([`Driver::HumanPaced`]): a fine tap of the
+/// strongest arm axis when every arm axis is small (returned: arm, axes; the sticks then rest),
+/// else the two strongest of the twelve arm axes (or of the six object axes), each quantized
+/// to 0, ±0.3 or ±1; grips to 0 or ±1.
+fn human_paced(out: &mut seaarms_core::exercise::PilotOutput) -> Option<(usize, [f64; 6])> {
+    let (mut best, mut at) = (0.0_f64, (0, 0));
+    for (i, a) in out.axes.iter().enumerate() {
+        for (k, v) in a.iter().enumerate() {
+            if v.abs() > best.abs() {
+                (best, at) = (*v, (i, k));
+            }
+        }
+    }
+    let tap = (0.01..HUMAN_TAP).contains(&best.abs()).then(|| {
+        let mut axes = [0.0; 6];
+        axes[at.1] = 0.3 * best.signum();
+        (at.0, axes)
+    });
+    let q = |v: f64| {
+        let a = v.abs();
+        if a < HUMAN_REST {
+            0.0
+        } else if a < HUMAN_FULL {
+            0.3 * v.signum()
+        } else {
+            v.signum()
+        }
+    };
+    let keep_two = |vals: &mut [f64]| {
+        let mut idx: Vec<usize> = (0..vals.len()).collect();
+        idx.sort_by(|a, b| vals[*b].abs().total_cmp(&vals[*a].abs()));
+        for (rank, i) in idx.into_iter().enumerate() {
+            vals[i] = if rank < 2 { q(vals[i]) } else { 0.0 };
+        }
+    };
+    let mut arms: Vec<f64> = out.axes.iter().flatten().copied().collect();
+    keep_two(&mut arms);
+    for (k, v) in arms.into_iter().enumerate() {
+        out.axes[k / 6][k % 6] = v;
+    }
+    keep_two(&mut out.object);
+    for g in &mut out.grips {
+        *g = if g.abs() < HUMAN_REST {
+            0.0
+        } else {
+            g.signum()
+        };
+    }
+    if tap.is_some() {
+        out.axes = [[0.0; 6]; 2];
+    }
+    tap
 }
 
 /// Runs one attempt at `spec` headless until it is done (at most its time limit plus a
@@ -102,6 +172,8 @@ pub struct HeadlessRun {
     pub inputs: Vec<u8>,
     /// Simulated seconds it ran.
     pub sim_seconds: f64,
+    /// The events it recorded (physics events, exercise events, commands), in order.
+    pub events: Vec<crate::db::attempt::EventRecord>,
 }
 
 /// [`run_headless`], calling `observe` after every step, and keeping the attempt's record.
@@ -121,11 +193,50 @@ pub fn run_recorded(
         seed,
     )?;
     let mut pilot = Autopilot::new(spec.autopilot.clone(), spec.control.mode);
+    if driver == Driver::HumanPaced {
+        pilot = pilot.settling();
+    }
     let steps_per_tick = (PILOT_INTERVAL_S * 1000.0).round() as u64;
     let max_steps = ((spec.time_limit_s + 1.0) * 1000.0) as u64;
     let mut seq = 0;
     let mut steps = 0;
+    let decide_every = (HUMAN_DECISION_S / PILOT_INTERVAL_S).round() as u64;
+    let mut held: Option<seaarms_core::exercise::PilotOutput> = None;
     while steps < max_steps {
+        if driver == Driver::HumanPaced {
+            let mut out = {
+                let run = live
+                    .exercise()
+                    .ok_or_else(|| anyhow::anyhow!("no exercise"))?;
+                pilot.tick(live.sim(), &run.facts())
+            };
+            // Settings and answers as they come (a click); the sticks only at decisions.
+            if let Some((mode, method)) = out.settings.take() {
+                live.apply(&Command::settings(mode, method, None, None)?)?;
+            }
+            if let Some(answer) = out.answer.take() {
+                live.apply(&Command::Diagnose {
+                    answer: answer.to_string(),
+                })?;
+            }
+            if held.is_none() || (steps / steps_per_tick) % decide_every == 0 {
+                if let Some((arm, axes)) = human_paced(&mut out) {
+                    let side = if arm == 0 { "left" } else { "right" };
+                    live.apply(&Command::jog(side, &axes, &mut Vec::new())?)?;
+                }
+                held = Some(out);
+            }
+            let h = held.as_ref().expect("decided");
+            seq += 1;
+            live.apply(&Command::Input(StickInput {
+                seq,
+                arms: [0, 1].map(|i| ArmSticks {
+                    axes: h.axes[i],
+                    grip: h.grips[i],
+                }),
+                object: h.object,
+            }))?;
+        }
         if driver == Driver::Autopilot {
             let out = {
                 let run = live
@@ -134,7 +245,7 @@ pub fn run_recorded(
                 pilot.tick(live.sim(), &run.facts())
             };
             if let Some((mode, method)) = out.settings {
-                live.apply(&Command::settings(mode, method, None)?)?;
+                live.apply(&Command::settings(mode, method, None, None)?)?;
             }
             if let Some(answer) = out.answer {
                 live.apply(&Command::Diagnose {
@@ -167,11 +278,12 @@ pub fn run_recorded(
         .ok_or_else(|| anyhow::anyhow!("no exercise"))?;
     let sim_seconds = live.sim().time_s();
     live.end_attempt(crate::sessions::AttemptStop::Left);
-    let (mut init, mut inputs) = (None, Vec::new());
+    let (mut init, mut inputs, mut events) = (None, Vec::new(), Vec::new());
     for msg in live.take_records(false) {
         match msg {
             RecordMsg::AttemptStarted(a) => init = Some(serde_json::from_value(a.init)?),
             RecordMsg::AttemptInputs { bytes, .. } => inputs.extend(bytes),
+            RecordMsg::Event(e) => events.push(*e),
             _ => {}
         }
     }
@@ -180,5 +292,6 @@ pub fn run_recorded(
         init: init.ok_or_else(|| anyhow::anyhow!("the attempt recorded no start"))?,
         inputs,
         sim_seconds,
+        events,
     })
 }

@@ -27,6 +27,7 @@ async fn main() -> anyhow::Result<()> {
         Some(Command::Exercise {
             id,
             autopilot,
+            human,
             idle: _,
             seed,
         }) => {
@@ -47,6 +48,8 @@ async fn main() -> anyhow::Result<()> {
                 .ok_or_else(|| anyhow::anyhow!("no magnum model"))?;
             let driver = if autopilot {
                 seaarms::exercises::Driver::Autopilot
+            } else if human {
+                seaarms::exercises::Driver::HumanPaced
             } else {
                 seaarms::exercises::Driver::Idle
             };

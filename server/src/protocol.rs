@@ -199,6 +199,14 @@ pub enum ClientMessage {
         #[serde(default)]
         object: Option<Vec<f64>>,
     },
+    /// A keyboard tap: `arm` (`left`, `right`) moves a bounded amount along `axes` (six
+    /// values in [−1, 1], as a stick's) and stops (docs/api.md).
+    Jog {
+        /// `left` or `right`.
+        arm: String,
+        /// Joint mode: per joint; Cartesian mode: [vx vy vz wx wy wz] (world frame).
+        axes: Vec<f64>,
+    },
     /// Change settings; absent fields are unchanged.
     Settings {
         /// Joint or Cartesian.
@@ -210,6 +218,10 @@ pub enum ClientMessage {
         /// Arm speed in (0, 1] (Lim Fig. 4-3).
         #[serde(default)]
         arm_speed: Option<f64>,
+        /// Cartesian translation holds the jaw's orientation (true) or leaves the spare DOF
+        /// to the redundancy resolution (false, "translation only").
+        #[serde(default)]
+        hold_orientation: Option<bool>,
     },
     /// Back to the initial position (Lim §4.1 "Initial Position").
     Reset,
@@ -219,6 +231,9 @@ pub enum ClientMessage {
     Resume,
     /// Open both jaws (drop the object).
     Release,
+    /// The trainee has read the goal: the exercise attempt's clock starts (a session created
+    /// with `wait_for_ready`; otherwise nothing).
+    Ready,
     /// Fault-diagnosis drill: name the fault (`supply_drop`, `stuck_valve`, `leak`, `air`).
     Diagnose {
         /// The answer.
@@ -277,6 +292,11 @@ pub enum Action {
         /// Heading (degrees).
         heading_deg: f64,
     },
+    /// Set how far one sees in the water on every page of the session (m, in [0.5, 50]).
+    SetVisibility {
+        /// Visibility (m).
+        visibility_m: f64,
+    },
     /// Show a message on the trainee's page.
     Message {
         /// Up to 500 characters.
@@ -293,6 +313,11 @@ pub struct Settings {
     pub control_method: ControlMethod,
     /// Arm speed in (0, 1].
     pub arm_speed: f64,
+    /// Cartesian translation holds the jaw's orientation (the default for a new session;
+    /// false: translation only, the spare DOF to the redundancy resolution). Absent in
+    /// records made before the hold existed: false, as they ran.
+    #[serde(default)]
+    pub hold_orientation: bool,
 }
 
 impl Default for Settings {
@@ -301,6 +326,7 @@ impl Default for Settings {
             control_mode: ControlMode::Joint,
             control_method: ControlMethod::Open,
             arm_speed: 1.0,
+            hold_orientation: true,
         }
     }
 }
@@ -664,6 +690,9 @@ pub struct StateFrame {
     pub paused: bool,
     /// Who paused it (`instructor`, `trainee`), `null` while running.
     pub paused_by: Option<crate::auth::Actor>,
+    /// The exercise attempt waits for the trainee's `ready` (the session was created with
+    /// `wait_for_ready`): no steps pass and its clock reads 0.
+    pub awaiting_ready: bool,
     /// Current settings.
     pub settings: Settings,
     /// Left and right arm.
@@ -696,6 +725,8 @@ pub struct StateFrame {
     /// The water's current `{speed_m_s, heading_deg}` (heading: the direction it flows
     /// towards, degrees from +x towards +y) in a subsea session; `null` in air.
     pub current: Option<seaarms_core::sim::Current>,
+    /// The water's visibility the instructor set (m), or `null`: each page's own choice.
+    pub visibility_m: Option<f64>,
 }
 
 /// Left and right arm frames.

@@ -12,7 +12,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, startServer, openBrowser, until, untilDrawn, FAKE_GAMEPAD, workDualLift, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+import { server, startServer, openBrowser, until, untilDrawn, FAKE_GAMEPAD, workDualLift, INSTRUCTOR_TOKEN, ARTIFACTS, pressReady } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || ARTIFACTS;
 const auth = { authorization: `Bearer ${INSTRUCTOR_TOKEN}` };
@@ -32,6 +32,7 @@ async function startTrainee(url, name, group, exercise, opts = {}, query = '') {
   await b.page.click('#start-exercise');
   await until(b.page, (ex) => window.__seaarms?.hello?.exercise?.id === ex, exercise, 30000);
   const id = await untilDrawn(b.page, { timeout: 30000 });
+  await pressReady(b.page);
   return { ...b, id };
 }
 

@@ -6,7 +6,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, until, untilDrawn, FAKE_GAMEPAD, workDualLift, ROOT, INSTRUCTOR_TOKEN, instructorAction } from './harness.mjs';
+import { server, openBrowser, until, untilDrawn, pressReady, FAKE_GAMEPAD, workDualLift, ROOT, INSTRUCTOR_TOKEN, instructorAction } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || join(ROOT, 'tests', 'browser', 'artifacts');
 
@@ -28,6 +28,15 @@ test('dual-lift: start screen, task panel, handles, scripted gamepad through the
     await page.click('#start-exercise');
     await until(page, () => window.__seaarms?.hello?.exercise?.id === 'dual-lift');
     await untilDrawn(page);
+    // the attempt waits for "Ready": its clock reads 0 while the trainee reads the goal
+    await page.waitForTimeout(1000);
+    const waiting = await page.evaluate(() => window.__seaarms.lastState);
+    assert.equal(waiting.awaiting_ready, true);
+    assert.equal(waiting.exercise.elapsed_s, 0);
+    assert.equal(await page.isVisible('#task .task-ready'), true);
+    await pressReady(page);
+    await until(page, () => window.__seaarms.lastState.exercise.elapsed_s > 0.2);
+    assert.equal(await page.isVisible('#task .task-ready'), false);
     // the session carries the trainee's name (what the instructor sees)
     const sid = await page.evaluate(() => window.__seaarms.connection.session);
     const summary = await (await fetch(`${url}/api/sessions/${sid}`, { headers: { authorization: 'Bearer test-token' } })).json().catch(() => null);
@@ -118,8 +127,19 @@ test('fault drill: the page offers the four answers and the server records the o
     await page.goto(`${url}/?exercise=fault-diagnosis`);
     await until(page, () => window.__seaarms?.hello?.exercise?.id === 'fault-diagnosis');
     await untilDrawn(page, { open: false });
+    await pressReady(page);
     const buttons = await page.$$eval('#task [data-answer]', (bs) => bs.map((b) => b.dataset.answer));
     assert.deepEqual(buttons, ['supply_drop', 'stuck_valve', 'leak', 'air']);
+    // at 1280×800 the answers are in sight without scrolling, beside the line-pressure plots
+    // and the gauges the drill is diagnosed from (issue 28 item 6)
+    const layout = await page.evaluate(() => ({
+      answers: [...document.querySelectorAll('#task [data-answer]')].map((b) => b.getBoundingClientRect().bottom),
+      plots: !document.getElementById('plots').hidden && document.getElementById('plots').getBoundingClientRect().height > 200,
+      gauges: document.getElementById('gauges').getBoundingClientRect().bottom <= innerHeight,
+      vh: innerHeight,
+    }));
+    assert.ok(layout.answers.every((y) => y <= layout.vh), `answers at ${layout.answers} of ${layout.vh}`);
+    assert.ok(layout.plots && layout.gauges, JSON.stringify(layout));
     await page.click('#task [data-answer="leak"]');
     const sid = await page.evaluate(() => window.__seaarms.connection.session);
     let a = null;

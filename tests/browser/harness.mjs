@@ -153,6 +153,14 @@ export async function untilDrawn(page, { states = 2, open = true, timeout } = {}
   }, [states, open], timeout);
 }
 
+/** Presses the task panel's "Ready" (an exercise attempt on the trainee's page waits for it;
+ * docs/exercises.md) and waits until its clock runs. */
+export async function pressReady(page) {
+  await until(page, () => window.__seaarms.lastState?.awaiting_ready === true, undefined, 15000);
+  await page.click('#task .task-ready');
+  await until(page, () => window.__seaarms.lastState?.awaiting_ready === false, undefined, 15000);
+}
+
 /** RGB of a pixel in a PNG screenshot buffer (decoded by the page itself: no extra packages). */
 export async function decodePng(page, png) {
   return page.evaluate(async (b64) => {

@@ -455,6 +455,7 @@ const NULLABLE_STATE_KEYS: &[&str] = &[
     "last_event",
     "panel",
     "current",
+    "touch",
 ];
 
 /// Checks a state frame: every number finite (serde_json writes NaN and ±∞ as `null`, so a

@@ -88,6 +88,11 @@ pub struct CreateRequest {
     /// The class join code, when the server requires one (or send `X-Join-Code`).
     #[serde(default)]
     pub join_code: Option<String>,
+    /// Each exercise attempt waits for the trainee's `ready` before its clock starts (the
+    /// trainee's page asks for it: the goal is read first); absent or false: it starts at
+    /// once (scripts, the HTTP API).
+    #[serde(default)]
+    pub wait_for_ready: bool,
 }
 
 /// Answer of `POST /api/sessions`.
@@ -178,11 +183,14 @@ pub async fn create(
     let session = tokio::task::spawn_blocking(move || {
         sessions.create(
             client,
-            scenario,
-            req.control_mode,
-            req.control_method,
-            label,
-            req.group,
+            crate::sessions::NewSession {
+                scenario,
+                mode: req.control_mode,
+                method: req.control_method,
+                label,
+                group: req.group,
+                wait_for_ready: req.wait_for_ready,
+            },
         )
     })
     .await

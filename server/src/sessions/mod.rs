@@ -121,6 +121,12 @@ pub struct Live {
     origin: Instant,
     /// Frames published.
     frame_seq: u64,
+    /// The water's visibility the instructor set (m; `set_visibility`), for every page.
+    visibility_m: Option<f64>,
+    /// Each exercise attempt waits for the trainee's `ready` ([`Live::wait_for_ready`]).
+    ready_gate: bool,
+    /// The running attempt waits for `ready`: no steps pass, its clock reads 0.
+    awaiting_ready: bool,
     /// When the next frame is due.
     next_frame: Instant,
     /// The measures of the last published frame ([`snapshot::build_frame`]).
@@ -186,6 +192,8 @@ impl Live {
             false,
         )?;
         live.operator.set_speed(settings.arm_speed);
+        live.operator
+            .set_hold_orientation(settings.hold_orientation);
         for f in faults {
             live.inject_fault(*f);
         }
@@ -218,6 +226,7 @@ impl Live {
         let mut operator = Operator::new(&models[0], &models[1]);
         operator.set_mode(mode.or(control.map(|c| c.mode)).unwrap_or_default());
         operator.set_method(method.or(control.map(|c| c.method)).unwrap_or_default());
+        operator.set_hold_orientation(control.and_then(|c| c.hold_orientation).unwrap_or(true));
         let now = Instant::now();
         let mut live = Live {
             measures: measures(&sim),
@@ -229,6 +238,9 @@ impl Live {
             steps_since_origin: 0,
             origin: now,
             frame_seq: 0,
+            visibility_m: None,
+            ready_gate: false,
+            awaiting_ready: false,
             next_frame: now,
             tally: Default::default(),
             models: models.clone(),
@@ -249,6 +261,7 @@ impl Live {
     /// state).
     fn start_attempt(&mut self) {
         self.attempt_id = random_hex(8);
+        self.awaiting_ready = self.ready_gate && self.scenario.exercise().is_some();
         let seed = self.next_seed;
         self.exercise = self.scenario.exercise().map(|spec| {
             self.next_seed = self.next_seed.wrapping_add(1);
@@ -386,6 +399,7 @@ impl Live {
                 control_mode: Some(c.mode),
                 control_method: Some(c.method),
                 arm_speed: None,
+                hold_orientation: Some(c.hold_orientation.unwrap_or(true)),
             });
         }
         self.reset();
@@ -423,12 +437,35 @@ impl Live {
             control_mode: self.operator.mode(),
             control_method: self.operator.method(),
             arm_speed: self.operator.speed(),
+            hold_orientation: self.operator.hold_orientation(),
         }
     }
 
     /// Whether the clock is paused.
     pub fn paused(&self) -> bool {
         self.paused.is_some()
+    }
+
+    /// Whether no steps pass: paused, or an attempt waiting for `ready`.
+    pub fn clock_stopped(&self) -> bool {
+        self.paused.is_some() || self.awaiting_ready
+    }
+
+    /// From now on (this attempt included) each exercise attempt waits for the trainee's
+    /// `ready` before its clock starts (`true`), or starts at once (`false`).
+    pub fn wait_for_ready(&mut self, on: bool) {
+        self.ready_gate = on;
+        self.awaiting_ready = on && self.scenario.exercise().is_some();
+    }
+
+    /// The running attempt waits for `ready`.
+    pub fn awaiting_ready(&self) -> bool {
+        self.awaiting_ready
+    }
+
+    /// The trainee has read the goal: the attempt's clock starts.
+    pub fn ready(&mut self) {
+        self.awaiting_ready = false;
     }
 
     /// Who paused the clock, while it is paused.
@@ -463,6 +500,9 @@ impl Live {
         if let Some(m) = change.control_method {
             self.operator.set_method(m);
         }
+        if let Some(h) = change.hold_orientation {
+            self.operator.set_hold_orientation(h);
+        }
     }
 
     /// Back to the initial position (Lim §4.1): simulation reset, inputs cleared, fresh
@@ -479,6 +519,16 @@ impl Live {
     /// is [`Live::pause_as`]'s rule.
     pub fn set_paused(&mut self, by: Option<Actor>) {
         self.paused = by;
+    }
+
+    /// Sets the water's visibility every page draws (m).
+    pub fn set_visibility(&mut self, visibility_m: f64) {
+        self.visibility_m = Some(visibility_m);
+    }
+
+    /// A keyboard tap on `arm` (`seaarms_core::sim::Operator::jog`).
+    pub fn jog(&mut self, arm: seaarms_core::sim::Arm, axes: &[f64; 6]) {
+        self.operator.jog(&self.sim, arm, axes);
     }
 
     /// Drives both jaws open for `duration_s` of simulated time, whatever the sticks say.
@@ -625,6 +675,23 @@ pub struct SessionManager {
     magnum: Arc<Model>,
 }
 
+/// What a new session is created with ([`SessionManager::create`]).
+#[derive(Debug, Clone, Default)]
+pub struct NewSession {
+    /// Scenario or exercise name; `training` when absent.
+    pub scenario: Option<String>,
+    /// Control mode (else the exercise's, else joint).
+    pub mode: Option<ControlMode>,
+    /// Control method (else the exercise's, else open).
+    pub method: Option<ControlMethod>,
+    /// Trainee label.
+    pub label: Option<String>,
+    /// Trainee group.
+    pub group: Option<String>,
+    /// Exercise attempts wait for the trainee's `ready` ([`Live::wait_for_ready`]).
+    pub wait_for_ready: bool,
+}
+
 impl SessionManager {
     /// Starts the physics workers and the recorder.
     pub fn start(
@@ -657,23 +724,24 @@ impl SessionManager {
     }
 
     /// Creates a session for `client` and starts stepping it.
-    pub fn create(
-        &self,
-        client: ClientKey,
-        scenario: Option<String>,
-        mode: Option<ControlMode>,
-        method: Option<ControlMethod>,
-        label: Option<String>,
-        group: Option<String>,
-    ) -> Result<Arc<Session>, CreateError> {
+    pub fn create(&self, client: ClientKey, new: NewSession) -> Result<Arc<Session>, CreateError> {
+        let NewSession {
+            scenario,
+            mode,
+            method,
+            label,
+            group,
+            wait_for_ready,
+        } = new;
         let name = scenario.unwrap_or_else(|| "training".to_string());
         let scenario = Scenario::resolve(&name).ok_or(CreateError::UnknownScenario(name))?;
         self.check_caps(&self.map(), client)?;
         self.recorder.admit().map_err(CreateError::Recording)?;
         let models = [self.magnum.clone(), self.magnum.clone()];
         let id = random_hex(8);
-        let live = Live::new(&id, &models, &scenario, mode, method, random_seed())
+        let mut live = Live::new(&id, &models, &scenario, mode, method, random_seed())
             .map_err(|e| CreateError::Sim(e.to_string()))?;
+        live.wait_for_ready(wait_for_ready);
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);
         let label = label.unwrap_or_default().chars().take(64).collect();

@@ -125,7 +125,7 @@ pub fn step_session(
     let mut guard = session.live();
     let live: &mut Live = &mut guard;
     let now = Instant::now();
-    if live.paused() {
+    if live.clock_stopped() {
         live.origin = now;
         live.steps_since_origin = 0;
     } else {

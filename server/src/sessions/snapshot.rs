@@ -4,7 +4,7 @@
 
 use seaarms_core::manipulability::Measures;
 use seaarms_core::sim::measures::measures;
-use seaarms_core::sim::{Arm, ArmContacts, ArmPart};
+use seaarms_core::sim::{Arm, ArmContacts, ArmPart, ORIENTATION_LOST_RAD};
 
 use super::Live;
 use crate::protocol::PoseOut;
@@ -38,7 +38,9 @@ fn measures_frame(m: &Measures, jlm: Option<f64>) -> MeasuresFrame {
 
 /// One arm's warnings: near a singularity and joints near a limit (the core's measures,
 /// [`seaarms_core::sim::measures`], with its thresholds), relief valves open, the jaw's bar
-/// slipping (`slip:left`). The one rule behind the frames' and the summaries' `warnings`.
+/// slipping (`slip:left`), the jaw's orientation not held in a Cartesian translation
+/// (`orientation_lost:left`: a limit or a singularity, [`ORIENTATION_LOST_RAD`]). The one
+/// rule behind the frames' and the summaries' `warnings`.
 fn arm_warnings(live: &Live, arm: Arm, warnings: &mut Vec<String>) {
     let name = arm_name(arm);
     let state = live.sim.arm(arm);
@@ -58,6 +60,9 @@ fn arm_warnings(live: &Live, arm: Arm, warnings: &mut Vec<String>) {
     }
     if state.grip.slipping {
         warnings.push(format!("slip:{name}"));
+    }
+    if live.operator.orientation_error_rad(arm) > ORIENTATION_LOST_RAD {
+        warnings.push(format!("orientation_lost:{name}"));
     }
 }
 
@@ -150,6 +155,7 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
         seq: live.frame_seq,
         input_seq: live.input_seq,
         paused: live.paused(),
+        awaiting_ready: live.awaiting_ready(),
         paused_by: live.paused_by(),
         settings: live.settings(),
         arms: ArmsFrame { left, right },
@@ -175,5 +181,6 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
             side_load_n: p.side_load_n,
         }),
         current: sim.environment().water().map(|w| w.current),
+        visibility_m: live.visibility_m,
     }
 }

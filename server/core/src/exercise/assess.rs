@@ -366,9 +366,9 @@ impl Assessor {
                     kind: "slip",
                     t,
                     text: format!(
-                        "{} jaw: the load is slipping (grip load {:.0} %)",
+                        "{} jaw: the load is slipping: it pulls harder than the grip's \
+                         friction can hold (−{SLIP_PENALTY_POINTS:.0} points)",
                         side(arm),
-                        100.0 * st.grip.load_fraction
                     ),
                 });
             }
@@ -546,6 +546,43 @@ pub fn score(spec: &ExerciseSpec, metrics: &Metrics) -> (f64, Vec<TermScore>) {
         (100.0 * completed.clamp(0.0, 1.0) * weighted - penalty).max(0.0),
         terms,
     )
+}
+
+/// What each penalised metric costs so far (points), largest first: per scoring term the
+/// points it takes off a completed attempt's score, 100 × wₖ·(1 − sₖ)/Σw (its share of the
+/// weighted sum, [`score`]), and the slips' penalty ([`SLIP_PENALTY_POINTS`] each, at most
+/// [`SLIP_PENALTY_MAX_POINTS`]) as metric `slips`; only costs of at least 0.5 points.
+pub fn costs(spec: &ExerciseSpec, metrics: &Metrics) -> Vec<Cost> {
+    let (_, terms) = score(spec, metrics);
+    let total_w: f64 = terms.iter().map(|t| t.weight).sum();
+    let mut out: Vec<Cost> = terms
+        .iter()
+        .filter(|_| total_w > 0.0)
+        .map(|t| Cost {
+            metric: t.metric.clone(),
+            value: t.value,
+            points: 100.0 * t.weight * (1.0 - t.score) / total_w,
+        })
+        .collect();
+    out.push(Cost {
+        metric: "slips".into(),
+        value: metrics.slips,
+        points: (SLIP_PENALTY_POINTS * metrics.slips).min(SLIP_PENALTY_MAX_POINTS),
+    });
+    out.retain(|c| c.points >= 0.5 && c.points.is_finite());
+    out.sort_by(|a, b| b.points.total_cmp(&a.points));
+    out
+}
+
+/// A penalised metric's cost ([`costs`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Cost {
+    /// The metric (a scoring term's, or `slips`).
+    pub metric: String,
+    /// Its value now.
+    pub value: f64,
+    /// Points it takes off the score.
+    pub points: f64,
 }
 
 /// The pass limits of `spec` checked against `metrics`.

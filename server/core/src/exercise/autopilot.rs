@@ -235,6 +235,9 @@ fn level_sticks(sim: &Simulation) -> Vector3<f64> {
 /// Proportional gain of `move`'s attitude (stick fraction per radian of error): full stick
 /// beyond 0.2 rad.
 const ATTITUDE_GAIN_PER_RAD: f64 = 5.0;
+/// With [`Autopilot::settling`], `joint` finishes only with the joint this slow (rad/s):
+/// 0.05 (about 3°/s).
+const JOINT_STILL_RAD_S: f64 = 0.05;
 /// `move` with an attitude finishes within this orientation error (rad): 0.02 (1.1°).
 pub const ATTITUDE_TOLERANCE_RAD: f64 = 0.02;
 /// Proportional gain of `joint` (stick fraction per degree of error): full stick beyond 10°.
@@ -550,9 +553,19 @@ pub struct Autopilot {
     mode: ControlMode,
     diagnosis: Diagnosis,
     answered: bool,
+    /// A `joint` action finishes only with the joint nearly still ([`Autopilot::settling`]).
+    settle: bool,
 }
 
 impl Autopilot {
+    /// The script's `joint` actions finish only with the joint nearly still
+    /// ([`JOINT_STILL_RAD_S`]): for an operator who reacts late (a human-paced driver) and
+    /// may pass through the tolerance and must come back.
+    pub fn settling(mut self) -> Autopilot {
+        self.settle = true;
+        self
+    }
+
     /// Starts `script` with the sticks in `mode`.
     pub fn new(script: Vec<Action>, mode: ControlMode) -> Autopilot {
         Autopilot {
@@ -562,6 +575,7 @@ impl Autopilot {
             mode,
             diagnosis: Diagnosis::default(),
             answered: false,
+            settle: false,
         }
     }
 
@@ -662,9 +676,11 @@ impl Autopilot {
                 tolerance_deg,
                 timeout_s,
             } => {
-                let q = sim.arm(Arm::BOTH[arm.index()]).q[*joint].to_degrees();
+                let st = sim.arm(Arm::BOTH[arm.index()]);
+                let q = st.q[*joint].to_degrees();
                 let e = angle_deg - q;
-                if e.abs() <= *tolerance_deg || elapsed > *timeout_s {
+                let still = !self.settle || st.qd[*joint].abs() <= JOINT_STILL_RAD_S;
+                if (e.abs() <= *tolerance_deg && still) || elapsed > *timeout_s {
                     true
                 } else {
                     out.axes[arm.index()][*joint] = (e * JOINT_GAIN_PER_DEG).clamp(-1.0, 1.0);

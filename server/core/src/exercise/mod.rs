@@ -86,6 +86,8 @@ pub struct Status {
     pub readouts: Vec<Readout>,
     /// Counters.
     pub counters: Counters,
+    /// What each penalised metric costs so far (points, largest first; [`assess::costs`]).
+    pub costs: Vec<assess::Cost>,
     /// The latest counted event.
     pub last_event: Option<Event>,
 }
@@ -351,6 +353,7 @@ impl ExerciseRun {
                 limit_hits: m.joint_limit_hits,
                 slips: m.slips,
             },
+            costs: assess::costs(&self.spec, m),
             last_event: self.last_event.clone(),
         }
     }

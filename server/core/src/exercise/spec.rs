@@ -11,6 +11,15 @@ use crate::Error;
 use crate::sim::measures::{NEAR_LIMIT_FRACTION, NEAR_SINGULAR_ISOTROPY};
 use crate::sim::{ControlMethod, ControlMode};
 
+/// A set of views the page may offer.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum ViewSet {
+    /// Only the pilot cameras: the vehicle's pan-tilt camera, the wrist cameras, the fixed
+    /// overview (no orbit, top, front or side view).
+    Pilot,
+}
+
 /// One exercise, as stored in its file.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -44,6 +53,11 @@ pub struct ExerciseSpec {
     /// A hidden fault for a diagnosis drill.
     #[serde(default)]
     pub fault_drill: Option<FaultDrill>,
+    /// The views the page offers during the attempt: `pilot` allows only the vehicle's
+    /// cameras (an assessed run as an ROV operator works, issue 28); absent: every view (the
+    /// engineering views as training wheels).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub views: Option<ViewSet>,
     /// The scripted controller for `seaarms exercise <id> --autopilot`.
     pub autopilot: Vec<Action>,
 }
@@ -102,6 +116,10 @@ pub struct ControlSpec {
     /// Control method.
     #[serde(default)]
     pub method: ControlMethod,
+    /// Cartesian translation holds the jaw's orientation ([`crate::sim::Operator`]); absent:
+    /// held, as in a new session. An attempt starts with this setting whatever came before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hold_orientation: Option<bool>,
     /// The working arm(s): their posture and smoothness are assessed.
     pub arm: ArmSel,
 }

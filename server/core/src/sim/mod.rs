@@ -88,7 +88,10 @@ pub use crate::panel::{Graspable, PanelParams, PanelState, StabPhase};
 pub use constraint::{GripState, SLIP_NOTICE_M, SLIP_NOTICE_RAD};
 pub use contact::{ArmContact, ArmContacts, ContactParams, Contacts, STRIKE_WINDOW_S, Strike};
 pub use events::{Event, MAX_EVENTS_PER_STEP};
-pub use operator::{ControlMode, Operator, Sticks};
+pub use operator::{
+    ControlMode, JOG_ANGLE_RAD, JOG_GAIN_PER_S, JOG_JOINT_RAD, JOG_LINEAR_M, JOG_TIMEOUT_S,
+    ORIENTATION_HOLD_GAIN_PER_S, ORIENTATION_LOST_RAD, ORIENTATION_SETTLE_S, Operator, Sticks,
+};
 pub use setup::{INITIAL_Q, LEFT_BASE_Y_M, OBJECT_XY_M, SEABED_Z_M, pose};
 pub use water::{Current, Environment, Flow, Medium, Water};
 

@@ -11,10 +11,13 @@
 //! that drives both jaws open. The live session, the headless exercises, the replay and the
 //! tests all drive the simulation through it ([`Operator::step`]).
 
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use serde::{Deserialize, Serialize};
 
 use super::{Arm, ControlMethod, Input, Simulation};
-use crate::control::teleop::cartesian_to_joint_velocity;
+use crate::control::teleop::{
+    MAX_ANGULAR_SPEED_RAD_S, MAX_LINEAR_SPEED_M_S, cartesian_to_joint_velocity,
+};
 use crate::grasp::GraspState;
 use crate::hydraulics::N_ACT;
 use crate::model::Model;
@@ -33,6 +36,52 @@ pub enum ControlMode {
     /// [`crate::control::teleop::MAX_ANGULAR_SPEED_RAD_S`]); redundancy resolution picks
     /// the joint velocities.
     Cartesian,
+}
+
+/// Gain of the orientation hold (1/s): the angular rate commanded per radian of orientation
+/// error while a Cartesian translation holds the jaw's orientation ([`Operator::input`]). A
+/// time constant of 0.125 s, five times the valve spool's lag
+/// ([`crate::hydraulics::SPOOL_TIME_CONSTANT_S`], 25 ms), so the correction does not excite
+/// the servo; measured on 20 cm moves from the start posture (tests/orientation_hold.rs), the
+/// jaw turns by at most 1.13° at K = 4 s⁻¹, 0.66° at 8 s⁻¹ and 0.40° at 12 s⁻¹ (the joint
+/// servo's per-joint lag, caught up after the stick is centred, is what turns it).
+pub const ORIENTATION_HOLD_GAIN_PER_S: f64 = 8.0;
+
+/// How long the hold goes on after the translation stick is centred (s): the joints come to
+/// rest at different rates (spool lag, inertia) and would turn the jaw by a degree or two
+/// as they stop; the hold keeps correcting while they do.
+pub const ORIENTATION_SETTLE_S: f64 = 0.5;
+
+/// Orientation error (rad) above which the hold is reported lost (a joint limit or a
+/// singularity keeps the resolver from turning the jaw back): 2°, twice the acceptance's 1°
+/// over a 20 cm move.
+pub const ORIENTATION_LOST_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
+
+/// A jog at full arm speed and a full axis (the amounts scale with both): a joint turns by 2°
+/// (joint mode); the jaw moves by 1 cm or turns by 2° (Cartesian mode). A keyboard tap is a
+/// jog (issue 28: a tap moves a bounded, repeatable amount at every arm speed), small enough
+/// to line a jaw up within the exercises' ±3° and 1 cm tolerances in a few taps.
+pub const JOG_JOINT_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
+/// See [`JOG_JOINT_RAD`].
+pub const JOG_LINEAR_M: f64 = 0.01;
+/// See [`JOG_JOINT_RAD`].
+pub const JOG_ANGLE_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
+/// Gain of a jog's approach to its target (1/s; rate ∝ remaining distance, at most the
+/// joints' nominal speeds or the Cartesian maxima, times the arm speed).
+pub const JOG_GAIN_PER_S: f64 = 8.0;
+/// A jog gives up after this long (s): a target behind an obstacle or a limit.
+pub const JOG_TIMEOUT_S: f64 = 3.0;
+/// A jog is done within these of its target: 0.01° per joint; 0.1 mm and 0.01° for the jaw.
+const JOG_DONE_RAD: f64 = 0.01 * std::f64::consts::PI / 180.0;
+const JOG_DONE_M: f64 = 1.0e-4;
+
+/// A jog under way: its target, and when it gives up.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Jog {
+    /// Joint angles (rad), joint mode.
+    Joints([f64; N_ACT], f64),
+    /// The jaw's pose (world), Cartesian mode.
+    Pose(Isometry3<f64>, f64),
 }
 
 /// One arm's sticks: six axes and the grip, each in [−1, 1] (fractions of full stick).
@@ -61,6 +110,16 @@ pub struct Operator {
     redundancy: [Redundancy; 2],
     /// The arm models (left, right) in their own base frames, as the resolvers use them.
     models: [Model; 2],
+    /// Cartesian translation holds the jaw's orientation (default) or leaves the three spare
+    /// DOF to the redundancy resolution (the translational-only option).
+    hold_orientation: bool,
+    /// Per arm: the jaw orientation (world) held during the current translation, and the
+    /// simulated time until which it is held after the stick is centred.
+    held: [Option<(UnitQuaternion<f64>, f64)>; 2],
+    /// Per arm: the held orientation's error at the last input (rad; 0 when not holding).
+    orientation_error_rad: [f64; 2],
+    /// Per arm: the jog under way ([`Operator::jog`]).
+    jogs: [Option<Jog>; 2],
     /// The next step's input: method and speed are the settings; valves, jaws, joint-velocity
     /// references and the object twist are filled by [`Operator::input`].
     input: Input,
@@ -80,8 +139,32 @@ impl Operator {
                 Redundancy::new(right, RedundancyParams::default()),
             ],
             models: [left.clone(), right.clone()],
+            hold_orientation: true,
+            held: [None; 2],
+            orientation_error_rad: [0.0; 2],
+            jogs: [None; 2],
             input: Input::default(),
         }
+    }
+
+    /// Whether a Cartesian translation holds the jaw's orientation (the default).
+    pub fn hold_orientation(&self) -> bool {
+        self.hold_orientation
+    }
+
+    /// Cartesian translation holds the jaw's orientation (`true`, the default) or resolves
+    /// only the three translational rows, leaving the spare DOF to the redundancy resolution
+    /// (`false`).
+    pub fn set_hold_orientation(&mut self, hold: bool) {
+        self.hold_orientation = hold;
+        self.held = [None; 2];
+        self.orientation_error_rad = [0.0; 2];
+    }
+
+    /// `arm`'s orientation error while a translation holds it (rad; 0 otherwise): above
+    /// [`ORIENTATION_LOST_RAD`] the hold is lost (a limit or a singularity).
+    pub fn orientation_error_rad(&self, arm: Arm) -> f64 {
+        self.orientation_error_rad[arm.index()]
     }
 
     /// The control mode.
@@ -103,6 +186,8 @@ impl Operator {
     /// not drive the arm the other way).
     pub fn set_mode(&mut self, mode: ControlMode) {
         self.mode = mode;
+        self.held = [None; 2];
+        self.jogs = [None; 2];
         for s in &mut self.sticks {
             s.axes = [0.0; N_ACT];
         }
@@ -145,6 +230,61 @@ impl Operator {
         ];
         self.input.arms = Default::default();
         self.input.object_velocity = [0.0; 6];
+        self.held = [None; 2];
+        self.orientation_error_rad = [0.0; 2];
+        self.jogs = [None; 2];
+    }
+
+    /// A jog of `arm` (a keyboard tap): `axes` (each in [−1, 1], as a stick's; clamped,
+    /// non-finite read as 0) times the arm speed times [`JOG_JOINT_RAD`] per joint in joint
+    /// mode, or [`JOG_LINEAR_M`] along and [`JOG_ANGLE_RAD`] about the world axes at the jaw in
+    /// Cartesian mode. The target is taken from `sim` now (joint targets within the limits);
+    /// the arm goes there by the joint servo and stops, whatever the tap's length. A stick
+    /// on that arm, a mode change or a reset cancels it; it gives up after
+    /// [`JOG_TIMEOUT_S`]. Nothing in closed loop while both jaws hold (the object is driven
+    /// then).
+    pub fn jog(&mut self, sim: &Simulation, arm: Arm, axes: &[f64; N_ACT]) {
+        let a: [f64; N_ACT] =
+            core::array::from_fn(|k| crate::finite_or(axes[k], 0.0).clamp(-1.0, 1.0));
+        let i = arm.index();
+        let speed = crate::finite_or(self.input.speed_scale, 0.0).clamp(0.0, 1.0);
+        if a.iter().all(|v| *v == 0.0) || speed == 0.0 {
+            return;
+        }
+        let until = sim.time_s() + JOG_TIMEOUT_S;
+        self.jogs[i] = Some(match self.mode {
+            ControlMode::Joint => {
+                let q = sim.arm(arm).q;
+                let joints = &sim.model(arm).joints;
+                Jog::Joints(
+                    core::array::from_fn(|j| {
+                        let t = q[j] + a[j] * speed * JOG_JOINT_RAD;
+                        let [lo, hi] = joints[j].limits;
+                        t.clamp(lo.min(q[j]), hi.max(q[j]))
+                    }),
+                    until,
+                )
+            }
+            ControlMode::Cartesian => {
+                let now = sim.end_effector(arm);
+                let d = Vector3::new(a[0], a[1], a[2]) * (speed * JOG_LINEAR_M);
+                let r = UnitQuaternion::from_scaled_axis(
+                    Vector3::new(a[3], a[4], a[5]) * (speed * JOG_ANGLE_RAD),
+                );
+                Jog::Pose(
+                    Isometry3::from_parts(
+                        Translation3::from(now.translation.vector + d),
+                        r * now.rotation,
+                    ),
+                    until,
+                )
+            }
+        });
+    }
+
+    /// Whether `arm` has a jog under way.
+    pub fn jogging(&self, arm: Arm) -> bool {
+        self.jogs[arm.index()].is_some()
     }
 
     /// No stick, grip or object input: every axis and grip below `threshold` in magnitude
@@ -159,10 +299,15 @@ impl Operator {
 
     /// Stage 0: the input of `sim`'s next step. While a release runs both jaws are driven
     /// open. Joint mode puts each axis on its valve; Cartesian mode turns each arm's axes
-    /// into a joint-velocity reference for the joint servo, holding the tool's orientation
-    /// while both jaws hold the object (their closed chain fixes it,
-    /// [`cartesian_to_joint_velocity`]). The object twist is scaled to the controller's
-    /// maximum speeds.
+    /// into a joint-velocity reference for the joint servo ([`cartesian_to_joint_velocity`]),
+    /// holding the tool's orientation while both jaws hold the object (their closed chain
+    /// fixes it) and, with [`Operator::hold_orientation`], during a translation: the jaw's
+    /// orientation when the translation began is held by an angular-rate command
+    /// ω = K·θ (θ the rotation vector from the jaw's orientation to the held one, world;
+    /// K = [`ORIENTATION_HOLD_GAIN_PER_S`]) on the six-row resolution, and for
+    /// [`ORIENTATION_SETTLE_S`] after the stick is centred. Turning the jaw (an angular axis)
+    /// ends the hold. The object twist is scaled to the
+    /// controller's maximum speeds.
     pub fn input(&mut self, sim: &Simulation) -> &Input {
         let releasing = sim.time_s() < self.release_until_s;
         let chain = sim.grasp_state() == GraspState::BothHolding;
@@ -174,21 +319,70 @@ impl Operator {
             }
             let a = &mut self.input.arms[i];
             a.jaw = self.sticks[i].grip;
+            // A jog runs while its arm's sticks are centred (a stick takes over).
+            if self.sticks[i].axes.iter().any(|v| *v != 0.0)
+                || self.jogs[i].is_some_and(|j| match j {
+                    Jog::Joints(_, until) | Jog::Pose(_, until) => sim.time_s() >= until,
+                })
+            {
+                self.jogs[i] = None;
+            }
+            if let Some(jog) = self.jogs[i] {
+                let (valves, qd_ref, done) = jog_step(
+                    &jog,
+                    sim,
+                    arm,
+                    &mut self.redundancy[i],
+                    &self.models[i],
+                    dt_s,
+                );
+                (a.valves, a.joint_velocity_ref) = (valves, Some(qd_ref));
+                if done {
+                    self.jogs[i] = None;
+                }
+                continue;
+            }
             // The control-mode decision (the only one).
             (a.valves, a.joint_velocity_ref) = match self.mode {
                 ControlMode::Joint => (self.sticks[i].axes, None),
-                ControlMode::Cartesian => (
-                    [0.0; N_ACT],
-                    Some(cartesian_to_joint_velocity(
-                        &mut self.redundancy[i],
-                        &self.models[i],
-                        &sim.params().arms[i].base.rotation,
-                        &sim.arm(arm).q,
-                        &self.sticks[i].axes,
-                        chain,
-                        dt_s,
-                    )),
-                ),
+                ControlMode::Cartesian => {
+                    let mut axes = self.sticks[i].axes;
+                    let translating = axes[..3].iter().any(|v| *v != 0.0);
+                    let turning = axes[3..].iter().any(|v| *v != 0.0);
+                    let t = sim.time_s();
+                    let settling = self.held[i].is_some_and(|(_, until)| t < until);
+                    let hold =
+                        self.hold_orientation && (translating || settling) && !turning && !chain;
+                    self.orientation_error_rad[i] = 0.0;
+                    if hold {
+                        let now = sim.end_effector(arm).rotation;
+                        let (held, _) = *self.held[i].get_or_insert((now, 0.0));
+                        if translating {
+                            self.held[i] = Some((held, t + ORIENTATION_SETTLE_S));
+                        }
+                        let theta = (held * now.inverse()).scaled_axis();
+                        self.orientation_error_rad[i] = theta.norm();
+                        for k in 0..3 {
+                            axes[3 + k] = (ORIENTATION_HOLD_GAIN_PER_S * theta[k]
+                                / MAX_ANGULAR_SPEED_RAD_S)
+                                .clamp(-1.0, 1.0);
+                        }
+                    } else {
+                        self.held[i] = None;
+                    }
+                    (
+                        [0.0; N_ACT],
+                        Some(cartesian_to_joint_velocity(
+                            &mut self.redundancy[i],
+                            &self.models[i],
+                            &sim.params().arms[i].base.rotation,
+                            &sim.arm(arm).q,
+                            &axes,
+                            chain || hold,
+                            dt_s,
+                        )),
+                    )
+                }
             };
         }
         let cp = &sim.params().control;
@@ -213,6 +407,58 @@ impl Operator {
     pub fn step(&mut self, sim: &mut Simulation) {
         let input = self.input(sim);
         sim.step(input);
+    }
+}
+
+/// One input of a jog: centred valves and the servo's joint-velocity reference towards the
+/// target (rate = [`JOG_GAIN_PER_S`] × the remaining distance, capped at the nominal joint
+/// speeds or the Cartesian maxima), and whether the target is reached.
+fn jog_step(
+    jog: &Jog,
+    sim: &Simulation,
+    arm: Arm,
+    resolver: &mut Redundancy,
+    model: &Model,
+    dt_s: f64,
+) -> ([f64; N_ACT], [f64; N_ACT], bool) {
+    match jog {
+        Jog::Joints(target, _) => {
+            let q = sim.arm(arm).q;
+            let hp = &sim.params().arms[arm.index()].hydraulics;
+            let done = (0..N_ACT).all(|j| (target[j] - q[j]).abs() < JOG_DONE_RAD);
+            let qd = core::array::from_fn(|j| {
+                let max = hp.actuators[j].nominal_speed_rad_s;
+                (JOG_GAIN_PER_S * (target[j] - q[j])).clamp(-max, max)
+            });
+            ([0.0; N_ACT], if done { [0.0; N_ACT] } else { qd }, done)
+        }
+        Jog::Pose(target, _) => {
+            let now = sim.end_effector(arm);
+            let dp = target.translation.vector - now.translation.vector;
+            let theta = (target.rotation * now.rotation.inverse()).scaled_axis();
+            let done = dp.norm() < JOG_DONE_M && theta.norm() < JOG_DONE_RAD;
+            if done {
+                return ([0.0; N_ACT], [0.0; N_ACT], true);
+            }
+            let axes: [f64; N_ACT] = core::array::from_fn(|k| {
+                let v = if k < 3 {
+                    dp[k] / MAX_LINEAR_SPEED_M_S
+                } else {
+                    theta[k - 3] / MAX_ANGULAR_SPEED_RAD_S
+                };
+                (JOG_GAIN_PER_S * v).clamp(-1.0, 1.0)
+            });
+            let qd = cartesian_to_joint_velocity(
+                resolver,
+                model,
+                &sim.params().arms[arm.index()].base.rotation,
+                &sim.arm(arm).q,
+                &axes,
+                true,
+                dt_s,
+            );
+            ([0.0; N_ACT], qd, false)
+        }
     }
 }
 

@@ -14,7 +14,9 @@
 //! | file | command | wire (`type`) | who | logged (`c`) |
 //! | --- | --- | --- | --- | --- |
 //! | [`input`] | [`Command::Input`] | WS `input` | trainee | `input` (quanta) |
+//! | [`jog`] | [`Command::Jog`] | WS `jog` | trainee | `jog` |
 //! | [`settings`] | [`Command::Settings`] | WS `settings` | trainee | `settings` |
+//! | [`ready`] | [`Command::Ready`] | WS `ready` | trainee | — (no steps pass while waiting) |
 //! | [`reset`] | [`Command::Reset`] | WS, REST `reset` | trainee | — (a new attempt) |
 //! | [`pause`] | [`Command::Pause`], [`Command::Resume`] | WS, REST `pause`, `resume` | trainee | — (no steps pass) |
 //! | [`release`] | [`Command::Release`] | WS, REST `release` | trainee | `release` |
@@ -22,6 +24,7 @@
 //! | [`diagnose`] | [`Command::Diagnose`] | WS `diagnose` | trainee | `diagnose` |
 //! | [`fault`] | [`Command::InjectFault`], [`Command::ClearFaults`] | REST `fault`, `clear_faults` | instructor | `fault`, `clear_faults` |
 //! | [`current`] | [`Command::SetCurrent`] | REST `set_current` | instructor | `current` |
+//! | [`visibility`] | [`Command::SetVisibility`] | REST `set_visibility` | instructor | — (drawing only) |
 //! | [`message`] | [`Command::Message`] | REST `message` | instructor | — |
 //! | [`end`] | [`Command::End`] | `DELETE /api/sessions/{id}` | trainee | — |
 //!
@@ -34,13 +37,16 @@ pub mod diagnose;
 pub mod end;
 pub mod fault;
 pub mod input;
+pub mod jog;
 pub mod log;
 pub mod message;
 pub mod pause;
+pub mod ready;
 pub mod release;
 pub mod reset;
 pub mod scenario;
 pub mod settings;
+pub mod visibility;
 
 use std::sync::atomic::Ordering;
 
@@ -74,6 +80,8 @@ pub use settings::SettingsChange;
 pub enum Command {
     /// New stick input ([`input`]).
     Input(StickInput),
+    /// A keyboard tap: move a bounded amount and stop ([`jog`]).
+    Jog(jog::Jog),
     /// Change settings ([`settings`]).
     Settings(SettingsChange),
     /// Back to the initial position, Lim §4.1 ([`reset`]).
@@ -87,6 +95,9 @@ pub enum Command {
     Resume,
     /// Open both jaws for [`RELEASE_DURATION_S`] ([`release`]).
     Release,
+    /// The trainee has read the goal: the attempt's clock starts ([`ready`]).
+    #[serde(skip)]
+    Ready,
     /// Switch scenario (a fresh simulation): free play, a case-study set-up or an exercise
     /// ([`scenario`]).
     #[serde(skip)]
@@ -108,6 +119,9 @@ pub enum Command {
     /// Set the water's current: instructor only, a subsea session ([`current`]).
     #[serde(rename = "current")]
     SetCurrent(Current),
+    /// Set the water's visibility for every page: instructor only ([`visibility`]).
+    #[serde(skip)]
+    SetVisibility(f64),
     /// Show an instructor's message on every client of the session ([`message`]).
     #[serde(skip)]
     Message(String),
@@ -132,16 +146,19 @@ impl Command {
     pub fn name(&self) -> &'static str {
         match self {
             Command::Input(_) => "input",
+            Command::Jog(_) => "jog",
             Command::Settings(_) => "settings",
             Command::Reset => "reset",
             Command::Pause => "pause",
             Command::Resume => "resume",
             Command::Release => "release",
+            Command::Ready => "ready",
             Command::Scenario(_) => "scenario",
             Command::Diagnose { .. } => "diagnose",
             Command::InjectFault { .. } => "fault",
             Command::ClearFaults => "clear_faults",
             Command::SetCurrent(_) => "set_current",
+            Command::SetVisibility(_) => "set_visibility",
             Command::Message(_) => "message",
             Command::End => "end",
         }
@@ -154,11 +171,13 @@ impl Command {
             Actor::Trainee => matches!(
                 self,
                 Command::Input(_)
+                    | Command::Jog(_)
                     | Command::Settings(_)
                     | Command::Reset
                     | Command::Pause
                     | Command::Resume
                     | Command::Release
+                    | Command::Ready
                     | Command::Diagnose { .. }
                     | Command::End
             ),
@@ -174,16 +193,21 @@ impl Command {
             ClientMessage::Input { seq, arms, object } => {
                 Command::input(seq, &arms, object.as_deref(), notes)?
             }
+            ClientMessage::Jog { arm, axes } => {
+                Command::jog(&arm, &axes, notes).map_err(|e| e.to_string())?
+            }
             ClientMessage::Settings {
                 control_mode,
                 control_method,
                 arm_speed,
-            } => Command::settings(control_mode, control_method, arm_speed)
+                hold_orientation,
+            } => Command::settings(control_mode, control_method, arm_speed, hold_orientation)
                 .map_err(|e| e.to_string())?,
             ClientMessage::Reset => Command::Reset,
             ClientMessage::Pause => Command::Pause,
             ClientMessage::Resume => Command::Resume,
             ClientMessage::Release => Command::Release,
+            ClientMessage::Ready => Command::Ready,
             ClientMessage::Diagnose { answer } => Command::Diagnose { answer },
             ClientMessage::Ping { .. } => return Err("ping is not a command".into()),
         })
@@ -204,6 +228,7 @@ impl Command {
         matches!(
             self,
             Command::Input(_)
+                | Command::Jog(_)
                 | Command::Settings(_)
                 | Command::Release
                 | Command::Diagnose { .. }
@@ -238,6 +263,7 @@ impl TryFrom<Action> for Command {
                 speed_m_s,
                 heading_deg,
             } => Command::current(speed_m_s, heading_deg)?,
+            Action::SetVisibility { visibility_m } => Command::visibility(visibility_m)?,
             Action::Message { text } => Command::message(&text)?,
         })
     }
@@ -291,7 +317,7 @@ pub fn apply(
             if let Command::Scenario(_) = &command {
                 scenario::announce(session, &live);
             }
-            if let Command::Input(_) = &command {
+            if let Command::Input(_) | Command::Jog(_) = &command {
                 return Ok(());
             }
             detail
@@ -322,6 +348,7 @@ impl Live {
         let command = command.applied_form();
         let detail = match &command {
             Command::Input(input) => input::apply(self, input),
+            Command::Jog(j) => jog::apply(self, j),
             Command::Settings(change) => settings::apply(self, change),
             Command::Reset => reset::apply(self),
             // Without an actor (headless attempts), pause and resume act as the trainee's.
@@ -333,6 +360,8 @@ impl Live {
             Command::InjectFault { fault } => fault::inject(self, fault),
             Command::ClearFaults => fault::clear(self),
             Command::SetCurrent(current) => current::apply(self, current)?,
+            Command::SetVisibility(v) => visibility::apply(self, *v),
+            Command::Ready => ready::apply(self),
             Command::Message(_) | Command::End => json!({}),
         };
         if command.logged() {
@@ -350,7 +379,12 @@ impl Live {
             && !matches!(
                 command,
                 // The current is the exercise's conditions, not help given to the trainee.
-                Command::Input(_) | Command::Message(_) | Command::End | Command::SetCurrent(_)
+                Command::Input(_)
+                    | Command::Message(_)
+                    | Command::End
+                    | Command::SetCurrent(_)
+                    | Command::SetVisibility(_)
+                    | Command::Ready
             )
         {
             self.intervene();
@@ -371,8 +405,8 @@ mod tests {
         }
         assert!(!Command::ClearFaults.permitted(Actor::Trainee));
         assert!(!Command::Message("x".into()).permitted(Actor::Trainee));
-        assert!(Command::settings(None, None, Some(0.0)).is_err());
-        assert!(Command::settings(None, None, Some(1.0)).is_ok());
+        assert!(Command::settings(None, None, Some(0.0), None).is_err());
+        assert!(Command::settings(None, None, Some(1.0), None).is_ok());
         assert!(Command::scenario("nope").is_err());
     }
 }

@@ -1,6 +1,7 @@
-//! `settings`: control mode, control method and arm speed. Wire: the WebSocket's
-//! `{"type": "settings", "control_mode", "control_method", "arm_speed"}` (absent fields
-//! unchanged). Logged as `{"c": "settings", "mode", "method", "speed"}` (absent ones left out).
+//! `settings`: control mode, control method, arm speed and the orientation hold. Wire: the
+//! WebSocket's `{"type": "settings", "control_mode", "control_method", "arm_speed",
+//! "hold_orientation"}` (absent fields unchanged). Logged as `{"c": "settings", "mode",
+//! "method", "speed", "hold"}` (absent ones left out).
 
 use serde::{Deserialize, Serialize};
 use serde_json::json;
@@ -21,6 +22,9 @@ pub struct SettingsChange {
     /// Arm speed in (0, 1].
     #[serde(rename = "speed", default, skip_serializing_if = "Option::is_none")]
     pub arm_speed: Option<f64>,
+    /// Cartesian translation holds the jaw's orientation (`sim::Operator::hold_orientation`).
+    #[serde(rename = "hold", default, skip_serializing_if = "Option::is_none")]
+    pub hold_orientation: Option<bool>,
 }
 
 impl Command {
@@ -29,6 +33,7 @@ impl Command {
         control_mode: Option<ControlMode>,
         control_method: Option<ControlMethod>,
         arm_speed: Option<f64>,
+        hold_orientation: Option<bool>,
     ) -> Result<Command, CommandError> {
         if let Some(s) = arm_speed {
             if !(s.is_finite() && s > 0.0 && s <= 1.0) {
@@ -41,6 +46,7 @@ impl Command {
             control_mode,
             control_method,
             arm_speed,
+            hold_orientation,
         }))
     }
 }
@@ -57,12 +63,16 @@ mod tests {
 
     #[test]
     fn the_log_form_names_only_what_changed() {
-        let c = Command::settings(Some(ControlMode::Cartesian), None, Some(0.5)).unwrap();
+        let c = Command::settings(Some(ControlMode::Cartesian), None, Some(0.5), None).unwrap();
         let v = serde_json::to_value(&c).unwrap();
         assert_eq!(
             v,
             json!({"c": "settings", "mode": "cartesian", "speed": 0.5})
         );
+        assert_eq!(serde_json::from_value::<Command>(v).unwrap(), c);
+        let c = Command::settings(None, None, None, Some(false)).unwrap();
+        let v = serde_json::to_value(&c).unwrap();
+        assert_eq!(v, json!({"c": "settings", "hold": false}));
         assert_eq!(serde_json::from_value::<Command>(v).unwrap(), c);
     }
 }

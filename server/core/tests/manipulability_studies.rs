@@ -78,7 +78,10 @@ fn single_arm_sweeps_reach_the_boundary() {
         // Lim §4.3.1.1: the Yoshikawa maximum lies "at approximately 1.3m on the X
         // coordinate", inside the swept range: a maximum strictly inside X 0.9–1.4 m (measured
         // 1.16–1.24 m; issue 27 withdrew the ±0.05 m figure, docs/physics.md "Link lengths").
-        assert!(peak_x > 0.9 + 1e-9 && peak_x < 1.4 - 1e-9, "{z}: peak at X {peak_x}");
+        assert!(
+            peak_x > 0.9 + 1e-9 && peak_x < 1.4 - 1e-9,
+            "{z}: peak at X {peak_x}"
+        );
         // The workspace edge lies beyond X = 1.4 m and within the 1.51 m reach (Table 1-1:
         // 1.5 m; the jaw centre of the straight arm, from the swing axis).
         assert!(
@@ -120,13 +123,20 @@ fn single_arm_sweeps_reach_the_boundary() {
         // Every series starts at Z = 0 (the workspace's floor), is reachable through
         // Z = 0.5 m and ends at the top of the workspace.
         assert!(s[0].reachable && s[0].parameter == 0.0, "{x} starts at Z 0");
-        assert!(!s.last().expect("rows").reachable, "{x} ends at the boundary");
+        assert!(
+            !s.last().expect("rows").reachable,
+            "{x} ends at the boundary"
+        );
         let w: Vec<(f64, f64)> = s
             .iter()
             .filter(|r| r.reachable)
             .map(|r| (r.parameter, r.single.expect("present").yoshikawa))
             .collect();
-        assert!(w[w.len() - 1].0 >= 0.5 - 1e-9, "{x}: top {}", w[w.len() - 1].0);
+        assert!(
+            w[w.len() - 1].0 >= 0.5 - 1e-9,
+            "{x}: top {}",
+            w[w.len() - 1].0
+        );
         // Lim §4.3.1.2 (Fig. 4-48): the Yoshikawa measure "increased and decreased as the Z
         // coordinate increased": an interior maximum, then a fall towards the boundary.
         let (ip, peak) = w
@@ -141,7 +151,10 @@ fn single_arm_sweeps_reach_the_boundary() {
             peak.1,
             peak.0
         );
-        assert!(ip > 0 && ip + 1 < w.len(), "{x}: maximum at an end of the sweep");
+        assert!(
+            ip > 0 && ip + 1 < w.len(),
+            "{x}: maximum at an end of the sweep"
+        );
         assert!(
             w[w.len() - 1].1 < 0.95 * peak.1,
             "{x}: no fall towards the boundary"
@@ -166,7 +179,9 @@ fn the_case_study_workspace_is_reachable_and_the_reach_is_table_1_1s() {
             let q = place(&model, &pose, Some(&start))
                 .unwrap_or_else(|| panic!("({x:.2}, {z:.2}) out of reach"));
             assert!(
-                q.iter().zip(lo.iter().zip(&hi)).all(|(v, (l, h))| *v >= l - 1e-9 && *v <= h + 1e-9),
+                q.iter()
+                    .zip(lo.iter().zip(&hi))
+                    .all(|(v, (l, h))| *v >= l - 1e-9 && *v <= h + 1e-9),
                 "({x:.2}, {z:.2}): {q:?} outside the limits"
             );
             let p = end_effector_pose(&model, &q);

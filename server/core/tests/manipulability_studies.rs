@@ -85,7 +85,7 @@ fn single_arm_sweeps_reach_the_boundary() {
         // The workspace edge lies beyond X = 1.4 m and within the 1.51 m reach (Table 1-1:
         // 1.5 m; the jaw centre of the straight arm, from the swing axis).
         assert!(
-            boundary >= 1.4 - 1e-9 && boundary <= 1.51 + 1e-9,
+            (1.4 - 1e-9..=1.51 + 1e-9).contains(&boundary),
             "{z}: boundary {boundary}"
         );
         // Isotropy falls towards the boundary (Lim §4.3.1.1).

@@ -114,12 +114,12 @@ fn a_scripted_overload_is_counted() {
 #[test]
 fn a_scripted_seabed_strike_is_counted_once() {
     let mut spec = (*EXERCISES.get("familiarisation").expect("familiarisation")).clone();
-    // The start posture (`sim::INITIAL_Q`, jaw 10 cm above the seabed); pitching the wrist
-    // down to −60° would take the jaw below the seabed.
-    spec.scene.initial_q_deg = Some([[0.0, 30.0, -70.0, -10.0, 0.0, 0.0]; 2]);
+    // A start posture with the jaw 12 cm above the seabed and 18° below the horizontal;
+    // pitching the wrist down to its −35° limit would take the jaw below the seabed.
+    spec.scene.initial_q_deg = Some([[0.0, 17.0, -75.0, 40.0, 0.0, 0.0]; 2]);
     spec.autopilot = serde_json::from_value(serde_json::json!([
         {"do": "settings", "mode": "joint"},
-        {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -60, "tolerance_deg": 1},
+        {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -35, "tolerance_deg": 1},
     ]))
     .expect("script");
     let r = seaarms::exercises::run_recorded(

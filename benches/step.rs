@@ -53,7 +53,10 @@ fn bench_step(c: &mut Criterion) {
     for _ in 0..1500 {
         pressed.step(&down);
     }
-    assert!(pressed.contacts().arms.iter().all(|c| c.points > 0), "both arms on the seabed");
+    assert!(
+        pressed.contacts().arms.iter().all(|c| c.points > 0),
+        "both arms on the seabed"
+    );
     let pressed_base = pressed.clone();
     c.bench_function("step_in_contact_subsea", |b| {
         b.iter(|| {

@@ -1,6 +1,6 @@
 //! A solid world over real sockets (issue 27's acceptance, "the contact force and the strike
-//! event are in the frames and the record; the line pressures show it"): the trainee pitches
-//! the left wrist down at full stick from the start posture (jaw 10 cm above the seabed,
+//! event are in the frames and the record; the line pressures show it"): the trainee lowers
+//! the left shoulder at full stick from the start posture (jaw about 11 cm above the seabed,
 //! `sim::INITIAL_Q`); the seabed stops the jaw. The frames then carry the arm's touch
 //! (partner `seabed`, a normal force the stall pushes far above the jaw's weight), one
 //! strike, and the wrist-pitch actuator's pressure difference near the supply pressure (a
@@ -30,8 +30,8 @@ async fn a_jaw_driven_into_the_seabed_shows_its_touch_strike_and_pressures_in_th
         "touches at the start"
     );
     assert_eq!(first["arms"]["left"]["strikes"], 0);
-    // 3 s of full stick on the wrist pitch (joint 4), downwards.
-    let axes = json!({"axes": [0.0, 0.0, 0.0, -1.0, 0.0, 0.0]});
+    // 3 s of full stick on the shoulder (joint 2), downwards.
+    let axes = json!({"axes": [0.0, -1.0, 0.0, 0.0, 0.0, 0.0]});
     hold_sticks(&mut ws, 1, 75, json!({"left": axes})).await;
     let t0 = first["t"].as_f64().unwrap();
     let f = state_after(&mut ws, t0 + 2.9).await;
@@ -39,7 +39,7 @@ async fn a_jaw_driven_into_the_seabed_shows_its_touch_strike_and_pressures_in_th
     let touch = &arm["touch"];
     assert_eq!(touch["partner"], "seabed", "{arm}");
     let force = touch["total_force_n"].as_f64().unwrap();
-    // The jaw and the wrist links weigh tens of newtons; a stalled wrist pitch presses with
+    // The jaw and the wrist links weigh tens of newtons; a stalled shoulder presses with
     // hundreds (collisions.rs measures the same stall in the core).
     assert!(force > 100.0, "{touch}");
     let point = touch["point_m"].as_array().unwrap();
@@ -50,9 +50,9 @@ async fn a_jaw_driven_into_the_seabed_shows_its_touch_strike_and_pressures_in_th
     );
     assert!(touch["depth_m"].as_f64().unwrap() < 0.01);
     assert_eq!(arm["strikes"], 1, "{arm}");
-    let dp = arm["p_out"][3].as_f64().unwrap() - arm["p_in"][3].as_f64().unwrap();
+    let dp = arm["p_out"][1].as_f64().unwrap() - arm["p_in"][1].as_f64().unwrap();
     let supply = 6.89e6; // Lim Table 1-1 operating pressure (server/core HydraulicParams)
-    assert!(dp.abs() > 0.8 * supply, "wrist pitch Δp {dp} Pa");
+    assert!(dp.abs() > 0.8 * supply, "shoulder Δp {dp} Pa");
     // The other arm touches nothing.
     assert!(f["arms"]["right"]["touch"].is_null());
     s.stop().await;

@@ -114,12 +114,12 @@ fn a_scripted_overload_is_counted() {
 #[test]
 fn a_scripted_seabed_strike_is_counted_once() {
     let mut spec = (*EXERCISES.get("familiarisation").expect("familiarisation")).clone();
-    // The start posture (`sim::INITIAL_Q`, jaw 10 cm above the seabed); pitching the wrist
-    // down to −60° would take the jaw below the seabed.
-    spec.scene.initial_q_deg = Some([[0.0, 30.0, -70.0, -10.0, 0.0, 0.0]; 2]);
+    // A start posture with the jaw 12 cm above the seabed and 18° below the horizontal;
+    // pitching the wrist down to its −35° limit would take the jaw below the seabed.
+    spec.scene.initial_q_deg = Some([[0.0, 17.0, -75.0, 40.0, 0.0, 0.0]; 2]);
     spec.autopilot = serde_json::from_value(serde_json::json!([
         {"do": "settings", "mode": "joint"},
-        {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -60, "tolerance_deg": 1},
+        {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -35, "tolerance_deg": 1},
     ]))
     .expect("script");
     let r = seaarms::exercises::run_recorded(
@@ -178,10 +178,11 @@ fn the_costs_add_up_to_what_the_score_lost() {
     // A strike costs what its term says: familiarisation's seabed-strike term (bad 2, good 0,
     // weight 1 of 5) takes 10 points for one strike.
     let mut spec = (*EXERCISES.get("familiarisation").expect("familiarisation")).clone();
-    spec.scene.initial_q_deg = Some([[0.0, 30.0, -70.0, -10.0, 0.0, 0.0]; 2]);
+    // The scripted strike of a_scripted_seabed_strike_is_counted_once.
+    spec.scene.initial_q_deg = Some([[0.0, 17.0, -75.0, 40.0, 0.0, 0.0]; 2]);
     spec.autopilot = serde_json::from_value(serde_json::json!([
         {"do": "settings", "mode": "joint"},
-        {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -60, "tolerance_deg": 1},
+        {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -35, "tolerance_deg": 1},
     ]))
     .expect("script");
     let c = check("familiarisation, struck", &spec, Driver::Autopilot);

@@ -456,6 +456,7 @@ const NULLABLE_STATE_KEYS: &[&str] = &[
     "panel",
     "current",
     "touch",
+    "visibility_m",
 ];
 
 /// Checks a state frame: every number finite (serde_json writes NaN and ±∞ as `null`, so a

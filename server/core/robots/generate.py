@@ -10,7 +10,7 @@ def j(kind="revolute", a=0.0, alpha=0.0, d=0.0, theta=0.0, lim=None, vel=None, n
     if lim: o["limits"] = [r(lim[0]), r(lim[1])]
     if vel: o["max_velocity"] = r(vel)
     return o
-L = dict(l1=0.10, l2=0.60, l3=0.40, l4=0.25, l5=0.10, l6=0.16)
+L = dict(l1=0.05, l2=0.70, l3=0.56, l4=0.04, l5=0.04, l6=0.12)
 models = {
  "magnum": {
   "name": "magnum",
@@ -20,7 +20,7 @@ models = {
     j(a=L["l1"], alpha=90, lim=(-25, 25), vel=20, name="swing"),
     j(a=L["l2"], alpha=0, lim=(0, 90), vel=20, name="shoulder"),
     j(a=L["l3"], alpha=0, lim=(-130, 0), vel=30, name="elbow"),
-    j(a=L["l4"], alpha=-90, lim=(-55, 60), vel=30, name="pitch"),
+    j(a=L["l4"], alpha=-90, lim=(-35, 80), vel=30, name="pitch"),
     j(a=L["l5"], alpha=90, twist="y", lim=(-60, 60), vel=30, name="yaw"),
     j(d=L["l6"], vel=150, name="rotate"),
   ],
@@ -32,7 +32,7 @@ models = {
    "wrist_half_extents_m": [0.045, 0.045, 0.01],
    "finger_half_extents_m": [0.0175, 0.008, 0.02],
   },
-  "notes": "The thesis prints no link lengths. Chosen (docs/physics.md 'Link lengths', server/core/robots/search_lengths.py): l1=0.10 (swing axis to shoulder), l2=0.60 (shoulder to elbow, cf. the comparable Oberon 7 arm's 0.556 m), l3=0.40 (elbow to pitch), l4=0.25 (pitch to yaw), l5=0.10 (yaw to rotate), l6=0.16 (rotate to jaw centre) m: 1.51 m from the shoulder pivot to the jaw centre, our reading of the Table 1-1 reach of 1.5 m. With the translational Yoshikawa measure of Lim 4.3.1 these put the X-sweep maximum at 1.27-1.33 m at every Z level (thesis: approximately 1.3 m) and the Z-sweep maximum at X = 1.4 m at Z = 0.40 m (thesis: 0.42 m); l4 takes most of the pitch-to-jaw length so the jaw can face the intervention panel midway between the arms within the swing range. Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg), placed by a grid search (5 deg steps, docs/physics.md 'Joint-range placement') so that the Table 1-1 full-extension posture q = 0 is inside and the Lim 4.3.1.3 points are reachable at the 90/90 start pose with most rows of the pitch (75-135 deg) and yaw (60-120 deg) studies: swing -25..25, shoulder 0..90 (horizontal to vertical; the straight arm lies on its lower limit), elbow -130..0 (straight at its upper limit), pitch -55..60, yaw -60..60 deg; rotate is continuous (no limits)",
+  "notes": "The thesis prints no link lengths (Table 3-1 names l1..l6 only). Chosen (docs/physics.md 'Link lengths', server/core/robots/search_lengths.py): l1=0.05 (swing axis to shoulder), l2=0.70 (shoulder to elbow), l3=0.56 (elbow to pitch), l4=0.04 (pitch to yaw), l5=0.04 (yaw to rotate), l6=0.12 (rotate to jaw centre) m: the straight arm's jaw centre is 1.51 m from the swing axis, Table 1-1's reach of 1.5 m (within 1 cm), and with the studies' horizontal approach (Lim 4.3.1, pitch 90 / yaw 90) every point of the case-study workspace X 0.9-1.4 m, Z 0-0.5 m (seeds README) is reachable. The far top corner (1.4, 0.5) is 1.487 m from the swing axis, so it is reachable with a horizontal approach only if the swing-axis-to-shoulder offset plus the pitch-axis-to-jaw length l1 + l4 + l5 + l6 is at most 0.32 m at a 1.51 m reach (0.20 m at 1.50 m): hence the compact wrist (0.20 m from the pitch axis to the jaw centre). Ranges are the Table 1-1 spans (swing 50, shoulder 90, elbow 130, pitch 115, yaw 120 deg), placed so that the Table 1-1 full-extension posture q = 0 is inside and the whole workspace is reachable at the 90/90 start pose (the pitch needs 76 deg at X 0.9, Z 0): swing -25..25, shoulder 0..90 (horizontal to vertical; the straight arm lies on its lower limit), elbow -130..0 (straight at its upper limit), pitch -35..80, yaw -60..60 deg; rotate is continuous (no limits)",
  },
  "orion": {
   "name": "orion",

@@ -1,31 +1,34 @@
-"""Which Magnum link lengths put Lim's §4.3 maxima where the thesis says? (docs/physics.md,
-"Link lengths"; issue 17 item 4.) Standard library only: `python3 search_lengths.py`.
+"""Which Magnum link lengths give Table 1-1's reach of 1.5 m and make Lim's case-study
+workspace reachable at the studies' start pose? (docs/physics.md, "Link lengths"; issue 27
+item 5.) Standard library only: `python3 search_lengths.py` (a few seconds).
 
-The studies' measure is Yoshikawa's w of the translational Jacobian (Lim eq. 3.62) with the
-tool's approach axis held horizontal along +X (pitch 90°, yaw 90°, `seaarms_core::studies`).
-At swing 0 and yaw 0 the Jacobian splits into an out-of-plane part (swing lever X, yaw lever
-l5 + l6, both along Y; rotate moves the tool point not at all) and the in-plane part of
-shoulder, elbow and pitch (lever vectors r_s, r_e, r_p from each axis to the tool point), so
+The studies hold the tool's approach axis horizontal along +X (pitch 90°, yaw 90°,
+`seaarms_core::studies`) and sweep X 0.9–1.4 m at Z 0–0.5 m (Lim §4.3.1.1–2; seeds README).
+At swing 0 and yaw 0 the pitch axis then sits lw = l4 + l5 + l6 behind the tool point and
+the shoulder l1 in front of the swing axis, so a tool point (X, Z) needs the wrist point
+(X − l1 − lw, Z) within the shoulder–elbow pair's annulus (elbow range 130°) and the pitch
+−(q2 + q3) within its range. With the reach R = l1 + l2 + l3 + lw (the straight arm's jaw
+centre from the swing axis), the far top corner (1.4, 0.5) — 1.487 m from the swing axis —
+needs (1.4 − a)² + 0.5² ≤ (R − a)² with a = l1 + lw, i.e.
 
-    w² = (X² + (l5 + l6)²) · Σ_{i<j} (r_i × r_j)²      (Cauchy–Binet on the 2×3 block)
+    a ≤ (R² − 2.21) / (2R − 2.8):   0.20 m at R = 1.50 m, 0.32 m at R = 1.51 m,
 
-with the elbow-up branch of the closed-form IK (Lim eqs 3.10–3.19 in the plane) and the joint
-ranges of Table 1-1 (spans 90° / 130° / 115°) placed as given. The first two lines printed
-check this against the Rust studies (`cargo test -p seaarms-core --test manipulability_studies
--- --nocapture`): the shipped arm (l2 0.60, l3 0.40, lw 0.51 m) gives X-sweep maxima 1.33 /
-1.32 / 1.29 / 1.27 m and the Z-sweep maximum at X = 1.4 m at Z = 0.40 m; the first arm we
-shipped (l2 0.56, l3 0.50, lw 0.34 m) gave 1.23 / 1.23 / 1.19 / 1.16 m and 0.14 m.
+so Table 1-1's reach and the workspace together ask for a compact wrist.
 
-Then three searches (X-sweep from 0.9 m, Z-sweep from 0 m, 1 cm steps; a sweep ends at the
-first unreachable row after a reachable one, as the Rust studies do):
-(only arms whose Z-sweeps at X = 0.9 … 1.3 m have rows count: the thesis sweeps them)
-  1. reach from the shoulder l2 + l3 + lw = 1.5 m (lw = l4 + l5 + l6, pitch axis to jaw
-     centre): the best Z-sweep maximum at X = 1.4 m among arms whose X-sweep maxima are all in
-     1.3 ± 0.05 m;
-  2. the reach free (1.40–1.70 m): the arms meeting both figures (X maxima in 1.3 ± 0.05 m, Z
-     maximum at X = 1.4 m in 0.42 ± 0.05 m), and their shortest reach;
-  3. a 1 cm grid near the shortest (l1 0.10 m, reach from the shoulder 1.48–1.51 m): the arms
-     with the largest margin — the shipped arm's l2 0.60, l3 0.40, lw 0.51 m is among them.
+The studies' measure is Yoshikawa's w of the translational Jacobian (Lim eq. 3.62). At swing 0
+and yaw 0 it splits into an out-of-plane part (swing lever X, yaw lever l5 + l6) and the
+in-plane shoulder/elbow/pitch block, so w² = (X² + (l5 + l6)²) · Σ_{i<j} (r_i × r_j)²
+(Cauchy–Binet; r_i from each in-plane axis to the tool point); the Rust studies print the same
+(`cargo test -p seaarms-core --test manipulability_studies -- --nocapture`).
+
+The search: l1 ∈ {0.05, 0.08, 0.10}, lw 0.10–0.34 m, l2 0.40–1.00 m (2 cm steps), l3 = R − l1
+− l2 − lw ≥ 0.30 m, R ∈ {1.50, 1.505, 1.51} m (Table 1-1 ± 1 cm); shoulder 0..90° and elbow
+−130..0° as before (q = 0, Table 1-1's full extension, stays inside), the pitch's 115° placed
+(lower limit −35 … −85°) so the workspace is reachable; kept: every 1 cm grid point of the
+workspace reachable. Ranked by the thesis's qualitative figures: the X-sweep maximum inside
+0.9–1.4 m at Z = 0, 0.2, 0.4, 0.5 m (§4.3.1.1: "approximately 1.3m") and the Yoshikawa rising
+with Z (§4.3.1.1: "As the Z coordinate was increased, the manipulability increased") — the
+fraction of X (5 cm steps) where it rises over all four levels, and the peak's rise with Z.
 """
 import math
 
@@ -64,105 +67,77 @@ def yoshikawa(x, z, q, arm):
     return math.sqrt((x * x + c * c) * g)
 
 
-def sweep(points, arm, lim):
+def workspace_ok(arm, lim):
+    return all(
+        ik(x, z, arm, lim) is not None
+        for x in frange(0.9, 1.4, 0.01)
+        for z in frange(0.0, 0.5, 0.01)
+    )
+
+
+def x_sweep(z, arm, lim):
     rows = []
-    for x, z in points:
+    for x in frange(0.9, 2.0, 0.01):
         q = ik(x, z, arm, lim)
         if q is None:
             if rows:
                 break
             continue
-        rows.append(((x, z), yoshikawa(x, z, q, arm)))
+        rows.append((x, yoshikawa(x, z, q, arm)))
     return rows
 
 
-def maxima(arm, lim):
-    """X-sweep maxima at Z = 0, 0.2, 0.4, 0.5 and the Z-sweep maximum at X = 1.4 (m)."""
-    xs = []
-    for z in (0.0, 0.2, 0.4, 0.5):
-        rows = sweep([(x, z) for x in frange(0.9, 2.0, 0.01)], arm, lim)
-        xs.append(max(rows, key=lambda r: r[1])[0][0] if rows else float("nan"))
-    rows = sweep([(1.4, z) for z in frange(0.0, 1.5, 0.01)], arm, lim)
-    zmax = max(rows, key=lambda r: r[1])[0][1] if rows else float("nan")
-    return xs, zmax
+def limits(lo4):
+    return [(0.0, R(90)), (R(-130), 0.0), (R(lo4), R(lo4 + 115))]
 
 
-def workspace_ok(arm, lim):
-    """The Z-sweeps at X = 0.9 … 1.3 m (Lim §4.3.1.2 sweeps X = 0.9 to 1.4) each reach
-    at least 5 rows: the case-study workspace is usable at the start pose."""
-    return all(
-        len(sweep([(x, z) for z in frange(0.0, 1.5, 0.01)], arm, lim)) >= 5
-        for x in (0.9, 1.0, 1.1, 1.2, 1.3)
+LEVELS = (0.0, 0.2, 0.4, 0.5)
+
+
+def figures(arm, lim):
+    peaks = [max(x_sweep(z, arm, lim), key=lambda r: r[1]) for z in LEVELS]
+    inside = all(0.9 < p[0] < 1.4 for p in peaks)
+    xs = frange(0.9, 1.4, 0.05)
+    rising = sum(
+        all(a < b for a, b in zip(w, w[1:]))
+        for w in ([yoshikawa(x, z, ik(x, z, arm, lim), arm) for z in LEVELS] for x in xs)
+    ) / len(xs)
+    return inside, rising, peaks
+
+
+found = []
+for reach in (1.50, 1.505, 1.51):
+    for l1 in (0.05, 0.08, 0.10):
+        for lw in frange(0.10, 0.34, 0.02):
+            a = l1 + lw
+            for l2 in frange(0.40, 1.00, 0.02):
+                l3 = reach - a - l2
+                if l3 < 0.30 or math.hypot(1.4 - a, 0.5) > l2 + l3:
+                    continue
+                arm = (l1, l2, l3, lw, max(lw - 0.04, 0.08))
+                for lo4 in (-35, -45, -55, -65, -75, -85):
+                    if workspace_ok(arm, limits(lo4)):
+                        inside, rising, peaks = figures(arm, limits(lo4))
+                        found.append((inside, rising, reach, arm, lo4, peaks))
+                        break
+print(f"{len(found)} arms reach the whole workspace; the best by the qualitative figures:")
+for inside, rising, reach, arm, lo4, peaks in sorted(
+    found, key=lambda f: (f[0], f[1], f[3][3]), reverse=True
+)[:8]:
+    print(
+        f"  R {reach:.3f}: l1 {arm[0]:.2f} l2 {arm[1]:.2f} l3 {arm[2]:.3f} lw {arm[3]:.2f}, "
+        f"pitch {lo4}..{lo4 + 115}: peak inside {inside}, rising at {rising:.0%} of X, "
+        "X maxima " + " / ".join(f"{p[0]:.2f} ({p[1]:.3f})" for p in peaks)
     )
 
-
-def fmt(xs):
-    return " / ".join(f"{x:.2f}" for x in xs)
-
-
-# (l1, l2, l3, lw = l4 + l5 + l6, l5 + l6) in m; the ranges as shipped.
-SHIPPED = (0.10, 0.60, 0.40, 0.51, 0.26)
-FIRST = (0.10, 0.56, 0.50, 0.34, 0.22)
-SHIPPED_LIM = [(0.0, R(90)), (R(-130), 0.0), (R(-55), R(60))]
-for name, arm in (("shipped arm", SHIPPED), ("first arm", FIRST)):
-    xs, zm = maxima(arm, SHIPPED_LIM)
-    print(f"{name}: X-sweep maxima {fmt(xs)} m, Z-sweep maximum at X = 1.4: {zm:.2f} m")
-
-best1, meets = None, []
-for l1 in (0.05, 0.10, 0.15):
-    for l2 in frange(0.30, 0.85, 0.025):
-        for lw in frange(0.34, 0.75, 0.025):
-            for l3 in frange(0.30, 0.80, 0.025):
-                reach = l2 + l3 + lw
-                if not 1.40 - 1e-9 <= reach <= 1.70 + 1e-9:
-                    continue
-                # l4 = 0.12 m here; the yaw lever l5 + l6 moves the maxima by ≤ 0.01 m.
-                arm = (l1, l2, l3, lw, lw - 0.12)
-                for lo2, lo4 in ((0, -50), (-10, -50), (0, -30)):
-                    lim = [(R(lo2), R(lo2 + 90)), (R(-130), 0.0), (R(lo4), R(lo4 + 115))]
-                    xs, zm = maxima(arm, lim)
-                    if not all(abs(x - 1.3) <= 0.05 + 1e-9 for x in xs):
-                        continue
-                    if not workspace_ok(arm, lim):
-                        continue
-                    if abs(reach - 1.5) < 1e-6 and (best1 is None or zm > best1[0]):
-                        best1 = (zm, arm, xs)
-                    if abs(zm - 0.42) <= 0.05 + 1e-9:
-                        meets.append((reach, arm, xs, zm))
-                    break
-if best1 is None:
-    print("1. reach from the shoulder 1.5 m: no arm has every X-sweep maximum in 1.3 ± 0.05 m")
-else:
-    zm, arm, xs = best1
-    print(f"1. reach from the shoulder 1.5 m: best Z-sweep maximum {zm:.2f} m "
-          f"(l1 {arm[0]:.3f}, l2 {arm[1]:.3f}, l3 {arm[2]:.3f}, lw {arm[3]:.3f}; X maxima {fmt(xs)})")
-print(f"2. arms meeting both figures: {len(meets)}")
-if meets:
-    span = lambda k: f"{min(m[1][k] for m in meets):.3f}–{max(m[1][k] for m in meets):.3f}"
-    print(f"   l1 {span(0)}, l2 {span(1)}, l3 {span(2)}, lw {span(3)} m; "
-          f"swing axis to jaw centre ≥ {min(m[0] + m[1][0] for m in meets):.3f} m")
-for reach, arm, xs, zm in sorted(meets)[:8]:
-    print(f"   reach {reach:.3f} m: l1 {arm[0]:.3f}, l2 {arm[1]:.3f}, l3 {arm[2]:.3f}, "
-          f"lw {arm[3]:.3f}; X maxima {fmt(xs)}, Z maximum {zm:.2f}")
-
-# 3. A 1 cm grid near the shortest arms (l1 = 0.10 m, reach from the shoulder 1.48–1.51 m,
-#    the ranges as shipped): the arms meeting both figures with the largest margin, i.e. the
-#    smallest worst-case distance from 1.3 m (X maxima) and 0.42 m (Z maximum).
-fine = []
-for l2 in frange(0.58, 0.78, 0.01):
-    for l3 in frange(0.26, 0.45, 0.01):
-        for reach in (1.48, 1.49, 1.50, 1.51):
-            lw = reach - l2 - l3
-            if not 0.35 <= lw <= 0.62:
-                continue
-            arm = (0.10, l2, l3, lw, 0.26)
-            xs, zm = maxima(arm, SHIPPED_LIM)
-            if any(math.isnan(x) for x in xs) or math.isnan(zm) or not workspace_ok(arm, SHIPPED_LIM):
-                continue
-            err = max(max(abs(x - 1.3) for x in xs), abs(zm - 0.42))
-            if err <= 0.05 + 1e-9:
-                fine.append((round(err, 3), reach, arm, xs, zm))
-print(f"3. 1 cm grid, l1 0.10, reach from the shoulder 1.48–1.51 m: {len(fine)} arms meet both")
-for err, reach, arm, xs, zm in sorted(fine, key=lambda f: (f[0], f[1]))[:6]:
-    print(f"   worst error {err:.3f} m, reach {reach:.2f}: l2 {arm[1]:.2f}, l3 {arm[2]:.2f}, "
-          f"lw {arm[3]:.2f}; X maxima {fmt(xs)}, Z maximum {zm:.2f}")
+CHOSEN = (0.05, 0.70, 0.56, 0.20, 0.16)
+lim = limits(-35)
+inside, rising, peaks = figures(CHOSEN, lim)
+print(f"shipped arm (l1 0.05, l2 0.70, l3 0.56, lw 0.20 m, pitch -35..80): workspace "
+      f"{workspace_ok(CHOSEN, lim)}, X maxima " + " / ".join(f"{p[0]:.2f}" for p in peaks)
+      + f", rising with Z at {rising:.0%} of X")
+print("X     " + "  ".join(f"Z {z:.1f}" for z in (0, 0.1, 0.2, 0.3, 0.4, 0.5)))
+for x in frange(0.9, 1.4, 0.05):
+    print(f"{x:.2f}  " + "  ".join(
+        f"{yoshikawa(x, z, ik(x, z, CHOSEN, lim), CHOSEN):.3f}" for z in (0, 0.1, 0.2, 0.3, 0.4, 0.5)
+    ))

@@ -91,11 +91,25 @@ fn sticks(arms: [ArmInput; 2]) -> impl FnMut(&Simulation) -> Input {
 
 #[test]
 fn full_stick_into_the_seabed_stalls_on_it_and_the_pressures_show_it() {
-    // Lowering the shoulder, folding the elbow or pitching the wrist down from the reset
-    // posture (jaw 10 cm above the seabed) drives the jaw into it.
+    // Lowering the shoulder or folding the elbow from the reset posture (jaw 11 cm above the
+    // seabed), or pitching the wrist down from a posture with the jaw as high but 13° below
+    // the horizontal (the 0.20 m wrist of the issue-27 links pitched down from the reset's 50°
+    // would lower the jaw by 5 cm only), drives the jaw into it.
     for wet in [false, true] {
         for j in [1, 2, 3] {
-            let mut s = sim(wet, false);
+            let mut s = if j == 3 {
+                let m = common::builtin("magnum");
+                let mut p = if wet {
+                    SimParams::training(&m, &m).expect("params")
+                } else {
+                    SimParams::case_study(&m, &m).expect("params")
+                };
+                let deg = std::f64::consts::PI / 180.0;
+                p.arms[0].initial_q = [0.0, 17.0 * deg, -75.0 * deg, 45.0 * deg, 0.0, 0.0];
+                Simulation::new(m.clone(), m, p).expect("sim")
+            } else {
+                sim(wet, false)
+            };
             let mut v = [0.0; 6];
             v[j] = -1.0;
             let arm = Arm::Left;
@@ -213,18 +227,21 @@ fn arms_swung_into_each_other_push_on_both() {
 fn a_jaw_driven_into_the_panel_stops_on_it() {
     for wet in [false, true] {
         let mut s = sim(wet, true);
-        // Swing the left arm in front of the panel (0.6 s), then stretch the elbow and raise
-        // the wrist towards it with the shoulder lowering.
+        // Swing the left arm in front of the panel (0.6 s), then stretch the elbow towards it
+        // with the shoulder lowering.
         let swing = drive(
             &mut s,
             0.6,
             sticks([valves([-1.0, 0.0, 0.0, 0.0, 0.0, 0.0]), valves([0.0; 6])]),
         );
-        let r = drive(
-            &mut s,
-            5.0,
-            sticks([valves([0.0, -0.3, 1.0, 1.0, 0.0, 0.0]), valves([0.0; 6])]),
-        );
+        // (The wrist held level with the forearm: pitch driven towards 0 from the reset's 40°.)
+        let r = drive(&mut s, 5.0, |s| {
+            let pitch = (-3.0 * s.arm(Arm::Left).q[3]).clamp(-1.0, 1.0);
+            Input {
+                arms: [valves([0.0, -0.3, 1.0, pitch, 0.0, 0.0]), valves([0.0; 6])],
+                ..Input::default()
+            }
+        });
         println!("into the panel, wet {wet}: {swing:?} {r:?}");
         assert!(r.max_depth_m < MAX_DEPTH_M, "{} m", r.max_depth_m);
         assert!(r.partners[0].contains(&Partner::Panel), "{r:?}");

@@ -265,13 +265,12 @@ fn cartesian_pair_lift(
 /// bars (the roll about the bar axis grows; in air the jaws slip about 0.4 s later).
 /// With the translational rows only, each arm's null-space motion (Jun eq. 21, scaled by the
 /// stick's deflection) turns its jaw against the other through the box: the pair loses part of
-/// the lift, and the pads slide at their limit (in air under the slip notice, in water
-/// slipping at 1.23 s).
+/// the lift.
 /// Other stick speeds and ramps sit just as close to the grip's limit, some slipping and some
 /// not (docs/physics.md, "Moving the pair in Cartesian mode"); trainees lift the pair in closed
 /// loop (the `dual-lift` exercise).
 #[test]
-fn a_cartesian_lift_of_the_pair_keeps_the_box_only_with_the_orientation_held() {
+fn a_cartesian_lift_of_the_pair_lifts_best_with_the_orientation_held() {
     for env in [Environment::Air, Environment::subsea()] {
         let (dz_held, slips, first, peak) = cartesian_pair_lift(env, true, 0.5, 1.5);
         println!("{env:?} orientation held: rose {dz_held:.4} m, {slips} slips, peak λ {peak:.3}");
@@ -284,22 +283,14 @@ fn a_cartesian_lift_of_the_pair_keeps_the_box_only_with_the_orientation_held() {
         // The onset and the growing twist take λ to ≈ 1: the pads creep, under the slip notice
         // (2 mm / 2°), and grip again.
         assert!(peak <= 1.1, "{env:?}: peak λ {peak}");
-        let (dz, slips, first, peak_rows) = cartesian_pair_lift(env, false, 0.5, 1.5);
+        let (dz, slips, first, _) = cartesian_pair_lift(env, false, 0.5, 1.5);
         println!(
-            "{env:?} translational rows only: rose {dz:.4} m, {slips} slips, first at {first:?} s, peak λ {peak_rows:.3}"
+            "{env:?} translational rows only: rose {dz:.4} m, {slips} slips, first at {first:?} s"
         );
-        // The null-space twist scales with the stick (ε × 0.1 here, issue 27). With the jaws
-        // square to the bars and the grip's limits in the bar frame (issue 27 item 4) it loads
-        // the pads to their limit — they slide (λ reported as 1): in air in steps under the
-        // slip notice (0 slips, peak λ 1.000; before item 4 it slipped at 1.46 s), in water
-        // with a slip at 1.23 s — and both lose part of the lift to it (air 0.0158 m, water
-        // 0.0209 m of the held 0.0245 / 0.0247 m).
-        if env == Environment::Air {
-            assert!(
-                slips > 0 || peak_rows >= 1.0,
-                "{env:?}: the null-space twist must take the pads to their limit (λ {peak_rows})"
-            );
-        }
-        assert!(dz < 0.9 * dz_held, "{env:?}: rose {dz} m");
+        // The null-space twist scales with the stick (ε × 0.1 here, issue 27) and turns the
+        // jaws against each other through the box: the pair loses part of the lift (on the
+        // restored arm of issue 27 item 5: air 0.0218 of 0.0242 m, water 0.0229 of 0.0244 m; on the
+        // earlier 0.10/0.60/0.40/0.25/0.10/0.16 m arm it also slipped the jaws in air).
+        assert!(dz < dz_held - 5.0e-4, "{env:?}: rose {dz} m of {dz_held} m");
     }
 }

@@ -70,7 +70,7 @@ pub struct ValveParams {
     /// [`PanelParams::standard`] — world z = +0.15, the top of the three items.
     pub axis_point_m: Vector3<f64>,
     /// Stem length from the face to the T-bar grip point on the axis (m): 0.10 (assumed; puts
-    /// the grip at world x = 1.42, inside both arms' common reach, see [`PanelParams`]).
+    /// the grip at world x = 1.36, inside both arms' common reach, see [`PanelParams`]).
     pub stem_length_m: f64,
     /// T-bar cross-bar length (m): 0.15 (assumed; a hand-size T-bar of the kind ISO 13628-8
     /// shows for manipulator-operated low-torque valves). Drawing only.
@@ -179,11 +179,11 @@ pub struct CouplingParams {
 /// The panel: plate pose and size, its items and the capture radius.
 ///
 /// World coordinates of [`PanelParams::standard`] (arm bases at y = 0 and 1, facing +x): the
-/// face is the plane x = 1.52 m, y 0.25…0.75, z from the seabed (−0.45) to +0.30; the valve
-/// grip point is at (1.42, 0.50, 0.15), the receptacle mouth at (1.52, 0.50, 0.00), the
-/// holster mouth at (1.52, 0.50, −0.15), all axes along +x. The 50 kg box (x ≤ 1.15) is
-/// 0.37 m clear. With the jaw pointing along +x both Magnums reach tool points from
-/// x ≈ 1.34 to 1.48 m on the midplane y = 0.5 at z = −0.15…0.15 (Magnum closed-form IK; the
+/// face is the plane x = 1.46 m, y 0.25…0.75, z from the seabed (−0.45) to +0.30; the valve
+/// grip point is at (1.36, 0.50, 0.15), the receptacle mouth at (1.46, 0.50, 0.00), the
+/// holster mouth at (1.46, 0.50, −0.15), all axes along +x. The 50 kg box (x ≤ 1.15) is
+/// 0.31 m clear. With the jaw pointing along +x both Magnums reach tool points from
+/// x ≈ 1.24 to 1.39 m on the midplane y = 0.5 at z = −0.15…0.15 (Magnum closed-form IK; the
 /// swing joint's ±25° of Table 1-1 binds at the near end, the reach at the far end;
 /// `tests/panel.rs` checks the grip, pre-insert and seated points for both arms).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -206,7 +206,7 @@ pub struct PanelParams {
 
 const DEG: f64 = std::f64::consts::PI / 180.0;
 /// Face plane of the standard panel (world x, m).
-const FACE_X_M: f64 = 1.52;
+const FACE_X_M: f64 = 1.46;
 
 impl PanelParams {
     /// The documented standard panel (see the type docs for its world coordinates).

@@ -137,16 +137,21 @@ pub(super) fn clamp_force(current: f64, jaw: &JawParams, closed_on: bool, cmd: f
 /// carry of the object (half its weight in the medium, the equal share of eq. 3.46).
 ///
 /// **Rate control in the closed chain.** Each valve opens by what moves its joint at the
-/// reference rate in steady state against the joint's static load from the model
+/// reference rate in steady state against the joint's static load
 /// ([`hydraulics::steady_opening`]; the load: gravity and buoyancy of the arm, G(q) by RNEA,
-/// plus Jᵀ of the held share), and the servo's reference follows the arm, so no position
+/// plus Jᵀ·w with w the arm's last contact wrench on the object — the equal share of the
+/// weight before there is one), and the servo's reference follows the arm, so no position
 /// loop acts: the two arms cannot wind the chain up against each other (two position loops
 /// through one rigid object integrate any disagreement into pressure, [`control::joint_servo`]).
-/// A zero reference centres the valves, which lock the cylinders (eqs 3.49–3.50). The load
-/// is the model's, never the measured one: with the measured load an arm pushing harder
-/// against the other would open its valve wider (positive feedback, as a pressure-compensated
-/// valve in a locked chain); with the model's the residual mismatch of the two arms is taken
-/// up by the valves' own pressure–flow droop (eq. 3.48, q ∝ √(P_s − P)), which bounds it.
+/// A zero reference centres the valves, which lock the cylinders (eqs 3.49–3.50). With the
+/// measured load the valve delivers the commanded flow whatever the load, as a
+/// pressure-compensated proportional valve does, so the two arms move as commanded and the
+/// chain keeps whatever internal force it had. With the model's equal share instead (the
+/// first design) each arm's rate erred by its load's difference from the share, and that
+/// mismatch wound the chain up until the valves' droop (eq. 3.48) balanced it: on the
+/// restored arm (issue 27 item 5), a pair lifted in joint mode (406 N locked in) then moved
+/// up at 4 mm/s in Cartesian mode in air reached 922 N and let go at 53 s; with the measured
+/// load it stays at 380–400 N for the 60 s (held_load_stays_held.rs).
 /// Measured, two free Magnum arms rate-commanded 4 mm/s up: with q̇_ref/q̇_nominal alone they
 /// rose at 4.4 mm/s and drifted 2 mm towards each other in 20 s (the orifice areas differ by
 /// the rod and the loads by joint); with the steady inverse, 3.99 and 4.01 mm/s, 0.16 mm.
@@ -191,7 +196,8 @@ pub(super) fn operator_spools(
 }
 
 /// The closed chain's rate control ([`operator_spools`]): per joint the steady opening for
-/// q̇_ref against the static load G(q) + J_zᵀ·`held_share_n` (`work` holds the kinematics of
+/// q̇_ref against the static load G(q) + Jᵀ·w (the arm's contact wrench; J_zᵀ·`held_share_n`
+/// before the first) (`work` holds the kinematics of
 /// the state's q; its dynamics scratch is reused). Zero for a zero reference (no RNEA then).
 fn rate_control(
     a: &ArmState,
@@ -222,7 +228,14 @@ fn rate_control(
     core::array::from_fn(|j| {
         let act = &hp.actuators[j];
         let (_, jh) = act.linkage.coordinate(a.q[j]);
-        let tau = load[j] + work.jw[(2, j)] * held_share_n;
+        // The jaw's load: the arm's last contact wrench on the object (Jᵀ·w), the equal
+        // share of the weight before the first one.
+        let w = Vector6::from(a.contact_wrench);
+        let tau = if w.iter().any(|v| *v != 0.0) {
+            load[j] + (work.jw.column(j)).dot(&w)
+        } else {
+            load[j] + work.jw[(2, j)] * held_share_n
+        };
         if jh == 0.0 {
             return 0.0;
         }

@@ -42,7 +42,7 @@
 //!   the clamp force and slips beyond them (`constraint.rs`, "Finite grip"), or rigid
 //!   whatever the load with [`SimParams::rigid_grasp`].
 //! * Grasping is jaw–handle (capture radius); the box rests on the seabed on corner penalty
-//!   springs with friction. With a panel ([`SimParams::panel`]) the jaws also take its valve
+//!   springs with stick–slip friction (anchored spring-dampers capped at μN). With a panel ([`SimParams::panel`]) the jaws also take its valve
 //!   T-bar and hot stab, whose loads act on the arms as JᵀF (see [`crate::panel`]). Links
 //!   and jaws collide with the seabed, the box, the panel, the vehicle and the other arm
 //!   (`contact.rs`, [`crate::collision`]), not with their own arm; the box does not collide
@@ -51,8 +51,9 @@
 //!   with a first-order lag ([`crate::hydraulics::SPOOL_TIME_CONSTANT_S`], 25 ms); no valve
 //!   leakage, hose dynamics or pump/accumulator dynamics (supply is a fixed pressure).
 //! * Water ([`StepParams::environment`], [`water`]): buoyancy from the links' mean density and
-//!   the box's size, Morison drag and added mass on link pieces and the box, a uniform steady
-//!   current; no wake, wall or free-surface effects, no rotational drag on the box.
+//!   the box's size, Morison drag and added mass on link pieces and the box, a uniform current
+//!   that ramps to its set value (τ = 1.5 s) with its acceleration term; no wake, wall or
+//!   free-surface effects, no rotational drag on the box.
 //!
 //! # Layout
 //! * here: parameters, inputs, state and the [`Simulation`] with its public API;

@@ -21,13 +21,13 @@ pub const LEFT_BASE_Y_M: f64 = 1.0;
 pub const SEABED_Z_M: f64 = -0.45;
 /// Object centre (x, y) on the seabed (m): (1.0, 0.5), midway between the arms.
 pub const OBJECT_XY_M: [f64; 2] = [1.0, 0.5];
-/// Reset posture of both arms (rad): swing 0, shoulder 30°, elbow −70°, pitch −10°, yaw 0,
-/// rotate 0 — jaw centre at x ≈ 1.25 m, z ≈ −0.35 m in front of each arm, clear of the
-/// object (x ≤ 1.15). The case studies reach their grasp postures by position IK from here;
-/// pitch −10° (of −20, −10, −5, 0 and +5° tried) is where case 4's closed-loop lift and
-/// sideways move stay inside the pitch range and the finite grip holds (docs/physics.md,
-/// "Link lengths").
-pub const INITIAL_Q: [f64; N_ACT] = [0.0, 30.0 * DEG, -70.0 * DEG, -10.0 * DEG, 0.0, 0.0];
+/// Reset posture of both arms (rad): swing 0, shoulder 20°, elbow −70°, pitch 0, yaw 0,
+/// rotate 0 — jaw centre at x ≈ 1.20 m, z ≈ −0.34 m in front of each arm (11 cm above the
+/// seabed, clear of the object at x ≤ 1.15), the jaw pointing 50° below the horizontal: the
+/// height and attitude of the reset posture on the issue-17 links, on the links of issue 27
+/// (docs/physics.md, "Link lengths"). The case studies reach their grasp postures by
+/// position IK from here.
+pub const INITIAL_Q: [f64; N_ACT] = [0.0, 20.0 * DEG, -70.0 * DEG, 0.0, 0.0, 0.0];
 const DEG: f64 = std::f64::consts::PI / 180.0;
 
 impl SimParams {

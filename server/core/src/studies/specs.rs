@@ -54,7 +54,7 @@ pub struct PitchYaw {
     /// Named points (base frame, m). Default: Fig. 4-51's points are not printed; we use
     /// A (1.1, 0, 0.2), B (1.2, 0, 0.2), C (1.3, 0, 0.2), D (1.1, 0, 0.3), E (1.2, 0, 0.3),
     /// F (1.3, 0, 0.3): inside the case-study workspace, where the 90°/90° start pose and at
-    /// least 10 of the 13 pitch rows are reachable (docs/physics.md, "Joint-range placement").
+    /// least 10 of the 13 pitch rows are reachable (docs/physics.md, "Link lengths").
     pub points: Vec<(String, [f64; 3])>,
     /// Pitch range (deg, default [75, 135], the thesis's range), yaw held at 90°.
     pub pitch_deg: [f64; 2],
@@ -88,8 +88,8 @@ impl Default for PitchYaw {
 pub struct DistanceSweep {
     /// X levels (m, default [1.0, 1.2, 1.4]).
     pub x_levels: Vec<f64>,
-    /// Z of both end-effectors (m, default 0.3; not printed in the thesis; at 0.2 m the
-    /// horizontal approach leaves X = 1.0 m inside the arm's inner workspace boundary).
+    /// Z of both end-effectors (m, default 0.3; not printed in the thesis; inside the
+    /// case-study workspace Z 0–0.5 m).
     pub z: f64,
     /// Largest swing δ (deg, default 25 = the Magnum swing limit). The right arm swings by +δ
     /// (towards the left arm), the left by −δ; δ runs from −max to +max, so the distance first

@@ -125,18 +125,25 @@ export class Markers {
     if (!sc) return;
     const box = this.world.object;
     const top = hello.object.size_m[2] / 2;
-    (sc.handles_m || []).forEach((h) => {
+    (sc.handles_m || []).forEach((h, i) => {
       const g = new THREE.Group();
       g.position.set(h[0], h[1], h[2]);
       const mat = new THREE.MeshLambertMaterial({ color: HANDLE_COLOUR });
+      // The bar along its axis (box frame; the side handles along x, the lifting point as sent).
+      const axis = new THREE.Vector3(...(sc.handle_axes?.[i] || [1, 0, 0])).normalize();
       const bar = new THREE.Mesh(new THREE.CylinderGeometry(HANDLE_RADIUS_M, HANDLE_RADIUS_M, HANDLE_LENGTH_M, 12), mat);
-      bar.rotation.z = Math.PI / 2; // cylinder axis y → x
+      bar.quaternion.setFromUnitVectors(new THREE.Vector3(0, 1, 0), axis); // cylinder axis y → bar
       g.add(bar);
       const rise = h[2] - top; // posts from the top face up to the bar
-      for (const sx of [-1, 1]) {
-        const post = new THREE.Mesh(new THREE.CylinderGeometry(0.008, 0.008, rise, 8), mat);
+      const centre = sc.handle_posts?.[i] === 'centre';
+      // A grab handle stands on two thin end posts; the lifting point (a T-handle) on one
+      // post under its centre, as thick as the collision shape (0.015 m).
+      for (const s of centre ? [0] : [-1, 1]) {
+        const r = centre ? 0.015 : 0.008;
+        const post = new THREE.Mesh(new THREE.CylinderGeometry(r, r, rise, 8), mat);
         post.rotation.x = Math.PI / 2;
-        post.position.set(sx * HANDLE_LENGTH_M / 2, 0, -rise / 2);
+        post.position.copy(axis.clone().multiplyScalar(s * HANDLE_LENGTH_M / 2));
+        post.position.z = -rise / 2;
         g.add(post);
       }
       const material = translucent(HANDLE_COLOUR, 0.12);

@@ -428,9 +428,16 @@ pub enum ReplayClientMessage {
 /// targets, zones, ghosts and obstacles.
 #[derive(Debug, Clone, Serialize)]
 pub struct SceneOut {
-    /// Handle grasp points in the box's frame (m): index 0 the left arm's, 1 the right's.
-    pub handles_m: [[f64; 3]; 2],
-    /// Radius around a handle within which a closing jaw grasps it (m).
+    /// Handle bar centres in the box's frame (m): index 0 the left arm's side handle, 1 the
+    /// right's, 2 the lifting point over the centre of mass. Every bar runs along the box's
+    /// x axis (`handle_axes`).
+    pub handles_m: Vec<[f64; 3]>,
+    /// Each handle bar's axis in the box's frame (unit).
+    pub handle_axes: Vec<[f64; 3]>,
+    /// How each handle's bar stands on the box: "ends" (a grab handle on two end posts) or
+    /// "centre" (the lifting point's T-handle on one post down to the top face).
+    pub handle_posts: Vec<&'static str>,
+    /// Radius around a handle's bar within which a closing jaw aligned with it grasps it (m).
     pub capture_radius_m: f64,
     /// Floating markers.
     pub targets: Vec<seaarms_core::exercise::spec::Target>,
@@ -477,10 +484,19 @@ pub struct PanelFrame {
 impl SceneOut {
     /// The scene of a simulation running `exercise` (or free play).
     pub fn new(params: &seaarms_core::sim::SimParams, exercise: Option<&ExerciseSpec>) -> SceneOut {
-        let h = params.object.handles_m;
+        let h = &params.object.handles;
         let scene = exercise.map(|e| e.scene.clone()).unwrap_or_default();
+        let v = |x: &nalgebra::Vector3<f64>| [x.x, x.y, x.z];
         SceneOut {
-            handles_m: [[h[0].x, h[0].y, h[0].z], [h[1].x, h[1].y, h[1].z]],
+            handles_m: h.iter().map(|h| v(&h.centre_m)).collect(),
+            handle_axes: h.iter().map(|h| v(&h.axis)).collect(),
+            handle_posts: h
+                .iter()
+                .map(|h| match h.posts {
+                    seaarms_core::grasp::Posts::Ends => "ends",
+                    seaarms_core::grasp::Posts::Centre => "centre",
+                })
+                .collect(),
             capture_radius_m: params.object.capture_radius_m,
             targets: scene.targets,
             zones: scene.zones,

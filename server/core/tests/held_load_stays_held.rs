@@ -255,14 +255,24 @@ fn current_step(mode: Mode, speed_m_s: f64, heading_deg: f64) -> (u64, f64) {
 /// The instructor steps the current to 2.5 m/s (the largest allowed; before the ramp the
 /// step dropped a held box with 11–20 slips, issue 27) while both jaws hold the lifted box in
 /// open loop, sticks at zero: the current ramps (`sim::water`, τ = 1.5 s) and the box stays
-/// held — no slip, no drop along, across and quartering the pair (peak λ 0.74, 1.08 and 1.26:
-/// the pads creep below the slip notice at the steady 2.5 m/s load).
+/// held — no drop along, across and quartering the pair, and no slip across and quartering
+/// it (the pads creep below the slip notice at the steady 2.5 m/s load). Along the pair (0°,
+/// along the bars) the jaws slip without dropping it: the drag on the box's 0.40 × 0.20 m face,
+/// ½·ρ·C_d·A·u² = ½·1025·1.05·0.08·2.5² = 269 N at the centre of mass, acts 0.14 m below the
+/// bars, and its 38 N·m about the horizontal normal to the bars can only be taken by the
+/// jaws' moments (their forces are level with each other along x): 19 N·m each about their
+/// closing axes, which since issue 27 item 4 lie normal to the bars (the grip's limits in the
+/// bar frame, the wrist rotate turned onto the bar) — above the 15.2 N·m torsion limit
+/// (`grasp::grip`), as in the closed loop below.
 #[test]
 fn a_current_stepped_to_full_does_not_drop_a_box_held_in_open_loop() {
     for mode in [Mode::Joint, Mode::Cartesian] {
         for heading in [0.0, 90.0, 225.0] {
+            // `current_step` asserts no drop.
             let (slips, _) = current_step(mode, 2.5, heading);
-            assert_eq!(slips, 0, "{mode:?} at {heading}°");
+            if heading != 0.0 {
+                assert_eq!(slips, 0, "{mode:?} at {heading}°");
+            }
         }
     }
 }

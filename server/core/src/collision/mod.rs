@@ -164,7 +164,7 @@ impl Partner {
 pub enum Item {
     /// The box body.
     BoxBody,
-    /// Box handle bar `k` (the arm index whose handle it is).
+    /// Box handle `k` (`ObjectParams::handles`): its bar, and a T-handle's post.
     Handle(usize),
     /// The panel plate.
     Plate,
@@ -194,8 +194,10 @@ impl Item {
 pub struct WorldGeometry {
     /// Handle bar radius: 0.02 (the jaws close on 0.04, `ObjectParams::handle_width_m`).
     pub handle_radius_m: f64,
-    /// Handle bar half length along the box's x axis: 0.06 (web/markers.js draws 0.12).
-    pub handle_half_length_m: f64,
+    /// Radius of a T-handle's post (`grasp::Posts::Centre`): 0.015 (as drawn; thinner than
+    /// the bar, so the fingers closing on the bar straddle it). The bars' lengths and axes are
+    /// the handles' own (`grasp::Handle`).
+    pub post_radius_m: f64,
     /// Valve stem radius: 0.012 (as drawn).
     pub valve_stem_radius_m: f64,
     /// T-bar radius: 0.015 (as drawn); its length is `ValveParams::bar_length_m`.
@@ -218,7 +220,7 @@ impl WorldGeometry {
     pub fn standard() -> WorldGeometry {
         WorldGeometry {
             handle_radius_m: 0.02,
-            handle_half_length_m: 0.06,
+            post_radius_m: 0.015,
             valve_stem_radius_m: 0.012,
             valve_bar_radius_m: 0.015,
             vehicle_centre_m: Vector3::new(-0.60, 0.50, 0.0),
@@ -649,8 +651,8 @@ pub struct Exclusions {
     pub arm: usize,
     /// The jaw (wrist and fingers) skips the whole box and its handles (the arm holds it).
     pub jaw_box: bool,
-    /// The jaw skips handle bar `k` (it is closing on it).
-    pub jaw_handle: [bool; 2],
+    /// The jaw skips handle `k` (it is closing on it).
+    pub jaw_handle: [bool; crate::grasp::N_HANDLES],
     /// The jaw skips the valve (held, or the fingers within its capture radius).
     pub jaw_valve: bool,
     /// The jaw skips the stab (held, or the fingers within its capture radius).

@@ -25,7 +25,8 @@ pub const PILOT_INTERVAL_S: f64 = 0.02;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum PointRef {
-    /// A box handle (0: the left arm's, 1: the right arm's), where it is now.
+    /// A box handle's centre, where it is now (0: the left arm's side handle, 1: the right
+    /// arm's, 2: the lifting point over the centre of mass; [`crate::grasp::ObjectParams`]).
     Handle(usize),
     /// A target marker.
     Target(String),
@@ -179,7 +180,9 @@ impl Action {
     pub fn check(&self, scene: &Scene) -> Result<(), String> {
         match self {
             Action::Move { to, .. } => match to {
-                PointRef::Handle(i) if *i > 1 => Err(format!("handle {i} is not 0 or 1")),
+                PointRef::Handle(i) if *i >= crate::grasp::N_HANDLES => {
+                    Err(format!("handle {i} is not 0, 1 or 2 (the lifting point)"))
+                }
                 PointRef::Target(t) if !scene.targets.iter().any(|x| &x.id == t) => {
                     Err(format!("unknown target `{t}`"))
                 }
@@ -586,7 +589,8 @@ impl Autopilot {
             PointRef::Handle(i) => {
                 {
                     let o = sim.object().pose;
-                    o * nalgebra::Point3::from(sim.params().object.handles_m[(*i).min(1)])
+                    let handles = &sim.params().object.handles;
+                    o * nalgebra::Point3::from(handles[(*i).min(handles.len() - 1)].centre_m)
                 }
                 .coords
             }

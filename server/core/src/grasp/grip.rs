@@ -2,22 +2,26 @@
 //! transmit, and the wrench it transmits while the bar slips.
 //!
 //! # Contact model
-//! The jaw is two flat finger pads closing along the tool frame's **y** axis (the closing axis
-//! n; the page draws the jaw so: z along the jaw, y across the opening) on a flat-sided handle
-//! bar of section s × s (s = [`ObjectParams::handle_width_m`], 4 cm; the flat "fishtail"
-//! section of ROV grab handles, assumed) that lies across the jaw along the tool **x** axis
-//! (the bar axis a); z is the jaw's depth axis d. Each pad presses one flat with the clamp
-//! force N (Lim Table 1-1: 150 kgf = 1 471 N at full command) over a w × s patch (w the pad
-//! width along the bar, [`GripParams::pad_width_m`]). In the jaw frame a contact wrench
-//! [f; m] splits into
+//! The jaw is two flat finger pads closing along the tool frame's **y** axis (the page draws
+//! the jaw so: z along the jaw, y across the opening) on a flat-sided handle bar of section
+//! s × s (s = [`ObjectParams::handle_width_m`], 4 cm; the flat "fishtail" section of ROV grab
+//! handles, assumed). The wrench is written in the **bar frame** of the grasp
+//! ([`super::Handle::bar_frame`]): x the bar's axis a (from the handle, not the jaw), y the
+//! closing axis n made normal to it, z = a × n the direction across the bar in the pads'
+//! plane, d (for an aligned jaw within 45° of its depth axis). Each pad presses one flat with
+//! the clamp force N (Lim Table 1-1: 150 kgf = 1 471 N at full command) over a w × s patch (w
+//! the pad width along the bar, [`GripParams::pad_width_m`]). A contact wrench [f; m] splits
+//! into
 //!
-//! * **geometry-carried** components: the force along n (one pad pushes the bar; the
-//!   hydraulically held fingers do not yield) and the moment about d (it would turn the bar's
-//!   two ends into opposite pads). These stay rigid whatever their size (assumed);
-//! * the **roll** about the bar axis a, carried by the flats up to the moment that tips the
-//!   bar onto its edges and pries the pads apart: each pad's pressure resultant moves to the
-//!   flat's edge, s/2 from the axis, so M_a = N·s (friction plays no part; the same limit
-//!   static and sliding);
+//! * the **geometry-carried** force along n (one pad pushes the bar; the hydraulically held
+//!   fingers do not yield), rigid whatever its size (assumed);
+//! * two **pry** moments, each carried by the pads' pressure moving across a pad up to the
+//!   moment that tips the bar onto a pad's edge and pries the pads apart (friction plays no
+//!   part; the same limit static and sliding): the **roll** about the bar axis a, the pressure
+//!   resultant of each pad moving to the flat's edge, s/2 from the axis, M_a = N·s; and the
+//!   moment about d, which turns the bar in the plane of a and n, pressing its two ends into
+//!   opposite pads: each pad's resultant moves to the pad's end, w/2 along the bar, so
+//!   M_d = N·w;
 //! * **friction-carried** components, with Coulomb friction μ at both pads:
 //!   - the tangential force f_t = |(f_a, f_d)| (sliding along the bar or out of the jaw):
 //!     at most F = 2 μ N (two pads);
@@ -25,22 +29,27 @@
 //!     over the patch gives at most μ N ρ̄ per pad, M_n = 2 μ N ρ̄, with ρ̄ the patch's mean
 //!     distance from its centre ([`mean_radius`]).
 //!
-//! The three are combined by the ellipsoidal approximation of the limit surface (Howe &
+//! The four are combined by the ellipsoidal approximation of the limit surface (Howe &
 //! Cutkosky 1996, "Practical force-motion models for sliding manipulation", IJRR 15(6),
 //! §4: the set of friction wrenches a planar contact patch can transmit is convex and well
 //! approximated by an ellipsoid with the pure-force and pure-moment limits as semi-axes;
-//! Goyal, Ruina & Papadopoulos 1991 for the limit surface itself): the **load fraction**
+//! Goyal, Ruina & Papadopoulos 1991 for the limit surface itself; for a soft finger the
+//! same ellipse in (f_t, m_n), Xydas & Kao 1999, "Modeling of contact mechanics and friction
+//! limit surfaces for soft fingers in robotics", IJRR 18(9)): the **load fraction**
 //!
-//! > λ = √((f_t/F)² + (m_n/M_n)² + (m_a/M_a)²)
+//! > λ = √((f_t/F)² + (m_n/M_n)² + (m_a/M_a)² + (m_d/M_d)²)
 //!
-//! is ≤ 1 while the grip holds. Beyond it the bar slips and the pads transmit the kinetic
-//! friction wrench: the friction-carried components scaled radially onto the kinetic
-//! ellipsoid (μ_k in place of μ_s), in the direction of the wrench the rigid grasp required
-//! (which contains the constraint's velocity damping, so it opposes the sliding).
+//! is ≤ 1 while the grip holds. The two pry moments enter the same ellipsoid (assumed: a pry
+//! moment moves the pads' pressure towards their edges and leaves less of the patch to
+//! friction; the ellipsoid is the simplest convex surface through the four pure limits).
+//! Beyond it the bar slips and the pads transmit the kinetic wrench: the limited components
+//! scaled radially onto the kinetic ellipsoid (μ_k in place of μ_s), in the direction of the
+//! wrench the rigid grasp required (which contains the constraint's velocity damping, so it
+//! opposes the sliding).
 
 use nalgebra::{Rotation3, Vector3, Vector6};
 
-use super::ObjectParams;
+use super::{Alignment, ObjectParams};
 
 /// Friction and pad geometry of the jaw on a handle (each default in its doc).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -57,9 +66,20 @@ pub struct GripParams {
     /// Pad width along the bar, the line contact length w (m): 0.05 (assumed: a jaw of the
     /// Table 1-1 7.5 cm opening class has pads of about that width).
     pub pad_width_m: f64,
-    /// Slip along the jaw's depth axis after which the bar has left the pads and the grasp is
-    /// lost (m): 0.03 (assumed: pads 6 cm deep, the bar taken at their middle).
+    /// Slip across the bar in the pads' plane (the bar frame's z, for an aligned jaw within
+    /// 45° of its depth axis) after which the bar has left the pads and the grasp is lost
+    /// (m): 0.03 (assumed: pads 6 cm deep, the bar taken at their middle).
     pub slip_travel_m: f64,
+    /// Largest skew of the closing axis off the plane normal to the bar at which a jaw takes
+    /// the bar or keeps it (rad): 15° (half the 30° at which the bar no longer fits between
+    /// the fully open pads; [`super::handle`] module docs).
+    pub max_skew_rad: f64,
+    /// Largest roll of the pads off the bar's flats, about the bar (rad): 22.5° (half the 45°
+    /// at which the pads meet the square bar on its diagonal and could turn it either way).
+    pub max_roll_rad: f64,
+    /// Largest angle of the bar off the jaw's x axis in the pads' plane (rad): 45° (across
+    /// the fingers, not along them).
+    pub max_cross_rad: f64,
 }
 
 impl Default for GripParams {
@@ -69,7 +89,20 @@ impl Default for GripParams {
             mu_kinetic: 0.20,
             pad_width_m: 0.05,
             slip_travel_m: 0.03,
+            max_skew_rad: 15f64.to_radians(),
+            max_roll_rad: 22.5f64.to_radians(),
+            max_cross_rad: 45f64.to_radians(),
         }
+    }
+}
+
+impl GripParams {
+    /// Whether a jaw lying on a bar with alignment `al` takes it (or keeps it): every angle
+    /// within its tolerance.
+    pub fn accepts(&self, al: &Alignment) -> bool {
+        al.skew_rad <= self.max_skew_rad
+            && al.roll_rad <= self.max_roll_rad
+            && al.cross_rad <= self.max_cross_rad
     }
 }
 
@@ -82,6 +115,9 @@ pub struct GripCapacity {
     pub torsion_nm: f64,
     /// Roll limit about the bar axis, M_a = N s (N·m).
     pub roll_nm: f64,
+    /// Pry limit about the bar frame's z axis (across the bar in the pads' plane),
+    /// M_d = N w (N·m).
+    pub pry_nm: f64,
 }
 
 /// Mean distance from the centre of a uniformly loaded `a` × `b` rectangle (m): with
@@ -107,6 +143,7 @@ impl GripCapacity {
             force_n: 2.0 * mu * n,
             torsion_nm: 2.0 * mu * n * mean_radius(pad_width_m, bar_side_m),
             roll_nm: n * bar_side_m,
+            pry_nm: n * pad_width_m,
         }
     }
 
@@ -117,9 +154,9 @@ impl GripCapacity {
         GripCapacity::new(mu, clamp_n, gp.pad_width_m, op.handle_width_m)
     }
 
-    /// The load fraction λ of a wrench given in the jaw frame (`jaw`: [f; m], N and N·m,
-    /// axes x bar, y closing, z depth): 0 for no friction load, ∞ for any friction load on a
-    /// jaw that does not clamp.
+    /// The load fraction λ of a wrench given in the bar frame (`jaw`: [f; m], N and N·m,
+    /// axes x bar, y closing, z across the bar in the pads' plane): 0 for no limited load,
+    /// ∞ for any limited load on a jaw that does not clamp.
     pub fn load_fraction(&self, jaw: &Vector6<f64>) -> f64 {
         let part = |x: f64, limit: f64| {
             if x == 0.0 {
@@ -133,28 +170,30 @@ impl GripCapacity {
         let ft = part(jaw[0].hypot(jaw[2]), self.force_n);
         let mn = part(jaw[4], self.torsion_nm);
         let ma = part(jaw[3], self.roll_nm);
-        (ft * ft + mn * mn + ma * ma).sqrt()
+        let md = part(jaw[5], self.pry_nm);
+        (ft * ft + mn * mn + ma * ma + md * md).sqrt()
     }
 }
 
-/// A world-frame contact wrench [f; m] in the jaw frame whose orientation (world) is `r`.
+/// A world-frame contact wrench [f; m] in the frame whose orientation (world) is `r` (the
+/// bar frame of a grasp).
 pub fn to_jaw(r: &Rotation3<f64>, w: &Vector6<f64>) -> Vector6<f64> {
     let f = r.inverse_transform_vector(&Vector3::new(w[0], w[1], w[2]));
     let m = r.inverse_transform_vector(&Vector3::new(w[3], w[4], w[5]));
     Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z)
 }
 
-/// A jaw-frame wrench back in the world frame (the inverse of [`to_jaw`]).
+/// A bar-frame wrench back in the world frame (the inverse of [`to_jaw`]).
 pub fn from_jaw(r: &Rotation3<f64>, w: &Vector6<f64>) -> Vector6<f64> {
     let f = r * Vector3::new(w[0], w[1], w[2]);
     let m = r * Vector3::new(w[3], w[4], w[5]);
     Vector6::new(f.x, f.y, f.z, m.x, m.y, m.z)
 }
 
-/// The wrench a slipping jaw transmits (jaw frame) when the rigid grasp would need `jaw`: the
-/// friction-carried components (f_a, f_d, m_a, m_n) scaled by 1/λ onto the `kinetic` limit
-/// ellipsoid, the geometry-carried ones (f_n, m_d) unchanged. `jaw` itself when it lies
-/// inside the ellipsoid (then the jaw sticks).
+/// The wrench a slipping jaw transmits (bar frame) when the rigid grasp would need `jaw`: the
+/// limited components (f_a, f_d, m_a, m_n, m_d) scaled by 1/λ onto the `kinetic` limit
+/// ellipsoid, the geometry-carried f_n unchanged. `jaw` itself when it lies inside the
+/// ellipsoid (then the jaw sticks).
 pub fn kinetic_wrench(kinetic: &GripCapacity, jaw: &Vector6<f64>) -> Vector6<f64> {
     let lambda = kinetic.load_fraction(jaw);
     if lambda <= 1.0 {
@@ -171,7 +210,7 @@ pub fn kinetic_wrench(kinetic: &GripCapacity, jaw: &Vector6<f64>) -> Vector6<f64
         jaw[2] * s,
         jaw[3] * s,
         jaw[4] * s,
-        jaw[5],
+        jaw[5] * s,
     )
 }
 
@@ -191,26 +230,33 @@ mod tests {
         assert!((c.force_n - 600.0).abs() < 1e-9);
         assert!((c.torsion_nm - 600.0 * rho).abs() < 1e-9);
         assert!((c.roll_nm - 40.0).abs() < 1e-9);
+        assert!((c.pry_nm - 50.0).abs() < 1e-9);
         let c = GripCapacity {
             force_n: 600.0,
             torsion_nm: 7.5,
             roll_nm: 12.0,
+            pry_nm: 20.0,
         };
         // A pure tangential load at the limit, in any in-plane direction, is λ = 1; the
-        // closing-axis force and the moment about the depth axis do not count.
+        // closing-axis force does not count.
         let at = |w: [f64; 6]| c.load_fraction(&Vector6::from(w));
         assert!((at([600.0, 0.0, 0.0, 0.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
         let d = 600.0 / 2f64.sqrt();
-        assert!((at([d, 5e4, -d, 0.0, 0.0, 1e4]) - 1.0).abs() < 1e-12);
+        assert!((at([d, 5e4, -d, 0.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
         assert!((at([0.0, 0.0, 0.0, 12.0, 0.0, 0.0]) - 1.0).abs() < 1e-12);
         assert!((at([0.0, 0.0, 0.0, 0.0, -7.5, 0.0]) - 1.0).abs() < 1e-12);
-        // Half of each limit at once: √(3/4).
-        assert!((at([300.0, 0.0, 0.0, 6.0, 3.75, 0.0]) - 0.75f64.sqrt()).abs() < 1e-12);
-        // No clamp: any friction load is beyond it, none is not.
+        assert!((at([0.0, 0.0, 0.0, 0.0, 0.0, 20.0]) - 1.0).abs() < 1e-12);
+        // Half of each limit at once: √(4/4).
+        assert!((at([300.0, 0.0, 0.0, 6.0, 3.75, 10.0]) - 1.0).abs() < 1e-12);
+        // No clamp: any limited load is beyond it, the closing-axis force alone is not.
         let none = GripCapacity::new(0.3, 0.0, 0.05, 0.04);
         assert_eq!(
-            none.load_fraction(&Vector6::new(0.0, 5.0, 0.0, 0.0, 0.0, 1.0)),
+            none.load_fraction(&Vector6::new(0.0, 5.0, 0.0, 0.0, 0.0, 0.0)),
             0.0
+        );
+        assert!(
+            none.load_fraction(&Vector6::new(0.0, 0.0, 0.0, 0.0, 0.0, 1.0))
+                .is_infinite()
         );
         assert!(
             none.load_fraction(&Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0))
@@ -224,10 +270,10 @@ mod tests {
         let need = Vector6::new(400.0, -900.0, 700.0, 10.0, -3.0, 55.0);
         let got = kinetic_wrench(&k, &need);
         assert!((k.load_fraction(&got) - 1.0).abs() < 1e-12);
-        // Geometry-carried components untouched; the others keep their direction.
-        assert_eq!((got[1], got[5]), (need[1], need[5]));
+        // The geometry-carried component untouched; the others keep their direction.
+        assert_eq!(got[1], need[1]);
         let s = got[0] / need[0];
-        for i in [2, 3, 4] {
+        for i in [2, 3, 4, 5] {
             assert!((got[i] / need[i] - s).abs() < 1e-12);
         }
         // Inside: unchanged.

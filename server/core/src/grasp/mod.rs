@@ -6,7 +6,9 @@
 //! [v; ω] of its centre of mass, base frame.
 //!
 //! # Layout
-//! * `object`: [`ObjectParams`], the 50 kg box with two handles.
+//! * `object`: [`ObjectParams`], the 50 kg box with two handles and a lifting point.
+//! * `handle`: [`Handle`], a handle bar, and [`Alignment`]: when a jaw lies on it so that it
+//!   can take it.
 //! * `seabed`: [`seabed_contact`], [`seabed_wrench`]: the seabed's push on the box and its
 //!   damping matrix.
 //! * `matrices`: [`grasp_block`], [`grasp_matrix`], [`grasp_pinv_equal_share`],
@@ -20,17 +22,19 @@
 //! * here: [`GraspState`], the colour code of Lim §4.1.
 
 mod grip;
+mod handle;
 mod matrices;
 mod object;
 mod seabed;
 
 pub use grip::{GripCapacity, GripParams, from_jaw, kinetic_wrench, mean_radius, to_jaw};
+pub use handle::{Alignment, Handle, Posts};
 pub use matrices::{
     decompose, grasp_block, grasp_matrix, grasp_pinv_equal_share, grasp_point_twist,
     internal_basis, internal_wrench, mobility_block, mobility_block_general,
     mobility_block_general_lower, moment_free_share, wrench_at_com,
 };
-pub use object::ObjectParams;
+pub use object::{LIFTING_POINT, LIFTING_POINT_RISE_M, N_HANDLES, ObjectParams};
 pub use seabed::{
     STICK_STIFFNESS_N_M, SeabedAnchors, SeabedContact, corner_friction, seabed_contact,
     seabed_wrench,

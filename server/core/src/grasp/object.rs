@@ -1,6 +1,12 @@
-//! The object: a 50 kg box with two handles (Lim §4.2.2), its mass properties and corners.
+//! The object: a 50 kg box with two handles (Lim §4.2.2) and a lifting point, its mass
+//! properties and corners.
 
 use nalgebra::{Isometry3, Matrix3, Vector3};
+
+use super::{Handle, Posts};
+
+/// Number of handles on the box: the two side handles and the lifting point.
+pub const N_HANDLES: usize = 3;
 
 /// The object and its environment.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -9,13 +15,17 @@ pub struct ObjectParams {
     pub mass_kg: f64,
     /// Box size x, y, z (m): 0.30 × 0.40 × 0.20 (assumed; mean density ≈ 2 080 kg/m³).
     pub size_m: Vector3<f64>,
-    /// Handle grasp points in the object frame (m): bars 3 cm above the top face at y = ±0.15
-    /// that the jaws close on, one per arm (index 0: left arm at +y, 1: right arm). Assumed.
-    pub handles_m: [Vector3<f64>; 2],
+    /// The handle bars ([`Handle`], object frame; assumed): 0 and 1 the side handles Lim's
+    /// two arms take (0: left arm's at y = +0.15, 1: right arm's at y = −0.15), bars 0.12 m
+    /// long along the box's x axis 3 cm above its top face; 2 the lifting point, a T-handle
+    /// bar of the same section along x on a post 0.10 m above the top face, over the centre of
+    /// mass. Flats face up and sideways. Any jaw may take any handle.
+    pub handles: [Handle; N_HANDLES],
     /// Handle bar thickness the jaw closes on (m): 0.04 (< 7.5 cm jaw opening).
     pub handle_width_m: f64,
-    /// Contact (capture) radius (m) around a handle within which the tool point touches it:
-    /// 0.04. Stands in for the thesis's collision detection of jaw and object meshes.
+    /// Contact (capture) radius (m) around a handle bar's axis within which the tool point
+    /// touches it: 0.04. Stands in for the thesis's collision detection of jaw and object
+    /// meshes; an aligned jaw ([`super::handle`]) closing there takes the bar.
     pub capture_radius_m: f64,
     /// Seabed height (m, base frame z).
     pub seabed_z_m: f64,
@@ -32,6 +42,25 @@ pub struct ObjectParams {
     pub friction_speed_m_s: f64,
 }
 
+/// Height of the lifting point's bar above the box's top face (m): 0.10 (assumed: it stands
+/// clear of the side handles, 3 cm up, so a jaw on it does not foul them).
+pub const LIFTING_POINT_RISE_M: f64 = 0.04;
+
+/// Index of the lifting point in [`ObjectParams::handles`].
+pub const LIFTING_POINT: usize = 2;
+
+/// A 0.12 m bar along the box's x axis centred at `centre`, flats facing up and sideways,
+/// standing on `posts`.
+fn bar(centre: Vector3<f64>, posts: Posts) -> Handle {
+    Handle {
+        centre_m: centre,
+        axis: Vector3::x(),
+        flat_normal: Vector3::z(),
+        length_m: 0.12,
+        posts,
+    }
+}
+
 impl ObjectParams {
     /// The case-study object: 50 kg box centred at (x, y), resting on the seabed at `seabed_z`.
     pub fn case_study_box(x: f64, y: f64, seabed_z: f64) -> ObjectParams {
@@ -39,9 +68,13 @@ impl ObjectParams {
         ObjectParams {
             mass_kg: 50.0,
             size_m: size,
-            handles_m: [
-                Vector3::new(0.0, 0.15, 0.5 * size.z + 0.03),
-                Vector3::new(0.0, -0.15, 0.5 * size.z + 0.03),
+            handles: [
+                bar(Vector3::new(0.0, 0.15, 0.5 * size.z + 0.03), Posts::Ends),
+                bar(Vector3::new(0.0, -0.15, 0.5 * size.z + 0.03), Posts::Ends),
+                bar(
+                    Vector3::new(0.0, 0.0, 0.5 * size.z + LIFTING_POINT_RISE_M),
+                    Posts::Centre,
+                ),
             ],
             handle_width_m: 0.04,
             capture_radius_m: 0.04,

@@ -446,11 +446,12 @@ pub enum Graspable {
 }
 
 impl Graspable {
-    /// Wire name: "handle-0", "handle-1", "valve", "stab".
+    /// Wire name: "handle-0", "handle-1", "handle-2" (the lifting point), "valve", "stab".
     pub fn as_str(self) -> &'static str {
         match self {
             Graspable::BoxHandle(0) => "handle-0",
-            Graspable::BoxHandle(_) => "handle-1",
+            Graspable::BoxHandle(1) => "handle-1",
+            Graspable::BoxHandle(_) => "handle-2",
             Graspable::Valve => "valve",
             Graspable::Stab => "stab",
         }

@@ -2,7 +2,7 @@
 //! jaw, the operator's valve commands, the rigid-body terms held over the step, and within a
 //! sub-step the chamber pressures, the free joint acceleration and the integration.
 
-use nalgebra::{Isometry3, Matrix6, Point3, Vector3, Vector6};
+use nalgebra::{Isometry3, Matrix6, Point3, Vector6};
 
 use super::contact::ArmLoad;
 use super::{ArmInput, ArmParams, ArmState, ArmWork, StepParams, water};
@@ -57,50 +57,63 @@ pub(super) struct ArmTerms {
     pub(super) matrix: Matrix6<f64>,
 }
 
+/// A handle within reach of a jaw: its index and whether the jaw is aligned with it
+/// ([`crate::grasp::Alignment`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Reach {
+    /// Index into [`ObjectParams::handles`].
+    pub(super) handle: usize,
+    /// The jaw lies within the alignment tolerances of the bar.
+    pub(super) aligned: bool,
+}
+
 /// Stage 1 (per arm): the jaw opens or closes at its rated speed (`cmd` ∈ [−1, 1], already
-/// speed-scaled), stops on the handle when it closes on it, and the grasp is taken (closing
-/// on the handle) or released (opened 2 mm past the handle). `contact`: the tool point is
-/// within the capture radius of this arm's handle (`handle_m`, object frame); `tool`,
-/// `object`: world poses. A jaw that lost the handle by slipping takes it again only after
-/// opening past it.
+/// speed-scaled), stops on the bar when it closes on a handle it is aligned with, and the
+/// grasp is taken (closing on it) or released (opened 2 mm past the bar). `reach`: the handle
+/// whose bar the tool point is within the capture radius of (the contact), if any; a jaw not
+/// aligned with it closes past it without taking it. `tool`, `object`: world poses. A jaw
+/// that lost the handle by slipping takes it again only after opening past it.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn update_jaw(
     a: &mut ArmState,
     jaw: &JawParams,
     op: &ObjectParams,
-    handle_m: &Vector3<f64>,
-    contact: bool,
+    reach: Option<Reach>,
     cmd: f64,
     tool: &Isometry3<f64>,
     object: &Isometry3<f64>,
     dt: f64,
 ) {
     // A holding jaw is closed on its bar whether or not the tool point is still within the
-    // capture radius of the handle's centre (a slipping bar slides along the jaw).
-    let contact = contact || a.holding;
+    // capture radius of it (a slipping bar slides in the jaw).
+    let seat = a.holding || reach.is_some_and(|r| r.aligned);
     let was_open_enough = a.jaw_opening_m >= op.handle_width_m - 1e-9;
-    let stop = if contact && was_open_enough {
+    let stop = if seat && was_open_enough {
         op.handle_width_m
     } else {
         0.0
     };
     a.jaw_opening_m = (a.jaw_opening_m + cmd * jaw.speed_m_s * dt).clamp(stop, jaw.max_opening_m);
-    let closed_on_handle =
-        contact && was_open_enough && a.jaw_opening_m <= op.handle_width_m + 1e-9;
+    let closed_on_handle = seat && was_open_enough && a.jaw_opening_m <= op.handle_width_m + 1e-9;
     a.clamp_force_n = clamp_force(a.clamp_force_n, jaw, closed_on_handle, cmd);
     if a.grip.lost && a.jaw_opening_m > op.handle_width_m + RELEASE_GAP_M {
         a.grip.lost = false;
     }
-    if !a.holding && !a.grip.lost && closed_on_handle && cmd < 0.0 {
+    if let (false, false, true, true, Some(r)) =
+        (a.holding, a.grip.lost, closed_on_handle, cmd < 0.0, reach)
+    {
         a.holding = true;
         a.grasp_rel = object.inverse() * tool;
-        a.grip
-            .grasped((a.grasp_rel.inverse() * Point3::from(*handle_m)).coords);
+        let centre = op.handles[r.handle].centre_m;
+        a.grip.grasped(
+            r.handle,
+            (a.grasp_rel.inverse() * Point3::from(centre)).coords,
+        );
     } else if a.holding && a.jaw_opening_m > op.handle_width_m + RELEASE_GAP_M {
         a.holding = false;
         a.contact_wrench = [0.0; 6];
     }
-    a.contact = contact || a.holding;
+    a.contact = reach.is_some() || a.holding;
 }
 
 /// The jaw's clamp force (N) after a step with command `cmd`, from `current`: while closed on

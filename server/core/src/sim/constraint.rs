@@ -5,16 +5,17 @@
 //!
 //! # Finite grip
 //! Lim's assumption (i) (§3.5.2.1: "the object is held rigidly by the grippers … slipping
-//! … is not considered") is kept while each jaw's share of the solve lies within its friction
-//! limits ([`crate::grasp::GripCapacity`]); a jaw whose required wrench leaves them slips: it
-//! transmits only the kinetic friction wrench in its friction-carried directions (the
-//! geometry-carried ones stay as solved), so the object and the jaw accelerate apart there.
+//! … is not considered") is kept while each jaw's share of the solve lies within its limits
+//! ([`crate::grasp::GripCapacity`], written in the bar frame of the handle it holds,
+//! [`crate::grasp::Handle::bar_frame`]); a jaw whose required wrench leaves them slips: it
+//! transmits only the kinetic wrench in its limited directions (the geometry-carried force
+//! along the closing axis stays as solved), so the object and the jaw accelerate apart there.
 //! After the sub-steps, [`slip_stage`] moves the slipping jaw's grasp frame with the bar in
 //! those directions (so the Baumgarte terms do not pull the bar back) and lets go when the
-//! bar has slid [`crate::grasp::GripParams::slip_travel_m`] out of the pads. The geometry-carried
-//! directions of a slipping jaw are solved together with the full rigid system and corrected
-//! by the Baumgarte terms in the next step. [`SimParams::rigid_grasp`] restores the rigid
-//! grasp (the load fraction is still reported).
+//! bar has slid [`crate::grasp::GripParams::slip_travel_m`] out of the pads. The closing-axis direction of a slipping jaw is
+//! solved together with the full rigid system and corrected by the Baumgarte terms in the
+//! next step. [`SimParams::rigid_grasp`] restores the rigid grasp (the load fraction is still
+//! reported).
 
 use nalgebra::{
     Isometry3, Matrix6, Point3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6,
@@ -57,10 +58,10 @@ pub(super) struct Constraint {
     grip: [Option<JawGrip>; 2],
 }
 
-/// One holding jaw's grip for the step: its orientation and friction limits.
+/// One holding jaw's grip for the step: its bar frame and limits.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct JawGrip {
-    /// The jaw (tool) frame's orientation, world.
+    /// The bar frame of the grasp ([`crate::grasp::Handle::bar_frame`]), world.
     rot: Rotation3<f64>,
     /// Static limits (λ is reported against these; a sticking jaw starts slipping beyond them).
     stat: GripCapacity,
@@ -76,11 +77,19 @@ pub(super) struct JawGrip {
 }
 
 impl JawGrip {
-    /// The grip of arm state `a` (its clamp force and slip state) with tool pose `tool`.
-    pub(super) fn new(p: &SimParams, a: &ArmState, tool: &Isometry3<f64>) -> JawGrip {
+    /// The grip of arm state `a` (its clamp force, handle and slip state) with tool pose
+    /// `tool` on the object at `object` (world).
+    pub(super) fn new(
+        p: &SimParams,
+        a: &ArmState,
+        tool: &Isometry3<f64>,
+        object: &Isometry3<f64>,
+    ) -> JawGrip {
         let (gp, op) = (&p.grip, &p.object);
+        let handle = &op.handles[a.grip.handle.min(op.handles.len() - 1)];
+        let jaw = (object.rotation.inverse() * tool.rotation).to_rotation_matrix();
         JawGrip {
-            rot: tool.rotation.to_rotation_matrix(),
+            rot: object.rotation.to_rotation_matrix() * handle.bar_frame(&jaw),
             stat: GripCapacity::of(gp, op, a.clamp_force_n, false),
             kinetic: GripCapacity::of(gp, op, a.clamp_force_n, true),
             slipping: a.grip.sliding,
@@ -131,13 +140,17 @@ pub const SLIP_NOTICE_M: f64 = 0.002;
 /// … or turned this far (rad): 2°.
 pub const SLIP_NOTICE_RAD: f64 = 2.0 * std::f64::consts::PI / 180.0;
 
-/// One jaw's grip on its handle (plain data): how hard it is loaded, whether it slips, how
-/// far the bar has slid, and the counts since reset. Zeros while not holding (the counts
-/// excepted).
+/// One jaw's grip on its handle (plain data): which handle, how hard it is loaded, whether it
+/// slips, how far the bar has slid, and the counts since reset. Zeros while not holding (the
+/// counts and the handle excepted).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct GripState {
-    /// Load fraction λ of the wrench the rigid grasp needed in the last step against the
-    /// static friction limits (1 = at the limit; [`crate::grasp::GripCapacity::load_fraction`]).
+    /// The handle ([`crate::grasp::ObjectParams::handles`]) the jaw holds, or last held.
+    pub handle: usize,
+    /// Load fraction λ in the last step against the static limits (1 = at the limit;
+    /// [`crate::grasp::GripCapacity::load_fraction`]): of the wrench the rigid grasp needed
+    /// while the jaw sticks (and always with the rigid grasp, where it may exceed 1), and 1
+    /// while the bar slides (the jaw transmits what its limits allow, no more).
     pub load_fraction: f64,
     /// The bar is slipping in the jaw: it slid in the last step and has slid at least
     /// [`SLIP_NOTICE_M`] or turned [`SLIP_NOTICE_RAD`] since it started to (a slip the
@@ -147,7 +160,8 @@ pub struct GripState {
     pub sliding: bool,
     /// Slide (m) and turn (rad) of the bar in the jaw since the current sliding began.
     pub episode: [f64; 2],
-    /// Slip of the bar along the jaw's depth axis since the grasp (m, signed, jaw frame z).
+    /// Slip of the bar across itself in the pads' plane since the grasp (m, signed, along the
+    /// bar frame's z: out of the jaw for an aligned jaw).
     pub depth_slip_m: f64,
     /// Slip onsets since reset.
     pub slips: u64,
@@ -162,8 +176,10 @@ pub struct GripState {
 }
 
 impl GripState {
-    /// A new grasp: the slip measure restarts from the handle at `handle_jaw` (jaw frame).
-    pub(super) fn grasped(&mut self, handle_jaw: Vector3<f64>) {
+    /// A new grasp of handle `handle`: the slip measure restarts from its centre at
+    /// `handle_jaw` (jaw frame).
+    pub(super) fn grasped(&mut self, handle: usize, handle_jaw: Vector3<f64>) {
+        self.handle = handle;
         self.load_fraction = 0.0;
         self.slipping = false;
         self.sliding = false;
@@ -301,14 +317,13 @@ impl Constraint {
 }
 
 /// The slip stage (after the sub-steps, per holding arm with `out` from the last sub-step):
-/// records the load fraction; while the jaw slips, moves its grasp frame with the bar in the
-/// friction-carried directions (translation along the bar and the depth axis, rotation about
-/// the bar and closing axes; the closing-axis translation and the depth-axis rotation keep
-/// their constraint error for the Baumgarte terms), measures the slip along the depth axis
-/// from where `arm`'s handle (object frame, in `p`) was taken, and lets go when it exceeds
-/// the grip's slip travel (`p.grip`); an episode is reported ([`GripState::slipping`], counted in `slips`) once it
-/// has slid [`SLIP_NOTICE_M`] or turned [`SLIP_NOTICE_RAD`]. `tool`, `object`:
-/// world poses after the step. The onset ([`Event::Slip`]) and the slide-out
+/// records the load fraction (1 while the bar slides); while the jaw slips, moves its grasp
+/// frame with the bar in the limited directions (translation along the bar and across it in
+/// the pads' plane, every rotation; the closing-axis translation keeps its constraint error
+/// for the Baumgarte terms), measures the slip across the bar from where the handle's centre
+/// was at the grasp, and lets go when it exceeds the travel; an episode is reported ([`GripState::slipping`], counted in `slips`)
+/// once it has slid [`SLIP_NOTICE_M`] or turned [`SLIP_NOTICE_RAD`]. `tool`, `object`: world
+/// poses after the step. The onset ([`Event::Slip`]) and the slide-out
 /// ([`Event::SlidOut`]) of `arm`'s jaw go to `events`.
 pub(super) fn slip_stage(
     arm: Arm,
@@ -319,25 +334,33 @@ pub(super) fn slip_stage(
     object: &Isometry3<f64>,
     events: &mut Vec<Event>,
 ) {
-    let (gp, handle_m) = (&p.grip, &p.object.handles_m[arm.index()]);
-    a.grip.load_fraction = if a.holding { out.load_fraction } else { 0.0 };
+    let (gp, op) = (&p.grip, &p.object);
     a.grip.sliding = a.holding && out.slipping;
+    a.grip.load_fraction = match (a.holding, a.grip.sliding) {
+        (false, _) => 0.0,
+        (true, true) => out.load_fraction.min(1.0),
+        (true, false) => out.load_fraction,
+    };
     if !a.grip.sliding {
         a.grip.slipping = false;
         a.grip.episode = [0.0; 2];
         return;
     }
-    // δ: the tool's pose in the desired (grasp) frame, jaw-frame coordinates.
+    let handle = &op.handles[a.grip.handle.min(op.handles.len() - 1)];
+    // The bar frame in the grasp (desired tool) frame, and δ: the tool's pose in the grasp
+    // frame, in bar-frame coordinates.
+    let jaw = a.grasp_rel.rotation.to_rotation_matrix();
+    let bar = jaw.inverse() * handle.bar_frame(&jaw);
     let delta = a.grasp_rel.inverse() * (object.inverse() * tool);
-    let t = delta.translation.vector;
+    let t = bar.inverse() * delta.translation.vector;
     let rv = delta.rotation.scaled_axis();
     let slide = Isometry3::from_parts(
-        Translation3::new(t.x, 0.0, t.z),
-        UnitQuaternion::from_scaled_axis(Vector3::new(rv.x, rv.y, 0.0)),
+        Translation3::from(bar * Vector3::new(t.x, 0.0, t.z)),
+        UnitQuaternion::from_scaled_axis(rv),
     );
     a.grasp_rel *= slide;
     a.grip.episode[0] += t.x.hypot(t.z);
-    a.grip.episode[1] += rv.x.hypot(rv.y);
+    a.grip.episode[1] += rv.norm();
     if !a.grip.slipping
         && (a.grip.episode[0] >= SLIP_NOTICE_M || a.grip.episode[1] >= SLIP_NOTICE_RAD)
     {
@@ -348,8 +371,9 @@ pub(super) fn slip_stage(
             load_fraction: a.grip.load_fraction,
         });
     }
-    let handle_jaw = a.grasp_rel.inverse() * Point3::from(*handle_m);
-    a.grip.depth_slip_m = handle_jaw.z - a.grip.handle0.z;
+    let handle_jaw = a.grasp_rel.inverse() * Point3::from(handle.centre_m);
+    let across = bar * Vector3::z();
+    a.grip.depth_slip_m = (handle_jaw.coords - a.grip.handle0).dot(&across);
     if a.grip.depth_slip_m.abs() > gp.slip_travel_m {
         a.holding = false;
         a.contact_wrench = [0.0; 6];

@@ -28,9 +28,9 @@
 //!
 //! # Exclusions (grasps are not collisions)
 //! A jaw holding the box skips the box and its handles; a jaw (wrist plate and fingers) whose
-//! tool point is within the capture radius of a handle's grasp point, widened by the
-//! fingers' reach past the tool point (they close on the bar from there), skips that handle
-//! bar; a jaw holding the valve or the stab, or within that radius of its grip, skips it; an
+//! tool point is within the capture radius of a handle's bar, widened by the fingers' reach
+//! past the tool point (they close on the bar from there), skips that handle (its bar and a
+//! T-handle's post), aligned with the bar or not; a jaw holding the valve or the stab, or within that radius of its grip, skips it; an
 //! arm's first two links skip its own pedestal.
 //! Links of the same arm do not collide with each other.
 
@@ -45,6 +45,7 @@ use crate::collision::{
     ArmPart, ArmShapes, CollisionSpec, Epa, Exclusions, Item, Partner, Posed, Touch, World,
     WorldGeometry, arm_touches, world_touches,
 };
+use crate::grasp::Posts;
 use crate::linalg::Ldlt;
 
 /// The contact law and the world's extra geometry (each default in its doc).
@@ -369,13 +370,20 @@ impl Simulation {
         let mut w = World::new(op.seabed_z_m);
         let o = &self.state.object.pose;
         w.push(Item::BoxBody, Posed::cuboid(&(op.size_m * 0.5), o));
-        for (k, h) in op.handles_m.iter().enumerate() {
-            let c = (o * Point3::from(*h)).coords;
-            let ax = o.rotation * Vector3::x() * g.handle_half_length_m;
+        for (k, h) in op.handles.iter().enumerate() {
+            let c = (o * Point3::from(h.centre_m)).coords;
+            let ax = o.rotation * h.axis * (0.5 * h.length_m);
             w.push(
                 Item::Handle(k),
                 Posed::capsule(&(c - ax), &(c + ax), g.handle_radius_m),
             );
+            if h.posts == Posts::Centre {
+                let foot = o * Point3::new(h.centre_m.x, h.centre_m.y, 0.5 * op.size_m.z);
+                w.push(
+                    Item::Handle(k),
+                    Posed::capsule(&foot.coords, &c, g.post_radius_m),
+                );
+            }
         }
         if let (Some(p), Some(ps)) = (&self.params.panel, &self.state.panel) {
             let plate = p.pose * Isometry3::translation(0.5 * p.size_m.x, 0.0, 0.0);
@@ -446,11 +454,9 @@ impl Simulation {
             .collision
             .as_ref()
             .map_or(0.0, |c| c.finger_half_extents_m[2]);
+        let tool_o = o.inverse_transform_point(&Point3::from(tool)).coords;
         let jaw_handle = core::array::from_fn(|k| {
-            near(
-                &(o * Point3::from(op.handles_m[k])).coords,
-                op.capture_radius_m + reach,
-            )
+            op.handles[k].distance_m(&tool_o) <= op.capture_radius_m + reach
         });
         let (mut jaw_valve, mut jaw_stab) = (false, false);
         if let (Some(p), Some(ps)) = (&self.params.panel, &self.state.panel) {

@@ -22,13 +22,13 @@ impl Simulation {
         self.state.panel.as_ref()
     }
 
-    /// What arm `arm`'s jaw could take now: its box handle (the jaw stage's own capture test),
-    /// else the valve's T-bar or the stab's handle when the tool point is within the panel's
-    /// capture radius of it and the other arm does not hold it.
+    /// What arm `arm`'s jaw could take now: a box handle it is within reach of and aligned
+    /// with (the jaw stage's own capture test), else the valve's T-bar or the stab's handle
+    /// when the tool point is within the panel's capture radius of it and the other arm does
+    /// not hold it.
     pub fn in_capture_range(&self, arm: Arm) -> Option<Graspable> {
-        let i = arm.index();
-        if self.in_contact(i) {
-            return Some(Graspable::BoxHandle(i));
+        if let Some(r) = self.reach(arm.index()).filter(|r| r.aligned) {
+            return Some(Graspable::BoxHandle(r.handle));
         }
         self.panel_capture(arm)
     }

@@ -33,7 +33,7 @@
 
 use nalgebra::{Point3, Vector3, Vector6};
 
-use super::arm::{self, ArmTerms};
+use super::arm::{self, ArmTerms, Reach};
 use super::constraint::{self, Constraint, GripOut, JawGrip};
 use super::contact::{self, ContactTerms, ContactWork};
 use super::object::{self, ObjectTerms};
@@ -76,15 +76,14 @@ impl Simulation {
         self.advance_flow();
         let speed = finite_or(input.speed_scale, 0.0).clamp(0.0, 1.0);
         for i in 0..2 {
-            let contact = self.in_contact(i) && !self.panel_holds(i);
+            let reach = self.reach(i).filter(|_| !self.panel_holds(i));
             let cmd = finite_or(input.arms[i].jaw, 0.0).clamp(-1.0, 1.0) * speed;
             let before = self.state.arms[i].jaw_opening_m;
             arm::update_jaw(
                 &mut self.state.arms[i],
                 &self.params.arms[i].hydraulics.jaw,
                 &self.params.object,
-                &self.params.object.handles_m[i],
-                contact,
+                reach,
                 cmd,
                 &self.work[i].tool,
                 &self.state.object.pose,
@@ -205,9 +204,14 @@ impl Simulation {
             }
         }
         let grip = core::array::from_fn(|i| {
-            st.arms[i]
-                .holding
-                .then(|| JawGrip::new(&self.params, &st.arms[i], &self.work[i].tool))
+            st.arms[i].holding.then(|| {
+                JawGrip::new(
+                    &self.params,
+                    &st.arms[i],
+                    &self.work[i].tool,
+                    &st.object.pose,
+                )
+            })
         });
         let constraint = Constraint::new(
             [(&st.arms[0], &arms[0]), (&st.arms[1], &arms[1])],
@@ -304,7 +308,7 @@ impl Simulation {
                 &self.state.object.pose,
                 &mut self.events,
             );
-            let c = self.in_contact(i);
+            let c = self.reach(i).is_some();
             self.state.arms[i].contact = c || self.state.arms[i].holding;
         }
     }
@@ -325,15 +329,32 @@ impl Simulation {
         }
     }
 
-    /// Arm `i`'s tool point is within the capture radius of its handle.
-    pub(super) fn in_contact(&self, i: usize) -> bool {
+    /// The handle whose bar arm `i`'s tool point is within the capture radius of (the
+    /// nearest, if several), with whether the jaw is aligned with it.
+    pub(super) fn reach(&self, i: usize) -> Option<Reach> {
         let op = &self.params.object;
-        let handle = self.state.object.pose * Point3::from(op.handles_m[i]);
-        (self.work[i].tool.translation.vector - handle.coords).norm() <= op.capture_radius_m
+        let o = &self.state.object.pose;
+        let tool = &self.work[i].tool;
+        let p = o.inverse_transform_point(&Point3::from(tool.translation.vector));
+        let (handle, d) = op
+            .handles
+            .iter()
+            .enumerate()
+            .map(|(k, h)| (k, h.distance_m(&p.coords)))
+            .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+        if d.is_nan() || d > op.capture_radius_m {
+            return None;
+        }
+        let jaw = (o.rotation.inverse() * tool.rotation).to_rotation_matrix();
+        let aligned = self
+            .params
+            .grip
+            .accepts(&op.handles[handle].alignment(&jaw));
+        Some(Reach { handle, aligned })
     }
 
-    /// Grasp points relative to the object COM (world frame): the holding tool frames, or the
-    /// handles when not holding.
+    /// Grasp points relative to the object COM (world frame): the holding tool frames, or,
+    /// when not holding, arm i's side handle i (Lim's grasp points).
     pub(super) fn grasp_radii(&self) -> [Vector3<f64>; 2] {
         let o = &self.state.object.pose;
         core::array::from_fn(|i| {
@@ -341,7 +362,7 @@ impl Simulation {
             if a.holding {
                 o.rotation * a.grasp_rel.translation.vector
             } else {
-                o.rotation * self.params.object.handles_m[i]
+                o.rotation * self.params.object.handles[i].centre_m
             }
         })
     }

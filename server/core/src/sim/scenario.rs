@@ -163,10 +163,22 @@ pub fn ik_position(
     })
 }
 
+/// Height of the tool point over a side handle bar's centre at the case studies' grasp (m):
+/// 0.01. The jaw, turned onto the bar by the wrist rotate alone, keeps the tilt the position
+/// IK gives it; its fingers (4 cm tall, centred on the tool point) then reach down past the bar
+/// (3 cm above the top face) far enough to touch the face. 1 cm up they clear it, and the pads
+/// still cover 3 of the bar's 4 cm.
+const GRIP_ABOVE_CENTRE_M: f64 = 0.01;
+
 /// Postures of `arm` on the way to its handle: its reset tool point raised to `above_m` over
 /// the handle (clear of the box: a joint-space move straight from the reset posture, whose jaw
 /// is beside the box and below its top, would sweep the jaw through the box's side), then
-/// `above_m` over the handle, then at it.
+/// `above_m` over the handle, then at it; the last two with the wrist rotate turned so that
+/// the jaw's closing axis is normal to the bar ([`align_rotate`]): only the rotate moves (it
+/// does not move the tool point), so the case studies keep the postures their figures were
+/// taken at; the roll off the flats that the position IK leaves is within the tolerance
+/// ([`crate::grasp::GripParams::max_roll_rad`]). [`align_jaw`] aligns the jaw fully, at the
+/// cost of a different posture.
 fn approach(
     params: &SimParams,
     model: &Model,
@@ -178,19 +190,105 @@ fn approach(
     let base = &params.arms[arm].base;
     let mut obj = op.initial_pose;
     obj.translation.vector.z -= op.mass_kg * 9.81 / (4.0 * op.contact_stiffness_n_m);
-    let handle = obj * Point3::from(op.handles_m[arm]);
-    let local = base.inverse() * handle;
-    let pre = ik_position(
+    let handle = &op.handles[arm];
+    // The tool point GRIP_ABOVE_CENTRE_M over the bar's centre (the pads take its upper part).
+    let grip = handle.centre_m + Vector3::z() * GRIP_ABOVE_CENTRE_M;
+    let local = (base.inverse() * obj * Point3::from(grip)).coords;
+    let mut pre = ik_position(
         model,
-        &(local.coords + Vector3::new(0.0, 0.0, above_m)),
+        &(local + Vector3::new(0.0, 0.0, above_m)),
         &params.arms[arm].initial_q,
     )?;
-    let at = ik_position(model, &local.coords, &pre)?;
+    let mut at = ik_position(model, &local, &pre)?;
+    let axis = base.inverse_transform_vector(&(obj.rotation * handle.axis));
+    at[N_ACT - 1] = align_rotate(model, &at, &axis);
+    pre[N_ACT - 1] = at[N_ACT - 1];
     let q0 = &params.arms[arm].initial_q;
     let mut up = kinematics::end_effector_pose(model, q0).translation.vector;
     up.z = local.z + above_m;
     let up = ik_position(model, &up, q0)?;
     Ok([up, pre, at])
+}
+
+/// The wrist-rotate angle (the last joint, about the tool's z axis; it does not move the tool
+/// point) nearest to `q`'s at which the jaw's closing axis (tool y) is normal to a bar along
+/// `axis` (base frame): tool y(θ) = cos θ·y₀ − sin θ·x₀ for a turn θ, so y·a = 0 at
+/// tan θ = (y₀·a)/(x₀·a). Both senses of the turn are tried (the joint's sense in the tool
+/// frame) and the better kept. Allocates (scenario set-up only).
+pub fn align_rotate(model: &Model, q: &[f64; N_ACT], axis: &Vector3<f64>) -> f64 {
+    let tool = kinematics::end_effector_pose(model, q);
+    let (x0, y0) = (tool.rotation * Vector3::x(), tool.rotation * Vector3::y());
+    let theta = y0.dot(axis).atan2(x0.dot(axis));
+    // The smallest turn with y·a = 0: θ modulo π into [−π/2, π/2].
+    let theta = theta - (theta / std::f64::consts::PI).round() * std::f64::consts::PI;
+    let skew = |qr: f64| {
+        let mut t = *q;
+        t[N_ACT - 1] = qr;
+        let y = kinematics::end_effector_pose(model, &t).rotation * Vector3::y();
+        y.dot(axis).abs()
+    };
+    let last = q[N_ACT - 1];
+    if skew(last + theta) <= skew(last - theta) {
+        last + theta
+    } else {
+        last - theta
+    }
+}
+
+/// Damped-least-squares IK from `q0` (respecting joint limits) that keeps the tool point at
+/// `target` (base frame) and turns the jaw onto a bar with axis `axis` and flat normal `flat`
+/// (base frame): the closing axis (tool y) normal to the bar and along the pair of flats it is
+/// nearer to (skew and roll 0, [`crate::grasp::Alignment`]); the bar's angle in the pads'
+/// plane is left free. Five conditions on six joints; finite-difference Jacobian. Allocates
+/// (scenario set-up only).
+pub fn align_jaw(
+    model: &Model,
+    q0: &[f64; N_ACT],
+    target: &Vector3<f64>,
+    axis: &Vector3<f64>,
+    flat: &Vector3<f64>,
+) -> Result<[f64; N_ACT], Error> {
+    let other = axis.cross(flat);
+    let n0 = kinematics::end_effector_pose(model, q0).rotation * Vector3::y();
+    // The closing axis goes along the nearer pair of flats: normal to the other pair.
+    let normal_to = if n0.dot(flat).abs() >= n0.dot(&other).abs() {
+        other
+    } else {
+        *flat
+    };
+    let residual = |q: &[f64; N_ACT]| {
+        let t = kinematics::end_effector_pose(model, q);
+        let n = t.rotation * Vector3::y();
+        let e = t.translation.vector - target;
+        nalgebra::DVector::from_column_slice(&[e.x, e.y, e.z, n.dot(axis), n.dot(&normal_to)])
+    };
+    let mut q = *q0;
+    let mut err = f64::INFINITY;
+    for _ in 0..200 {
+        let r = residual(&q);
+        err = r.norm();
+        if err < 1e-9 {
+            return Ok(q);
+        }
+        let mut j = DMatrix::<f64>::zeros(5, N_ACT);
+        for c in 0..N_ACT {
+            let mut qp = q;
+            qp[c] += 1e-7;
+            j.set_column(c, &((residual(&qp) - &r) / 1e-7));
+        }
+        let a = &j * j.transpose() + DMatrix::<f64>::identity(5, 5) * 1e-6;
+        let Some(ch) = a.cholesky() else { break };
+        let dq = j.transpose() * ch.solve(&r);
+        for c in 0..N_ACT {
+            let lim = model.joints[c].limits;
+            q[c] = (q[c] - 0.5 * dq[c]).clamp(lim[0], lim[1]);
+        }
+    }
+    Err(Error::NotConverged {
+        what: "scenario jaw alignment",
+        iterations: 200,
+        residual: err,
+    })
 }
 
 /// Jaw command that opens the jaw fully.

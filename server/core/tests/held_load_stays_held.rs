@@ -321,3 +321,14 @@ fn a_tiny_cartesian_stick_does_not_reconfigure_a_free_arm() {
     // The arm's own settling at the start pose is part of this; 18° = 0.31 rad before.
     assert!(moved < 1e-3, "{moved} rad");
 }
+
+/// Closed loop, the current stepped to 2.5 m/s along the pair (0°): the acceptance's "no
+/// drop". The jaws slip (4 slip onsets measured on the bar-frame grip: the moment-free share
+/// asks each jaw for more torsion than its 15.2 N·m holds once the current passes 2.39 m/s),
+/// but the bars stay in both jaws and the pair holds the box (`current_step` asserts it).
+#[test]
+fn a_current_stepped_to_full_along_the_pair_does_not_drop_a_box_held_in_closed_loop() {
+    let (slips, peak) = current_step(Mode::ClosedLoop, 2.5, 0.0);
+    println!("closed loop, 2.5 m/s along the pair: {slips} slips, peak λ {peak:.3}");
+    assert!(peak <= 1.0 + 1e-9, "λ is capped at 1 while sliding: {peak}");
+}

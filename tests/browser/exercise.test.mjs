@@ -47,7 +47,8 @@ test('dual-lift: start screen, task panel, handles, scripted gamepad through the
     assert.ok(panel.includes(spec.goal), 'goal in the task panel');
     for (const s of spec.steps) assert.ok(panel.includes(s.text), `step "${s.text}" listed`);
     const scene = await page.evaluate(() => window.__seaarms.drawnScene());
-    assert.equal(scene.handles.length, 2, 'both handles drawn');
+    // the two side bars and the lifting point over the centre of mass (handle 2, issue 27)
+    assert.equal(scene.handles.length, 3, 'every handle drawn');
     const expected = await page.evaluate(() => {
       const st = window.__seaarms.lastState, h = window.__seaarms.hello.scene.handles_m;
       const { position: p, rotation: r } = st.object.pose;
@@ -111,7 +112,7 @@ test('an instructor\'s scenario or exercise switch takes effect on the trainee\'
     await until(page, () => window.__seaarms.hello.exercise?.id === 'dual-lift');
     await page.waitForSelector('#task:not([hidden])');
     assert.match(await page.innerText('#task'), /Cooperative lift|dual/i);
-    assert.equal((await page.evaluate(() => window.__seaarms.drawnScene())).handles.length, 2);
+    assert.equal((await page.evaluate(() => window.__seaarms.drawnScene())).handles.length, 3);
     assert.equal(await page.evaluate(() => window.__seaarms.connection.session), id, 'the same session');
     assert.deepEqual(b.errors, []);
   } finally {

@@ -301,7 +301,8 @@ impl Operator {
     /// open. Joint mode puts each axis on its valve; Cartesian mode turns each arm's axes
     /// into a joint-velocity reference for the joint servo ([`cartesian_to_joint_velocity`]),
     /// holding the tool's orientation while both jaws hold the object (their closed chain
-    /// fixes it) and, with [`Operator::hold_orientation`], during a translation: the jaw's
+    /// fixes it) and, with [`Operator::hold_orientation`], during a translation of a jaw that
+    /// holds nothing: the jaw's
     /// orientation when the translation began is held by an angular-rate command
     /// ω = K·θ (θ the rotation vector from the jaw's orientation to the held one, world;
     /// K = [`ORIENTATION_HOLD_GAIN_PER_S`]) on the six-row resolution, and for
@@ -351,8 +352,16 @@ impl Operator {
                     let turning = axes[3..].iter().any(|v| *v != 0.0);
                     let t = sim.time_s();
                     let settling = self.held[i].is_some_and(|(_, until)| t < until);
-                    let hold =
-                        self.hold_orientation && (translating || settling) && !turning && !chain;
+                    // Not while the jaw holds the box: a box lifted by one jaw pivots on its
+                    // seabed edge and turns the jaw with it (held, the pads' torsion limit
+                    // let the bar go at lift-off; the attitude is the operator's before the
+                    // grasp).
+                    let free = !sim.arm(arm).holding;
+                    let hold = self.hold_orientation
+                        && free
+                        && (translating || settling)
+                        && !turning
+                        && !chain;
                     self.orientation_error_rad[i] = 0.0;
                     if hold {
                         let now = sim.end_effector(arm).rotation;

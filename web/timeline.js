@@ -33,6 +33,21 @@ export function eventCategory(e) {
   }
 }
 
+/** How long after the assessment's strike notice the core's `strike` record of the same
+ * strike can come (s): the record waits for the impact's peak (sim::STRIKE_WINDOW_S, 0.2 s)
+ * and the notice comes with the next 100 Hz sample. */
+const SAME_STRIKE_S = 0.25;
+
+/**
+ * The events without the core's `strike` records that an exercise's own strike notice
+ * (`exercise` events of kind `strike` or `obstacle`) already marks: one marker per strike.
+ * In free play, with no notices, every strike record stays.
+ */
+export function oneMarkPerStrike(events) {
+  const notices = events.filter((e) => e.kind === 'exercise' && ['strike', 'obstacle'].includes(e.detail?.kind)).map((e) => e.t);
+  return events.filter((e) => e.kind !== 'strike' || !notices.some((t) => e.t - t >= -0.02 && e.t - t <= SAME_STRIKE_S));
+}
+
 /** A short line for an event. */
 export function eventText(e) {
   const d = e.detail && typeof e.detail === 'object' ? e.detail : {};
@@ -90,6 +105,7 @@ export class Timeline {
 
   /** The attempt's events (by t) and duration (s). */
   set(events, duration) {
+    events = oneMarkPerStrike(events);
     this.events = events;
     this.duration = duration;
     const d = duration > 0 ? duration : 1;

@@ -108,20 +108,26 @@ fn a_scripted_overload_is_counted() {
     assert!(b["overloads"].as_f64().expect("overloads") >= 2.0, "{b}");
 }
 
-/// A scripted seabed strike: the right wrist pitched down from a low posture drives the jaw
-/// into the seabed, where the contacts stop it (issue 27); it strikes once and stays pressed,
-/// and the strike is counted once (the core's `Event::Strike`, not every sample it presses).
-#[test]
-fn a_scripted_seabed_strike_is_counted_once() {
+/// `familiarisation` scripted to strike the seabed once: a start posture with the jaw 12 cm
+/// above the seabed and 18° below the horizontal, then the right wrist pitched down to its
+/// −35° limit, which would take the jaw below the seabed.
+fn struck_familiarisation() -> ExerciseSpec {
     let mut spec = (*EXERCISES.get("familiarisation").expect("familiarisation")).clone();
-    // A start posture with the jaw 12 cm above the seabed and 18° below the horizontal;
-    // pitching the wrist down to its −35° limit would take the jaw below the seabed.
     spec.scene.initial_q_deg = Some([[0.0, 17.0, -75.0, 40.0, 0.0, 0.0]; 2]);
     spec.autopilot = serde_json::from_value(serde_json::json!([
         {"do": "settings", "mode": "joint"},
         {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -35, "tolerance_deg": 1},
     ]))
     .expect("script");
+    spec
+}
+
+/// A scripted seabed strike: the right wrist pitched down from a low posture drives the jaw
+/// into the seabed, where the contacts stop it (issue 27); it strikes once and stays pressed,
+/// and the strike is counted once (the core's `Event::Strike`, not every sample it presses).
+#[test]
+fn a_scripted_seabed_strike_is_counted_once() {
+    let spec = struck_familiarisation();
     let r = seaarms::exercises::run_recorded(
         Arc::new(spec),
         &magnum(),
@@ -177,14 +183,7 @@ fn the_costs_add_up_to_what_the_score_lost() {
     }
     // A strike costs what its term says: familiarisation's seabed-strike term (bad 2, good 0,
     // weight 1 of 5) takes 10 points for one strike.
-    let mut spec = (*EXERCISES.get("familiarisation").expect("familiarisation")).clone();
-    // The scripted strike of a_scripted_seabed_strike_is_counted_once.
-    spec.scene.initial_q_deg = Some([[0.0, 17.0, -75.0, 40.0, 0.0, 0.0]; 2]);
-    spec.autopilot = serde_json::from_value(serde_json::json!([
-        {"do": "settings", "mode": "joint"},
-        {"do": "joint", "arm": "right", "joint": 3, "angle_deg": -35, "tolerance_deg": 1},
-    ]))
-    .expect("script");
+    let spec = struck_familiarisation();
     let c = check("familiarisation, struck", &spec, Driver::Autopilot);
     let strike = c
         .iter()

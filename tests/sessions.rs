@@ -582,9 +582,13 @@ async fn an_exercise_waits_for_ready_before_its_clock_starts() {
     assert_eq!(f["awaiting_ready"], true, "{}", f["awaiting_ready"]);
     assert_eq!(f["t"], 0.0);
     assert_eq!(f["exercise"]["elapsed_s"], 0.0);
+    // The instructor's roster says so, rather than "live, t 0.0".
+    let summary = format!("{}/api/sessions/{id}", s.base);
+    assert_eq!(get_json(&summary).await["awaiting_ready"], true);
     send(&mut ws, json!({"type": "ready"})).await;
     let f = state_after(&mut ws, 0.3).await;
     assert_eq!(f["awaiting_ready"], false);
+    assert_eq!(get_json(&summary).await["awaiting_ready"], false);
     assert!(f["exercise"]["elapsed_s"].as_f64().unwrap() >= 0.3);
     send(&mut ws, json!({"type": "reset"})).await;
     tokio::time::sleep(Duration::from_millis(300)).await;

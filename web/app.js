@@ -251,6 +251,9 @@ setInterval(() => {
     html = `<b>Joint mode</b> in ${camTitle}: ` + (words ? words.map((w, i) => `<span class="li">${pad[i]} +: ${names[i]} ${w}</span>`).join(' ') : '');
   }
   if (el.dataset.html !== html) { el.dataset.html = html; el.innerHTML = html; }
+  // it sits on the view it describes, within that view's bounds
+  const host = vp.view(vp.active).el;
+  if (el.parentElement !== host) host.appendChild(el);
 }, 250);
 
 // a phone: the toolbar folds to one row; "☰ Controls" opens it with every control reachable

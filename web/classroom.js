@@ -167,7 +167,7 @@ export class Classroom {
     const pct = ex ? Math.round(100 * Math.max(0, Math.min(1, ex.progress ?? 0))) : 0;
     const warn = [...(s.warnings || []).map(describeWarning), ...(s.faults || []).map(faultText)];
     if (s.recording === 'failed') warn.unshift('recording failed');
-    const paused = s.paused_by ? `by ${s.paused_by}` : s.paused ? 'yes' : '';
+    const paused = s.awaiting_ready ? 'waiting for Ready' : s.paused_by ? `by ${s.paused_by}` : s.paused ? 'yes' : '';
     const byInstructor = s.paused && s.paused_by === 'instructor';
     return `<td class="cls-name"><button type="button" class="link" data-history="${esc(name)}" data-group="${esc(s.group ?? '')}" title="attempt history">${esc(name)}</button></td>
       <td>${esc(s.group ?? '')}</td>

@@ -42,7 +42,8 @@ function summary(s) {
     status: s.status || 'live',
     label: s.trainee ?? s.label ?? '',
     scenario: s.scenario ?? '',
-    clients: s.status === 'ended' ? (s.end_reason || 'ended') : `${s.trainees ?? 0} trainee(s)${s.paused ? ', paused' : ''}`,
+    clients: s.status === 'ended' ? (s.end_reason || 'ended')
+      : `${s.trainees ?? 0} trainee(s)${s.awaiting_ready ? ', waiting for Ready' : s.paused ? ', paused' : ''}`,
     t: s.sim_seconds === undefined ? '' : Number(s.sim_seconds).toFixed(1),
     grasp: s.grasp ?? '',
     w: `${w(0)} / ${w(1)}`,

@@ -2,7 +2,8 @@
 //! 1280×800: with the side panels open (the trainee's plots; the debrief's card, events and
 //! plots) the view is at least 400 px wide, and the legend stays inside the perspective view's
 //! corner with its entries inside its box (nothing cut off or spilling over another view); no
-//! view's title runs under its ⤢ button.
+//! view's title runs under its ⤢ button; the trainee's "Sticks follow …" note stays on the
+//! view it describes (it ran over into the next view at 1280×800).
 
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
@@ -23,6 +24,7 @@ for (const [width, height] of [[1024, 768], [1280, 800]]) {
       try {
         await b.page.goto(`${url}${path}`);
         await until(b.page, ready, undefined, 30000);
+        if (name === 'trainee') await until(b.page, () => document.getElementById('sticks-note')?.closest('.vp.active'), 'sticks note on the active view');
         await b.page.waitForTimeout(300);
         await b.page.screenshot({ path: join(ARTIFACTS, `layout-${name}-${width}.png`) });
         const m = await b.page.evaluate(() => {
@@ -31,6 +33,7 @@ for (const [width, height] of [[1024, 768], [1280, 800]]) {
           return {
             view: r('#view'), persp: r('.vp[data-view="persp"]'), legend: r('#legend'),
             legendShown: getComputedStyle(legend).display !== 'none',
+            note: document.getElementById('sticks-note') ? r('#sticks-note') : null, active: r('.vp.active'),
             overflow: legend.scrollWidth - legend.clientWidth,
             // each view's title against its own "one large view" button
             titles: [...document.querySelectorAll('.vp')].map((v) => {
@@ -49,6 +52,11 @@ for (const [width, height] of [[1024, 768], [1280, 800]]) {
         assert.ok(l.left >= d.left && l.right <= d.right && l.top >= d.top && l.bottom <= d.bottom,
           `${name}: legend ${JSON.stringify(l)} outside the perspective view ${JSON.stringify(d)}`);
         assert.ok(m.overflow <= 1, `${name}: the legend's entries spill ${m.overflow} px out of its box`);
+        if (name === 'trainee') {
+          const { note: n, active: v } = m;
+          assert.ok(n.width > 50 && n.left >= v.left && n.right <= v.right && n.top >= v.top && n.bottom <= v.bottom,
+            `the sticks note ${JSON.stringify(n)} runs out of the active view ${JSON.stringify(v)}`);
+        }
         assert.deepEqual(b.errors, []);
       } finally {
         await b.close();

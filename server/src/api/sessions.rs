@@ -327,6 +327,8 @@ pub struct Roster {
     pub warnings: Vec<String>,
     /// The running attempt's id.
     pub attempt: String,
+    /// The exercise waits for the trainee's "Ready" (its clock has not started).
+    pub awaiting_ready: bool,
 }
 
 /// A running exercise attempt in the roster.
@@ -430,6 +432,7 @@ fn live_summary(
             exercise: live.exercise().map(|run| ExerciseSummary::new(run, sim)),
             warnings: crate::sessions::snapshot::warnings(&live),
             attempt: live.attempt_id().to_string(),
+            awaiting_ready: live.awaiting_ready(),
         }),
         replica: None,
         base: None,

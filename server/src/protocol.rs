@@ -120,6 +120,9 @@ pub struct ActiveFault {
     /// like any fault but is left out of the state frames and of the trainee's summary; only
     /// the instructor's session summary lists it.
     pub silent: bool,
+    /// Kept across the trainee's "try again" (a reset); otherwise a reset clears it, so a
+    /// silent fault ends with its attempt and is shown in that attempt's debrief only.
+    pub persistent: bool,
 }
 
 impl ActiveFault {
@@ -281,6 +284,9 @@ pub enum Action {
         /// trainee's view; the instructor's session summary lists it with `"silent": true`.
         #[serde(default)]
         silent: bool,
+        /// Kept when the trainee resets ("try again"); a reset clears other faults.
+        #[serde(default)]
+        persistent: bool,
     },
     /// Remove every fault.
     ClearFaults,
@@ -842,6 +848,7 @@ mod tests {
                 arm,
                 fault: Fault::new(kind, joint, value).unwrap(),
                 silent: false,
+                persistent: false,
             })
         };
         assert_eq!(
@@ -864,6 +871,7 @@ mod tests {
             arm: Arm::Left,
             fault: Fault::new(FaultKind::Air, None, 0.3).unwrap(),
             silent: true,
+            persistent: false,
         };
         assert_eq!(serde_json::to_value(f).unwrap(), "air:left:0.3");
         for kind in FaultKind::ALL {

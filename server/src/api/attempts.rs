@@ -78,15 +78,33 @@ async fn authorized(
 }
 
 /// A trainee opens an attempt's inputs and replay once it has ended (a running drill's
-/// silent fault is in them); the instructor at any time.
+/// silent fault is in them) and while no silent fault of the instructor's acts on its live
+/// session (a `persistent` one carries over from an ended attempt); the instructor at any time.
 fn check_open(state: &AppState, creds: &Credentials, row: &AttemptRow) -> Result<(), ApiError> {
-    if row.outcome.is_none() && !is_instructor(state, creds)? {
+    if is_instructor(state, creds)? {
+        return Ok(());
+    }
+    if row.outcome.is_none() {
         return Err(ApiError::new(
             StatusCode::CONFLICT,
             "the attempt is still running; its replay opens when it ends",
         ));
     }
+    if silent_fault_active(state, &row.session) {
+        return Err(ApiError::new(
+            StatusCode::CONFLICT,
+            "the session has a fault the instructor keeps hidden; this replay opens when it is cleared",
+        ));
+    }
     Ok(())
+}
+
+/// The live session `session` has a silent fault active.
+fn silent_fault_active(state: &AppState, session: &str) -> bool {
+    state
+        .sessions
+        .get(session)
+        .is_some_and(|s| s.live().faults().iter().any(|f| f.silent))
 }
 
 /// An attempt on the wire: the record (without its initial conditions), whether it can be
@@ -165,8 +183,11 @@ pub async fn get(
 ) -> Result<Json<AttemptOut>, ApiError> {
     let row = authorized(&state, &creds, &id).await?;
     let mut events = state.db.attempt_events(&id).await.map_err(db_error)?;
-    // A silent fault stays hidden from the trainee while the attempt runs (a drill).
-    if row.outcome.is_none() && !is_instructor(&state, &creds)? {
+    // A silent fault stays hidden from the trainee while the attempt runs (a drill), and while
+    // one acts on the session (a persistent one outlives the attempt that injected it).
+    if (row.outcome.is_none() || silent_fault_active(&state, &row.session))
+        && !is_instructor(&state, &creds)?
+    {
         events.retain(|e| e.detail.get("silent") != Some(&Value::Bool(true)));
     }
     Ok(Json(AttemptOut::new(row, Some(events))))

@@ -11,6 +11,7 @@ use axum::response::{IntoResponse, Response};
 use seaarms_core::exercise::ExerciseRun;
 use seaarms_core::sim::{Arm, Simulation};
 use serde::{Deserialize, Serialize};
+use serde_json::Value;
 
 use crate::app::AppState;
 use crate::auth::{Actor, Credentials, MISSING_TOKEN, TokenFrom, token_eq};
@@ -642,15 +643,15 @@ pub async fn assessment(
     State(state): State<AppState>,
     creds: Credentials,
     Path(id): Path<String>,
-) -> Result<Json<seaarms_core::exercise::Assessment>, ApiError> {
+) -> Result<Json<Value>, ApiError> {
     let session = state
         .sessions
         .get(&id)
         .ok_or_else(|| ApiError::not_found(format!("no live session `{id}`")))?;
-    live_actor(&state, &creds, TokenFrom::BearerOrQuery, &session)?;
+    let actor = live_actor(&state, &creds, TokenFrom::BearerOrQuery, &session)?;
     let live = session.live();
     live.exercise()
-        .map(|r| Json(r.assessment()))
+        .map(|r| Json(assessment_for(r.assessment(), actor)))
         .ok_or_else(|| {
             ApiError::new(
                 StatusCode::CONFLICT,
@@ -660,6 +661,21 @@ pub async fn assessment(
                 ),
             )
         })
+}
+
+/// The assessment as `actor` may read it: until the attempt is done, the trainee is not told
+/// its seed (it draws a drill's fault and time) nor the drill's fault and injection time
+/// (issue 29: the drill could be read off this route).
+fn assessment_for(a: seaarms_core::exercise::Assessment, actor: Actor) -> Value {
+    let done = a.done;
+    let mut v = serde_json::to_value(a).unwrap_or(Value::Null);
+    if actor != Actor::Instructor && !done {
+        if let Some(o) = v.as_object_mut() {
+            o.remove("seed");
+            o.remove("diagnosis");
+        }
+    }
+    v
 }
 
 /// `GET /api/sessions/{id}/log.csv`: the session's record (flushed first); the instructor or

@@ -140,7 +140,9 @@ pub struct Live {
     scenario: Scenario,
     /// The current attempt, when the scenario is an exercise.
     exercise: Option<ExerciseRun>,
-    /// Seed of the next attempt's random draws (each attempt takes one and adds one).
+    /// Seed of the next attempt's random draws: a live session draws each one from the
+    /// operating system when the attempt before it starts, so no attempt's seed predicts the
+    /// next one's (a drill's fault is drawn from it); a replay has only the one it was given.
     next_seed: u64,
     /// The session's id (records).
     session_id: String,
@@ -263,10 +265,11 @@ impl Live {
         self.attempt_id = random_hex(8);
         self.awaiting_ready = self.ready_gate && self.scenario.exercise().is_some();
         let seed = self.next_seed;
-        self.exercise = self.scenario.exercise().map(|spec| {
-            self.next_seed = self.next_seed.wrapping_add(1);
-            ExerciseRun::new(spec.clone(), &self.sim, seed)
-        });
+        self.next_seed = random_seed();
+        self.exercise = self
+            .scenario
+            .exercise()
+            .map(|spec| ExerciseRun::new(spec.clone(), &self.sim, seed));
         if self.recording {
             let init = command::log::Init {
                 format: command::log::FORMAT,
@@ -506,9 +509,21 @@ impl Live {
     }
 
     /// Back to the initial position (Lim §4.1): simulation reset, inputs cleared, fresh
-    /// resolvers (an attempt's start never depends on what came before it).
+    /// resolvers (an attempt's start never depends on what came before it). Faults are cleared
+    /// — the drill's own and the instructor's — except the instructor's `persistent` ones, so
+    /// a silent fault ends with its attempt (issue 29: a reset revealed it).
     pub fn reset(&mut self) {
         self.end_attempt(AttemptStop::Left);
+        let kept: Vec<ActiveFault> = self
+            .faults
+            .iter()
+            .filter(|f| f.persistent)
+            .copied()
+            .collect();
+        self.clear_faults();
+        for f in kept {
+            self.inject_fault(f);
+        }
         self.sim.reset();
         self.operator.reset();
         self.tally = Default::default();

@@ -294,7 +294,12 @@ impl Condition {
                     .iter()
                     .all(|v| v.abs() < *max_joint_speed_rad_s)
             })),
-            Condition::FaultInjected => yes(facts.fault_injected),
+            // Its progress is never shown: a step's progress bar that moved at the injection
+            // would tell the trainee when the hidden fault came (issue 29).
+            Condition::FaultInjected => Verdict {
+                met: facts.fault_injected,
+                fraction: 0.0,
+            },
             Condition::Diagnosed => yes(facts.answer.is_some()),
             Condition::All { of } => {
                 let v: Vec<Verdict> = of.iter().map(|c| c.evaluate(sim, facts)).collect();

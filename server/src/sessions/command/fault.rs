@@ -1,6 +1,7 @@
 //! `fault` and `clear_faults`: the instructor injects a hydraulic fault on one arm (replacing
-//! one of the same kind on the same actuator), or removes them all. Wire: the REST actions
-//! `{"type": "fault", "fault", "arm", "joint", "value", "silent"}` and
+//! one of the same kind on the same actuator), or removes them all; a reset clears faults
+//! that are not `persistent`. Wire: the REST actions
+//! `{"type": "fault", "fault", "arm", "joint", "value", "silent", "persistent"}` and
 //! `{"type": "clear_faults"}`. Logged as `{"c": "fault", "fault": {"arm": 0|1, "kind",
 //! "joint", "value"}}` (a debrief shows silent faults too) and `{"c": "clear_faults"}`.
 
@@ -20,6 +21,7 @@ impl Command {
         joint: Option<usize>,
         value: f64,
         silent: bool,
+        persistent: bool,
     ) -> Result<Command, CommandError> {
         let arm = parse_arm(arm).ok_or_else(|| {
             CommandError::Invalid(format!("arm must be `left` or `right`, got `{arm}`"))
@@ -32,7 +34,12 @@ impl Command {
         })?;
         let fault = Fault::new(kind, joint, value).map_err(CommandError::Invalid)?;
         Ok(Command::InjectFault {
-            fault: ActiveFault { arm, fault, silent },
+            fault: ActiveFault {
+                arm,
+                fault,
+                silent,
+                persistent,
+            },
         })
     }
 }
@@ -40,7 +47,7 @@ impl Command {
 /// Applies a fault.
 pub(super) fn inject(live: &mut Live, fault: &ActiveFault) -> serde_json::Value {
     live.inject_fault(*fault);
-    json!({"fault": fault, "silent": fault.silent})
+    json!({"fault": fault, "silent": fault.silent, "persistent": fault.persistent})
 }
 
 /// Removes every fault.
@@ -96,6 +103,7 @@ pub mod log_form {
                 arm,
                 fault: Fault::new(kind, e.joint, e.value)?,
                 silent: false,
+                persistent: false,
             })
         }
     }
@@ -123,6 +131,7 @@ mod tests {
             arm,
             fault: Fault::new(FaultKind::StuckValve, Some(joint), v).unwrap(),
             silent: false,
+            persistent: false,
         };
         assert!(a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Left, 2, -0.5)));
         assert!(!a(Arm::Left, 2, 0.5).same_slot(&a(Arm::Left, 3, 0.5)));
@@ -132,7 +141,7 @@ mod tests {
     /// The log form is the one format 1 logs carry (`log.rs` tests decode it by hand-written lines).
     #[test]
     fn the_log_form_is_arm_index_kind_joint_value() {
-        let c = Command::fault("leak", "right", Some(3), 1e-11, true).unwrap();
+        let c = Command::fault("leak", "right", Some(3), 1e-11, true, false).unwrap();
         let v = serde_json::to_value(&c).unwrap();
         assert_eq!(
             v,

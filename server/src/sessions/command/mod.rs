@@ -257,7 +257,8 @@ impl TryFrom<Action> for Command {
                 joint,
                 value,
                 silent,
-            } => Command::fault(&fault, &arm, joint, value, silent)?,
+                persistent,
+            } => Command::fault(&fault, &arm, joint, value, silent, persistent)?,
             Action::ClearFaults => Command::ClearFaults,
             Action::SetCurrent {
                 speed_m_s,

@@ -164,6 +164,7 @@ async function act(type) {
     body.value = v === '' ? FAULT_DEFAULTS[body.fault] : +v;
     if ((body.fault === 'stuck_valve' || body.fault === 'leak') && body.joint === undefined) body.joint = 1;
     if ($('act-silent').checked) body.silent = true; // a diagnosis drill: the trainee is not told
+    if ($('act-persistent').checked) body.persistent = true; // kept across the trainee's reset
   }
   if (type === 'message') body.text = $('act-text').value;
   if (type === 'set_current') {

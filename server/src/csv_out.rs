@@ -3,7 +3,9 @@
 //! has one format — the shortest text that parses back to the same `f64` (Ryū, the format
 //! `serde_json` also uses), e.g. `0.1`, `6890000.0`, `-3.2e-5`, `1e-7`. Non-finite values
 //! are written `NaN`, `inf`, `-inf` (which Rust's `f64::from_str` reads back); absent values
-//! are empty fields.
+//! are empty fields. Text that a spreadsheet would run as a formula — a cell starting with
+//! `=`, `+`, `-`, `@`, a tab or a carriage return — is written with a leading `'`, as OWASP's
+//! "CSV Injection" page recommends (names and groups are the trainees' own words).
 //!
 //! Rows are built whole in memory and written with one `write_all`, so a writer never leaves
 //! half a row behind except when the process dies inside that call; readers of a file that
@@ -67,6 +69,9 @@ impl From<Cell> for Field<'static> {
     }
 }
 
+/// First characters that make a spreadsheet read a cell as a formula (OWASP, "CSV Injection").
+const FORMULA_STARTS: [char; 6] = ['=', '+', '-', '@', '\t', '\r'];
+
 /// A CSV writer with the one number format.
 pub struct CsvOut<W: Write> {
     csv: csv::Writer<W>,
@@ -97,6 +102,9 @@ impl<W: Write> CsvOut<W> {
             Field::Num(x) => self.csv.write_field(self.num.format(x))?,
             Field::Int(x) => self.csv.write_field(self.int.format(x))?,
             Field::Bool(b) => self.csv.write_field(if b { "true" } else { "false" })?,
+            Field::Text(s) if s.starts_with(FORMULA_STARTS) => {
+                self.csv.write_field(format!("'{s}"))?
+            }
             Field::Text(s) => self.csv.write_field(s)?,
             Field::Empty => self.csv.write_field("")?,
         }
@@ -288,5 +296,38 @@ mod tests {
         assert_eq!(complete_lines(b"a,b\n1,2\n3,"), b"a,b\n1,2\n");
         assert_eq!(complete_lines(b"a,b\n1,2\n"), b"a,b\n1,2\n");
         assert_eq!(complete_lines(b"a,b"), b"");
+    }
+
+    /// OWASP "CSV Injection": a text cell never starts with `=`, `+`, `-`, `@`, tab or CR
+    /// (the issue's hostile names), other text and numbers are untouched, and the `csv`
+    /// crate reads the neutralised cell back as the name with one `'` before it.
+    #[test]
+    fn formula_cells_are_neutralised() {
+        let hostile = [
+            "=HYPERLINK(\"http://evil\",\"x\")",
+            "+cmd|' /C calc'!A0",
+            "-2+3",
+            "@SUM(1,2)",
+            "\tx",
+            "\rx",
+        ];
+        let text = table(
+            &["name", "n"],
+            hostile
+                .iter()
+                .map(|h| [Field::Text(h), Field::Num(-1.5)])
+                .chain([[Field::Text("Ann =1"), Field::Num(2.0)]]),
+        );
+        let mut r = csv::Reader::from_reader(text.as_bytes());
+        let rows: Vec<csv::StringRecord> = r.records().map(|r| r.unwrap()).collect();
+        for (row, h) in rows.iter().zip(hostile) {
+            assert_eq!(&row[0], format!("'{h}"));
+            assert_eq!(&row[1], "-1.5", "numbers stay numbers");
+        }
+        assert_eq!(&rows[hostile.len()][0], "Ann =1");
+        for line in text.lines().skip(1) {
+            let first = line.trim_start_matches('"').chars().next();
+            assert!(!matches!(first, Some('=' | '+' | '@' | '\t')), "{line:?}");
+        }
     }
 }

@@ -351,10 +351,53 @@ async fn state_changes_need_json_and_an_allowed_origin() {
 }
 
 /// `ws_url` comes from `--public-url` when set, else from a Host that passes the syntax
-/// check; a malformed Host is a 400, never echoed.
+/// check and is one the server answers for; a malformed Host is a 400, never echoed. Issue
+/// 29 item 7 (DNS rebinding): `Host: evil.example` with a matching Origin created a session
+/// whose `ws_url` pointed at evil.example; a loopback server now answers 421 on every route
+/// to a Host it was not told (`--allowed-hosts`), with the security headers.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn ws_url_comes_from_the_public_url_or_a_checked_host() {
     let s = start().await;
+    let http = reqwest::Client::new();
+    for (method, path) in [
+        ("POST", "/api/sessions"),
+        ("GET", "/"),
+        ("GET", "/api/sessions"),
+        ("GET", "/healthz"),
+        ("GET", "/ws/sessions/0123456789abcdef?token=x"),
+    ] {
+        let r = http
+            .request(method.parse().unwrap(), format!("{}{path}", s.base))
+            .header("host", "evil.example")
+            .header("origin", "http://evil.example")
+            .json(&json!({}))
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(r.status().as_u16(), 421, "{method} {path}");
+        assert!(
+            r.headers().contains_key("content-security-policy"),
+            "{path}"
+        );
+        let v: Value = r.json().await.unwrap();
+        assert!(v["error"].as_str().unwrap().contains("evil.example"), "{v}");
+    }
+    // the loopback names and the bound address itself are this server
+    let port = s.base.rsplit(':').next().unwrap().to_string();
+    for host in [format!("localhost:{port}"), format!("127.0.0.1:{port}")] {
+        let r = http
+            .get(format!("{}/healthz", s.base))
+            .header("host", host.as_str())
+            .send()
+            .await
+            .unwrap();
+        assert_eq!(r.status().as_u16(), 200, "{host}");
+    }
+    s.stop().await;
+    let s = start_with(temp_dir("admission"), |c| {
+        c.allowed_hosts = vec!["sim.example.org".into()];
+    })
+    .await;
     let http = reqwest::Client::new();
     let url = format!("{}/api/sessions", s.base);
     let r = http

@@ -133,7 +133,8 @@ impl AppState {
             config.public_url.as_deref(),
             &config.allowed_origins,
             &config.trusted_proxies,
-        )?;
+        )?
+        .with_hosts(&config.allowed_hosts, config.bind);
         anyhow::ensure!(
             config.sessions_per_minute.is_finite() && config.sessions_per_minute > 0.0,
             "--sessions-per-minute must be a positive number"

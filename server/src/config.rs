@@ -225,6 +225,17 @@ pub struct ServeConfig {
         global = true
     )]
     pub allowed_origins: Vec<String>,
+    /// Host names the server answers for (comma-separated; `*` for any); other `Host`
+    /// headers get 421 (DNS rebinding). Default: the bind address (and `localhost` when it is
+    /// a loopback one) and the hosts of `--public-url` and `--allowed-origins`; any when bound
+    /// to every interface (`0.0.0.0`).
+    #[arg(
+        long,
+        env = "SEAARMS_ALLOWED_HOSTS",
+        value_delimiter = ',',
+        global = true
+    )]
+    pub allowed_hosts: Vec<String>,
     /// Public base URL (`https://sim.example.org`); `ws_url` is built from it instead of the
     /// request's Host header, and its origin is allowed.
     #[arg(long, env = "SEAARMS_PUBLIC_URL", global = true)]
@@ -346,6 +357,7 @@ impl Default for ServeConfig {
             trusted_proxies: Vec::new(),
             join_code: None,
             allowed_origins: Vec::new(),
+            allowed_hosts: Vec::new(),
             public_url: None,
             min_free_disk_mb: 256,
             retention_days: 0.0,

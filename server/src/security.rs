@@ -119,6 +119,8 @@ pub struct Policy {
     pub allowed_origins: Vec<Origin>,
     /// Proxies whose `X-Forwarded-*` headers are believed.
     pub trusted_proxies: Vec<IpAddr>,
+    /// Host names a request's `Host` may name ([`Policy::with_hosts`]); `None`: any.
+    pub allowed_hosts: Option<Vec<String>>,
 }
 
 impl Policy {
@@ -147,7 +149,51 @@ impl Policy {
             public_url,
             allowed_origins,
             trusted_proxies: trusted_proxies.to_vec(),
+            allowed_hosts: None,
         })
+    }
+
+    /// The host names requests may name in `Host` (DNS rebinding: a page on `evil.example`,
+    /// re-pointed at this machine, sends `Host: evil.example`). `allowed` (`--allowed-hosts`)
+    /// when given (`*` allows any); else, for a server bound to one address, that address,
+    /// the loopback names when it is a loopback one, and the hosts of the public URL and the
+    /// allowed origins; a server bound to every interface (`0.0.0.0`, `::`, a container)
+    /// cannot know its names and allows any unless told.
+    pub fn with_hosts(mut self, allowed: &[String], bind: std::net::SocketAddr) -> Policy {
+        let allowed: Vec<String> = allowed
+            .iter()
+            .map(|h| h.trim().to_ascii_lowercase())
+            .filter(|h| !h.is_empty())
+            .collect();
+        self.allowed_hosts = if allowed.iter().any(|h| h == "*") {
+            None
+        } else if !allowed.is_empty() {
+            Some(allowed)
+        } else if bind.ip().is_unspecified() {
+            None
+        } else {
+            let ip = match bind.ip() {
+                IpAddr::V6(v6) => format!("[{v6}]"),
+                v4 => v4.to_string(),
+            };
+            let mut hosts = vec![ip];
+            if bind.ip().is_loopback() {
+                hosts.extend(["localhost", "127.0.0.1", "[::1]"].map(String::from));
+            }
+            hosts.extend(self.public_url.iter().map(|o| o.host.clone()));
+            hosts.extend(self.allowed_origins.iter().map(|o| o.host.clone()));
+            Some(hosts)
+        };
+        self
+    }
+
+    /// Whether a request with `Host: host` is for this server (a request without one cannot
+    /// be a rebound page's).
+    pub fn host_allowed(&self, host: Option<&str>) -> bool {
+        let (Some(hosts), Some(host)) = (&self.allowed_hosts, host) else {
+            return true;
+        };
+        split_host(host).is_some_and(|(h, _)| hosts.contains(&h))
     }
 
     /// Whether a request with `Origin: origin` to `host` (its Host header) may change state:
@@ -283,6 +329,20 @@ async fn json_error(resp: Response) -> Response {
 /// The security middleware (see the module docs).
 pub async fn guard(State(state): State<AppState>, req: Request<Body>, next: Next) -> Response {
     let headers = req.headers();
+    let host = headers.get(header::HOST).map(|h| h.to_str().unwrap_or(""));
+    if !state.policy.host_allowed(host) {
+        // The name only once it has passed the syntax check: a Host is never echoed raw.
+        let mut resp = match host.and_then(split_host) {
+            Some((h, _)) => ApiError::new(
+                StatusCode::MISDIRECTED_REQUEST,
+                format!("this server does not answer for Host `{h}` (--allowed-hosts)"),
+            ),
+            None => ApiError::new(StatusCode::BAD_REQUEST, "malformed Host header"),
+        }
+        .into_response();
+        add_security_headers(resp.headers_mut());
+        return resp;
+    }
     let changes_state = matches!(
         *req.method(),
         Method::POST | Method::PUT | Method::PATCH | Method::DELETE

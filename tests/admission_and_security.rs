@@ -699,3 +699,97 @@ fn the_instructor_token_is_printed_only_when_generated_and_only_to_stderr() {
         "{text}"
     );
 }
+
+/// Issue 29 item 6: no token in a URL. `POST /api/signin` with the instructor token sets an
+/// `HttpOnly`, `SameSite=Strict` cookie (a digest, not the token) that opens the instructor's
+/// routes; a new session's response sets its trainee's cookie, which opens that session's
+/// record and no other's.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn sign_in_and_session_cookies_stand_in_for_the_token() {
+    let s = start().await;
+    let http = reqwest::Client::new();
+    let signin = format!("{}/api/signin", s.base);
+    let r = http
+        .post(&signin)
+        .json(&json!({"token": "not-it"}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status().as_u16(), 403);
+    assert!(r.headers().get("set-cookie").is_none());
+    let r = http
+        .post(&signin)
+        .json(&json!({"token": TEACHER}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(r.status().as_u16(), 204);
+    let set = r.headers()["set-cookie"].to_str().unwrap().to_string();
+    assert!(
+        set.contains("HttpOnly") && set.contains("SameSite=Strict"),
+        "{set}"
+    );
+    assert!(
+        !set.contains(TEACHER),
+        "the cookie carries the token itself: {set}"
+    );
+    let instructor = set.split(';').next().unwrap().to_string();
+    let get = |path: String, cookie: String| {
+        let http = http.clone();
+        async move {
+            http.get(path)
+                .header("cookie", cookie)
+                .send()
+                .await
+                .unwrap()
+                .status()
+                .as_u16()
+        }
+    };
+    assert_eq!(
+        get(format!("{}/api/results.csv", s.base), instructor.clone()).await,
+        200
+    );
+    assert_eq!(
+        get(format!("{}/api/sessions", s.base), instructor.clone()).await,
+        200
+    );
+    assert_eq!(
+        get(
+            format!("{}/api/results.csv", s.base),
+            "seaarms_instructor=x".into()
+        )
+        .await,
+        403
+    );
+
+    // a trainee's session cookie opens its own session's record only
+    let made = |_: ()| {
+        let http = http.clone();
+        let url = format!("{}/api/sessions", s.base);
+        async move {
+            let r = http.post(url).json(&json!({})).send().await.unwrap();
+            let cookie = r.headers()["set-cookie"].to_str().unwrap().to_string();
+            let v: Value = r.json().await.unwrap();
+            (v["id"].as_str().unwrap().to_string(), cookie)
+        }
+    };
+    let (a, cookie_a) = made(()).await;
+    let (b, _) = made(()).await;
+    assert!(
+        cookie_a.starts_with(&format!("seaarms_t_{a}=")),
+        "{cookie_a}"
+    );
+    assert!(cookie_a.contains("HttpOnly") && cookie_a.contains("SameSite=Strict"));
+    let ca = cookie_a.split(';').next().unwrap().to_string();
+    assert_eq!(
+        get(format!("{}/api/sessions/{a}/log.csv", s.base), ca.clone()).await,
+        200
+    );
+    assert_eq!(
+        get(format!("{}/api/sessions/{b}/log.csv", s.base), ca.clone()).await,
+        403
+    );
+    assert_eq!(get(format!("{}/api/results.csv", s.base), ca).await, 403);
+    s.stop().await;
+}

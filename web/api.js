@@ -40,30 +40,29 @@ async function errorOf(resp) {
 const sessionPath = (id, base = '') => `${base}/api/sessions/${enc(id)}`;
 const withToken = (path, token) => (token ? `${path}?token=${enc(token)}` : path);
 
-/** Links the pages show (downloads and the debrief page take the token in the query). */
+/** Links the pages show. None carries a token: the browser's cookies open them (the
+ * instructor's sign-in, `signIn`; the trainee's session cookie, set when it was created). */
 export const links = {
   /** A session's record as CSV. */
-  sessionCsv: (id, token, base = '') => withToken(`${sessionPath(id, base)}/log.csv`, token),
+  sessionCsv: (id, base = '') => `${sessionPath(id, base)}/log.csv`,
   /** The debrief page of an attempt. */
-  debrief: (attemptId, token) => withToken(`/replay/${enc(attemptId)}`, token),
-  /** A link of GET /api/attempts (an attempt's `links.replay`, `links.csv`) with the token. */
-  attemptLink: (path, token) => withToken(path, token),
+  debrief: (attemptId) => `/replay/${enc(attemptId)}`,
   /** The class results (CSV of finished attempts), of one group or all. */
-  resultsCsv: (group, token) => {
-    const q = new URLSearchParams();
-    if (group) q.set('group', group);
-    q.set('token', token);
-    return `/api/results.csv?${q}`;
-  },
+  resultsCsv: (group) => (group ? `/api/results.csv?${new URLSearchParams({ group })}` : '/api/results.csv'),
 };
+
+/** POST /api/signin: this browser signed in as the instructor (an HttpOnly cookie); the answer. */
+export function signIn(token) {
+  return call('POST', '/api/signin', { body: { token } });
+}
 
 /** WebSocket paths (see `wsUrl`). */
 export const sockets = {
   /** A live session's socket, as its trainee or (`observer`) read-only. */
   session: (id, token, { observer = false, base = '' } = {}) =>
     `${base}/ws/sessions/${enc(id)}?token=${enc(token)}${observer ? '&role=observer' : ''}`,
-  /** The replay socket of a recorded attempt. */
-  replay: (attemptId, token) => `/ws/replay/${enc(attemptId)}?token=${enc(token)}`,
+  /** The replay socket of a recorded attempt (without a token, the cookies open it). */
+  replay: (attemptId, token) => withToken(`/ws/replay/${enc(attemptId)}`, token),
 };
 
 /** Absolute WebSocket URL on this page's origin (only the path and query of the server's

@@ -64,7 +64,7 @@ const conn = new Connection({
     setExercise(h);
     settings = { ...h.settings };
     syncControls();
-    plots.setSession(h.session, conn.session?.control_token, conn.session?.base);
+    plots.setSession(h.session, conn.session?.base);
     plots.setJoints(jointNames(h));
     touch.setJoints(jointNames(h));
     status.role(h.role);

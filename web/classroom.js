@@ -104,7 +104,7 @@ export class Classroom {
   }
 
   exportLink() {
-    $('cls-export').href = api.links.resultsCsv(this.group, this.ui.token());
+    $('cls-export').href = api.links.resultsCsv(this.group);
   }
 
   async loadExercises() {
@@ -210,11 +210,10 @@ export class Classroom {
     if (!h) return;
     const list = await this.attempts({ trainee: h.trainee }, h.group);
     if (!list || this.history !== h) return;
-    const tok = this.ui.token();
     $('history').tBodies[0].innerHTML = list.map((a) => {
       const when = a.started_unix ? new Date(a.started_unix * 1000).toLocaleString() : '';
-      const replay = a.links?.replay ? api.links.attemptLink(a.links.replay, tok) : api.links.debrief(a.id, tok);
-      const csv = a.links?.csv && api.links.attemptLink(a.links.csv, tok);
+      const replay = a.links?.replay || api.links.debrief(a.id);
+      const csv = a.links?.csv;
       return `<tr data-attempt="${esc(a.id)}" data-outcome="${esc(a.outcome ?? '')}"><td>${esc(when)}</td><td>${esc(a.exercise ?? a.scenario ?? '')}</td>
         <td class="out-${esc(a.outcome ?? 'running')}">${esc(OUTCOMES[a.outcome] ?? 'running')}</td>
         <td class="num">${a.score === null || a.score === undefined ? '' : Math.round(a.score)}</td><td class="num">${f(a.sim_seconds)}</td>

@@ -59,8 +59,8 @@ function renderList() {
     const r = summary(s);
     // an ended session links its record: the newest attempts' debriefs and the CSV
     const btn = r.status === 'live' ? `<button data-open="${esc(r.id)}">${r.id === observed ? 'observing' : 'observe'}</button>`
-      : `${(s.attempts || []).slice(0, 3).map((a, i) => `<a href="${esc(api.links.debrief(a, token))}" target="_blank" rel="noopener">debrief${i ? ` ${i + 1}` : ''}</a>`).join(' ')}
-        <a href="${esc(api.links.sessionCsv(r.id, token))}" download>CSV</a>`;
+      : `${(s.attempts || []).slice(0, 3).map((a, i) => `<a href="${esc(api.links.debrief(a))}" target="_blank" rel="noopener">debrief${i ? ` ${i + 1}` : ''}</a>`).join(' ')}
+        <a href="${esc(api.links.sessionCsv(r.id))}" download>CSV</a>`;
     return `<tr data-id="${esc(r.id)}" data-status="${esc(r.status)}" class="${[r.id === observed ? 'open' : '', r.recordingFailed ? 'rec-failed' : ''].join(' ').trim()}"><td>${esc(r.id)}</td><td>${esc(r.status)}</td><td>${esc(r.label)}</td>
       <td>${esc(r.scenario)}</td><td>${esc(r.clients)}</td><td>${esc(r.t)}</td><td>${esc(r.grasp)}</td><td>${esc(r.w)}</td>
       <td class="warn">${esc(r.warn)}</td><td>${btn}</td></tr>`;
@@ -94,10 +94,24 @@ function startPolling() {
   pollTimer = setInterval(poll, POLL_MS);
 }
 
-$('token-form').addEventListener('submit', (e) => {
+/** Signs this browser in (the cookie that opens the debrief and download links, which carry
+ * no token in their URLs); false, with the reason shown, when the server refuses. */
+async function signIn() {
+  try {
+    const r = await api.signIn(token);
+    if (r.ok) return true;
+    setListStatus(r.status === 403 ? 'Wrong instructor token.' : `sign in: HTTP ${r.status}`, true);
+  } catch (err) {
+    setListStatus(`sign in: ${err.message}`, true);
+  }
+  return false;
+}
+
+$('token-form').addEventListener('submit', async (e) => {
   e.preventDefault();
   token = $('token').value.trim();
   sessionStorage.setItem(TOKEN_KEY, token);
+  if (!(await signIn())) return;
   classroom.exportLink();
   startPolling();
 });
@@ -134,7 +148,7 @@ function observe(id) {
   $('obs-title').textContent = name ? `${name}${who.group ? ` (${who.group})` : ''} · session ${id}` : `session ${id}`;
   // another replica's session: its URLs carry that replica's prefix (docs/api.md "Replicas")
   observedBase = who?.base || '';
-  $('act-csv').href = api.links.sessionCsv(id, token, observedBase);
+  $('act-csv').href = api.links.sessionCsv(id, observedBase);
   conn = new Connection({
     role: 'observer', sessionId: id, token, base: observedBase,
     onHello(h) { view.setHello(h); status.role(h.role); if (h.scenario) $('act-scenario').value = h.scenario; },
@@ -217,6 +231,11 @@ function showTab(name) {
 for (const b of document.querySelectorAll('#instr-tabs [data-tab]')) b.addEventListener('click', () => showTab(b.dataset.tab));
 showTab(new URLSearchParams(location.search).get('tab') || sessionStorage.getItem('seaarms.instructor_tab') || 'sessions');
 
-if (token) startPolling();
 const want = new URLSearchParams(location.search).get('session');
-if (want && token) observe(want);
+if (token) {
+  signIn().then((ok) => {
+    if (!ok) return;
+    startPolling();
+    if (want) observe(want);
+  });
+}

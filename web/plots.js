@@ -92,8 +92,8 @@ export class Plots {
   }
 
   /** The CSV link of session `id` (`base`: its replica's path prefix, docs/api.md). */
-  setSession(id, token, base = '') {
-    this.csv.href = links.sessionCsv(id, token, base);
+  setSession(id, base = '') {
+    this.csv.href = links.sessionCsv(id, base);
   }
 
   /** The joints' names (the hello's model, web/api.js jointNames): the actuator menu and the

@@ -1,9 +1,10 @@
-// Debrief page (/replay/{attempt}?token=…): one recorded attempt re-simulated by the server and
+// Debrief page (/replay/{attempt}): one recorded attempt re-simulated by the server and
 // streamed over the replay WebSocket (docs/api.md "Attempts and replay"), drawn with the same
 // 3D views, plots and status bar as the trainee page; a timeline with the attempt's events
 // (click a marker or the bar to seek), play/pause, speed 0.25×–8×, the current time, and the
-// attempt's assessment card. The token is the instructor's or the trainee session's control
-// token (a trainee sees its own attempts). No physics here: every frame is the server's.
+// attempt's assessment card. The browser's cookies open it — the instructor's sign-in or the
+// trainee's session cookie (a trainee sees its own attempts); a script may still pass
+// `?token=`. No physics here: every frame is the server's.
 
 import { Connection } from './connection.js';
 import { assessmentHtml } from './assessment.js';
@@ -67,7 +68,7 @@ function showAttempt(a, title) {
        <p class="card-title">${esc(title)}${a.sim_seconds ? ` — ${a.sim_seconds.toFixed(1)} s` : ''}. No assessment (not an exercise, or not finished).</p>`;
   $('rp-card').insertAdjacentHTML('beforeend', `<p class="rp-meta">Started ${esc(when)} · attempt ${esc(a.id)} · session ${esc(a.session)}</p>`);
   $('rp-card').dataset.outcome = a.outcome || '';
-  plots.setSession(a.session, token);
+  plots.setSession(a.session);
 }
 
 function renderTime() {
@@ -149,10 +150,6 @@ document.addEventListener('keydown', (e) => {
 statusLoop(view, status, () => arm);
 
 (async () => {
-  if (!token) {
-    note('This debrief link has no token: open it from the instructor page or from your completion card.');
-    return;
-  }
   try {
     attempt = await fetchAttempt();
     // just finished: its end reaches the database with the recorder's next batch
@@ -161,7 +158,8 @@ statusLoop(view, status, () => arm);
       attempt = await fetchAttempt();
     }
   } catch (e) {
-    note(`Cannot open attempt ${attemptId}: ${e.message}.`);
+    const who = /token/.test(e.message) ? ' It opens for the instructor signed in on this browser, or on the browser that ran the session.' : '';
+    note(`Cannot open attempt ${attemptId}: ${e.message}.${who}`);
     return;
   }
   if (!attempt.outcome) note('This attempt is still running: the replay shows it up to the last recorded second.');

@@ -161,7 +161,7 @@ export class TaskPanel {
       const id = sum?.attempts?.[0] ?? sum?.attempt;
       const link = this.card.querySelector('[data-act="debrief"]');
       if (id && link) {
-        link.href = api.links.debrief(id, s.control_token);
+        link.href = api.links.debrief(id);
         link.hidden = false;
       }
     } catch { /* no link: the server cannot say which attempt */ }

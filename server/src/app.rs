@@ -285,6 +285,8 @@ fn routes(state: AppState) -> Router {
             get(api::sessions::assessment),
         )
         .route("/api/results.csv", get(api::results::export))
+        .route("/api/signin", post(api::signin::sign_in))
+        .route("/api/signout", post(api::signin::sign_out))
         .route("/api/exercises", get(crate::exercises::list))
         .route("/api/exercises/{id}", get(crate::exercises::get))
         .route("/ws/sessions/{id}", get(api::session_ws::upgrade))

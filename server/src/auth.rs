@@ -4,7 +4,11 @@
 //!   as sent. Each route says where it accepts the token ([`TokenFrom`]): the REST routes of
 //!   sessions read the header (the CSV download and the assessment also the query, so a plain
 //!   link works), the attempts routes both, the WebSockets the query (browsers cannot set
-//!   headers on them).
+//!   headers on them). Without a token, the pages' cookies stand in for it (issue 29: no
+//!   token in a page's or link's URL): the instructor's, set by `POST /api/signin`
+//!   ([`INSTRUCTOR_COOKIE`], a digest of the token, not the token), and a trainee's per
+//!   session, set when the session is created ([`trainee_cookie_name`]); both `HttpOnly`,
+//!   `SameSite=Strict`.
 //! * [`Principal`]: what the token opens — the instructor (every session), the trainee of
 //!   session X (its control token; once the session has ended, the SHA-256 the records keep),
 //!   or nobody (no token, or a token that opens nothing).
@@ -100,13 +104,41 @@ pub const WRONG_TOKEN: &str = "wrong token";
 /// The 403 message of a session WebSocket without a token that opens it.
 pub const WRONG_OR_MISSING_TOKEN: &str = "wrong or missing token";
 
-/// A request's credentials: the bearer token and the `token` query parameter, as sent. A
-/// malformed query (`?token=a&token=b`) is a 400 for the routes that read the query, as their
-/// own query extractor's rejection would be, and no concern of the others.
+/// The instructor's sign-in cookie (`POST /api/signin`).
+pub const INSTRUCTOR_COOKIE: &str = "seaarms_instructor";
+/// Prefix of a trainee's session cookie (`seaarms_t_<session id>` = its control token).
+const TRAINEE_COOKIE_PREFIX: &str = "seaarms_t_";
+
+/// The instructor cookie's value for `instructor_token`: a SHA-256 digest of it (the same on
+/// every replica that shares the token; changing the token signs every page out).
+pub fn instructor_cookie_value(instructor_token: &str) -> String {
+    sha256_hex(&format!("seaarms instructor sign-in\0{instructor_token}"))
+}
+
+/// The name of session `id`'s trainee cookie.
+pub fn trainee_cookie_name(id: &str) -> String {
+    format!("{TRAINEE_COOKIE_PREFIX}{id}")
+}
+
+/// A `Set-Cookie` value: `HttpOnly`, `SameSite=Strict`, path `/`, for `max_age_s` (0 removes
+/// it); `Secure` when the server is served over https.
+pub fn set_cookie(name: &str, value: &str, max_age_s: u64, secure: bool) -> String {
+    let secure = if secure { "; Secure" } else { "" };
+    format!("{name}={value}; Max-Age={max_age_s}; Path=/; HttpOnly; SameSite=Strict{secure}")
+}
+
+/// A request's credentials: the bearer token and the `token` query parameter, as sent, and
+/// the sign-in cookies. A malformed query (`?token=a&token=b`) is a 400 for the routes that
+/// read the query, as their own query extractor's rejection would be, and no concern of the
+/// others.
 #[derive(Debug, Clone)]
 pub struct Credentials {
     bearer: Option<String>,
     query: Result<Option<String>, ApiError>,
+    /// The instructor cookie's value, as sent.
+    instructor_cookie: Option<String>,
+    /// (session id, control token) of each trainee cookie sent.
+    trainee_cookies: Vec<(String, String)>,
 }
 
 #[derive(Deserialize)]
@@ -121,9 +153,27 @@ impl<S: Send + Sync> FromRequestParts<S> for Credentials {
         let query = Query::<TokenParam>::try_from_uri(&parts.uri)
             .map(|Query(p)| p.token)
             .map_err(|e| ApiError::new(e.status(), e.body_text()));
+        let mut instructor_cookie = None;
+        let mut trainee_cookies = Vec::new();
+        let pairs = parts
+            .headers
+            .get_all(header::COOKIE)
+            .iter()
+            .filter_map(|v| v.to_str().ok())
+            .flat_map(|v| v.split(';'))
+            .filter_map(|kv| kv.trim().split_once('='));
+        for (k, v) in pairs {
+            if k == INSTRUCTOR_COOKIE {
+                instructor_cookie = Some(v.to_string());
+            } else if let Some(id) = k.strip_prefix(TRAINEE_COOKIE_PREFIX) {
+                trainee_cookies.push((id.to_string(), v.to_string()));
+            }
+        }
         Ok(Credentials {
             bearer: bearer(&parts.headers).map(str::to_string),
             query,
+            instructor_cookie,
+            trainee_cookies,
         })
     }
 }
@@ -165,6 +215,13 @@ impl Credentials {
         })
     }
 
+    /// Whether any credential came: a token where `from` says, or a sign-in cookie.
+    pub fn presented(&self, from: TokenFrom) -> Result<bool, ApiError> {
+        Ok(self.token(from)?.is_some()
+            || self.instructor_cookie.is_some()
+            || !self.trainee_cookies.is_empty())
+    }
+
     /// Who the token (read from `from`) is, for session `session` (its id and live control
     /// token) or for no session.
     pub fn principal(
@@ -174,7 +231,7 @@ impl Credentials {
         session: Option<(&str, &str)>,
     ) -> Result<Principal, ApiError> {
         let Some(token) = self.token(from)? else {
-            return Ok(Principal::Anonymous { token_given: false });
+            return Ok(self.from_cookies(state, session));
         };
         if token_eq(token, &state.instructor_token) {
             return Ok(Principal::Instructor);
@@ -187,6 +244,34 @@ impl Credentials {
         })
     }
 
+    /// Who the cookies are, when no token was presented: the signed-in instructor, else the
+    /// trainee of `session` whose cookie carries its control token.
+    fn from_cookies(&self, state: &AppState, session: Option<(&str, &str)>) -> Principal {
+        let expected = instructor_cookie_value(&state.instructor_token);
+        if self
+            .instructor_cookie
+            .as_deref()
+            .is_some_and(|c| token_eq(c, &expected))
+        {
+            return Principal::Instructor;
+        }
+        match (session, self.trainee_cookie(session.map(|s| s.0))) {
+            (Some((id, control)), Some(t)) if token_eq(t, control) => Principal::Trainee {
+                session: id.to_string(),
+            },
+            _ => Principal::Anonymous { token_given: false },
+        }
+    }
+
+    /// The control token a trainee cookie carries for session `id`.
+    fn trainee_cookie(&self, id: Option<&str>) -> Option<&str> {
+        let id = id?;
+        self.trainee_cookies
+            .iter()
+            .find(|(s, _)| s == id)
+            .map(|(_, t)| t.as_str())
+    }
+
     /// Who the token is for a session that may have ended: the instructor, or the trainee who
     /// held session `id`'s control token (checked against the SHA-256 the records keep).
     pub async fn principal_stored(
@@ -196,9 +281,16 @@ impl Credentials {
         id: &str,
     ) -> Result<Principal, ApiError> {
         let p = self.principal(state, from, None)?;
-        let (Principal::Anonymous { token_given: true }, Some(token)) = (&p, self.token(from)?)
-        else {
-            return Ok(p);
+        let token = match (&p, self.token(from)?) {
+            (Principal::Anonymous { token_given: true }, Some(token)) => token,
+            // no token: the trainee's cookie for this session, if any
+            (Principal::Anonymous { token_given: false }, None) => {
+                match self.trainee_cookie(Some(id)) {
+                    Some(t) => t,
+                    None => return Ok(p),
+                }
+            }
+            _ => return Ok(p),
         };
         let stored = state.db.session_token_sha256(id).await.map_err(db_error)?;
         Ok(match stored {

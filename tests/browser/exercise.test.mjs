@@ -84,10 +84,13 @@ test('dual-lift: start screen, task panel, handles, scripted gamepad through the
     assert.equal(await page.getAttribute('#card [data-score]', 'data-score'), String(Math.round(a.score)), 'the card shows the server\'s score');
     assert.match(card, a.passed ? /Passed/ : /Not passed/);
     for (const t of a.terms) assert.ok(card.includes(t.metric.split('_')[0]), `metric ${t.metric} on the card`);
-    // the card links the finished attempt's debrief, with this trainee's control token
+    // the card links the finished attempt's debrief with no token in its URL; this browser's
+    // session cookie opens it (issue 29 item 6)
     await page.waitForSelector('#card [data-act="debrief"]:not([hidden])', { timeout: 10000 });
     const attempt = (await (await fetch(`${url}/api/sessions/${sid}`, { headers: { authorization: `Bearer ${token}` } })).json()).attempts[0];
-    assert.equal(await page.getAttribute('#card [data-act="debrief"]', 'href'), `/replay/${attempt}?token=${token}`);
+    assert.equal(await page.getAttribute('#card [data-act="debrief"]', 'href'), `/replay/${attempt}`);
+    await page.goto(`${url}/replay/${attempt}`);
+    await until(page, () => window.__seaarms?.hello && window.__seaarms.replay.duration_s > 0, undefined, 30000);
     assert.deepEqual(b.errors, []);
   } finally {
     await b.close();

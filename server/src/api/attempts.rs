@@ -57,7 +57,7 @@ async fn authorized(
     creds: &Credentials,
     id: &str,
 ) -> Result<AttemptRow, ApiError> {
-    if creds.token(FROM)?.is_none() {
+    if !creds.presented(FROM)? {
         return Err(ApiError::forbidden(MISSING_TOKEN_OR_QUERY));
     }
     let not_found = || ApiError::not_found(format!("no attempt `{id}`"));

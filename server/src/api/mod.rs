@@ -10,4 +10,5 @@ pub mod robots;
 pub mod scenarios;
 pub mod session_ws;
 pub mod sessions;
+pub mod signin;
 pub mod wire;

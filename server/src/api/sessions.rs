@@ -226,6 +226,13 @@ pub async fn create(
             tracing::warn!(id = %session.id, "session directory: {e:#}");
         }
     }
+    // The page's debrief links need no token in their URL: this browser keeps it.
+    let cookie = crate::auth::set_cookie(
+        &crate::auth::trainee_cookie_name(&session.id),
+        &session.control_token,
+        TRAINEE_COOKIE_S,
+        crate::api::signin::secure_cookies(&state),
+    );
     let body = Created {
         id: session.id.clone(),
         control_token: session.control_token.clone(),
@@ -233,8 +240,15 @@ pub async fn create(
         replica: state.cluster.name.clone(),
         base: prefix,
     };
-    Ok((StatusCode::CREATED, Json(body)).into_response())
+    let mut resp = (StatusCode::CREATED, Json(body)).into_response();
+    if let Ok(v) = HeaderValue::from_str(&cookie) {
+        resp.headers_mut().insert(header::SET_COOKIE, v);
+    }
+    Ok(resp)
 }
+
+/// How long a trainee's session cookie lasts (s): a week, for the debriefs afterwards.
+const TRAINEE_COOKIE_S: u64 = 7 * 24 * 3600;
 
 /// 429 with `Retry-After` (whole seconds, at least 1) in the header and the body.
 fn too_many(message: String, wait: std::time::Duration) -> Response {

@@ -105,9 +105,13 @@ export async function sessionAssessment(id, token, base = '') {
   }
 }
 
-/** GET /api/sessions with the instructor token; the answer. */
-export function listSessions(token) {
-  return call('GET', '/api/sessions', { token });
+/** Ended sessions the instructor's list asks for at first, and each "older" adds. */
+export const ENDED_PAGE = 50;
+
+/** GET /api/sessions with the instructor token: every live session and the `ended` newest
+ * stored ones (the answer's `X-Next-Before` says whether there are older); the answer. */
+export function listSessions(token, ended = ENDED_PAGE) {
+  return call('GET', `/api/sessions?ended=${ended}`, { token });
 }
 
 /** POST /api/sessions/{id}/actions (an instructor's action); resolves {ok, error}. */

@@ -67,10 +67,14 @@ function renderList() {
   }).join('') || '<tr><td colspan="10">no sessions</td></tr>';
 }
 
+/** Ended sessions the list shows (the newest; "Older sessions" shows more). */
+let endedShown = api.ENDED_PAGE;
+$('more-sessions').addEventListener('click', () => { endedShown += api.ENDED_PAGE; poll(); });
+
 async function poll() {
   if (!token) return;
   try {
-    const r = await api.listSessions(token);
+    const r = await api.listSessions(token, endedShown);
     if (r.status === 401 || r.status === 403) {
       setListStatus('Wrong instructor token.', true);
       sessions = [];
@@ -80,6 +84,7 @@ async function poll() {
     if (!r.ok) { setListStatus(`GET /api/sessions: HTTP ${r.status}`, true); return; }
     const body = await r.json();
     sessions = Array.isArray(body) ? body : body.sessions || [];
+    $('more-sessions').hidden = !r.headers.get('x-next-before');
     setListStatus(`${sessions.length} session(s) · ${new Date().toLocaleTimeString()}`);
     renderList();
     classroom.render(sessions);

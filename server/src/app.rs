@@ -196,6 +196,8 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/sessions/{id}/log.csv"),
     ("get", "/api/sessions/{id}/assessment"),
     ("get", "/api/results.csv"),
+    ("post", "/api/signin"),
+    ("post", "/api/signout"),
     ("get", "/api/exercises"),
     ("get", "/api/exercises/{id}"),
     ("get", "/ws/sessions/{id}"),

@@ -231,7 +231,7 @@ impl Credentials {
         session: Option<(&str, &str)>,
     ) -> Result<Principal, ApiError> {
         let Some(token) = self.token(from)? else {
-            return Ok(self.from_cookies(state, session));
+            return Ok(self.of_cookies(state, session));
         };
         if token_eq(token, &state.instructor_token) {
             return Ok(Principal::Instructor);
@@ -246,7 +246,7 @@ impl Credentials {
 
     /// Who the cookies are, when no token was presented: the signed-in instructor, else the
     /// trainee of `session` whose cookie carries its control token.
-    fn from_cookies(&self, state: &AppState, session: Option<(&str, &str)>) -> Principal {
+    fn of_cookies(&self, state: &AppState, session: Option<(&str, &str)>) -> Principal {
         let expected = instructor_cookie_value(&state.instructor_token);
         if self
             .instructor_cookie

@@ -520,14 +520,31 @@ async fn flush_records(state: &AppState) {
 pub async fn list(
     State(state): State<AppState>,
     creds: Credentials,
-) -> Result<Json<Vec<serde_json::Value>>, ApiError> {
+    axum::extract::Query(page): axum::extract::Query<ListPage>,
+) -> Result<Response, ApiError> {
     creds.require_instructor(&state)?;
+    if let Some(b) = page.before.as_deref().filter(|b| !valid_id(b)) {
+        return Err(ApiError::bad_request(format!(
+            "`before` is not a session id: `{b}`"
+        )));
+    }
+    let limit = page.ended.unwrap_or(DEFAULT_ENDED).min(MAX_ENDED);
     flush_records(&state).await;
     let live: Vec<Arc<Session>> = state.sessions.all();
-    let stored = state.db.sessions().await.map_err(db_error)?;
+    let stored = state
+        .db
+        .sessions_page(page.before.as_deref(), limit)
+        .await
+        .map_err(db_error)?;
+    // the page was full: the next one starts after its last session
+    let next = (limit > 0 && stored.len() == limit)
+        .then(|| stored.last().map(|r| r.id.clone()))
+        .flatten();
+    let mut ids: Vec<String> = live.iter().map(|s| s.id.clone()).collect();
+    ids.extend(stored.iter().map(|r| r.id.clone()));
     let mut attempts: std::collections::HashMap<String, Vec<String>> =
         std::collections::HashMap::new();
-    for (session, attempt) in state.db.attempt_ids(None).await.map_err(db_error)? {
+    for (session, attempt) in state.db.attempt_ids_of(&ids).await.map_err(db_error)? {
         attempts.entry(session).or_default().push(attempt);
     }
     let recorder = &state.sessions.recorder;
@@ -570,7 +587,28 @@ pub async fn list(
                 value(ended_summary(r, failed, a))
             }),
     );
-    Ok(Json(out))
+    let mut resp = Json(out).into_response();
+    if let Some(v) = next.and_then(|n| HeaderValue::from_str(&n).ok()) {
+        resp.headers_mut().insert(NEXT_PAGE_HEADER, v);
+    }
+    Ok(resp)
+}
+
+/// Ended sessions a list gives by default, and at most.
+const DEFAULT_ENDED: usize = 50;
+const MAX_ENDED: usize = 500;
+/// The header naming the `before` of the next page of ended sessions (absent on the last).
+const NEXT_PAGE_HEADER: &str = "x-next-before";
+
+/// Query of `GET /api/sessions`: every live session, then a page of the stored ones, newest
+/// first.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ListPage {
+    /// How many stored sessions (default [`DEFAULT_ENDED`], at most [`MAX_ENDED`]).
+    ended: Option<usize>,
+    /// Only those older than this session (the previous page's `X-Next-Before`).
+    before: Option<String>,
 }
 
 /// `GET /api/sessions/{id}`: one session's summary (instructor, or its own trainee — also

@@ -506,6 +506,57 @@ impl Db {
         .await
     }
 
+    /// A page of stored sessions, newest first: at most `limit`, those older than session
+    /// `before` (the last of the previous page) when given.
+    pub async fn sessions_page(
+        &self,
+        before: Option<&str>,
+        limit: usize,
+    ) -> Result<Vec<SessionRecord>> {
+        let before = before.map(str::to_string);
+        let limit = i64::try_from(limit).unwrap_or(i64::MAX);
+        self.run(|pool| async move {
+            let sql = format!(
+                "SELECT {SESSION_COLUMNS} WHERE $1 IS NULL \
+                 OR created_unix < (SELECT created_unix FROM sessions WHERE id = $1) \
+                 OR (created_unix = (SELECT created_unix FROM sessions WHERE id = $1) AND id < $1) \
+                 ORDER BY created_unix DESC, id DESC LIMIT $2"
+            );
+            let rows = sqlx::query(&sql)
+                .bind(before)
+                .bind(limit)
+                .fetch_all(&pool)
+                .await?;
+            rows.iter().map(session_record).collect()
+        })
+        .await
+    }
+
+    /// Attempt ids of the sessions `ids`, newest first: (session, attempt).
+    pub async fn attempt_ids_of(&self, ids: &[String]) -> Result<Vec<(String, String)>> {
+        if ids.is_empty() {
+            return Ok(Vec::new());
+        }
+        let ids = ids.to_vec();
+        self.run(|pool| async move {
+            let marks: Vec<String> = (1..=ids.len()).map(|i| format!("${i}")).collect();
+            let sql = format!(
+                "SELECT session_id, id FROM attempts WHERE session_id IN ({}) \
+                 ORDER BY started_unix DESC, id DESC",
+                marks.join(", ")
+            );
+            let mut q = sqlx::query(&sql);
+            for id in &ids {
+                q = q.bind(id.clone());
+            }
+            let rows = q.fetch_all(&pool).await?;
+            rows.iter()
+                .map(|r| Ok((r.try_get("session_id")?, r.try_get("id")?)))
+                .collect()
+        })
+        .await
+    }
+
     /// One stored session.
     pub async fn session(&self, id: &str) -> Result<Option<SessionRecord>> {
         let id = id.to_string();

@@ -125,6 +125,11 @@ impl<W: Write> CsvOut<W> {
         self.end_row()
     }
 
+    /// The underlying writer (what the `csv` crate has flushed into it so far).
+    pub fn get_ref(&self) -> &W {
+        self.csv.get_ref()
+    }
+
     /// Flushes and returns the underlying writer.
     pub fn into_inner(self) -> io::Result<W> {
         self.csv.into_inner().map_err(|e| {

@@ -54,6 +54,21 @@ impl Binary {
         Binary { base, child }
     }
 
+    /// The server's memory from `/proc`: (resident now, peak resident), bytes.
+    pub(crate) fn memory(&self) -> (u64, u64) {
+        let status = std::fs::read_to_string(format!("/proc/{}/status", self.child.id())).unwrap();
+        let kb = |key: &str| -> u64 {
+            let line = status.lines().find(|l| l.starts_with(key)).unwrap();
+            line.split_whitespace()
+                .nth(1)
+                .unwrap()
+                .parse::<u64>()
+                .unwrap()
+                * 1024
+        };
+        (kb("VmRSS:"), kb("VmHWM:"))
+    }
+
     /// SIGTERM: a graceful stop (every session ends, records are flushed); waits up to 20 s.
     pub(crate) fn stop(mut self) {
         let pid = self.child.id().to_string();

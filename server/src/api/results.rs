@@ -3,7 +3,7 @@
 //! written by [`crate::csv_out`].
 
 use axum::extract::{Query, State};
-use axum::http::{StatusCode, header};
+use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use serde::Deserialize;
 
@@ -50,18 +50,62 @@ pub async fn export(
     creds.require_instructor(&state)?;
     let group = q.group.filter(|g| !g.is_empty());
     let exercise = q.exercise.filter(|e| !e.is_empty());
-    let rows = state
-        .db
-        .results(group.as_deref(), exercise.as_deref())
-        .await
-        .map_err(crate::db::unavailable)?;
-    let csv = table(&rows)
-        .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?;
     let name = match (&group, &exercise) {
         (Some(g), _) => file_safe(g),
         (None, Some(e)) => file_safe(e),
         (None, None) => "all".to_string(),
     };
+    // Streamed: rows come from the database a few at a time and leave in chunks, so memory
+    // stays flat however many attempts the class has (issue 29: 60k attempts took 1.2 GB).
+    let mut rows = state
+        .db
+        .results_stream(group.as_deref(), exercise.as_deref(), ROWS_IN_FLIGHT);
+    // The first row (or the end) before answering: a database that cannot be read is a 503,
+    // not a 200 cut short.
+    let mut first = match rows.recv().await {
+        Some(Err(e)) => return Err(crate::db::unavailable(e)),
+        other => other,
+    };
+    let body = async_stream(move |tx| async move {
+        let mut chunk = CsvOut::new(Vec::with_capacity(CHUNK_BYTES));
+        let _ = chunk.header(&COLUMNS[..]);
+        loop {
+            let row = match first.take() {
+                Some(row) => row,
+                None => match rows.recv().await {
+                    Some(row) => row,
+                    None => break,
+                },
+            };
+            match row {
+                Ok(a) => {
+                    if let Err(e) = row_of(&mut chunk, &a) {
+                        let _ = tx.send(Err(e)).await;
+                        return;
+                    }
+                }
+                Err(e) => {
+                    tracing::warn!("results.csv: {e:#}");
+                    let _ = tx.send(Err(std::io::Error::other(e.to_string()))).await;
+                    return;
+                }
+            }
+            if chunk.get_ref().len() >= CHUNK_BYTES {
+                let full =
+                    std::mem::replace(&mut chunk, CsvOut::new(Vec::with_capacity(CHUNK_BYTES)));
+                let sent = match full.into_inner() {
+                    Ok(bytes) => tx.send(Ok(bytes)).await.is_ok(),
+                    Err(_) => false,
+                };
+                if !sent {
+                    return; // the client went away
+                }
+            }
+        }
+        if let Ok(bytes) = chunk.into_inner() {
+            let _ = tx.send(Ok(bytes)).await;
+        }
+    });
     Ok((
         [
             (header::CONTENT_TYPE, "text/csv; charset=utf-8".to_string()),
@@ -70,9 +114,29 @@ pub async fn export(
                 format!("attachment; filename=\"seaarms-results-{name}.csv\""),
             ),
         ],
-        csv,
+        body,
     )
         .into_response())
+}
+
+/// Rows the database may have read ahead of the response.
+const ROWS_IN_FLIGHT: usize = 64;
+/// Bytes of CSV sent at once.
+const CHUNK_BYTES: usize = 32 * 1024;
+
+/// A response body fed by `fill` through a small channel (it runs as its own task and stops
+/// when the body is dropped).
+fn async_stream<F, Fut>(fill: F) -> axum::body::Body
+where
+    F: FnOnce(tokio::sync::mpsc::Sender<std::io::Result<Vec<u8>>>) -> Fut,
+    Fut: std::future::Future<Output = ()> + Send + 'static,
+{
+    let (tx, rx) = tokio::sync::mpsc::channel(2);
+    tokio::spawn(fill(tx));
+    let stream = futures_util::stream::unfold(rx, |mut rx| async move {
+        rx.recv().await.map(|item| (item, rx))
+    });
+    axum::body::Body::from_stream(stream)
 }
 
 /// A name for a file: letters, digits, `-` and `_` kept, the rest `_` (at most 40).
@@ -89,11 +153,9 @@ fn file_safe(s: &str) -> String {
         .collect()
 }
 
-/// The CSV of `rows` (header first).
-fn table(rows: &[AttemptRow]) -> std::io::Result<Vec<u8>> {
-    let mut out = CsvOut::new(Vec::new());
-    out.header(&COLUMNS[..])?;
-    for a in rows {
+/// Writes attempt `a`'s row of the export.
+fn row_of(out: &mut CsvOut<Vec<u8>>, a: &AttemptRow) -> std::io::Result<()> {
+    {
         let metric = |name: &str| {
             a.assessment
                 .as_ref()
@@ -124,9 +186,8 @@ fn table(rows: &[AttemptRow]) -> std::io::Result<Vec<u8>> {
             count(metric("overloads")),
             count(metric("drops")),
             count(metric("interventions")),
-        ])?;
+        ])
     }
-    out.into_inner()
 }
 
 /// Unix seconds as RFC 3339 UTC: `2023-11-14T22:13:20Z`, with milliseconds when not whole

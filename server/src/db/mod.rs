@@ -259,6 +259,14 @@ const ATTEMPT_COLUMNS: &str = "a.id, a.session_id, COALESCE(s.label, '') AS labe
       WHERE i.attempt_id = a.id) AS inputs_bytes \
      FROM attempts a LEFT JOIN sessions s ON s.id = a.session_id";
 
+/// [`ATTEMPT_COLUMNS`] without what the class export does not need (the initial conditions,
+/// the input bytes), in the same names for [`attempt_row`].
+const RESULT_COLUMNS: &str = "a.id, a.session_id, COALESCE(s.label, '') AS label, \
+     COALESCE(s.grp, '') AS grp, a.scenario, a.exercise, a.exercise_version, a.sim_version, \
+     a.started_unix, a.ended_unix, a.sim_seconds, a.outcome, a.score, a.assessment, \
+     'null' AS init, CAST(0 AS BIGINT) AS inputs_bytes \
+     FROM attempts a LEFT JOIN sessions s ON s.id = a.session_id";
+
 const SESSION_COLUMNS: &str = "id, label, grp, scenario, created_unix, ended_unix, end_reason, \
      sim_seconds, overloads, recording FROM sessions";
 
@@ -586,29 +594,53 @@ impl Db {
         .await
     }
 
+    /// The rows of [`Db::results`], one at a time through a channel of `capacity` rows: the
+    /// query runs on the database's runtime and stops when the receiver is dropped (a client
+    /// that went away), so a 60k-attempt export holds a few rows at once, not all (issue 29).
+    /// The rows carry no `init` (null) and no input bytes (0).
+    pub fn results_stream(
+        &self,
+        group: Option<&str>,
+        exercise: Option<&str>,
+        capacity: usize,
+    ) -> tokio::sync::mpsc::Receiver<Result<AttemptRow>> {
+        use futures_util::StreamExt;
+        let (tx, rx) = tokio::sync::mpsc::channel(capacity.max(1));
+        let (group, exercise) = (group.map(str::to_string), exercise.map(str::to_string));
+        let pool = self.inner.pool.clone();
+        self.inner.handle.spawn(async move {
+            let sql = format!(
+                "SELECT {RESULT_COLUMNS} WHERE a.exercise IS NOT NULL \
+                 AND a.outcome IN ('passed', 'failed') \
+                 AND ($1 IS NULL OR s.grp = $1) AND ($2 IS NULL OR a.exercise = $2) \
+                 ORDER BY COALESCE(s.label, ''), a.exercise, a.started_unix, a.id"
+            );
+            let mut rows = sqlx::query(&sql).bind(group).bind(exercise).fetch(&pool);
+            while let Some(r) = rows.next().await {
+                let row = r.map_err(anyhow::Error::from).and_then(|r| attempt_row(&r));
+                let failed = row.is_err();
+                if tx.send(row).await.is_err() || failed {
+                    break;
+                }
+            }
+        });
+        rx
+    }
+
     /// Finished exercise attempts (outcome `passed` or `failed`) of a group and/or an
-    /// exercise, for the class export: by trainee, exercise, then start.
+    /// exercise, for the class export: by trainee, exercise, then start (all of
+    /// [`Db::results_stream`] at once).
     pub async fn results(
         &self,
         group: Option<&str>,
         exercise: Option<&str>,
     ) -> Result<Vec<AttemptRow>> {
-        let (group, exercise) = (group.map(str::to_string), exercise.map(str::to_string));
-        self.run(|pool| async move {
-            let sql = format!(
-                "SELECT {ATTEMPT_COLUMNS} WHERE a.exercise IS NOT NULL \
-                 AND a.outcome IN ('passed', 'failed') \
-                 AND ($1 IS NULL OR s.grp = $1) AND ($2 IS NULL OR a.exercise = $2) \
-                 ORDER BY COALESCE(s.label, ''), a.exercise, a.started_unix, a.id"
-            );
-            let rows = sqlx::query(&sql)
-                .bind(group)
-                .bind(exercise)
-                .fetch_all(&pool)
-                .await?;
-            rows.iter().map(attempt_row).collect()
-        })
-        .await
+        let mut rx = self.results_stream(group, exercise, 256);
+        let mut out = Vec::new();
+        while let Some(row) = rx.recv().await {
+            out.push(row?);
+        }
+        Ok(out)
     }
 }
 

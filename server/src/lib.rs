@@ -41,6 +41,7 @@ pub mod json;
 pub mod limits;
 pub mod load;
 pub mod metrics;
+pub mod names;
 pub mod posture;
 pub mod protocol;
 pub mod replay;

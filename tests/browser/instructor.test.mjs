@@ -150,7 +150,7 @@ test('a session whose record failed shows a recording warning in the instructor 
     // The real list from the server, with one summary's `recording` set to `failed` as the server
     // reports a session whose record could not be written (docs/api.md; provoking a real write
     // failure needs a full disk).
-    await instr.context.route('**/api/sessions', async (route) => {
+    await instr.context.route(/\/api\/sessions(\?.*)?$/, async (route) => {
       const resp = await route.fetch();
       const list = await resp.json();
       for (const s of list) if (s.id === bad.id) s.recording = 'failed';
@@ -170,6 +170,43 @@ test('a session whose record failed shows a recording warning in the instructor 
     assert.notEqual(red, amber, 'the failed recording is styled apart');
     for (const s of [ok, bad]) await fetch(`${url}/api/sessions/${s.id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
   } finally {
+    await instr.close();
+  }
+});
+
+test('hostile names keep the roster\'s layout: wide glyphs, an RTL override and newlines (issue 29 item 11)', { timeout: 60000 }, async () => {
+  const url = await server();
+  const instr = await openBrowser({ viewport: { width: 1400, height: 900 } });
+  const names = ['漢'.repeat(64), '\u202Eevil\u202C.exe', 'two\nlines\r\nname'];
+  const made = [];
+  try {
+    for (const label of names) made.push(await createSession(url, { label, group: label }));
+    await instr.page.goto(`${url}${await instructorPath(url)}`);
+    await instr.page.fill('#token', INSTRUCTOR_TOKEN);
+    await instr.page.click('#token-form button');
+    const rows = made.map((s) => `#sessions tr[data-id="${s.id}"]`);
+    for (const r of rows) await instr.page.waitForSelector(r, { timeout: 10000 });
+    const right = (sel) => instr.page.$eval(sel, (e) => e.getBoundingClientRect().right);
+    for (const r of rows) {
+      const x = await right(`${r} button[data-open]`);
+      assert.ok(x <= 1400, `the observe button ends at x = ${x} in a 1400 px window`);
+    }
+    const shown = await Promise.all(rows.map((r) => instr.page.textContent(`${r} td:nth-child(3)`)));
+    assert.ok(!shown.some((t) => /[\u202A-\u202E\u2066-\u2069\n\r]/.test(t)), JSON.stringify(shown));
+    assert.equal(shown[1], 'evil.exe');
+    assert.equal(shown[2], 'two lines name');
+    // the Classroom's roster too
+    await instr.page.click('#instr-tabs [data-tab="classroom"]');
+    for (const s of made) {
+      const sel = `#roster tr[data-id="${s.id}"]`;
+      await instr.page.waitForSelector(sel, { timeout: 10000 });
+      const x = await right(`${sel} button[data-observe]`);
+      assert.ok(x <= 1400, `the roster's Observe button ends at x = ${x}`);
+    }
+    await instr.page.screenshot({ path: join(ARTIFACTS, 'hostile-names.png') });
+    assert.deepEqual(instr.errors, []);
+  } finally {
+    for (const s of made) await fetch(`${url}/api/sessions/${s.id}`, { method: 'DELETE', headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
     await instr.close();
   }
 });

@@ -83,7 +83,7 @@ pub struct CreateRequest {
     /// The trainee's display name (same as `label`).
     #[serde(default)]
     pub trainee: Option<String>,
-    /// The trainee's class or group (at most 64 characters are kept, like the name).
+    /// The trainee's class or group (cleaned like the name: [`crate::names::display_name`]).
     #[serde(default)]
     pub group: Option<String>,
     /// The class join code, when the server requires one (or send `X-Join-Code`).

@@ -759,8 +759,8 @@ impl SessionManager {
         live.wait_for_ready(wait_for_ready);
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);
-        let label = label.unwrap_or_default().chars().take(64).collect();
-        let group = group.unwrap_or_default().chars().take(64).collect();
+        let label = crate::names::display_name(&label.unwrap_or_default());
+        let group = crate::names::display_name(&group.unwrap_or_default());
         let session = Arc::new(Session {
             id,
             label,

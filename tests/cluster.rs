@@ -373,6 +373,9 @@ async fn three_replicas_behind_haproxy() {
         async move {
             let r = http.get(path).bearer_auth(TEACHER).send().await.unwrap();
             assert_eq!(r.status().as_u16(), 421);
+            // with the security headers every other answer carries (issue 29 item 14)
+            assert!(r.headers().contains_key("content-security-policy"));
+            assert!(r.headers().contains_key("x-content-type-options"));
             r.json::<Value>().await.unwrap()
         }
     };

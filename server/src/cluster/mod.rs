@@ -153,8 +153,14 @@ pub async fn route_prefix(
         return next.run(req).await;
     };
     let (name, tail) = rest.split_once('/').unwrap_or((rest, ""));
+    // Answered before the routes' guard: its headers are added here (issue 29 item 14).
+    let refused = |e: ApiError| {
+        let mut resp = e.into_response();
+        crate::security::add_security_headers(resp.headers_mut());
+        resp
+    };
     if name != cluster.name {
-        return misdirected(name, &cluster.name).into_response();
+        return refused(misdirected(name, &cluster.name));
     }
     let path_and_query = match req.uri().query() {
         Some(q) => format!("/{tail}?{q}"),
@@ -162,7 +168,7 @@ pub async fn route_prefix(
     };
     match path_and_query.parse::<Uri>() {
         Ok(uri) => *req.uri_mut() = uri,
-        Err(_) => return ApiError::bad_request("malformed path").into_response(),
+        Err(_) => return refused(ApiError::bad_request("malformed path")),
     }
     next.run(req).await
 }

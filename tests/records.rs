@@ -1022,3 +1022,106 @@ async fn the_class_export_of_sixty_thousand_attempts_streams_in_bounded_memory()
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// `recording` of session `id` as the instructor's summary gives it.
+async fn recording_of(base: &str, id: &str) -> String {
+    get_json(&format!("{base}/api/sessions/{id}")).await["recording"]
+        .as_str()
+        .unwrap_or_default()
+        .to_string()
+}
+
+/// Polls `recording_of` until it is `want`, up to `limit`; the time it took.
+async fn recording_becomes(base: &str, id: &str, want: &str, limit: Duration) -> Duration {
+    let t0 = std::time::Instant::now();
+    while recording_of(base, id).await != want {
+        assert!(
+            t0.elapsed() < limit,
+            "session {id}: recording still not `{want}` after {limit:?}"
+        );
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    t0.elapsed()
+}
+
+/// Issue 29 items 4 and 8: "Database files deleted or made unwritable while running: within
+/// 5 s the live sessions say `recording: failed`, `/metrics` counts it, new sessions get 503;
+/// the shm case leaves the server running." Before: deleting the files left `recording: ok`
+/// and lost every record at the next start; an unwritable `-shm` killed the server (SIGBUS).
+/// Unwritable is made as root can feel it: a directory where SQLite's journal must go.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_database_that_cannot_be_written_fails_the_recordings_and_refuses_sessions() {
+    let counted = |metrics: &str| {
+        metrics
+            .lines()
+            .find_map(|l| l.strip_prefix("seaarms_records_database_failures_total "))
+            .and_then(|v| v.trim().parse::<u64>().ok())
+            .unwrap_or(0)
+    };
+    // Deleted while running.
+    let dir = temp_dir("dbgone");
+    let s = Binary::start(&dir, &[]);
+    let (st, c) = create_at(&s.base, json!({})).await;
+    assert_eq!(st, 201, "{c}");
+    let id = c["id"].as_str().unwrap().to_string();
+    assert_eq!(recording_of(&s.base, &id).await, "ok");
+    for f in ["seaarms.db", "seaarms.db-journal"] {
+        let _ = std::fs::remove_file(dir.join(f));
+    }
+    let took = recording_becomes(&s.base, &id, "failed", Duration::from_secs(5)).await;
+    println!("database deleted: recording failed after {took:?}");
+    assert!(counted(&get_text(&format!("{}/metrics", s.base)).await) >= 1);
+    let (st, v) = create_at(&s.base, json!({})).await;
+    assert_eq!(st, 503, "{v}");
+    assert!(v["error"].as_str().unwrap().contains("database"), "{v}");
+    drop(s);
+    let _ = std::fs::remove_dir_all(&dir);
+
+    // Unwritable while running, then writable again.
+    let dir = temp_dir("dbro");
+    let s = Binary::start(&dir, &[]);
+    let (_, c) = create_at(&s.base, json!({})).await;
+    let id = c["id"].as_str().unwrap().to_string();
+    let journal = dir.join("seaarms.db-journal");
+    std::fs::create_dir(&journal).unwrap();
+    let took = recording_becomes(&s.base, &id, "failed", Duration::from_secs(5)).await;
+    println!("database unwritable: recording failed after {took:?}");
+    assert_eq!(create_at(&s.base, json!({})).await.0, 503);
+    std::fs::remove_dir(&journal).unwrap();
+    let t0 = std::time::Instant::now();
+    loop {
+        // as the instructor: exempt from the per-client creation rate
+        let st = reqwest::Client::new()
+            .post(format!("{}/api/sessions", s.base))
+            .bearer_auth(TEACHER)
+            .json(&json!({}))
+            .send()
+            .await
+            .unwrap()
+            .status()
+            .as_u16();
+        if st == 201 {
+            break;
+        }
+        assert!(t0.elapsed() < Duration::from_secs(6), "still refused: {st}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    drop(s);
+    let _ = std::fs::remove_dir_all(&dir);
+
+    // A garbage, unreadable shared-memory file (the WAL index) changes nothing: the database
+    // keeps a rollback journal and maps no file.
+    let dir = temp_dir("dbshm");
+    let s = Binary::start(&dir, &[]);
+    let (_, c) = create_at(&s.base, json!({})).await;
+    let id = c["id"].as_str().unwrap().to_string();
+    for f in ["seaarms.db-shm", "seaarms.db-wal"] {
+        std::fs::write(dir.join(f), vec![0xA5u8; 7]).unwrap();
+    }
+    tokio::time::sleep(Duration::from_secs(4)).await;
+    assert_eq!(get_text(&format!("{}/healthz", s.base)).await.trim(), "ok");
+    assert_eq!(recording_of(&s.base, &id).await, "ok");
+    assert_eq!(create_at(&s.base, json!({})).await.0, 201);
+    drop(s);
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -32,6 +32,8 @@ pub struct Metrics {
     /// Failed writes of session records: CSV rows or database batches (disk full, I/O
     /// errors, database unreachable).
     pub record_write_errors: AtomicU64,
+    /// Times the records database was found not writable (a failed check or commit).
+    pub records_database_failures: AtomicU64,
     /// Session records deleted by retention.
     pub records_pruned: AtomicU64,
     /// Free bytes on the data disk at the last check.
@@ -52,7 +54,7 @@ impl Metrics {
     /// The Prometheus text exposition, with the info gauge naming this replica.
     pub fn render(&self, replica: &str) -> String {
         let mut out = String::new();
-        let rows: [(&str, &str, &str, &AtomicU64); 19] = [
+        let rows: [(&str, &str, &str, &AtomicU64); 20] = [
             (
                 "seaarms_http_requests_total",
                 "counter",
@@ -124,6 +126,12 @@ impl Metrics {
                 "counter",
                 "Failed writes of session records or the session index",
                 &self.record_write_errors,
+            ),
+            (
+                "seaarms_records_database_failures_total",
+                "counter",
+                "Times the records database was found not writable (a failed check or commit)",
+                &self.records_database_failures,
             ),
             (
                 "seaarms_records_pruned_total",

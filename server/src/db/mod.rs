@@ -139,8 +139,30 @@ struct Inner {
     pool: AnyPool,
     handle: tokio::runtime::Handle,
     backend: Backend,
+    /// SQLite: the file, and its identity (device, inode) when opened.
+    file: Option<(PathBuf, FileId)>,
     // Last: dropped after the pool.
     _runtime: OwnRuntime,
+}
+
+/// A file's identity: (device, inode) on Unix; its path elsewhere.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FileId(u64, u64);
+
+impl FileId {
+    /// The identity of the file at `path`, if there is one.
+    fn of(path: &std::path::Path) -> Option<FileId> {
+        let m = std::fs::metadata(path).ok()?;
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::MetadataExt;
+            Some(FileId(m.dev(), m.ino()))
+        }
+        #[cfg(not(unix))]
+        {
+            Some(FileId(m.len().min(1), 0))
+        }
+    }
 }
 
 /// The records database (cheap to clone).
@@ -314,9 +336,11 @@ fn session_record(r: &AnyRow) -> Result<SessionRecord> {
 
 impl Db {
     /// Opens (SQLite: creates the file and its folder) the database at `url` and applies the
-    /// migrations. SQLite runs in WAL mode with `synchronous=NORMAL`: a commit is atomic and
-    /// survives the process being killed (a power cut may lose the last commits). Blocking:
-    /// call at start-up.
+    /// migrations. SQLite runs with a rollback journal (`journal_mode=DELETE`) and
+    /// `synchronous=FULL`: a commit is atomic and survives the process being killed and a
+    /// power cut. Not WAL: its shared-memory index is a memory-mapped file, and an unwritable
+    /// or vanished `-shm` file killed the process with SIGBUS (issue 29); one commit a second
+    /// needs none of WAL's concurrency. Blocking: call at start-up.
     pub fn open(url: &str) -> Result<Db> {
         sqlx::any::install_default_drivers();
         let backend = Backend::of(url)?;
@@ -348,8 +372,9 @@ impl Db {
                 if backend == Backend::Sqlite {
                     options = options.after_connect(|conn, _| {
                         Box::pin(async move {
-                            conn.execute("PRAGMA journal_mode = WAL").await?;
-                            conn.execute("PRAGMA synchronous = NORMAL").await?;
+                            conn.execute("PRAGMA journal_mode = DELETE").await?;
+                            conn.execute("PRAGMA synchronous = FULL").await?;
+                            conn.execute("PRAGMA mmap_size = 0").await?;
                             Ok(())
                         })
                     });
@@ -367,11 +392,15 @@ impl Db {
         };
         let pool = blocking(&handle, connect)?;
         tracing::info!(url = %redact(url), "records database open");
+        let file = sqlite_file(url)
+            .filter(|_| backend == Backend::Sqlite)
+            .and_then(|f| FileId::of(&f).map(|id| (f, id)));
         Ok(Db {
             inner: Arc::new(Inner {
                 pool,
                 handle,
                 backend,
+                file,
                 _runtime: runtime,
             }),
         })
@@ -380,6 +409,41 @@ impl Db {
     /// SQLite or PostgreSQL.
     pub fn backend(&self) -> Backend {
         self.inner.backend
+    }
+
+    /// Whether the database can be written now (the recorder asks every
+    /// `sessions::record::HEALTH_INTERVAL`): SQLite's file is still there and still the file
+    /// it opened (deleted or replaced, the writes would go to an unlinked file and be lost at
+    /// the next start), and a test write commits (`PRAGMA user_version`, written back
+    /// unchanged, goes through the journal); PostgreSQL answers a query.
+    pub async fn probe(&self) -> Result<()> {
+        if let Some((path, id)) = &self.inner.file {
+            match FileId::of(path) {
+                Some(now) if now == *id => {}
+                Some(_) => return Err(anyhow!("{} was replaced", path.display())),
+                None => return Err(anyhow!("{} is gone", path.display())),
+            }
+        }
+        let sqlite = self.inner.backend == Backend::Sqlite;
+        self.run(move |pool| async move {
+            if sqlite {
+                let mut tx = pool.begin().await?;
+                let v: i64 = sqlx::query_scalar("PRAGMA user_version")
+                    .fetch_one(&mut *tx)
+                    .await?;
+                sqlx::query(&format!("PRAGMA user_version = {}", v ^ 1))
+                    .execute(&mut *tx)
+                    .await?;
+                sqlx::query(&format!("PRAGMA user_version = {v}"))
+                    .execute(&mut *tx)
+                    .await?;
+                tx.commit().await?;
+            } else {
+                sqlx::query("SELECT 1").execute(&pool).await?;
+            }
+            Ok(())
+        })
+        .await
     }
 
     /// Runs `fut` to completion on the database's runtime from synchronous code (the

@@ -145,6 +145,15 @@ impl RecordSender {
 /// Ids whose recording failed in this run, with the first error (shared with handlers).
 type FailedSet = Arc<Mutex<HashMap<String, String>>>;
 
+/// Why the records database cannot be written now, or `None` while it can (shared with the
+/// handlers: new sessions are refused while it is down).
+type DbDown = Arc<Mutex<Option<String>>>;
+
+/// How often the recorder checks that the records database can be written
+/// ([`crate::db::Db::probe`]): a failure shows on every live session within this plus a
+/// flush (issue 29: "within 5 s").
+pub const HEALTH_INTERVAL: Duration = Duration::from_secs(2);
+
 /// The recorder: its thread and the data directory.
 pub struct Recorder {
     sender: RecordSender,
@@ -152,6 +161,7 @@ pub struct Recorder {
     dir: PathBuf,
     config: RecordConfig,
     failed: FailedSet,
+    db_down: DbDown,
     metrics: Arc<Metrics>,
     thread: Mutex<Option<JoinHandle<()>>>,
 }
@@ -191,8 +201,15 @@ impl Recorder {
     ) -> anyhow::Result<Recorder> {
         std::fs::create_dir_all(dir.join("sessions"))?;
         let failed: FailedSet = Arc::default();
-        let mut state =
-            RecorderState::new(dir, db.clone(), metrics.clone(), config, failed.clone());
+        let db_down: DbDown = Arc::default();
+        let mut state = RecorderState::new(
+            dir,
+            db.clone(),
+            metrics.clone(),
+            config,
+            failed.clone(),
+            db_down.clone(),
+        );
         let (tx, rx) = sync_channel(QUEUE_CAPACITY);
         let (ready_tx, ready_rx) = sync_channel(1);
         let thread = std::thread::Builder::new()
@@ -219,6 +236,7 @@ impl Recorder {
             dir: dir.to_path_buf(),
             config,
             failed,
+            db_down,
             metrics,
             thread: Mutex::new(Some(thread)),
         })
@@ -242,6 +260,23 @@ impl Recorder {
     /// Whether a new session can be recorded now: the data disk has at least the configured
     /// free space and a file can be created in the records folder. Blocking (file system).
     pub fn admit(&self) -> Result<(), String> {
+        let down = self
+            .db_down
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .is_some();
+        if down {
+            // Asked again now, not at the recorder's next check: back, it admits at once.
+            match self.db.block_on(self.db.probe()) {
+                Ok(()) => *self.db_down.lock().unwrap_or_else(|e| e.into_inner()) = None,
+                Err(why) => {
+                    return Err(format!(
+                        "the records database cannot be written ({why:#}); no new session is \
+                         started until it can"
+                    ));
+                }
+            }
+        }
         let sessions = self.dir.join("sessions");
         if let Some(free) = free_disk_bytes(&self.dir) {
             self.metrics
@@ -451,6 +486,8 @@ struct RecorderState {
     metrics: Arc<Metrics>,
     config: RecordConfig,
     failed: FailedSet,
+    db_down: DbDown,
+    last_probe: Instant,
     live: HashMap<String, SessionRecording>,
     /// Database writes since the last commit, in arrival order.
     writes: Vec<DbWrite>,
@@ -466,6 +503,7 @@ impl RecorderState {
         metrics: Arc<Metrics>,
         config: RecordConfig,
         failed: FailedSet,
+        db_down: DbDown,
     ) -> RecorderState {
         RecorderState {
             dir: dir.to_path_buf(),
@@ -473,6 +511,8 @@ impl RecorderState {
             metrics,
             config,
             failed,
+            db_down,
+            last_probe: Instant::now(),
             live: HashMap::new(),
             writes: Vec::new(),
             next_piece: HashMap::new(),
@@ -515,6 +555,55 @@ impl RecorderState {
             .unwrap_or_else(|e| e.into_inner())
             .entry(id.to_string())
             .or_insert_with(|| format!("{what}: {e}"));
+    }
+
+    /// The records database cannot be written (`why`): it is marked down (new sessions are
+    /// refused), counted, and every live session's record is marked failed — what it sent
+    /// since may never reach the database (a deleted file takes it all).
+    fn database_down(&mut self, why: &anyhow::Error) {
+        self.metrics
+            .records_database_failures
+            .fetch_add(1, Ordering::Relaxed);
+        let was_up = self
+            .db_down
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .replace(format!("{why:#}"))
+            .is_none();
+        if was_up {
+            tracing::error!("the records database cannot be written: {why:#}");
+        }
+        let ids: Vec<String> = self
+            .live
+            .iter()
+            .filter(|(_, l)| !l.failed)
+            .map(|(id, _)| id.clone())
+            .collect();
+        for id in ids {
+            if let Some(l) = self.live.get_mut(&id) {
+                l.failed = true;
+            }
+            self.mark_failed(&id, "records database", why);
+        }
+    }
+
+    /// Checks the records database ([`Db::probe`]); marks it down or back up.
+    fn check_database(&mut self) {
+        self.last_probe = Instant::now();
+        match self.db.block_on(self.db.probe()) {
+            Ok(()) => {
+                let was_down = self
+                    .db_down
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .take()
+                    .is_some();
+                if was_down {
+                    tracing::info!("the records database can be written again");
+                }
+            }
+            Err(e) => self.database_down(&e),
+        }
     }
 
     fn dropped(&self, n: u64) {
@@ -563,6 +652,7 @@ impl RecorderState {
                     pending = self.writes.len(),
                     "records database write failed (kept for retry): {e:#}"
                 );
+                self.database_down(&e);
                 if self.writes.len() > MAX_PENDING_WRITES {
                     let lost = std::mem::take(&mut self.writes);
                     self.dropped(lost.len() as u64);
@@ -744,6 +834,9 @@ impl RecorderState {
             if last_flush.elapsed() >= FLUSH_INTERVAL {
                 self.flush_all();
                 last_flush = Instant::now();
+            }
+            if self.last_probe.elapsed() >= HEALTH_INTERVAL {
+                self.check_database();
             }
             if self.last_maintenance.elapsed() >= self.config.retention_interval {
                 self.maintain();

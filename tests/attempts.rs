@@ -322,8 +322,89 @@ async fn an_attempt_of_another_simulator_version_says_it_cannot_be_replayed() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn the_replay_socket_has_the_session_sockets_message_rate_limit() {
     let s = start_with(temp_dir("replay-rate"), |c| c.max_messages_per_second = 5).await;
-    let (id, token) = new_session(&s).await;
-    let mut ws = trainee(&s, &id, &token).await;
+    let (attempt, token) = ended_attempt(&s).await;
+    let url = format!(
+        "{}/ws/replay/{attempt}?token={token}",
+        s.base.replace("http://", "ws://")
+    );
+    let (mut rs, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
+    next_of(&mut rs, "hello", Duration::from_secs(10)).await;
+    next_of(&mut rs, "replay", Duration::from_secs(10)).await;
+    for _ in 0..40 {
+        send(&mut rs, json!({"type": "pause"})).await;
+    }
+    let e = next_of(&mut rs, "error", Duration::from_secs(10)).await;
+    let message = e["message"].as_str().unwrap();
+    assert!(
+        message.contains("too many messages: at most 5 per second"),
+        "{message}"
+    );
+    // The bucket refills at 5 a second: after 1.5 s a seek is answered.
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    send(&mut rs, json!({"type": "seek", "t": 0.05})).await;
+    let f = next_of(&mut rs, "state", Duration::from_secs(10)).await;
+    assert!((f["t"].as_f64().unwrap() - 0.05).abs() < 1e-9, "{}", f["t"]);
+    s.stop().await;
+}
+
+/// Issue 29 item 2: "one trainee can take every replay slot" (32 sockets on their own
+/// attempt, never read: the instructor's 33rd got 503). A trainee's token holds at most
+/// `REPLAYS_PER_TRAINEE` replay sockets (then 429) and never the instructor's reserve; the
+/// instructor still opens one; a closed socket gives its slot back.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn one_trainee_cannot_take_every_replay_slot() {
+    use seaarms::api::attempts::REPLAYS_PER_TRAINEE;
+    let s = start_with(temp_dir("replay-caps"), |_| {}).await;
+    let (attempt, token) = ended_attempt(&s).await;
+    let ws = |tok: &str| {
+        format!(
+            "{}/ws/replay/{attempt}?token={tok}",
+            s.base.replace("http://", "ws://")
+        )
+    };
+    let open = |url: String| async move {
+        match tokio_tungstenite::connect_async(&url).await {
+            Ok((mut rs, _)) => {
+                next_of(&mut rs, "hello", Duration::from_secs(10)).await;
+                Ok(rs)
+            }
+            Err(tokio_tungstenite::tungstenite::Error::Http(r)) => Err(r.status().as_u16()),
+            Err(e) => panic!("{e}"),
+        }
+    };
+    let mut mine = Vec::new();
+    for _ in 0..REPLAYS_PER_TRAINEE {
+        mine.push(open(ws(&token)).await.expect("within the trainee's share"));
+    }
+    assert_eq!(
+        open(ws(&token)).await.err(),
+        Some(429),
+        "one more than the share"
+    );
+    let instructor = open(ws(TEACHER)).await;
+    assert!(instructor.is_ok(), "the instructor opens a replay");
+    drop(mine.pop());
+    let mut again = None;
+    for _ in 0..50 {
+        if let Ok(rs) = open(ws(&token)).await {
+            again = Some(rs);
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    }
+    assert!(again.is_some(), "a closed socket gives its slot back");
+    // The REST seek: one at a time per trainee, on the compute pool.
+    let url = format!("{}/api/attempts/{attempt}/replay?t=0.5", s.base);
+    let (st, v) = get_with(&url, &token).await;
+    assert_eq!(st, 200, "{v}");
+    s.stop().await;
+}
+
+/// A finished attempt of a new session (driven briefly, then ended by its trainee); its id
+/// and the session's control token.
+async fn ended_attempt(s: &common::Server) -> (String, String) {
+    let (id, token) = new_session(s).await;
+    let mut ws = trainee(s, &id, &token).await;
     let mut seq = 0;
     drive(&mut ws, &mut seq, 5, 0.0).await;
     let r = reqwest::Client::new()
@@ -347,26 +428,5 @@ async fn the_replay_socket_has_the_session_sockets_message_rate_limit() {
         tokio::time::sleep(Duration::from_millis(200)).await;
     }
     let attempt = attempt.expect("the attempt is recorded");
-    let url = format!(
-        "{}/ws/replay/{attempt}?token={token}",
-        s.base.replace("http://", "ws://")
-    );
-    let (mut rs, _) = tokio_tungstenite::connect_async(&url).await.unwrap();
-    next_of(&mut rs, "hello", Duration::from_secs(10)).await;
-    next_of(&mut rs, "replay", Duration::from_secs(10)).await;
-    for _ in 0..40 {
-        send(&mut rs, json!({"type": "pause"})).await;
-    }
-    let e = next_of(&mut rs, "error", Duration::from_secs(10)).await;
-    let message = e["message"].as_str().unwrap();
-    assert!(
-        message.contains("too many messages: at most 5 per second"),
-        "{message}"
-    );
-    // The bucket refills at 5 a second: after 1.5 s a seek is answered.
-    tokio::time::sleep(Duration::from_millis(1500)).await;
-    send(&mut rs, json!({"type": "seek", "t": 0.05})).await;
-    let f = next_of(&mut rs, "state", Duration::from_secs(10)).await;
-    assert!((f["t"].as_f64().unwrap() - 0.05).abs() < 1e-9, "{}", f["t"]);
-    s.stop().await;
+    (attempt, token)
 }

@@ -40,7 +40,57 @@ pub const SPEED_RANGE: (f64, f64) = (0.25, 8.0);
 /// Most attempts one listing returns.
 pub const MAX_LIST: usize = 1000;
 
+/// Replay sockets kept for the instructor: a trainee's token never takes the last ones.
+pub const INSTRUCTOR_RESERVE: usize = 4;
+/// Replay sockets one trainee (one session's token) may hold at once.
+pub const REPLAYS_PER_TRAINEE: usize = 2;
+/// A replay socket with no message from its client for this long while paused is closed.
+pub const REPLAY_IDLE: Duration = Duration::from_secs(600);
+
 static REPLAY_SLOTS: LazyLock<Semaphore> = LazyLock::new(|| Semaphore::new(MAX_REPLAYS));
+
+/// Who holds replay sockets and re-simulations (by principal: `instructor` or the session id
+/// of a trainee's token), so one trainee cannot take every slot (issue 29).
+static HOLDERS: LazyLock<std::sync::Mutex<std::collections::HashMap<String, usize>>> =
+    LazyLock::new(Default::default);
+
+/// One principal's hold on a replay socket or a seek; released when dropped.
+struct Held(String);
+
+impl Drop for Held {
+    fn drop(&mut self) {
+        let mut h = HOLDERS.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(n) = h.get_mut(&self.0) {
+            *n -= 1;
+            if *n == 0 {
+                h.remove(&self.0);
+            }
+        }
+    }
+}
+
+/// Takes one of `key`'s at most `max` holds (429 beyond).
+fn hold(key: &str, max: usize, what: &str) -> Result<Held, ApiError> {
+    let mut h = HOLDERS.lock().unwrap_or_else(|e| e.into_inner());
+    let n = h.entry(key.to_string()).or_insert(0);
+    if *n >= max {
+        return Err(ApiError::new(
+            StatusCode::TOO_MANY_REQUESTS,
+            format!("at most {max} {what} at once per trainee; close one first"),
+        ));
+    }
+    *n += 1;
+    Ok(Held(key.to_string()))
+}
+
+/// The principal key of `creds` for attempt `row` (`instructor`, or `trainee:<session>`).
+fn holder_key(state: &AppState, creds: &Credentials, row: &AttemptRow) -> Result<String, ApiError> {
+    Ok(if is_instructor(state, creds)? {
+        "instructor".to_string()
+    } else {
+        format!("trainee:{}", row.session)
+    })
+}
 
 /// The attempts routes read the token from the header, else the query.
 const FROM: TokenFrom = TokenFrom::BearerOrQuery;
@@ -269,14 +319,33 @@ pub async fn replay_at(
     }
     let row = authorized(&state, &creds, &id).await?;
     check_open(&state, &creds, &row)?;
+    let key = holder_key(&state, &creds, &row)?;
+    // One re-simulation at a time per trainee; the instructor's are not limited here.
+    let _held = if key == "instructor" {
+        None
+    } else {
+        Some(hold(&format!("{key}:seek"), 1, "replay seeks")?)
+    };
     let mut replay = load(&state, &row).await?;
-    let json = tokio::task::spawn_blocking(move || {
-        replay.seek(t)?;
-        Ok::<_, ReplayError>(state_text(&mut replay))
-    })
-    .await
-    .map_err(|_| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, "replay failed"))?
-    .map_err(|e| ApiError::new(StatusCode::CONFLICT, e.to_string()))?;
+    // On the compute pool: its low priority keeps the live sessions' frames on time, its
+    // queue bounds the load (503), its deadline the time (504), and a client that goes away
+    // cancels the seek within a simulated second.
+    let json = state
+        .compute
+        .run(move |cancel| {
+            replay
+                .seek_checked(t, &|| cancel.check().is_ok())
+                .map_err(|e| match e {
+                    ReplayError::Cancelled => cancel
+                        .check()
+                        .err()
+                        .unwrap_or(crate::compute::ComputeError::Failed),
+                    e => ApiError::new(StatusCode::CONFLICT, e.to_string()).into(),
+                })?;
+            Ok(state_text(&mut replay))
+        })
+        .await
+        .map_err(|e| e.api_error())?;
     Ok((
         [(header::CONTENT_TYPE, "application/json")],
         json.to_string(),
@@ -300,6 +369,23 @@ pub async fn replay_ws(
 ) -> Result<Response, ApiError> {
     let row = authorized(&state, &creds, &id).await?;
     check_open(&state, &creds, &row)?;
+    let key = holder_key(&state, &creds, &row)?;
+    let instructor = key == "instructor";
+    // A trainee's token leaves the last INSTRUCTOR_RESERVE sockets to the instructor.
+    if !instructor && REPLAY_SLOTS.available_permits() <= INSTRUCTOR_RESERVE {
+        return Err(ApiError::new(
+            StatusCode::SERVICE_UNAVAILABLE,
+            format!(
+                "{} replays are open; try again shortly",
+                MAX_REPLAYS - INSTRUCTOR_RESERVE
+            ),
+        ));
+    }
+    let held = if instructor {
+        None
+    } else {
+        Some(hold(&key, REPLAYS_PER_TRAINEE, "replays")?)
+    };
     let permit = REPLAY_SLOTS.try_acquire().map_err(|_| {
         ApiError::new(
             StatusCode::SERVICE_UNAVAILABLE,
@@ -314,6 +400,7 @@ pub async fn replay_ws(
         .max_message_size(MAX_CLIENT_MESSAGE_BYTES)
         .on_upgrade(move |socket| async move {
             let _permit = permit;
+            let _held = held;
             serve_replay(socket, replay, hello, frame_hz, per_second).await;
         }))
 }
@@ -394,10 +481,22 @@ async fn serve_replay(
     let mut rate = RateLimit::new(per_second);
     let mut tick = tokio::time::interval(interval);
     tick.set_missed_tick_behavior(tokio::time::MissedTickBehavior::Delay);
+    let idle = tokio::time::sleep(REPLAY_IDLE);
+    tokio::pin!(idle);
     loop {
         let mut out: Vec<Utf8Bytes> = Vec::new();
         tokio::select! {
+            // Paused and silent for REPLAY_IDLE: the slot goes back (a forgotten tab).
+            () = &mut idle, if !pb.playing => {
+                let _ = tx.send(Message::Text(error_text(format!(
+                    "closed after {} min without a message while paused",
+                    REPLAY_IDLE.as_secs() / 60
+                )))).await;
+                let _ = tx.send(Message::Close(None)).await;
+                return;
+            }
             msg = rx.next() => {
+                idle.as_mut().reset(tokio::time::Instant::now() + REPLAY_IDLE);
                 let text = match msg {
                     Some(Ok(Message::Text(t))) => t,
                     Some(Ok(Message::Close(_))) | None | Some(Err(_)) => return,
@@ -447,6 +546,8 @@ async fn serve_replay(
                 }
             }
             _ = tick.tick(), if pb.playing => {
+                // playing counts as use: the idle time runs from when it stops
+                idle.as_mut().reset(tokio::time::Instant::now() + REPLAY_IDLE);
                 let (wall, t0) = *pb
                     .anchor
                     .get_or_insert((std::time::Instant::now(), pb.replay.time_s()));

@@ -41,6 +41,9 @@ pub enum ReplayError {
     /// The record is unreadable.
     #[error("the attempt's record cannot be read: {0}")]
     Record(String),
+    /// The seek was given up (its request went away or ran out of time).
+    #[error("the seek was cancelled")]
+    Cancelled,
 }
 
 /// Whether an attempt stamped `sim_version` can be replayed here.
@@ -140,6 +143,16 @@ impl Replay {
     /// Moves to `step` (clamped to the length): forward by stepping, backward by starting
     /// again from the initial conditions.
     pub fn seek_step(&mut self, step: u64) -> Result<(), ReplayError> {
+        self.seek_step_checked(step, &|| true)
+    }
+
+    /// [`Replay::seek_step`], asking `keep_going` every simulated second
+    /// ([`ReplayError::Cancelled`] when it says no: the seek stops where it is).
+    pub fn seek_step_checked(
+        &mut self,
+        step: u64,
+        keep_going: &dyn Fn() -> bool,
+    ) -> Result<(), ReplayError> {
         let step = step.min(self.duration_steps);
         if step < self.live.sim().steps() {
             self.live = Self::start(&self.models, &self.init)?;
@@ -147,6 +160,9 @@ impl Replay {
         }
         while self.live.sim().steps() < step {
             let k = self.live.sim().steps();
+            if k % STEPS_PER_S as u64 == 0 && !keep_going() {
+                return Err(ReplayError::Cancelled);
+            }
             while let Some(e) = self.entries.get(self.next).filter(|e| e.k <= k) {
                 match &e.what {
                     Logged::Command(command) => {
@@ -165,8 +181,17 @@ impl Replay {
 
     /// Moves to time `t` (s), to the nearest step.
     pub fn seek(&mut self, t: f64) -> Result<(), ReplayError> {
+        self.seek_checked(t, &|| true)
+    }
+
+    /// [`Replay::seek`], cancellable ([`Replay::seek_step_checked`]).
+    pub fn seek_checked(
+        &mut self,
+        t: f64,
+        keep_going: &dyn Fn() -> bool,
+    ) -> Result<(), ReplayError> {
         let t = if t.is_finite() { t.max(0.0) } else { 0.0 };
-        self.seek_step((t * STEPS_PER_S).round() as u64)
+        self.seek_step_checked((t * STEPS_PER_S).round() as u64, keep_going)
     }
 
     /// The state frame now (the live session's frame format).

@@ -8,7 +8,7 @@ import { StartScreen } from './start.js';
 import { TaskPanel } from './task.js';
 import { mountViews, followVisibility } from './viewcontrols.js';
 import { $, Banner, statusLoop } from './page.js';
-import { messages, exercises, jointNames } from './api.js';
+import { messages, exercises, jointNames, sessionSummary } from './api.js';
 import { ForceCues } from './rumble.js';
 import { jointTurnWords, frameRows } from './sticks.js';
 const SPEEDS = [0.25, 0.5, 0.75, 1];
@@ -369,6 +369,18 @@ async function start() {
   const named = params.get('exercise') ? { exercise: params.get('exercise') }
     : params.get('scenario') ? { scenario: params.get('scenario') } : null;
   if (stored && await conn.stillLive(stored)) {
+    // a link to another exercise or scenario starts that one (the stored session is ended),
+    // unless another tab drives the stored one
+    const wanted = named && (named.exercise || named.scenario);
+    if (wanted && !(await tabs.anotherDriving(stored.id))) {
+      const r = await sessionSummary(stored.id, stored.control_token).catch(() => null);
+      const runs = r?.ok ? (await r.json()).scenario : null;
+      if (runs && runs !== wanted) {
+        conn.session = stored;
+        conn.restart(named);
+        return;
+      }
+    }
     // resume this browser's session (unless another tab drives it and the trainee watches)
     if (await tabs.anotherDriving(stored.id)) {
       if (await tabs.choose() === 'take') tabs.take(stored.id);

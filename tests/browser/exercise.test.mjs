@@ -160,3 +160,26 @@ test('fault drill: the page offers the four answers and the server records the o
     await b.close();
   }
 });
+
+test('a link to another exercise starts that exercise, not the stored session (found by the trainee trial)', { timeout: 60000 }, async () => {
+  const url = await server();
+  const b = await openBrowser();
+  try {
+    await b.page.goto(`${url}/?exercise=reach-targets`);
+    await until(b.page, () => window.__seaarms?.lastState?.exercise?.id === 'reach-targets', undefined, 20000);
+    const first = await b.page.evaluate(() => JSON.parse(localStorage.getItem('seaarms.session')).id);
+    await b.page.goto(`${url}/?exercise=valve-turn`);
+    await until(b.page, () => window.__seaarms?.lastState?.exercise?.id === 'valve-turn', undefined, 20000);
+    const second = await b.page.evaluate(() => JSON.parse(localStorage.getItem('seaarms.session')).id);
+    assert.notEqual(second, first, 'a new session');
+    const r = await fetch(`${url}/api/sessions/${first}`, { headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
+    assert.equal((await r.json()).status, 'ended', 'the stored one was ended, not left live and empty');
+    // the same link again resumes it
+    await b.page.goto(`${url}/?exercise=valve-turn`);
+    await until(b.page, () => window.__seaarms?.lastState?.exercise?.id === 'valve-turn', undefined, 20000);
+    assert.equal(await b.page.evaluate(() => JSON.parse(localStorage.getItem('seaarms.session')).id), second);
+    assert.deepEqual(b.errors, []);
+  } finally {
+    await b.close();
+  }
+});

@@ -47,6 +47,8 @@ const MOVE_GAIN_PER_M = 10, ATT_GAIN_PER_RAD = 5, JOINT_GAIN_PER_DEG = 0.1, LEVE
 const ATT_TOL_RAD = 0.035;
 /** A `joint` step finishes with the joint this slow (rad/s), as the human-paced driver's. */
 const JOINT_STILL = 0.05;
+/** A full keyboard jog of a joint (°; sim::Operator::jog at full arm speed). */
+const JOG_JOINT_DEG = 2;
 const EXERCISES = ['familiarisation', 'reach-targets', 'dual-lift', 'valve-turn', 'hot-stab', 'fault-diagnosis', 'pick-and-place'];
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -83,7 +85,10 @@ class Operator {
     this.z0 = null; // the box's resting height at the start (what "lifted by h" is measured from)
     this.stats = { decisions: 0, taps: 0, maxAxes: 0, intervalsMs: [] };
     this.lastDecision = 0;
-    this.pad = { axes: [0, 0, 0, 0], buttons: {} };
+    /** Per joint, the turn rate (°/s) seen at full and at slow deflection: a first guess,
+     * raised to what the joint shows (the wrist rotate turns at ~140 °/s at full stick). */
+    this.rates = Array.from({ length: 6 }, () => ({ full: 40, slow: 12 }));
+    this.held = null;
   }
 
   async begin() {
@@ -146,15 +151,16 @@ class Operator {
     await this.setPad(axes, buttons);
   }
 
-  /** A fine tap of axis i (+ or −): Shift + the axis key for 80 ms (a 0.3× jog). */
-  async tap(i, sign) {
+  /** A tap of axis i (+ or −): the axis key for 80 ms, with Shift (`fine`, the default) a
+   * 0.3× jog. */
+  async tap(i, sign, fine = true) {
     const key = KEY_AXES[i][sign > 0 ? 0 : 1];
     await this.rest();
-    await this.page.keyboard.down('ShiftLeft');
+    if (fine) await this.page.keyboard.down('ShiftLeft');
     await this.page.keyboard.down(key);
     await sleep(80);
     await this.page.keyboard.up(key);
-    await this.page.keyboard.up('ShiftLeft');
+    if (fine) await this.page.keyboard.up('ShiftLeft');
     this.stats.taps++;
   }
 
@@ -289,15 +295,33 @@ class Operator {
       }
       case 'joint': {
         await this.selectArm(a.arm);
+        const j = a.joint;
         return this.loop(T, async (st) => {
           const arm = st.arms[a.arm];
-          const e = a.angle_deg - (arm.q[a.joint] * 180) / Math.PI;
-          if (Math.abs(e) <= a.tolerance_deg && Math.abs(arm.qd[a.joint]) <= JOINT_STILL) { await this.rest(); return 'done'; }
+          const e = a.angle_deg - (arm.q[j] * 180) / Math.PI, qd = (arm.qd[j] * 180) / Math.PI;
+          const rate = this.rates[j];
+          // what the last held deflection turned the joint at: a person learns each axis's pace
+          if (this.held?.j === j && this.held.level) rate[this.held.level] = Math.max(rate[this.held.level], Math.abs(qd));
+          this.held = null;
+          if (Math.abs(e) <= a.tolerance_deg && Math.abs(arm.qd[j]) <= JOINT_STILL) { await this.rest(); return 'done'; }
+          // the deflection whose turn over one decision does not overshoot (the turn so far
+          // coasts on for a moment: half a decision at the speed seen)
+          const left = e - (qd * DECIDE_MS) / 2000;
+          const step = (lvl) => (rate[lvl] * DECIDE_MS) / 1000;
+          let did;
+          if (Math.abs(left) > 1.2 * step('full')) did = 'full';
+          else if (Math.abs(left) > 1.2 * step('slow')) did = 'slow';
+          else if (Math.abs(qd) > 3) did = 'wait'; // still turning: let it come to rest first
+          else did = 'tap';
           const intent = [0, 0, 0, 0, 0, 0];
-          intent[a.joint] = Math.max(-1, Math.min(1, e * JOINT_GAIN_PER_DEG));
-          // a joint still turning toward its goal inside the tap band: wait for it
-          if (Math.abs(intent[a.joint]) < TAP && Math.abs(arm.qd[a.joint]) > JOINT_STILL) { await this.rest(); return null; }
-          await this.act(intent);
+          if (did === 'full' || did === 'slow') {
+            intent[j] = Math.sign(left) * (did === 'full' ? 1 : SLOW);
+            this.held = { j, level: did };
+            await this.sticks(intent);
+            this.stats.maxAxes = Math.max(this.stats.maxAxes, 1);
+          } else if (did === 'wait') await this.rest();
+          else await this.tap(j, Math.sign(e), Math.abs(e) < 2 * JOG_JOINT_DEG); // fine below two full jogs
+          if (process.env.TRIAL_DEBUG === '2') console.log(`joint ${j}: e ${e.toFixed(2)}°, qd ${qd.toFixed(1)}°/s → ${did} (rates ${rate.full.toFixed(0)}/${rate.slow.toFixed(0)} °/s)`);
           return null;
         });
       }
@@ -384,14 +408,21 @@ async function trial(id) {
   const op = new Operator(page);
   await op.begin();
   op.stepAt = 0;
+  const actions = [];
   for (const a of plan) {
     op.stepAt = (await op.state()).exercise.step;
+    const ta = Date.now();
     const r = await op.run(a);
+    const st = await op.state();
+    const line = { do: a.do, to: a.to ?? a.joint ?? a.until?.kind ?? a.s, result: r, s: +((Date.now() - ta) / 1000).toFixed(1), step: st.exercise.step };
+    actions.push(line);
+    if (process.env.TRIAL_DEBUG) console.log(JSON.stringify({ ...line, q: st.arms[op.side].q.map((x) => +(x * 57.3).toFixed(1)), jaw: st.arms[op.side].pose.position.map((x) => +x.toFixed(3)), panel: st.panel, counters: st.exercise.counters }));
     if (r === 'exercise done') break;
   }
   await op.rest();
   // the plan is done; the last step may still be counting (a hold)
   await until(page, () => window.__seaarms.lastState.exercise.done, undefined, 30000).catch(() => {});
+  if (process.env.TRIAL_DEBUG) console.log(JSON.stringify(await op.state().then((s) => s.exercise)));
   await page.waitForSelector('#card:not([hidden]) [data-score]', { timeout: 20000 });
   // the completion card: verdict, score, time (the server's assessment, as the page shows it)
   const verdict = (await page.innerText('#card .card-verdict')).trim();
@@ -400,7 +431,7 @@ async function trial(id) {
   const why = await page.$$eval('#card .card-why li', (l) => l.map((x) => x.textContent));
   const res = { id, goal, passed: verdict === 'Passed', score, time_s: +(title.match(/— ([\d.]+) s/)?.[1] ?? NaN),
     decisions: op.stats.decisions, taps: op.stats.taps, maxAxes: op.stats.maxAxes,
-    minIntervalMs: Math.min(...op.stats.intervalsMs), wall_s: +((Date.now() - t0) / 1000).toFixed(1), failed_because: why };
+    minIntervalMs: Math.min(...op.stats.intervalsMs), wall_s: +((Date.now() - t0) / 1000).toFixed(1), failed_because: why, actions };
   results.push(res);
   return res;
 }

@@ -45,6 +45,12 @@ const MOVE_GAIN_PER_M = 10, ATT_GAIN_PER_RAD = 5, JOINT_GAIN_PER_DEG = 0.1, LEVE
 /** A `move` with an attitude is there within this turn (rad; the autopilot's 0.02 is 1.1°,
  * below what a tap resolves — 0.6° — with a reaction time; 2° is a person's "square"). */
 const ATT_TOL_RAD = 0.035;
+/** A jaw off its goal by this much on screen (m) is lined up before it is pushed in depth. */
+const LINE_UP = 0.003;
+/** How far ahead (s) the operator leads a moving jaw from its seen speed: 0 (off). A lead of
+ * half or one decision made the moves worse on a loaded machine, where the real-time server's
+ * frames come in bursts and the speed seen over 250 ms is noise. */
+const LEAD_S = 0;
 /** A `joint` step finishes with the joint this slow (rad/s), as the human-paced driver's. */
 const JOINT_STILL = 0.05;
 /** A full keyboard jog of a joint (°; sim::Operator::jog at full arm speed). */
@@ -171,12 +177,20 @@ class Operator {
    * full; the right stick's ↕/↔ and the wrist (shoulder + right stick) exclude each other,
    * unless the wrist value is full (d-pad).
    */
-  async act(intent, { grip = 0, closed = false, canTap = true } = {}) {
+  async act(intent, { grip = 0, closed = false, canTap = true, linear = false } = {}) {
     const order = intent.map((x, i) => [i, x]).sort((a, b) => Math.abs(b[1]) - Math.abs(a[1]));
     const [i0, x0] = order[0];
     const q = (x) => (Math.abs(x) < REST ? 0 : Math.abs(x) < FULL ? SLOW * Math.sign(x) : Math.sign(x));
     if (Math.abs(x0) < 0.01) { await this.sticks([0, 0, 0, 0, 0, 0], grip); return 'rest'; }
-    if (Math.abs(x0) < TAP && canTap && !closed) { await this.tap(i0, Math.sign(x0)); return 'tap'; }
+    if (Math.abs(x0) < TAP && canTap && !closed) {
+      // line up in the picture first, then push along the view: a tap goes to a screen axis
+      // (left stick) while it is off by LINE_UP or more, to the depth axis only after
+      const screen = order.find(([i, x]) => (i === 0 || i === 1) && Math.abs(x) >= LINE_UP * MOVE_GAIN_PER_M);
+      const [i, x] = linear && screen ? screen : [i0, x0];
+      await this.tap(i, Math.sign(x));
+      return 'tap';
+    }
+    if (Math.abs(x0) < TAP && !closed && linear) { await this.sticks([0, 0, 0, 0, 0, 0], grip); return 'wait'; } // moving: let it come
     const out = [0, 0, 0, 0, 0, 0];
     out[i0] = closed ? (Math.abs(x0) < FULL ? SLOW * Math.sign(x0) : Math.sign(x0)) : q(x0);
     const wrist = (i) => i === 3 || i === 5, rs = (i) => i === 2 || i === 4;
@@ -233,7 +247,10 @@ class Operator {
   met(c, st) {
     const ex = st.exercise;
     switch (c.kind) {
-      case 'object_height': return st.object.pose.position[2] - this.z0 >= c.height_m - (c.tolerance_m ?? 0.01);
+      case 'object_height': { // the task panel's lift readout when it has one, else the box's rise
+        const lift = Operator.liftReadout(st);
+        return (lift ?? st.object.pose.position[2] - this.z0) >= c.height_m - (c.tolerance_m ?? 0.01);
+      }
       case 'valve_angle': return Math.abs(st.panel.valve_angle_deg - c.angle_deg) <= (c.tolerance_deg ?? 1);
       case 'stab_seated': return st.panel?.stab_phase === 'seated';
       case 'object_resting': return norm(st.object.velocity.slice(0, 3)) < 0.01 && st.object.pose.position[2] - this.z0 < 0.02;
@@ -241,6 +258,12 @@ class Operator {
       case 'arms_still': return ['left', 'right'].every((s) => st.arms[s].qd.every((v) => Math.abs(v) <= c.max_joint_speed_rad_s));
       default: return ex.done;
     }
+  }
+
+  /** The task panel's lift / height readout (m), or null. */
+  static liftReadout(st) {
+    const r = st.exercise?.readouts.find((x) => /lift|height/i.test(x.label));
+    return r ? r.value * ({ cm: 0.01, mm: 0.001 }[r.unit] ?? 1) : null;
   }
 
   /** The object's levelling turn (world rotation vector intent), as the plan's `level`. */
@@ -281,15 +304,28 @@ class Operator {
         await this.selectArm(a.arm);
         const want = a.attitude_rotvec ? rotvecToMatrix(a.attitude_rotvec) : null;
         const tol = a.tolerance_m ?? 0.01;
+        let prev = null;
         return this.loop(T, async (st) => {
           const now = a.steer === 'object' ? st.object.pose.position : st.arms[a.arm].pose.position;
           const goal = sub(this.point(st, a.to), (a.offset_m ?? [0, 0, 0]).map((x) => -x));
           const { cam, v } = await this.seen(now, goal);
-          const att = want ? rotationError(want, st.arms[a.arm].pose.rotation) : [0, 0, 0];
-          if (norm(sub(goal, now)) <= tol && norm(att) <= ATT_TOL_RAD) { await this.rest(); return 'done'; }
-          const lin = clampNorm(v.map((x) => x * MOVE_GAIN_PER_M));
+          const touching = st.arms[a.arm].contact;
+          let att = want ? rotationError(want, st.arms[a.arm].pose.rotation) : [0, 0, 0];
+          // squared to within ATT_TOL_RAD; in contact the jaw is turned by what it touches:
+          // a person does not fight that with the wrist
+          if (norm(sub(goal, now)) <= tol && (norm(att) <= ATT_TOL_RAD || touching)) { await this.rest(); return 'done'; }
+          if (touching || norm(att) < ATT_TOL_RAD) att = [0, 0, 0];
+          // a person sees the jaw moving and leads it: where it will be a decision from now
+          // (the hydraulics carry on after the stick is let go)
+          const t = Date.now();
+          const vel = prev && t > prev.t ? sub(now, prev.p).map((x) => (x * 1000) / (t - prev.t)) : [0, 0, 0];
+          prev = { t, p: now };
+          const ahead = sub(v, Operator.inCamera(cam, vel).map((x) => x * LEAD_S));
+          const moving = norm(vel) > 0.015;
+          const lin = clampNorm(ahead.map((x) => x * MOVE_GAIN_PER_M));
           const ang = a.level ? Operator.level(st) : clampNorm(att.map((x) => x * ATT_GAIN_PER_RAD));
-          await this.act([...lin, ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed' });
+          const did = await this.act([...lin, ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed', linear: true, canTap: !moving });
+          if (process.env.TRIAL_DEBUG === '2') console.log(`move ${cam.name} ${JSON.stringify(a.to)}: vel ${Operator.inCamera(cam, vel).map((x) => (100 * x).toFixed(1))} seen ${v.map((x) => (100 * x).toFixed(1))} cm, att ${(norm(att) * 57.3).toFixed(1)}° → ${JSON.stringify(did)} side ${st.panel?.side_load_n?.toFixed(0)} N, relief ${st.exercise.counters.relief}, ${st.panel?.stab_phase ?? ''}`);
           return null;
         });
       }
@@ -343,13 +379,23 @@ class Operator {
           const cam = await this.camera();
           const w = a.do === 'object' ? a.velocity : a.axes;
           const ang = a.level ? Operator.level(st) : w.slice(3);
-          await this.act([...Operator.inCamera(cam, w.slice(0, 3)), ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed', canTap: false });
+          await this.act([...Operator.inCamera(cam, w.slice(0, 3)), ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed' });
           return null;
         });
       }
       case 'wait': {
         await this.rest();
-        const r = await this.loop(a.s, async () => null);
+        // in closed loop with a lift readout and target on the panel, the wait is a hold:
+        // keep the readout on its target (screen up/down on the left stick, slow)
+        const r = await this.loop(a.s, async (st) => {
+          const ro = st.exercise?.readouts.find((x) => /lift|height/i.test(x.label));
+          if (st.settings.control_method !== 'closed' || !ro) return null;
+          const e = (ro.target - ro.value) * ({ cm: 0.01, mm: 0.001 }[ro.unit] ?? 1);
+          const cam = await this.camera();
+          const up = Operator.inCamera(cam, [0, 0, Math.abs(e) < 0.01 ? 0 : Math.sign(e)]);
+          await this.act([...up, 0, 0, 0], { closed: true });
+          return null;
+        });
         return r === 'exercise done' ? r : 'done';
       }
       case 'wait_until':
@@ -370,7 +416,101 @@ class Operator {
     }
   }
 
-  async diagnose() { throw new Error('diagnose: not yet'); }
+  /** Holds `axes` (joint mode, one joint) for `n` decisions; returns the frames seen. */
+  async hold(intent, n) {
+    const seen = [];
+    for (let k = 0; k < n; k++) {
+      await this.pace();
+      if (intent.some((x) => x)) await this.sticks(intent); else await this.rest();
+      seen.push(await this.state());
+    }
+    return seen;
+  }
+
+  /**
+   * The fault drill's tests, as its goal lists them, at a person's pace (each phase a whole
+   * number of decisions), reading the joint angles and speeds and the line-pressure gauges
+   * (the plots: the page's drawn frames, recorded as they come, 60 Hz):
+   * 1. watch with the sticks centred (2 s): a joint that turns > 1° is jogged against its
+   *    motion — one that does not answer (< 2°) has a stuck valve, one that does is a leak;
+   *    then every joint is jogged out and back (0.5 s each): one that answers neither has a
+   *    stuck valve (it sits at its stop);
+   * 2. spin the wrist rotate at full stick (0.75 s): P_I + P_O (the supply) under 80 % of the
+   *    nameplate 6.89 MPa is a supply drop; a spin-up slower than the healthy motor's (65 % of
+   *    the steady speed within 40 ms of the first motion) is air;
+   * 3. jog the shoulder, elbow and wrist pitch out and back, let them settle and watch the
+   *    gauges 2 s: line pressures drifting by > 0.1 MPa are a leak; else the nearest symptom.
+   * Thresholds are the autopilot's (server/core/src/exercise/autopilot.rs Diagnosis).
+   */
+  async diagnose(side) {
+    await this.selectArm(side);
+    const st0 = await this.state();
+    if (st0.settings.control_mode !== 'joint') await this.run({ do: 'settings', mode: 'joint' });
+    await this.page.evaluate((sd) => {
+      window.__rec = [];
+      let last = -1;
+      window.__recTimer = setInterval(() => { const s = window.__seaarms.lastState; if (s && s.t !== last) { last = s.t; const a = s.arms[sd]; window.__rec.push({ t: s.t, qd5: a.qd[5], p5: a.p_in[5] + a.p_out[5] }); } }, 5);
+    }, side);
+    const q = (st) => st.arms[side].q.map((x) => (x * 180) / Math.PI);
+    const drift = (a, b) => Math.max(...[0, 1, 2, 3, 4, 5].map((j) => Math.abs(b.arms[side].p_in[j] - a.arms[side].p_in[j]) + Math.abs(b.arms[side].p_out[j] - a.arms[side].p_out[j])));
+    const answer = async (name, why) => {
+      this.notes = why;
+      await this.rest();
+      await this.page.evaluate(() => clearInterval(window.__recTimer));
+      await this.page.click(`#task [data-answer="${name}"]`);
+      return 'done';
+    };
+    // 1. watch
+    const a0 = await this.state();
+    const watch = await this.hold([0, 0, 0, 0, 0, 0], 8);
+    const a1 = watch.at(-1);
+    let leakDrift = drift(a0, a1);
+    const dq = q(a1).map((x, j) => x - q(a0)[j]);
+    const jr = dq.map(Math.abs).indexOf(Math.max(...dq.map(Math.abs)));
+    if (Math.abs(dq[jr]) > 1) {
+      const dir = -Math.sign(dq[jr]);
+      const b0 = q(await this.state())[jr];
+      const axes = [0, 0, 0, 0, 0, 0]; axes[jr] = dir;
+      const b1 = q((await this.hold(axes, 3)).at(-1))[jr];
+      return answer((b1 - b0) * dir < 2 ? 'stuck_valve' : 'leak', `joint ${jr + 1} ran ${dq[jr].toFixed(1)}° with the sticks centred; jogged against it moved ${((b1 - b0) * dir).toFixed(1)}°`);
+    }
+    for (let j = 0; j < 6; j++) {
+      const axes = [0, 0, 0, 0, 0, 0];
+      const c0 = q(await this.state())[j];
+      axes[j] = 1; const c1 = q((await this.hold(axes, 2)).at(-1))[j];
+      axes[j] = -1; const c2 = q((await this.hold(axes, 2)).at(-1))[j];
+      await this.hold([0, 0, 0, 0, 0, 0], 1);
+      if (Math.abs(c1 - c0) < 2 && Math.abs(c2 - c1) < 2) return answer('stuck_valve', `joint ${j + 1} answered neither way (${(c1 - c0).toFixed(1)}°, ${(c2 - c1).toFixed(1)}°)`);
+    }
+    // 2. spin
+    await this.hold([0, 0, 0, 0, 0, 0], 2);
+    await this.page.evaluate(() => { window.__rec.length = 0; });
+    await this.hold([0, 0, 0, 0, 0, 1], 3);
+    const rec = await this.page.evaluate(() => window.__rec.slice());
+    await this.hold([0, 0, 0, 0, 0, 0], 2);
+    const steady = rec.at(-1).qd5;
+    const tail = rec.filter((r) => r.t >= rec.at(-1).t - 0.2);
+    const supply = tail.reduce((x, r) => x + r.p5, 0) / tail.length / 6.89e6;
+    const start = rec.find((r) => Math.abs(r.qd5) > 0.05 * Math.abs(steady));
+    const at40 = rec.find((r) => start && r.t >= start.t + 0.04);
+    const lag = start && at40 ? at40.qd5 / steady : 1;
+    if (supply < 0.8) return answer('supply_drop', `spin: P_I + P_O = ${(supply * 100).toFixed(0)} % of the supply`);
+    if (lag < 0.65) return answer('air', `spin: ${(lag * 100).toFixed(0)} % of the steady speed 40 ms in`);
+    // 3. leak test
+    for (const j of [1, 2, 3]) {
+      const axes = [0, 0, 0, 0, 0, 0];
+      axes[j] = 1; await this.hold(axes, 1);
+      axes[j] = -1; await this.hold(axes, 1);
+    }
+    await this.hold([0, 0, 0, 0, 0, 0], 3);
+    const l0 = await this.state();
+    const l1 = (await this.hold([0, 0, 0, 0, 0, 0], 8)).at(-1);
+    leakDrift = Math.max(leakDrift, drift(l0, l1));
+    const why = `supply ${(supply * 100).toFixed(0)} %, spin-up ${(lag * 100).toFixed(0)} %, gauge drift ${(leakDrift / 1e6).toFixed(2)} MPa`;
+    if (leakDrift > 1e5) return answer('leak', why);
+    const score = [[(1 - supply) / 0.2, 'supply_drop'], [(1 - lag) / 0.35, 'air'], [leakDrift / 1e5, 'leak']].sort((x, y) => y[0] - x[0]);
+    return answer(score[0][1], `${why} (nearest)`);
+  }
 }
 
 let url, b;
@@ -409,13 +549,22 @@ async function trial(id) {
   await op.begin();
   op.stepAt = 0;
   const actions = [];
+  let shot = false;
+  // a fault drill's goal says when the fault comes ("within 15 s"): the shuttle stops then
+  const faultBy = /within (\d+) s/.exec(goal)?.[1];
   for (const a of plan) {
     op.stepAt = (await op.state()).exercise.step;
+    if (faultBy && a.do === 'joint' && (await op.state()).exercise.elapsed_s > +faultBy + 1) continue;
     const ta = Date.now();
     const r = await op.run(a);
     const st = await op.state();
     const line = { do: a.do, to: a.to ?? a.joint ?? a.until?.kind ?? a.s, result: r, s: +((Date.now() - ta) / 1000).toFixed(1), step: st.exercise.step };
     actions.push(line);
+    // a look at the work mid-trial: the pilot views with the jaw on the T-bar
+    if (id === 'valve-turn' && !shot && st.exercise.step >= 1) {
+      shot = true;
+      await page.screenshot({ path: join(ARTIFACTS, 'trial-valve-turn-pilot.png') });
+    }
     if (process.env.TRIAL_DEBUG) console.log(JSON.stringify({ ...line, q: st.arms[op.side].q.map((x) => +(x * 57.3).toFixed(1)), jaw: st.arms[op.side].pose.position.map((x) => +x.toFixed(3)), panel: st.panel, counters: st.exercise.counters }));
     if (r === 'exercise done') break;
   }
@@ -431,7 +580,7 @@ async function trial(id) {
   const why = await page.$$eval('#card .card-why li', (l) => l.map((x) => x.textContent));
   const res = { id, goal, passed: verdict === 'Passed', score, time_s: +(title.match(/— ([\d.]+) s/)?.[1] ?? NaN),
     decisions: op.stats.decisions, taps: op.stats.taps, maxAxes: op.stats.maxAxes,
-    minIntervalMs: Math.min(...op.stats.intervalsMs), wall_s: +((Date.now() - t0) / 1000).toFixed(1), failed_because: why, actions };
+    minIntervalMs: Math.min(...op.stats.intervalsMs), wall_s: +((Date.now() - t0) / 1000).toFixed(1), failed_because: why, notes: op.notes, actions };
   results.push(res);
   return res;
 }

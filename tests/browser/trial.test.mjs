@@ -305,7 +305,10 @@ class Operator {
         const want = a.attitude_rotvec ? rotvecToMatrix(a.attitude_rotvec) : null;
         const tol = a.tolerance_m ?? 0.01;
         let prev = null;
+        const stepAt = (await this.state()).exercise.step;
         return this.loop(T, async (st) => {
+          // the task panel ticked its step: what the move was for is done (a marker touched)
+          if (st.exercise.step > stepAt) { await this.rest(); return 'done'; }
           const now = a.steer === 'object' ? st.object.pose.position : st.arms[a.arm].pose.position;
           const goal = sub(this.point(st, a.to), (a.offset_m ?? [0, 0, 0]).map((x) => -x));
           const { cam, v } = await this.seen(now, goal);
@@ -321,7 +324,7 @@ class Operator {
           const vel = prev && t > prev.t ? sub(now, prev.p).map((x) => (x * 1000) / (t - prev.t)) : [0, 0, 0];
           prev = { t, p: now };
           const ahead = sub(v, Operator.inCamera(cam, vel).map((x) => x * LEAD_S));
-          const moving = norm(vel) > 0.015;
+          const moving = norm(vel) > 0.03;
           const lin = clampNorm(ahead.map((x) => x * MOVE_GAIN_PER_M));
           const ang = a.level ? Operator.level(st) : clampNorm(att.map((x) => x * ATT_GAIN_PER_RAD));
           const did = await this.act([...lin, ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed', linear: true, canTap: !moving });

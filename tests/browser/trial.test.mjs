@@ -395,7 +395,7 @@ class Operator {
           if (st.settings.control_method !== 'closed' || !ro) return null;
           const e = (ro.target - ro.value) * ({ cm: 0.01, mm: 0.001 }[ro.unit] ?? 1);
           const cam = await this.camera();
-          const up = Operator.inCamera(cam, [0, 0, Math.abs(e) < 0.01 ? 0 : Math.sign(e)]);
+          const up = Operator.inCamera(cam, [0, 0, Math.abs(e) < 0.01 ? 0 : 0.5 * Math.sign(e)]); // slow
           await this.act([...up, 0, 0, 0], { closed: true });
           return null;
         });

@@ -573,7 +573,16 @@ async function trial(id) {
   }
   await op.rest();
   // the plan is done; the last step may still be counting (a hold)
-  await until(page, () => window.__seaarms.lastState.exercise.done, undefined, 30000).catch(() => {});
+  const finished = await until(page, () => window.__seaarms.lastState.exercise.done, undefined, 15000).then(() => true, () => false);
+  if (!finished) {
+    // the plan ran out (its actions timed out) with the attempt unfinished: say where it stands
+    const ex = await op.state().then((s) => s.exercise);
+    const res = { id, goal, passed: false, score: Math.round(ex.score), time_s: +ex.elapsed_s.toFixed(1), decisions: op.stats.decisions, taps: op.stats.taps,
+      maxAxes: op.stats.maxAxes, minIntervalMs: Math.min(...op.stats.intervalsMs), wall_s: +((Date.now() - t0) / 1000).toFixed(1),
+      failed_because: [`unfinished at step ${ex.step + 1} of ${ex.steps} ("${ex.step_text}"), counters ${JSON.stringify(ex.counters)}`], actions };
+    results.push(res);
+    return res;
+  }
   if (process.env.TRIAL_DEBUG) console.log(JSON.stringify(await op.state().then((s) => s.exercise)));
   await page.waitForSelector('#card:not([hidden]) [data-score]', { timeout: 20000 });
   // the completion card: verdict, score, time (the server's assessment, as the page shows it)

@@ -22,6 +22,11 @@
 //!   LB/RB held + right stick: about screen right ↕ and about the view axis ↔).
 //! Prints and writes (artifacts/trial.json) each exercise's pass, score and time from the
 //! completion card; asserts every exercise passes.
+//!
+//! Not part of `bash tests/run.sh` (this file is not a `*.test.mjs`): it does not yet pass all
+//! seven exercises, and its real-time pacing is sensitive to a loaded machine. Run it on a
+//! quiet machine against a release build: `cd tests/browser && node --test trial.mjs`
+//! (`TRIAL_ONLY=a,b` for a subset; `TRIAL_DEBUG=1|2` logs each action or decision).
 
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';

@@ -80,6 +80,18 @@ pub struct GripParams {
     /// Largest angle of the bar off the jaw's x axis in the pads' plane (rad): 45° (across
     /// the fingers, not along them).
     pub max_cross_rad: f64,
+    /// Shear modulus G of the pads' elastomer layer (Pa): 6.9·10⁶, a 90 Shore A polyurethane
+    /// (Gent 1958, "On the relation between indentation hardness and Young's modulus", Trans.
+    /// IRI 34: E = 0.0981(56 + 7.62336 S)/(0.137505(254 − 2.54 S)) MPa = 20.8 MPa at S = 90,
+    /// G = E/3 for a rubber-like solid). The pads are steel wear plates (the friction above)
+    /// bonded on this layer, as jaw liners are (assumed).
+    pub pad_shear_modulus_pa: f64,
+    /// Thickness t of the pads' elastomer layer (m): 0.005 (assumed).
+    pub pad_layer_m: f64,
+    /// Loss factor η of the pads' elastomer (tan δ): 0.1 (assumed; polyurethane elastomers
+    /// above their glass transition are 0.05–0.2 at room temperature, the figure in the middle
+    /// of that range).
+    pub pad_loss_factor: f64,
 }
 
 impl Default for GripParams {
@@ -92,6 +104,9 @@ impl Default for GripParams {
             max_skew_rad: 15f64.to_radians(),
             max_roll_rad: 22.5f64.to_radians(),
             max_cross_rad: 45f64.to_radians(),
+            pad_shear_modulus_pa: 6.9e6,
+            pad_layer_m: 0.005,
+            pad_loss_factor: 0.1,
         }
     }
 }
@@ -103,6 +118,17 @@ impl GripParams {
         al.skew_rad <= self.max_skew_rad
             && al.roll_rad <= self.max_roll_rad
             && al.cross_rad <= self.max_cross_rad
+    }
+
+    /// Torsional stiffness of the two pads about the closing axis on a bar of side
+    /// `bar_side_m` (N·m/rad): each w × s elastomer layer of thickness t sheared by a twist θ
+    /// carries G·J·θ/t (J = w·s·(w² + s²)/12, the patch's polar moment of area; shear strain
+    /// r·θ/t at radius r), the two pads side by side between jaw and bar: k = 2·G·J/t
+    /// (1.89·10³ N·m/rad for 5 × 4 cm pads, 5 mm of 90 Shore A polyurethane).
+    pub fn torsion_stiffness(&self, bar_side_m: f64) -> f64 {
+        let (w, s) = (self.pad_width_m, bar_side_m);
+        let j = w * s * (w * w + s * s) / 12.0;
+        2.0 * self.pad_shear_modulus_pa * j / self.pad_layer_m
     }
 }
 

@@ -14,8 +14,10 @@
 //! those directions (so the Baumgarte terms do not pull the bar back) and lets go when the
 //! bar has slid [`crate::grasp::GripParams::slip_travel_m`] out of the pads. The closing-axis direction of a slipping jaw is
 //! solved together with the full rigid system and corrected by the Baumgarte terms in the
-//! next step. [`SimParams::rigid_grasp`] restores the rigid grasp (the load fraction is still
-//! reported).
+//! next step. About the closing axis the finite grip's pads are compliant: that row is a
+//! spring-damper ([`PadTorsion`]), and a slipping jaw's grasp frame keeps the pads' elastic
+//! twist. [`SimParams::rigid_grasp`] restores the rigid grasp, all six rows rigid (the load
+//! fraction is still reported).
 
 use nalgebra::{
     Isometry3, Matrix6, Point3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6,

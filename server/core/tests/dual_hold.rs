@@ -283,14 +283,24 @@ fn a_cartesian_lift_of_the_pair_lifts_best_with_the_orientation_held() {
         // The onset and the growing twist take λ to ≈ 1: the pads creep, under the slip notice
         // (2 mm / 2°), and grip again.
         assert!(peak <= 1.1, "{env:?}: peak λ {peak}");
-        let (dz, slips, first, _) = cartesian_pair_lift(env, false, 0.5, 1.5);
+        let (dz, slips, first, peak_t) = cartesian_pair_lift(env, false, 0.5, 1.5);
         println!(
-            "{env:?} translational rows only: rose {dz:.4} m, {slips} slips, first at {first:?} s"
+            "{env:?} translational rows only: rose {dz:.4} m, {slips} slips, first at {first:?} s, peak λ {peak_t:.3}"
         );
         // The null-space twist scales with the stick (ε × 0.1 here, issue 27) and turns the
-        // jaws against each other through the box: the pair loses part of the lift (on the
-        // restored arm of issue 27 item 5: air 0.0218 of 0.0242 m, water 0.0229 of 0.0244 m; on the
-        // earlier 0.10/0.60/0.40/0.25/0.10/0.16 m arm it also slipped the jaws in air).
-        assert!(dz < dz_held - 5.0e-4, "{env:?}: rose {dz} m of {dz_held} m");
+        // jaws against each other through the box: the pads are loaded to their limit and
+        // creep (λ 1.00 against 0.39 in air, 0.20 in water with the orientation held) and the
+        // pair loses part of the lift (on the restored arm of issue 27 item 5 with pads rigid
+        // in torsion: air 0.0218 of 0.0242 m, water 0.0229 of 0.0244 m; on the earlier
+        // 0.10/0.60/0.40/0.25/0.10/0.16 m arm it also slipped the jaws in air). With the pads
+        // compliant in torsion (issue 27 item 4) the twist about the closing axes goes into the
+        // pads: air 0.0232 of 0.0242 m, water 0.0241 of 0.0244 m.
+        assert!(peak_t > 2.0 * peak, "{env:?}: peak λ {peak_t} vs {peak}");
+        let margin = if env == Environment::Air {
+            5.0e-4
+        } else {
+            1.0e-4
+        };
+        assert!(dz < dz_held - margin, "{env:?}: rose {dz} m of {dz_held} m");
     }
 }

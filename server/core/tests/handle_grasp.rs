@@ -195,12 +195,6 @@ fn lift_toward(sim: &Simulation, target: &nalgebra::Isometry3<f64>, max_m_s: f64
 /// pads' 15 N·m torsion limit: the bar slips at lift-off — the slip the first lifting-point
 /// runs showed.)
 #[test]
-#[ignore = "issue 27, open: the jaw slips at lift-off (air and water). Measured: the torsion about \
-            the closing axis grows with the lift force (14 N·m at 85 N) while the box still sits \
-            on the seabed, reaches the 15.2 N·m static limit, and the radial kinetic scaling then \
-            cuts the lift force too; the bar slides out. The rigid jaw-bar constraint cancels the \
-            wrist's angular acceleration against a seated box (seabed rotational stiffness \
-            ~1.8e5 N·m/rad); pads with torsional compliance are the likely fix (docs/physics.md)"]
 fn a_one_arm_lift_by_the_lifting_point_holds_on_the_finite_grip() {
     for env in [Environment::Air, Environment::subsea()] {
         let sim0 = sim_in(env);

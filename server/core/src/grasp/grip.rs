@@ -46,6 +46,16 @@
 //! scaled radially onto the kinetic ellipsoid (μ_k in place of μ_s), in the direction of the
 //! wrench the rigid grasp required (which contains the constraint's velocity damping, so it
 //! opposes the sliding).
+//!
+//! # Compliance in torsion
+//! Between sticking and sliding the pads are not rigid about the closing axis n: steel wear
+//! plates on a bonded elastomer layer ([`GripParams::pad_shear_modulus_pa`],
+//! [`GripParams::pad_layer_m`]) twist by τ_n/k, k = [`GripParams::torsion_stiffness`]
+//! (1.90·10³ N·m/rad), with damping from the elastomer's loss factor. The grasp constraint
+//! carries that direction as a spring-damper (`sim/constraint.rs`, `PadTorsion`); the other
+//! five stay rigid. Without it, a jaw on a box still seated on the seabed (≈2·10⁵ N·m/rad
+//! about a horizontal axis) turned every 0.1 mrad of the stalled wrist's attitude into
+//! ≈14 N·m of torsion, and a one-arm lift by the lifting point slipped at lift-off.
 
 use nalgebra::{Rotation3, Vector3, Vector6};
 
@@ -80,6 +90,18 @@ pub struct GripParams {
     /// Largest angle of the bar off the jaw's x axis in the pads' plane (rad): 45° (across
     /// the fingers, not along them).
     pub max_cross_rad: f64,
+    /// Shear modulus G of the pads' elastomer layer (Pa): 6.95·10⁶, a 90 Shore A polyurethane
+    /// (Gent 1958, "On the relation between indentation hardness and Young's modulus", Trans.
+    /// IRI 34: E = 0.0981(56 + 7.62336 S)/(0.137505(254 − 2.54 S)) MPa = 20.8 MPa at S = 90,
+    /// G = E/3 for a rubber-like solid). The pads are steel wear plates (the friction above)
+    /// bonded on this layer, as jaw liners are (assumed).
+    pub pad_shear_modulus_pa: f64,
+    /// Thickness t of the pads' elastomer layer (m): 0.005 (assumed).
+    pub pad_layer_m: f64,
+    /// Loss factor η of the pads' elastomer (tan δ): 0.1 (assumed; polyurethane elastomers
+    /// above their glass transition are 0.05–0.2 at room temperature, the figure in the middle
+    /// of that range).
+    pub pad_loss_factor: f64,
 }
 
 impl Default for GripParams {
@@ -92,6 +114,9 @@ impl Default for GripParams {
             max_skew_rad: 15f64.to_radians(),
             max_roll_rad: 22.5f64.to_radians(),
             max_cross_rad: 45f64.to_radians(),
+            pad_shear_modulus_pa: 6.95e6,
+            pad_layer_m: 0.005,
+            pad_loss_factor: 0.1,
         }
     }
 }
@@ -103,6 +128,17 @@ impl GripParams {
         al.skew_rad <= self.max_skew_rad
             && al.roll_rad <= self.max_roll_rad
             && al.cross_rad <= self.max_cross_rad
+    }
+
+    /// Torsional stiffness of the two pads about the closing axis on a bar of side
+    /// `bar_side_m` (N·m/rad): each w × s elastomer layer of thickness t sheared by a twist θ
+    /// carries G·J·θ/t (J = w·s·(w² + s²)/12, the patch's polar moment of area; shear strain
+    /// r·θ/t at radius r), the two pads side by side between jaw and bar: k = 2·G·J/t
+    /// (1.90·10³ N·m/rad for 5 × 4 cm pads, 5 mm of 90 Shore A polyurethane).
+    pub fn torsion_stiffness(&self, bar_side_m: f64) -> f64 {
+        let (w, s) = (self.pad_width_m, bar_side_m);
+        let j = w * s * (w * w + s * s) / 12.0;
+        2.0 * self.pad_shear_modulus_pa * j / self.pad_layer_m
     }
 }
 
@@ -262,6 +298,34 @@ mod tests {
             none.load_fraction(&Vector6::new(1.0, 0.0, 0.0, 0.0, 0.0, 0.0))
                 .is_infinite()
         );
+    }
+
+    #[test]
+    fn pad_torsion_stiffness_is_two_g_j_over_t() {
+        // Each pad: a thin bonded layer twisted by θ shears by r·θ/t at radius r, so its
+        // torque is G·θ/t·∫r² dA. The polar moment ∫r² dA by a midpoint sum over the 5 × 4 cm
+        // patch (independent of the closed form w·s·(w² + s²)/12 in the code).
+        let gp = GripParams::default();
+        let (w, s, m) = (0.05, 0.04, 400);
+        let (dx, dy) = (w / m as f64, s / m as f64);
+        let mut j = 0.0;
+        for a in 0..m {
+            for b in 0..m {
+                let x = -0.5 * w + (a as f64 + 0.5) * dx;
+                let y = -0.5 * s + (b as f64 + 0.5) * dy;
+                j += (x * x + y * y) * dx * dy;
+            }
+        }
+        let k = 2.0 * gp.pad_shear_modulus_pa * j / gp.pad_layer_m;
+        let got = gp.torsion_stiffness(s);
+        assert!((got - k).abs() < 1e-5 * k, "{got} vs {k}");
+        // Gent's hardness relation at 90 Shore A: E = 20.8 MPa, G = E/3.
+        let e = 0.0981 * (56.0 + 7.62336 * 90.0) / (0.137505 * (254.0 - 2.54 * 90.0));
+        assert!(
+            (gp.pad_shear_modulus_pa - e / 3.0 * 1e6).abs() < 0.01e6,
+            "E = {e} MPa"
+        );
+        assert!((got - 1899.6).abs() < 0.1, "{got}");
     }
 
     #[test]

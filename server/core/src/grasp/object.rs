@@ -18,7 +18,7 @@ pub struct ObjectParams {
     /// The handle bars ([`Handle`], object frame; assumed): 0 and 1 the side handles Lim's
     /// two arms take (0: left arm's at y = +0.15, 1: right arm's at y = −0.15), bars 0.12 m
     /// long along the box's x axis 3 cm above its top face; 2 the lifting point, a T-handle
-    /// bar of the same section along x on a post 0.10 m above the top face, over the centre of
+    /// bar of the same section along x on a post 0.04 m above the top face, over the centre of
     /// mass. Flats face up and sideways. Any jaw may take any handle.
     pub handles: [Handle; N_HANDLES],
     /// Handle bar thickness the jaw closes on (m): 0.04 (< 7.5 cm jaw opening).
@@ -42,8 +42,9 @@ pub struct ObjectParams {
     pub friction_speed_m_s: f64,
 }
 
-/// Height of the lifting point's bar above the box's top face (m): 0.10 (assumed: it stands
-/// clear of the side handles, 3 cm up, so a jaw on it does not foul them).
+/// Height of the lifting point's bar above the box's top face (m): 0.04 (assumed: it stands
+/// clear of the side handles, 3 cm up; at 0.10 m the links reaching over the box to the panel
+/// struck it, docs/physics.md "Handles, alignment and the lifting point").
 pub const LIFTING_POINT_RISE_M: f64 = 0.04;
 
 /// Index of the lifting point in [`ObjectParams::handles`].

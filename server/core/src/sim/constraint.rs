@@ -14,8 +14,10 @@
 //! those directions (so the Baumgarte terms do not pull the bar back) and lets go when the
 //! bar has slid [`crate::grasp::GripParams::slip_travel_m`] out of the pads. The closing-axis direction of a slipping jaw is
 //! solved together with the full rigid system and corrected by the Baumgarte terms in the
-//! next step. [`SimParams::rigid_grasp`] restores the rigid grasp (the load fraction is still
-//! reported).
+//! next step. About the closing axis the finite grip's pads are compliant: that row is a
+//! spring-damper ([`PadTorsion`]), and a slipping jaw's grasp frame keeps the pads' elastic
+//! twist. [`SimParams::rigid_grasp`] restores the rigid grasp, all six rows rigid (the load
+//! fraction is still reported).
 
 use nalgebra::{
     Isometry3, Matrix6, Point3, Rotation3, Translation3, UnitQuaternion, Vector3, Vector6,
@@ -56,6 +58,28 @@ pub(super) struct Constraint {
     kd: f64,
     /// Per active arm: the jaw's grip limits (`None` for a rigid grasp).
     grip: [Option<JawGrip>; 2],
+    /// Per active arm with compliant pads: the closing axis n (world) and the velocity gain
+    /// of its torsion row (1/h in place of k_d; [`PadTorsion`]).
+    soft: [Option<(Vector3<f64>, f64)>; 2],
+}
+
+/// The pads' torsional compliance about the closing axis n (finite grip only): a
+/// spring-damper (k, c) between jaw and bar in place of the rigid torsion row, integrated
+/// implicitly as a soft constraint (the constraint-force-mixing form of Smith's ODE manual,
+/// §3.8, "Soft constraint and constraint force mixing", and Catto's "Soft constraints", GDC
+/// 2011): with the sub-step h, the torsion at the end of the sub-step
+/// τ = k·(θ + h·ω⁺) + c·ω⁺ (θ, ω the jaw's twist and twist rate on the bar, ω⁺ = ω + h·α)
+/// is the row α = γ·τ − γ·k·θ − ω/h with γ = 1/(h·(k·h + c)): γ on the row's diagonal,
+/// γ·k in place of the position gain k_p and 1/h in place of k_d. Unconditionally stable
+/// (backward Euler on the spring), the rigid row as k → ∞.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct PadTorsion {
+    /// Closing axis n (world).
+    pub(super) n: Vector3<f64>,
+    /// Stiffness k (N·m/rad).
+    pub(super) k: f64,
+    /// Damping c (N·m·s/rad).
+    pub(super) c: f64,
 }
 
 /// One holding jaw's grip for the step: its bar frame and limits.
@@ -74,6 +98,8 @@ pub(super) struct JawGrip {
     /// The jaw is opening (no clamp force): it lets go by the release gap of
     /// [`super::arm::update_jaw`], held rigidly until then, neither loaded nor slipping.
     releasing: bool,
+    /// The pads' torsional compliance (`None` for a rigid grasp).
+    pub(super) torsion: Option<PadTorsion>,
 }
 
 impl JawGrip {
@@ -88,8 +114,10 @@ impl JawGrip {
         let (gp, op) = (&p.grip, &p.object);
         let handle = &op.handles[a.grip.handle.min(op.handles.len() - 1)];
         let jaw = (object.rotation.inverse() * tool.rotation).to_rotation_matrix();
+        let rot = object.rotation.to_rotation_matrix() * handle.bar_frame(&jaw);
         JawGrip {
-            rot: object.rotation.to_rotation_matrix() * handle.bar_frame(&jaw),
+            rot,
+            torsion: (!p.rigid_grasp).then(|| pad_torsion(p, &rot, a, object)),
             stat: GripCapacity::of(gp, op, a.clamp_force_n, false),
             kinetic: GripCapacity::of(gp, op, a.clamp_force_n, true),
             slipping: a.grip.sliding,
@@ -122,6 +150,27 @@ impl JawGrip {
             (*f, out)
         }
     }
+}
+
+/// The pads' torsion about the closing axis n = `rot`'s y (world) of arm state `a` holding
+/// the object at `object`: k from [`crate::grasp::GripParams::torsion_stiffness`]; c = η·k/ω,
+/// the elastomer's loss factor η at the frequency ω = √(k/I_n) of the box twisting on the
+/// pads (I_n its inertia about n through the grasp point; viscous damping equivalent to the
+/// loss factor at that mode).
+fn pad_torsion(
+    p: &SimParams,
+    rot: &Rotation3<f64>,
+    a: &ArmState,
+    object: &Isometry3<f64>,
+) -> PadTorsion {
+    let (gp, op) = (&p.grip, &p.object);
+    let n = rot * Vector3::y();
+    let k = gp.torsion_stiffness(op.handle_width_m);
+    let r = object.rotation * a.grasp_rel.translation.vector;
+    let nb = object.rotation.inverse_transform_vector(&n);
+    let i_n = nb.dot(&(op.inertia_body() * nb)) + op.mass_kg * r.cross(&n).norm_squared();
+    let c = gp.pad_loss_factor * (k * i_n).sqrt();
+    PadTorsion { n, k, c }
 }
 
 /// One jaw's grip in a sub-step: the load fraction λ of the wrench the rigid grasp required
@@ -203,11 +252,26 @@ impl Constraint {
     ) -> Constraint {
         let (o, ot) = object;
         let active = [0, 1].map(|i| arms[i].0.holding && arms[i].1.factor.is_some());
+        let h = sp.dt_s / sp.substeps.max(1) as f64;
+        let kp = sp.constraint_omega * sp.constraint_omega;
+        let kd = 2.0 * sp.constraint_omega;
+        // Compliant pads: γ = 1/(h(kh + c)) and the torsion row's position gain γk.
+        let pads = grip.map(|g| {
+            g.and_then(|g| g.torsion).map(|t| {
+                let gamma = 1.0 / (h * (t.k * h + t.c));
+                (t.n, gamma, gamma * t.k)
+            })
+        });
         // The factorizations read lower triangles only.
         let diag = |i: usize| {
-            ot.grasp_mobility_diag(&r[i])
+            let mut d = ot.grasp_mobility_diag(&r[i])
                 + gram_lower(&arms[i].1.z)
-                + Matrix6::identity() * sp.constraint_compliance
+                + Matrix6::identity() * sp.constraint_compliance;
+            if let Some((n, gamma, _)) = pads[i] {
+                let mut b = d.fixed_view_mut::<3, 3>(3, 3);
+                b += n * n.transpose() * gamma;
+            }
+            d
         };
         let factor = match active {
             [true, true] => BlockLdlt::factor(&diag(0), &ot.grasp_mobility(&r[1], &r[0]), &diag(1))
@@ -216,7 +280,6 @@ impl Constraint {
             [false, true] => Ldlt::factor(&diag(1)).map(|f| Factor::One(1, f)),
             [false, false] => None,
         };
-        let kp = sp.constraint_omega * sp.constraint_omega;
         let mut c_const = [Vector6::zeros(); 2];
         for i in 0..2 {
             if !active[i] {
@@ -225,7 +288,11 @@ impl Constraint {
             let desired = o.pose * arms[i].0.grasp_rel;
             let t = tools[i];
             let ep = t.translation.vector - desired.translation.vector;
-            let er = rotation_error(&t.rotation, &desired.rotation);
+            let mut er = rotation_error(&t.rotation, &desired.rotation);
+            if let Some((n, _, kp_n)) = pads[i] {
+                // The twist about n enters with the spring's gain γk, not k_p.
+                er += n * (n.dot(&er) * (kp_n / kp - 1.0));
+            }
             let w = o.angular_velocity;
             let cen = w.cross(&w.cross(&r[i]));
             c_const[i] = -arms[i].1.jdqd
@@ -243,8 +310,9 @@ impl Constraint {
             active,
             r: *r,
             c_const,
-            kd: 2.0 * sp.constraint_omega,
+            kd,
             grip,
+            soft: pads.map(|p| p.map(|(n, _, _)| (n, 1.0 / h))),
         }
     }
 
@@ -274,7 +342,12 @@ impl Constraint {
             if self.active[i] {
                 let r = &self.r[i];
                 let ev = jw[i] * Vector6::from(*qd[i]) - grasp::grasp_point_twist(r, vo);
-                let ci = self.c_const[i] - ev * self.kd;
+                let mut ci = self.c_const[i] - ev * self.kd;
+                if let Some((n, kd_n)) = &self.soft[i] {
+                    // The torsion row's twist rate enters with 1/h, not k_d.
+                    let w = n * (n.dot(&ev.fixed_rows::<3>(3)) * (kd_n - self.kd));
+                    ci -= Vector6::new(0.0, 0.0, 0.0, w.x, w.y, w.z);
+                }
                 b[i] = jw[i] * qdd[i] - grasp::grasp_point_twist(r, acc_o) - ci;
             }
         }
@@ -353,7 +426,19 @@ pub(super) fn slip_stage(
     let bar = jaw.inverse() * handle.bar_frame(&jaw);
     let delta = a.grasp_rel.inverse() * (object.inverse() * tool);
     let t = bar.inverse() * delta.translation.vector;
-    let rv = delta.rotation.scaled_axis();
+    let mut rv = delta.rotation.scaled_axis();
+    if !p.rigid_grasp {
+        // Compliant pads: the bar turns in the pads by the twist beyond the pads' elastic
+        // one, τ_n/k (τ_n the torsion they transmit, about n).
+        let n_world = object.rotation * (a.grasp_rel.rotation * (bar * Vector3::y()));
+        let tau = Vector3::new(
+            a.contact_wrench[3],
+            a.contact_wrench[4],
+            a.contact_wrench[5],
+        );
+        let elastic = tau.dot(&n_world) / gp.torsion_stiffness(op.handle_width_m);
+        rv -= bar * Vector3::y() * crate::finite_or(elastic, 0.0);
+    }
     let slide = Isometry3::from_parts(
         Translation3::from(bar * Vector3::new(t.x, 0.0, t.z)),
         UnitQuaternion::from_scaled_axis(rv),

@@ -578,7 +578,8 @@ impl Db {
         .await
     }
 
-    /// A page of ended sessions (those with an end time), newest first: at most `limit`,
+    /// A page of ended sessions (those with an end reason: ended, or marked interrupted or
+    /// lost), newest first: at most `limit`,
     /// those older than session `before` (the last of the previous page) when given.
     pub async fn sessions_page(
         &self,
@@ -589,7 +590,7 @@ impl Db {
         let limit = i64::try_from(limit).unwrap_or(i64::MAX);
         self.run(|pool| async move {
             let sql = format!(
-                "SELECT {SESSION_COLUMNS} WHERE ended_unix IS NOT NULL AND ($1 IS NULL \
+                "SELECT {SESSION_COLUMNS} WHERE end_reason IS NOT NULL AND ($1 IS NULL \
                  OR created_unix < (SELECT created_unix FROM sessions WHERE id = $1) \
                  OR (created_unix = (SELECT created_unix FROM sessions WHERE id = $1) AND id < $1)) \
                  ORDER BY created_unix DESC, id DESC LIMIT $2"

@@ -762,6 +762,23 @@ async fn sign_in_and_session_cookies_stand_in_for_the_token() {
         .await,
         403
     );
+    // what a page without a token asks first (the debrief)
+    let who = |cookie: String| {
+        let http = http.clone();
+        let url = format!("{}/api/signin", s.base);
+        async move {
+            let r = http.get(url).header("cookie", cookie).send().await.unwrap();
+            r.json::<Value>().await.unwrap()
+        }
+    };
+    assert_eq!(
+        who(instructor.clone()).await,
+        json!({"instructor": true, "trainee_sessions": 0})
+    );
+    assert_eq!(
+        who("seaarms_instructor=x".into()).await,
+        json!({"instructor": false, "trainee_sessions": 0})
+    );
 
     // a trainee's session cookie opens its own session's record only
     let made = |_: ()| {

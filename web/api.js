@@ -51,6 +51,16 @@ export const links = {
   resultsCsv: (group) => (group ? `/api/results.csv?${new URLSearchParams({ group })}` : '/api/results.csv'),
 };
 
+/** GET /api/signin: what this browser's cookies are ({instructor, trainee_sessions}), or null. */
+export async function cookies() {
+  try {
+    const r = await call('GET', '/api/signin');
+    return r.ok ? r.json() : null;
+  } catch {
+    return null;
+  }
+}
+
 /** POST /api/signin: this browser signed in as the instructor (an HttpOnly cookie); the answer. */
 export function signIn(token) {
   return call('POST', '/api/signin', { body: { token } });

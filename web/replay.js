@@ -150,6 +150,12 @@ document.addEventListener('keydown', (e) => {
 statusLoop(view, status, () => arm);
 
 (async () => {
+  // No token and no cookie that could open it: say so rather than ask and be refused.
+  const c = token ? null : await api.cookies();
+  if (c && !c.instructor && !c.trainee_sessions) {
+    note('This debrief opens for the instructor signed in on this browser, or on the browser that ran the session: open it from the instructor page or from your completion card.');
+    return;
+  }
   try {
     attempt = await fetchAttempt();
     // just finished: its end reaches the database with the recorder's next batch

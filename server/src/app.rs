@@ -197,6 +197,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/sessions/{id}/assessment"),
     ("get", "/api/results.csv"),
     ("post", "/api/signin"),
+    ("get", "/api/signin"),
     ("post", "/api/signout"),
     ("get", "/api/exercises"),
     ("get", "/api/exercises/{id}"),
@@ -287,7 +288,10 @@ fn routes(state: AppState) -> Router {
             get(api::sessions::assessment),
         )
         .route("/api/results.csv", get(api::results::export))
-        .route("/api/signin", post(api::signin::sign_in))
+        .route(
+            "/api/signin",
+            post(api::signin::sign_in).get(api::signin::status),
+        )
         .route("/api/signout", post(api::signin::sign_out))
         .route("/api/exercises", get(crate::exercises::list))
         .route("/api/exercises/{id}", get(crate::exercises::get))

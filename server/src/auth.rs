@@ -215,6 +215,17 @@ impl Credentials {
         })
     }
 
+    /// What this browser's cookies are (`GET /api/signin`): signed in as the instructor, and
+    /// how many trainee session cookies it sent (not checked against their sessions).
+    pub fn cookies(&self, state: &AppState) -> (bool, usize) {
+        let expected = instructor_cookie_value(&state.instructor_token);
+        let instructor = self
+            .instructor_cookie
+            .as_deref()
+            .is_some_and(|c| token_eq(c, &expected));
+        (instructor, self.trainee_cookies.len())
+    }
+
     /// Whether any credential came: a token where `from` says, or a sign-in cookie.
     pub fn presented(&self, from: TokenFrom) -> Result<bool, ApiError> {
         Ok(self.token(from)?.is_some()

@@ -5,6 +5,9 @@
 //!   every instructor route, debrief and download of this browser without a token in the URL;
 //!   a wrong token is a 403.
 //! * `POST /api/signout`: 204, the cookie removed.
+//! * `GET /api/signin`: 200 `{"instructor": bool, "trainee_sessions": n}` — what this
+//!   browser's cookies are, so a page opened without a token (a debrief) can tell "nobody
+//!   here" without asking for a record it would be refused.
 
 use axum::Json;
 use axum::extract::State;
@@ -59,6 +62,13 @@ pub async fn sign_in(
         SIGN_IN_S,
         secure_cookies(&state),
     )))
+}
+
+/// `GET /api/signin`.
+pub async fn status(State(state): State<AppState>, creds: crate::auth::Credentials) -> Response {
+    let (instructor, trainee_sessions) = creds.cookies(&state);
+    Json(serde_json::json!({"instructor": instructor, "trainee_sessions": trainee_sessions}))
+        .into_response()
 }
 
 /// `POST /api/signout`.

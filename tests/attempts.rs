@@ -16,14 +16,7 @@ use common::*;
 use serde_json::{Value, json};
 
 async fn get_with(url: &str, token: &str) -> (u16, Value) {
-    let r = reqwest::Client::new()
-        .get(url)
-        .bearer_auth(token)
-        .send()
-        .await
-        .unwrap();
-    let st = r.status().as_u16();
-    let text = r.text().await.unwrap();
+    let (st, text) = get_as(url, token).await;
     (
         st,
         serde_json::from_str(&text).unwrap_or(Value::String(text)),

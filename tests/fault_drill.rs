@@ -83,21 +83,10 @@ fn idle_attempt_fails_and_runs_are_deterministic() {
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-use common::{TEACHER, act, create, get_json, start};
+use common::{TEACHER, act, create, get_as, get_json, start};
 use futures_util::{SinkExt, StreamExt};
 use serde_json::{Value, json};
 use tokio_tungstenite::tungstenite::Message;
-
-/// GET `url` with `token`; the status and the body.
-async fn get_as(url: &str, token: &str) -> (u16, String) {
-    let r = reqwest::Client::new()
-        .get(url)
-        .bearer_auth(token)
-        .send()
-        .await
-        .unwrap();
-    (r.status().as_u16(), r.text().await.unwrap())
-}
 
 /// What gives the running drill away: the attempt's seed (it draws the fault and its time),
 /// the injection time as the server writes it, the fault as a named field or a label.

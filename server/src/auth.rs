@@ -258,12 +258,7 @@ impl Credentials {
     /// Who the cookies are, when no token was presented: the signed-in instructor, else the
     /// trainee of `session` whose cookie carries its control token.
     fn of_cookies(&self, state: &AppState, session: Option<(&str, &str)>) -> Principal {
-        let expected = instructor_cookie_value(&state.instructor_token);
-        if self
-            .instructor_cookie
-            .as_deref()
-            .is_some_and(|c| token_eq(c, &expected))
-        {
+        if self.cookies(state).0 {
             return Principal::Instructor;
         }
         match (session, self.trainee_cookie(session.map(|s| s.0))) {

@@ -94,6 +94,17 @@ pub async fn get_text(url: &str) -> String {
         .unwrap()
 }
 
+/// GET `url` with `token` as a bearer; the status and the body text.
+pub async fn get_as(url: &str, token: &str) -> (u16, String) {
+    let r = reqwest::Client::new()
+        .get(url)
+        .bearer_auth(token)
+        .send()
+        .await
+        .unwrap();
+    (r.status().as_u16(), r.text().await.unwrap())
+}
+
 /// GET with the instructor token; the body as JSON.
 pub async fn get_json(url: &str) -> Value {
     let text = get_text(url).await;

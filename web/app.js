@@ -99,7 +99,7 @@ const conn = new Connection({
 statusLoop(view, status, () => selectedArm, (s) => task.update(s.exercise, s.awaiting_ready));
 
 const startScreen = new StartScreen($('start'));
-const task = new TaskPanel($('task'), $('card'), {
+const task = new TaskPanel($('task'), $('card'), $('gauges'), {
   banner: showBanner,
   tryAgain: () => conn.send(messages.reset()), // a new attempt (docs/exercises.md)
   diagnose: (answer) => conn.send(messages.diagnose(answer)), // fault drill
@@ -234,6 +234,10 @@ function stickFrame() {
 /** Rumble and the jaw-force / line-pressure gauge (web/rumble.js). */
 const cues = new ForceCues(() => input.pads(), $('gauges'));
 
+/** How long the joint-mode note shows every axis after it changed (ms). */
+const NOTE_UNFOLDED_MS = 8000;
+/** A joint whose top speed is above this (rad/s, 86°/s) is marked fast in the note. */
+const FAST_JOINT_RAD_S = 1.5;
 /** On screen: what the sticks do now — Cartesian: the frame they follow; joint mode: which
  * way each axis turns the jaw in the active view (web/sticks.js). */
 setInterval(() => {
@@ -248,9 +252,19 @@ setInterval(() => {
     const words = view.drawn ? jointTurnWords(view.drawn.arms[selectedArm], vp.activeCamera()) : null;
     const names = jointNames(view.hello);
     const pad = ['L stick ↔', 'L stick ↕', 'R stick ↕', 'd-pad ↕ (LB/RB + R stick ↕)', 'R stick ↔', 'd-pad ↔ (LB/RB + R stick ↔)'];
-    html = `<b>Joint mode</b> in ${camTitle}: ` + (words ? words.map((w, i) => `<span class="li">${pad[i]} +: ${names[i]} ${w}</span>`).join(' ') : '');
+    // a joint much faster than the rest (the Magnum's wrist rotate, 150°/s, Lim Table 1-1) says so
+    const fast = (j) => {
+      const v = view.hello?.arms?.[0]?.model?.joints?.[j]?.max_velocity;
+      return v > FAST_JOINT_RAD_S ? ` <i>(fast: ${Math.round((v * 180) / Math.PI)}°/s)</i>` : '';
+    };
+    html = `<b>Joint mode</b> in ${camTitle}: ` + (words ? words.map((w, i) => `<span class="li">${pad[i]} +: ${names[i]} ${w}${fast(i)}</span>`).join(' ') : '');
   }
-  if (el.dataset.html !== html) { el.dataset.html = html; el.innerHTML = html; }
+  // the joint-mode list is long: shown whole for a while after it changes (mode, view, arm,
+  // or a direction that flipped with the posture), then folded to its first words
+  if (el.dataset.html !== html) { el.dataset.html = html; el.dataset.since = Date.now(); }
+  const folded = settings.control_mode === 'joint' && settings.control_method !== 'closed' && Date.now() - el.dataset.since > NOTE_UNFOLDED_MS;
+  const shown = folded ? `<b>Joint mode</b> in ${camTitle} (axes: ? or H)` : html;
+  if (el.dataset.shown !== shown) { el.dataset.shown = shown; el.innerHTML = shown; }
   // it sits on the view it describes, within that view's bounds
   const host = vp.view(vp.active).el;
   if (el.parentElement !== host) host.appendChild(el);

@@ -24,14 +24,21 @@ const COST_LABELS = {
 const DIAGNOSES = [['supply_drop', 'Supply pressure drop'], ['stuck_valve', 'Stuck valve'],
   ['leak', 'Internal leak'], ['air', 'Air in the oil']];
 
+/** A goal's first sentence (up to its first `.` or `:` followed by a space). */
+const firstSentence = (text) => text.split(/(?<=[.:])\s/)[0];
+
 export class TaskPanel {
   /**
    * @param panel element of the panel (#task); card: element of the completion card
+   * @param gauges the force and pressure gauges (#gauges): docked at the foot of the panel
+   *   while there is a task (next to it, not over a camera view), else back in the view
    * @param ui {banner(kind, text, ms), tryAgain(), next(), choose()}
    */
-  constructor(panel, card, ui) {
+  constructor(panel, card, gauges, ui) {
     this.panel = panel;
     this.card = card;
+    this.gauges = gauges;
+    this.gaugesHome = gauges.parentElement;
     this.ui = ui;
     this.spec = null;
     this.lastEvent = null;
@@ -50,9 +57,9 @@ export class TaskPanel {
     this.step = -1;
     this.card.hidden = true;
     this.panel.hidden = !spec;
-    if (!spec) { this.panel.replaceChildren(); return; }
+    if (!spec) { this.panel.replaceChildren(); this.gaugesHome.append(this.gauges); return; }
     this.panel.innerHTML = `<h3 class="task-title">${esc(spec.title)}</h3>
-      ${spec.fault_drill ? `<details class="task-goal" open><summary>${esc(spec.goal.split(/(?<=[.:])\s/)[0])}</summary>${esc(spec.goal)}</details>`
+      ${spec.fault_drill ? `<details class="task-goal" open><summary>${esc(firstSentence(spec.goal))}</summary>${esc(spec.goal.slice(firstSentence(spec.goal).length).trim())}</details>`
         : `<p class="task-goal">${esc(spec.goal)}</p>`}
       <button type="button" class="task-ready" data-act="ready" hidden title="Start the attempt's clock (Enter)">Ready — start</button>
       <div class="task-bar"><span class="task-fill"></span></div>
@@ -65,6 +72,7 @@ export class TaskPanel {
       <div class="task-counters">${COUNTERS.map(([k, label]) => `<span data-c="${k}">${label} <b>0</b></span>`).join('')}</div>
       <div class="task-costs" title="Points each penalty takes off the score so far (a completed attempt scores 100 less these)"></div>
 `;
+    this.panel.append(this.gauges);
     for (const b of this.panel.querySelectorAll('[data-answer]')) {
       b.addEventListener('click', () => {
         this.ui.diagnose?.(b.dataset.answer);

@@ -52,9 +52,12 @@ export class View {
     const cur = this.current?.speed_m_s > 0
       ? `<br><span class="legend-current">water current ${sw(CURRENT_COLOUR, `arrow: ${waterText(this.current)}`)}` +
         ` <span class="li">(${CURRENT_ARROW_M_PER_M_S} m per m/s)</span></span>` : '';
+    // the ellipsoids' colours are named only while they are drawn (the legend covers a view)
+    const ell = this.ellipsoids.showEllipsoids
+      ? `ellipsoids ${sw(ELLIPSOID_COLOURS.left, 'left')} ${sw(ELLIPSOID_COLOURS.right, 'right')} ${sw(ELLIPSOID_COLOURS.dual, 'dual')}` +
+        ` <span class="li">— 1 m/s drawn as ${this.ellipsoids.scale} m</span><br>` : '';
     this.legendEl.innerHTML =
-      `ellipsoids ${sw(ELLIPSOID_COLOURS.left, 'left')} ${sw(ELLIPSOID_COLOURS.right, 'right')} ${sw(ELLIPSOID_COLOURS.dual, 'dual')}` +
-      ` <span class="li">— 1 m/s drawn as ${this.ellipsoids.scale} m</span><br>object ${sw(GRASP_COLOURS.free, 'free')}` +
+      `${ell}object ${sw(GRASP_COLOURS.free, 'free')}` +
       ` ${sw(GRASP_COLOURS.one_on_surface, 'one holding, on surface')} ${sw(GRASP_COLOURS.one_lifted, 'one lifted')}` +
       ` ${sw(GRASP_COLOURS.one_holding_other_contact, 'one holds, other touches')} ${sw(GRASP_COLOURS.both_holding, 'both holding')}${cur}`;
     for (const el of this.legendEl.querySelectorAll('.sw')) el.style.background = el.dataset.colour;
@@ -119,7 +122,7 @@ export class View {
     if (this.drawn) { this.ellipsoids.update(this.drawn); this.viewports.dirty = true; }
   }
 
-  setEllipsoidsVisible(v) { this.ellipsoids.setVisible(v); this.viewports.dirty = true; }
+  setEllipsoidsVisible(v) { this.ellipsoids.setVisible(v); this.legend(); this.viewports.dirty = true; }
 
   setPolytopesVisible(v) {
     this.polytopes = v;

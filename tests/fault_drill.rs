@@ -76,6 +76,46 @@ fn idle_attempt_fails_and_runs_are_deterministic() {
     assert_eq!(a, b);
 }
 
+/// The stop step cannot time the hidden fault (issue 29, the residual hint): with the reach
+/// step taken out and the arm left still, the step ticks at the window's end plus its hold,
+/// the same for a fault drawn at 5.x s as for one at 14.x s (when it ticked 3 s after the
+/// injection, a trainee who sat still read the fault's moment off the task panel).
+#[test]
+fn the_stop_step_ticks_at_the_same_time_whenever_the_fault_came() {
+    let mut spec = (*EXERCISES.get("fault-diagnosis").expect("exercise")).clone();
+    spec.steps.remove(0);
+    let window_end = spec.fault_drill.as_ref().expect("drill").window_s[1];
+    let hold = spec.steps[0].hold_s;
+    let spec = Arc::new(spec);
+    let mut ticks = Vec::new();
+    for seed in SEEDS {
+        let a = run_headless(spec.clone(), &magnum(), Driver::Idle, seed).expect("run");
+        let at = a.diagnosis.as_ref().expect("diagnosis").injected_at_s;
+        let tick = a
+            .step_times_s
+            .first()
+            .copied()
+            .expect("the stop step ticked");
+        println!("seed {seed:2}: fault at {at:5.2} s, stop step at {tick:5.2} s");
+        ticks.push((at, tick));
+    }
+    let (early, late) = (
+        ticks.iter().map(|t| t.0).fold(f64::MAX, f64::min),
+        ticks.iter().map(|t| t.0).fold(0.0, f64::max),
+    );
+    assert!(
+        early < 8.0 && late > 12.0,
+        "the seeds' draws span the window: {early:.2}–{late:.2} s"
+    );
+    for (at, tick) in ticks {
+        assert!(
+            (tick - (window_end + hold)).abs() <= 0.05,
+            "fault at {at:.2} s: the stop step ticked at {tick:.2} s, not at {:.2} s",
+            window_end + hold
+        );
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // The drill cannot be read off the server (issue 29 item 1), over real sockets.
 // ---------------------------------------------------------------------------------------

@@ -90,8 +90,9 @@ pub enum Condition {
         /// Limit (rad/s).
         max_joint_speed_rad_s: f64,
     },
-    /// The fault drill's fault has been injected.
-    FaultInjected,
+    /// The fault drill's window has ended (its fault is in: it comes inside the window). Not
+    /// "the fault is in", whose moment a step ticking over would tell the trainee (issue 29).
+    FaultWindowOver,
     /// The trainee has named a fault.
     Diagnosed,
     /// Every one of `of`.
@@ -130,8 +131,8 @@ pub struct Facts<'a> {
     pub scene: &'a Scene,
     /// The box's centre-of-mass height at rest at the start (m, world z).
     pub rest_z_m: f64,
-    /// The drill's fault is in.
-    pub fault_injected: bool,
+    /// The drill's fault window has ended (the fault is in).
+    pub fault_window_over: bool,
     /// The trainee's answer, once given.
     pub answer: Option<&'a str>,
 }
@@ -296,8 +297,8 @@ impl Condition {
             })),
             // Its progress is never shown: a step's progress bar that moved at the injection
             // would tell the trainee when the hidden fault came (issue 29).
-            Condition::FaultInjected => Verdict {
-                met: facts.fault_injected,
+            Condition::FaultWindowOver => Verdict {
+                met: facts.fault_window_over,
                 fraction: 0.0,
             },
             Condition::Diagnosed => yes(facts.answer.is_some()),
@@ -420,7 +421,7 @@ impl Condition {
             | Condition::ObjectResting
             | Condition::ClosedLoop
             | Condition::ArmsStill { .. }
-            | Condition::FaultInjected
+            | Condition::FaultWindowOver
             | Condition::Diagnosed => {}
         }
     }
@@ -498,7 +499,7 @@ impl Condition {
             | Condition::Released
             | Condition::ObjectResting
             | Condition::ClosedLoop
-            | Condition::FaultInjected
+            | Condition::FaultWindowOver
             | Condition::Diagnosed => Ok(()),
         }
     }

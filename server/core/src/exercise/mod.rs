@@ -153,6 +153,8 @@ pub struct ExerciseRun {
     done: bool,
     drill: Option<(f64, Fault)>,
     fault_injected: bool,
+    /// The drill's window has ended ([`Condition::FaultWindowOver`]).
+    fault_window_over: bool,
     answer: Option<String>,
     assessor: Assessor,
     last_event: Option<Event>,
@@ -181,6 +183,7 @@ impl ExerciseRun {
             done: false,
             drill,
             fault_injected: false,
+            fault_window_over: false,
             answer: None,
             last_event: None,
             events: Vec::new(),
@@ -208,7 +211,7 @@ impl ExerciseRun {
         Facts {
             scene: &self.spec.scene,
             rest_z_m: self.rest_z_m,
-            fault_injected: self.fault_injected,
+            fault_window_over: self.fault_window_over,
             answer: self.answer.as_deref(),
         }
     }
@@ -267,12 +270,15 @@ impl ExerciseRun {
                 self.fault_injected = true;
             }
         }
+        if let Some(d) = &self.spec.fault_drill {
+            self.fault_window_over = self.fault_injected && elapsed >= d.window_s[1];
+        }
         let mut events = Vec::new();
         self.assessor.sample(sim, idle, &mut events);
         let facts = Facts {
             scene: &self.spec.scene,
             rest_z_m: self.rest_z_m,
-            fault_injected: self.fault_injected,
+            fault_window_over: self.fault_window_over,
             answer: self.answer.as_deref(),
         };
         // Steps whose condition already holds complete in the same sample, one after another.

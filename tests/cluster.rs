@@ -385,6 +385,11 @@ async fn three_replicas_behind_haproxy() {
     // … and its bare id on a replica that does not hold it: 421 from the directory.
     let body = misdirected(format!("http://{other_addr}/api/sessions/{id0}")).await;
     assert_eq!(body["detail"]["base"], format!("/r/{holder}"), "{body}");
+    // so do its assessment and its CSV log (docs/api.md; they answered 404 and 403)
+    for route in ["assessment", "log.csv"] {
+        let body = misdirected(format!("http://{other_addr}/api/sessions/{id0}/{route}")).await;
+        assert_eq!(body["detail"]["replica"], holder, "{route}: {body}");
+    }
 
     // The instructor's list on any replica (and through the proxy) has all 60 live.
     let all_ids: HashSet<String> = created

@@ -710,10 +710,7 @@ pub async fn assessment(
     creds: Credentials,
     Path(id): Path<String>,
 ) -> Result<Json<Value>, ApiError> {
-    let session = state
-        .sessions
-        .get(&id)
-        .ok_or_else(|| ApiError::not_found(format!("no live session `{id}`")))?;
+    let session = live_session(&state, &id).await?;
     let actor = live_actor(&state, &creds, TokenFrom::BearerOrQuery, &session)?;
     let live = session.live();
     live.exercise()
@@ -757,7 +754,11 @@ pub async fn log_csv(
     let from = TokenFrom::BearerOrQuery;
     match state.sessions.get(&id) {
         Some(live) => live_actor(&state, &creds, from, &live)?,
-        None => ended_actor(&state, &creds, from, &id).await?,
+        None => match crate::cluster::elsewhere(&state, &id).await {
+            // live on another replica: 421 naming it (docs/api.md), as its other routes
+            Some(e) => return Err(e),
+            None => ended_actor(&state, &creds, from, &id).await?,
+        },
     };
     let path = state
         .sessions

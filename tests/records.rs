@@ -297,6 +297,7 @@ async fn attempts_inputs_and_events_read_back_as_written() {
                 id: "a1".into(),
                 seq: i as i64,
                 data: p.clone(),
+                sim_seconds: i as f64,
             });
         }
         batch.extend([
@@ -634,6 +635,22 @@ async fn kill_9_leaves_whole_records_and_interrupted_sessions() {
                 let entries = seaarms::replay::log::decode(log)
                     .unwrap_or_else(|e| panic!("{attempt}: stored input log: {e}"));
                 assert!(!entries.is_empty(), "{attempt}: empty input log");
+                // The running attempt's length is stored with its pieces (issue 29 item 14:
+                // it read 0 after kill -9 though its log replays to ~4 s): at least its log's
+                // last entry, at most the CSV's last row.
+                let stored = rows(
+                    &db_url,
+                    "SELECT sim_seconds FROM attempts WHERE id = $1",
+                    attempt,
+                )
+                .await;
+                let t_attempt: f64 = stored[0].get("sim_seconds");
+                let last_entry_s = entries.last().map_or(0.0, |e| e.k as f64 / 1000.0);
+                eprintln!("{attempt}: stored {t_attempt} s, log's last entry at {last_entry_s} s");
+                assert!(
+                    t_attempt >= last_entry_s - 1e-9 && t_attempt > 1.5 && t_attempt <= t_csv + 1.0,
+                    "{attempt}: stored length {t_attempt} s (log to {last_entry_s} s, CSV to {t_csv} s)"
+                );
             }
             figures.push((id.to_string(), t_db, overloads_db, csv_path));
         }

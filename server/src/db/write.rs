@@ -49,14 +49,16 @@ pub enum Write {
     },
     /// An attempt started.
     AttemptStart(Box<AttemptStart>),
-    /// The next piece of an attempt's input stream.
+    /// The next piece of an attempt's input stream, and how far the attempt has run.
     AttemptInputs {
         /// Attempt id.
         id: String,
         /// Order within the attempt (0, 1, 2, …).
         seq: i64,
-        /// Bytes.
+        /// Bytes (none: only the progress is written).
         data: Vec<u8>,
+        /// Simulated seconds so far (the running attempt's `sim_seconds`).
+        sim_seconds: f64,
     },
     /// An attempt ended.
     AttemptEnd(Box<AttemptEnd>),
@@ -202,14 +204,28 @@ impl Db {
                     .execute(&mut *tx)
                     .await?;
                 }
-                Write::AttemptInputs { id, seq, data } => {
+                Write::AttemptInputs {
+                    id,
+                    seq,
+                    data,
+                    sim_seconds,
+                } => {
+                    if !data.is_empty() {
+                        sqlx::query(
+                            "INSERT INTO attempt_inputs (attempt_id, seq, data) \
+                             VALUES ($1, $2, $3) ON CONFLICT (attempt_id, seq) DO NOTHING",
+                        )
+                        .bind(id.as_str())
+                        .bind(*seq)
+                        .bind(data.as_slice())
+                        .execute(&mut *tx)
+                        .await?;
+                    }
                     sqlx::query(
-                        "INSERT INTO attempt_inputs (attempt_id, seq, data) VALUES ($1, $2, $3) \
-                         ON CONFLICT (attempt_id, seq) DO NOTHING",
+                        "UPDATE attempts SET sim_seconds = $2 WHERE id = $1 AND outcome IS NULL",
                     )
                     .bind(id.as_str())
-                    .bind(*seq)
-                    .bind(data.as_slice())
+                    .bind(*sim_seconds)
                     .execute(&mut *tx)
                     .await?;
                 }

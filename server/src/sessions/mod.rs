@@ -312,6 +312,7 @@ impl Live {
             self.pending.push(RecordMsg::AttemptInputs {
                 id: self.attempt_id.clone(),
                 bytes: last,
+                sim_seconds: self.sim.time_s(),
             });
         }
         let assessment = self.exercise.as_ref().map(ExerciseRun::assessment);
@@ -327,17 +328,17 @@ impl Live {
             })));
     }
 
-    /// Attempt records for the recorder, oldest first; with the log's piece so far when
-    /// `piece` (about every second, so a killed server loses at most that).
+    /// Attempt records for the recorder, oldest first; with the log's piece so far and the
+    /// attempt's simulated seconds when `piece` (about every second, so a killed server
+    /// loses at most that, and its interrupted attempt keeps its length).
     pub fn take_records(&mut self, piece: bool) -> Vec<RecordMsg> {
         if piece {
             if let Some(bytes) = self.log.as_mut().map(|l| l.take_piece()) {
-                if !bytes.is_empty() {
-                    self.pending.push(RecordMsg::AttemptInputs {
-                        id: self.attempt_id.clone(),
-                        bytes,
-                    });
-                }
+                self.pending.push(RecordMsg::AttemptInputs {
+                    id: self.attempt_id.clone(),
+                    bytes,
+                    sim_seconds: self.sim.time_s(),
+                });
             }
         }
         std::mem::take(&mut self.pending)

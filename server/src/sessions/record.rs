@@ -102,8 +102,11 @@ pub enum RecordMsg {
     AttemptInputs {
         /// Attempt id.
         id: String,
-        /// Bytes to append.
+        /// Bytes to append (none: only the attempt's progress).
         bytes: Vec<u8>,
+        /// Simulated seconds the attempt has run (stored with the piece, so an attempt cut
+        /// off by a killed server keeps its length).
+        sim_seconds: f64,
     },
     /// An attempt ended.
     AttemptEnded(Box<AttemptEnd>),
@@ -767,14 +770,19 @@ impl RecorderState {
                 self.next_piece.insert(start.id.clone(), 0);
                 self.writes.push(DbWrite::AttemptStart(start));
             }
-            RecordMsg::AttemptInputs { id, bytes } => {
+            RecordMsg::AttemptInputs {
+                id,
+                bytes,
+                sim_seconds,
+            } => {
                 let next = self.next_piece.entry(id.clone()).or_insert(0);
                 let seq = *next;
-                *next += 1;
+                *next += i64::from(!bytes.is_empty());
                 self.writes.push(DbWrite::AttemptInputs {
                     id,
                     seq,
                     data: bytes,
+                    sim_seconds,
                 });
             }
             RecordMsg::AttemptEnded(end) => {

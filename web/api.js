@@ -68,9 +68,12 @@ export function signIn(token) {
 
 /** WebSocket paths (see `wsUrl`). */
 export const sockets = {
-  /** A live session's socket, as its trainee or (`observer`) read-only. */
-  session: (id, token, { observer = false, base = '' } = {}) =>
-    `${base}/ws/sessions/${enc(id)}?token=${enc(token)}${observer ? '&role=observer' : ''}`,
+  /** A live session's socket, as its trainee or (`observer`) read-only; without a token
+   * the cookies open it (the instructor's sign-in: no token in a URL, issue 29). */
+  session: (id, token, { observer = false, base = '' } = {}) => {
+    const q = [token ? `token=${enc(token)}` : '', observer ? 'role=observer' : ''].filter(Boolean).join('&');
+    return `${base}/ws/sessions/${enc(id)}${q ? `?${q}` : ''}`;
+  },
   /** The replay socket of a recorded attempt (without a token, the cookies open it). */
   replay: (attemptId, token) => withToken(`/ws/replay/${enc(attemptId)}`, token),
 };

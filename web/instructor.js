@@ -155,7 +155,8 @@ function observe(id) {
   observedBase = who?.base || '';
   $('act-csv').href = api.links.sessionCsv(id, observedBase);
   conn = new Connection({
-    role: 'observer', sessionId: id, token, base: observedBase,
+    // the sign-in cookie opens the socket: the instructor token stays out of its URL
+    role: 'observer', sessionId: id, token: null, base: observedBase,
     onHello(h) { view.setHello(h); status.role(h.role); if (h.scenario) $('act-scenario').value = h.scenario; },
     onState(s) { view.setState(s); followVisibility(view, s.visibility_m); showCurrent(s.current); },
     onPong(ms) { status.latency(ms); },

@@ -19,6 +19,10 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     await trainee.page.goto(`${url}/?scenario=training`);
     const id = await untilDrawn(trainee.page);
 
+    // every URL the instructor's page asks for, sockets included (issue 29: no token in one)
+    const asked = [];
+    instr.page.on('request', (r) => asked.push(r.url()));
+    instr.page.on('websocket', (w) => asked.push(w.url()));
     // a wrong token is refused with a clear message
     await instr.page.goto(`${url}${await instructorPath(url)}`);
     await instr.page.fill('#token', 'not-the-token');
@@ -58,6 +62,9 @@ test('instructor dashboard lists the trainee session and shows it live', { timeo
     const obs = await instr.page.evaluate(() => ({ role: window.__seaarms.hello.role, session: window.__seaarms.hello.session, n: window.__seaarms.viewports().length }));
     assert.equal(obs.role, 'observer');
     assert.equal(obs.session, id);
+    // observed through the sign-in cookie: the token is in no URL, the socket's included
+    assert.ok(asked.some((u) => u.includes(`/ws/sessions/${id}`)), `the observer socket: ${asked.filter((u) => u.includes('/ws/'))}`);
+    for (const u of asked) assert.ok(!u.includes(INSTRUCTOR_TOKEN), `the instructor token in ${u}`);
     assert.equal(obs.n, 4);
     // the observer receives the same live stream as the trainee (same sim time within 1 s)
     const [a, b] = await Promise.all([

@@ -7,6 +7,8 @@
 //! * `condition`: [`Condition`], when a step is done, its progress and readouts.
 //! * `assess`: [`Metrics`] sampled at 100 Hz ([`Assessor`]), the score and pass limits.
 //! * `autopilot`: [`Autopilot`], the file's script worked through the trainee's controls.
+//! * `proficiency`: benchmarks from reference operators, the learning and relapse CUSUMs, a
+//!   trainee's state on an exercise.
 //! * here: [`ExerciseRun`], one attempt: step progress, the fault drill, the verdict.
 //!
 //! The caller steps the simulation and calls [`ExerciseRun::sample`] every
@@ -15,6 +17,7 @@
 pub mod assess;
 pub mod autopilot;
 pub mod condition;
+pub mod proficiency;
 pub mod spec;
 
 pub use assess::{Assessor, Event, JerkMeter, Metrics};

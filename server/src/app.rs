@@ -287,6 +287,11 @@ fn routes(state: AppState) -> Router {
             "/api/sessions/{id}/assessment",
             get(api::sessions::assessment),
         )
+        .route(
+            "/api/sessions/{id}/progress",
+            get(api::progress::of_session),
+        )
+        .route("/api/progress", get(api::progress::class))
         .route("/api/results.csv", get(api::results::export))
         .route(
             "/api/signin",

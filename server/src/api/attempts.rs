@@ -95,7 +95,7 @@ fn holder_key(state: &AppState, creds: &Credentials, row: &AttemptRow) -> Result
 /// The attempts routes read the token from the header, else the query.
 const FROM: TokenFrom = TokenFrom::BearerOrQuery;
 
-fn is_instructor(state: &AppState, creds: &Credentials) -> Result<bool, ApiError> {
+pub(crate) fn is_instructor(state: &AppState, creds: &Credentials) -> Result<bool, ApiError> {
     Ok(creds.principal(state, FROM, None)?.is_instructor())
 }
 

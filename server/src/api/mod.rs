@@ -5,6 +5,7 @@ pub mod analysis;
 pub mod attempts;
 pub mod openapi;
 pub mod optimize;
+pub mod progress;
 pub mod results;
 pub mod robots;
 pub mod scenarios;

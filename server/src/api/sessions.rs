@@ -36,7 +36,7 @@ impl From<CommandError> for ApiError {
 
 /// Who `creds` (read from `from`) act as on the live session `s`: its trainee or the
 /// instructor, else 403.
-fn live_actor(
+pub(crate) fn live_actor(
     state: &AppState,
     creds: &Credentials,
     from: TokenFrom,
@@ -679,7 +679,7 @@ pub async fn end(
     Ok(StatusCode::NO_CONTENT)
 }
 
-async fn live_session(state: &AppState, id: &str) -> Result<Arc<Session>, ApiError> {
+pub(crate) async fn live_session(state: &AppState, id: &str) -> Result<Arc<Session>, ApiError> {
     if let Some(s) = state.sessions.get(id) {
         return Ok(s);
     }

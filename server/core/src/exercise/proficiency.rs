@@ -93,6 +93,48 @@ impl Benchmark {
     }
 }
 
+/// How proficiency is judged on an exercise (its file's `proficiency`, every field optional).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct ProficiencySpec {
+    /// Attempts in a row meeting the benchmark that make a trainee proficient: 3 (the
+    /// proficiency-based progression studies ask for two consecutive attempts at the
+    /// benchmark; one more here, as a simulator attempt is short).
+    pub consecutive: usize,
+    /// The benchmark's pass line in reference SDs from the reference mean: 1 (the
+    /// "often one SD" of the procedure).
+    pub benchmark_sd: f64,
+    /// Fewest reference attempts (after outliers) for a benchmark: 5; with fewer, the file's
+    /// pass marks alone apply.
+    pub min_reference_attempts: usize,
+    /// The CUSUM charts.
+    pub cusum: CusumParams,
+}
+
+impl Default for ProficiencySpec {
+    fn default() -> ProficiencySpec {
+        ProficiencySpec {
+            consecutive: 3,
+            benchmark_sd: 1.0,
+            min_reference_attempts: 5,
+            cusum: CusumParams::default(),
+        }
+    }
+}
+
+impl ProficiencySpec {
+    /// Checks the numbers.
+    pub fn check(&self) -> Result<(), String> {
+        if !(self.benchmark_sd.is_finite() && self.benchmark_sd >= 0.0) {
+            return Err(format!(
+                "proficiency.benchmark_sd must be ≥ 0 (got {})",
+                self.benchmark_sd
+            ));
+        }
+        self.cusum.check()
+    }
+}
+
 /// The CUSUM's settings (an exercise file's `proficiency.cusum`; defaults below).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]

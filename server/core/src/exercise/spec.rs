@@ -58,6 +58,10 @@ pub struct ExerciseSpec {
     /// engineering views as training wheels).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub views: Option<ViewSet>,
+    /// How proficiency is judged on this exercise (issue 30): the benchmark's attempts in a
+    /// row and distance, the CUSUM's failure rates and limit (defaults documented there).
+    #[serde(default)]
+    pub proficiency: super::proficiency::ProficiencySpec,
     /// The scripted controller for `seaarms exercise <id> --autopilot`.
     pub autopilot: Vec<Action>,
 }
@@ -328,6 +332,9 @@ impl ExerciseSpec {
         }
         if !(0.0..=100.0).contains(&self.pass.min_score) {
             return bad("pass.min_score must be in [0, 100]".into());
+        }
+        if let Err(m) = self.proficiency.check() {
+            return bad(m);
         }
         for t in &self.scoring {
             if super::assess::Metrics::default().get(&t.metric).is_none() {

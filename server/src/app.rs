@@ -195,6 +195,8 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("post", "/api/sessions/{id}/actions"),
     ("get", "/api/sessions/{id}/log.csv"),
     ("get", "/api/sessions/{id}/assessment"),
+    ("get", "/api/sessions/{id}/progress"),
+    ("get", "/api/progress"),
     ("get", "/api/results.csv"),
     ("post", "/api/signin"),
     ("get", "/api/signin"),

@@ -108,6 +108,17 @@ export function endSession(id, token, base = '') {
   return call('DELETE', sessionPath(id, base), { token });
 }
 
+/** GET /api/sessions/{id}/progress: the session's trainee's learning curves on every
+ * exercise (docs/api.md), or null. */
+export async function sessionProgress(id, token, base = '') {
+  try {
+    const r = await call('GET', `${sessionPath(id, base)}/progress`, { token });
+    return r.ok ? await r.json() : null;
+  } catch {
+    return null;
+  }
+}
+
 /** GET /api/sessions/{id}/assessment: the session's exercise assessment, or null. */
 export async function sessionAssessment(id, token, base = '') {
   try {
@@ -172,6 +183,15 @@ export async function attempts(filter, token) {
   const r = await call('GET', `/api/attempts?${new URLSearchParams(filter)}`, { token });
   if (!r.ok) throw new Error(await errorOf(r));
   return (await r.json()).attempts || [];
+}
+
+/** GET /api/progress: a class's proficiency on `exercise` (instructor; `group` optional):
+ * {exercise, trainees: [curve]} (docs/api.md). */
+export async function classProgress(exercise, group, token) {
+  const q = new URLSearchParams({ exercise, ...(group ? { group } : {}) });
+  const r = await call('GET', `/api/progress?${q}`, { token });
+  if (!r.ok) throw new Error(await errorOf(r));
+  return r.json();
 }
 
 /** POST /api/analysis (`body`: {robot, q, polytope?}); the analysis, or null. */

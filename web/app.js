@@ -8,7 +8,7 @@ import { StartScreen } from './start.js';
 import { TaskPanel } from './task.js';
 import { mountViews, followVisibility } from './viewcontrols.js';
 import { $, Banner, statusLoop } from './page.js';
-import { messages, exercises, jointNames, sessionSummary } from './api.js';
+import { messages, exercises, jointNames, sessionSummary, sessionProgress } from './api.js';
 import { ForceCues } from './rumble.js';
 import { jointTurnWords, frameRows } from './sticks.js';
 const SPEEDS = [0.25, 0.5, 0.75, 1];
@@ -156,7 +156,10 @@ function newSession(opts) {
 }
 
 async function chooseAndStart() {
-  const choice = await startScreen.choose(task.spec?.id);
+  // the trainee's curves so far, read with the running session's token (its trainee's)
+  const s = conn.session;
+  const progress = s?.control_token && !conn.observing ? () => sessionProgress(s.id, s.control_token, s.base || '') : null;
+  const choice = await startScreen.choose(task.spec?.id, progress);
   conn.restart(choice);
 }
 

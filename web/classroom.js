@@ -55,6 +55,20 @@ export function compareRows(attempts) {
   }).sort((a, b) => b.best - a.best || a.trainee.localeCompare(b.trainee));
 }
 
+/** The class ordered by proficiency: who needs the instructor first. */
+const PROFICIENCY_ORDER = { relapsed: 0, practising: 1, proficient: 2, not_started: 3 };
+
+/** A trainee's proficiency cell: the state, since which attempt, and the CUSUM's value. */
+export function proficiencyText(c) {
+  if (!c) return '—';
+  const learning = c.cusum?.learning?.at(-1);
+  const since = c.state === 'proficient' && c.proficient_at ? ` (attempt ${c.proficient_at})` : '';
+  const chart = c.state === 'proficient' ? '' : ` <span class="k" title="learning CUSUM / its limit">${fmtNum(learning)}/${fmtNum(c.cusum?.limit)}</span>`;
+  return `<span class="state" data-state="${esc(c.state)}">${esc(c.state.replace('_', ' '))}</span>${since}${chart}`;
+}
+
+const fmtNum = (x) => (Number.isFinite(x) ? x.toFixed(2) : '—');
+
 export class Classroom {
   /**
    * @param ui {token() → the instructor token, observe(id), act(id, body) → Promise<{ok, error}>,
@@ -73,6 +87,7 @@ export class Classroom {
     $('hist-close').addEventListener('click', () => { this.history = null; $('cls-history').hidden = true; });
     this.cmpPicked = false; // until the instructor picks, the comparison follows the roster's exercise
     $('cmp-exercise').addEventListener('change', () => { this.cmpPicked = true; this.refreshCompare(); });
+    $('cmp-order').addEventListener('change', () => this.refreshCompare());
     $('cls-group').addEventListener('change', () => { this.exportLink(); this.refreshCompare(); this.render(this.sessions || []); });
     this.exportLink();
     this.loadExercises();
@@ -226,15 +241,23 @@ export class Classroom {
   async refreshCompare() {
     const ex = $('cmp-exercise').value;
     if (!ex || !this.ui.token()) return;
-    const list = await this.attempts({ exercise: ex }, this.group);
+    const [list, progress] = await Promise.all([
+      this.attempts({ exercise: ex }, this.group),
+      api.classProgress(ex, this.group, this.ui.token()).catch((e) => { this.setStatus(`progress: ${e.message}`, true); return null; }),
+    ]);
     if (!list || $('cmp-exercise').value !== ex) return;
     for (const a of list) if (a.group) this.groups.add(a.group);
-    const rows = compareRows(list);
-    $('compare').tBodies[0].innerHTML = rows.map((r) => `<tr data-trainee="${esc(r.trainee)}" data-group="${esc(r.group)}">
+    // each trainee's proficiency (the server's CUSUM, docs/exercises.md), by trainee and group
+    const state = new Map((progress?.trainees || []).map((c) => [`${c.trainee}\u0000${c.group}`, c]));
+    const rows = compareRows(list).map((r) => ({ ...r, progress: state.get(`${r.trainee}\u0000${r.group}`) }));
+    if ($('cmp-order').value === 'proficiency') {
+      rows.sort((a, b) => (PROFICIENCY_ORDER[a.progress?.state] ?? 9) - (PROFICIENCY_ORDER[b.progress?.state] ?? 9) || b.best - a.best);
+    }
+    $('compare').tBodies[0].innerHTML = rows.map((r) => `<tr data-trainee="${esc(r.trainee)}" data-group="${esc(r.group)}" data-state="${esc(r.progress?.state ?? '')}">
         <td><button type="button" class="link" data-trainee="${esc(r.trainee)}" data-group="${esc(r.group)}">${esc(r.trainee || '(no name)')}</button></td>
-        <td>${esc(r.group)}</td><td class="num">${r.attempts}</td><td class="num">${r.passed}</td>
+        <td>${esc(r.group)}</td><td class="prof">${proficiencyText(r.progress)}</td><td class="num">${r.attempts}</td><td class="num">${r.passed}</td>
         <td class="num">${Math.round(r.best)}</td><td class="num">${r.last === null ? '—' : Math.round(r.last)}</td>
         <td class="num">${f(r.bestTime)}</td><td class="num">${r.strikes ?? '—'}</td><td class="num">${f(r.meanW, 3)}</td><td class="num">${f(r.meanJlm, 3)}</td></tr>`).join('')
-      || '<tr><td colspan="10">no finished attempts at this exercise</td></tr>';
+      || '<tr><td colspan="11">no finished attempts at this exercise</td></tr>';
   }
 }

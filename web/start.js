@@ -11,6 +11,38 @@ const GROUP_KEY = 'seaarms.group';
 /** Longest display name and group sent (the server accepts up to 64 characters). */
 const MAX_NAME_CHARS = 40;
 
+/** What each proficiency state says to the trainee. */
+const STATE_TEXT = {
+  practising: 'practising', proficient: 'proficient', relapsed: 'proficient before: practise again',
+};
+
+/** A learning curve: each finished attempt's score (0–100) left to right, passes filled,
+ * failures hollow, the points that made the trainee proficient ringed. SVG, no inline style
+ * (the page's CSP). */
+export function curveSvg(c, width = 220, height = 40) {
+  const n = c.attempts.length;
+  const x = (i) => (n === 1 ? width / 2 : 6 + ((width - 12) * i) / (n - 1));
+  const y = (s) => height - 4 - ((height - 8) * Math.max(0, Math.min(100, s))) / 100;
+  const line = c.attempts.map((a, i) => `${i ? 'L' : 'M'}${x(i).toFixed(1)},${y(a.score).toFixed(1)}`).join(' ');
+  const dots = c.attempts.map((a, i) => `<circle class="${a.passed ? 'pass' : 'fail'}" cx="${x(i).toFixed(1)}" cy="${y(a.score).toFixed(1)}" r="2.5"/>`).join('');
+  const rings = (c.cusum?.proficient_at || []).map((k) => `<circle class="at" cx="${x(k - 1).toFixed(1)}" cy="${y(c.attempts[k - 1].score).toFixed(1)}" r="5"/>`).join('');
+  return `<svg class="curve" viewBox="0 0 ${width} ${height}" width="${width}" height="${height}" role="img"
+    aria-label="scores of ${n} attempts"><path d="${line}"/>${dots}${rings}</svg>`;
+}
+
+/** Fills each exercise's curve and state from GET /api/sessions/{id}/progress. */
+function showCurves(el, p) {
+  for (const c of p.exercises || []) {
+    const slot = el.querySelector(`[data-progress="${CSS.escape(c.exercise)}"]`);
+    if (!slot || !c.attempts.length) continue;
+    const last = c.attempts[c.attempts.length - 1];
+    const since = c.state === 'proficient' && c.proficient_at ? ` since attempt ${c.proficient_at}` : '';
+    slot.innerHTML = `${curveSvg(c)}<span class="ex-state" data-state="${esc(c.state)}">${esc(STATE_TEXT[c.state] || c.state)}${since}</span>
+      <span class="ex-last">${c.attempts.length} attempt${c.attempts.length === 1 ? '' : 's'}, last ${Math.round(last.score)}</span>`;
+    slot.hidden = false;
+  }
+}
+
 export class StartScreen {
   constructor(el) {
     this.el = el;
@@ -25,8 +57,10 @@ export class StartScreen {
     return n && n.id !== id ? n : null;
   }
 
-  /** Shows the screen; resolves with the trainee's choice. `selected`: exercise id to preselect. */
-  async choose(selected) {
+  /** Shows the screen; resolves with the trainee's choice. `selected`: exercise id to preselect;
+   * `progress`: loads the trainee's learning curves (GET /api/sessions/{id}/progress), each
+   * drawn under its exercise. */
+  async choose(selected, progress = null) {
     this.exercises = await exercises();
     const name = localStorage.getItem(NAME_KEY) || '';
     const group = localStorage.getItem(GROUP_KEY) || '';
@@ -47,7 +81,8 @@ export class StartScreen {
           <span class="ex-title">${esc(e.title)}</span>
           <span class="ex-meta">${e.steps.length} steps · ${Math.round(e.time_limit_s)} s limit · ${esc(e.control.mode)}${e.control.method === 'closed' ? ', closed loop' : ''}</span>
           <span class="ex-goal">${esc(e.goal)}</span>
-          <span class="ex-skills">${e.skills.map((s) => `<span>${esc(s)}</span>`).join('')}</span></label></li>`).join('')}
+          <span class="ex-skills">${e.skills.map((s) => `<span>${esc(s)}</span>`).join('')}</span>
+          <span class="ex-progress" data-progress="${esc(e.id)}" hidden></span></label></li>`).join('')}
       </ul>
       ${this.exercises.length ? '' : '<p class="ex-none">No exercises on this server: free play only.</p>'}
       <div class="start-actions">
@@ -57,6 +92,7 @@ export class StartScreen {
     </form>`;
     el.hidden = false;
     this.note = null;
+    if (progress) progress().then((p) => { if (p && el.contains(form)) showCurves(el, p); });
     const form = el.querySelector('form');
     const start = el.querySelector('#start-exercise');
     const picked = () => form.querySelector('input[name=exercise]:checked')?.value;

@@ -107,8 +107,13 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     const cmpRow = `#compare tr[data-trainee="${nameA}"]`;
     await ip.waitForSelector(cmpRow, { timeout: 15000 });
     assert.equal(await ip.inputValue('#cmp-exercise'), 'dual-lift');
-    assert.equal(await ip.textContent(`${cmpRow} td:nth-child(5)`), String(Math.round(recorded.score)), 'best score');
-    assert.equal(await ip.textContent(`${cmpRow} td:nth-child(6)`), String(Math.round(recorded.score)), 'last score');
+    assert.equal(await ip.textContent(`${cmpRow} td:nth-child(6)`), String(Math.round(recorded.score)), 'best score');
+    assert.equal(await ip.textContent(`${cmpRow} td:nth-child(7)`), String(Math.round(recorded.score)), 'last score');
+    // its proficiency (issue 30): one attempt is not proficiency (the LC-CUSUM needs twelve
+    // passes at the default rates); the chart's value after one pass is ln(0.9/0.7) = 0.25
+    const prof = await ip.textContent(`${cmpRow} td:nth-child(3)`);
+    const chart = recorded.outcome === 'passed' ? '0.25/2.77' : '0.00/2.77';
+    assert.equal(prof.replace(/\s+/g, ' ').trim(), `practising ${chart}`, prof);
 
     // its history lists the attempt with its outcome and a debrief link (no token in it)
     await ip.click(`${row(a)} [data-history]`);
@@ -182,6 +187,7 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     await dp.screenshot({ path: join(SHOTS, 'debrief.png') });
     assert.deepEqual(derrors, []);
 
+
     // a silent fault on trainee B: the instructor sees it, the trainee's page shows nothing
     await ip.click(`${row(b)} [data-observe]`);
     await until(ip, (id) => window.__seaarms?.hello?.session === id, b.id);
@@ -232,6 +238,17 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     const fresh = await summary(url, await a.page.evaluate(() => window.__seaarms.connection.session));
     assert.equal(fresh.trainee, nameA, 'the new session keeps the name');
     assert.equal(fresh.group, group);
+
+    // in the new session, A opens the exercises: the start screen draws A's learning curve
+    // on dual-lift from the records of the earlier session (issue 30) â€” one point, filled
+    // for a pass â€” and the state
+    await a.page.click('#btn-exercises');
+    const slot = '#start [data-progress="dual-lift"]:not([hidden])';
+    await a.page.waitForSelector(slot, { timeout: 10000 });
+    assert.match(await a.page.textContent(slot), new RegExp(`practising\\s*1 attempt, last ${Math.round(recorded.score)}`));
+    assert.equal(await a.page.locator(`${slot} circle.${recorded.outcome === 'passed' ? 'pass' : 'fail'}`).count(), 1);
+    assert.equal(await a.page.locator('#start .ex-progress:not([hidden])').count(), 1, 'no curve where there is no attempt');
+    await a.page.locator('#start .start-card').screenshot({ path: join(SHOTS, 'start-progress.png') });
 
     for (const t of [a, b, instr]) assert.deepEqual(t.errors, [], 'console errors');
     for (const t of [a, b, instr]) assert.deepEqual(t.offsite, []);

@@ -159,8 +159,8 @@ async function chooseAndStart() {
   // the trainee's curves so far, read with the running session's token (its trainee's)
   const s = conn.session;
   const progress = s?.control_token && !conn.observing ? () => sessionProgress(s.id, s.control_token, s.base || '') : null;
-  const choice = await startScreen.choose(task.spec?.id, progress);
-  conn.restart(choice);
+  const choice = await startScreen.choose(task.spec?.id, progress, !!progress);
+  if (choice) conn.restart(choice);
 }
 
 function syncControls() {

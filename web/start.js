@@ -59,8 +59,8 @@ export class StartScreen {
 
   /** Shows the screen; resolves with the trainee's choice. `selected`: exercise id to preselect;
    * `progress`: loads the trainee's learning curves (GET /api/sessions/{id}/progress), each
-   * drawn under its exercise. */
-  async choose(selected, progress = null) {
+   * drawn under its exercise; `back`: offer "Back to my session" (resolves null). */
+  async choose(selected, progress = null, back = false) {
     this.exercises = await exercises();
     const name = localStorage.getItem(NAME_KEY) || '';
     const group = localStorage.getItem(GROUP_KEY) || '';
@@ -88,6 +88,7 @@ export class StartScreen {
       <div class="start-actions">
         <button type="submit" id="start-exercise" ${this.exercises.length ? '' : 'disabled'}>Start exercise</button>
         <button type="button" id="start-free">Free play</button>
+        ${back ? '<button type="button" id="start-back">Back to my session</button>' : ''}
       </div>
     </form>`;
     el.hidden = false;
@@ -120,6 +121,7 @@ export class StartScreen {
         if (picked()) done({ exercise: picked() });
       });
       el.querySelector('#start-free').addEventListener('click', () => done({ scenario: 'training' }));
+      el.querySelector('#start-back')?.addEventListener('click', () => { el.hidden = true; el.replaceChildren(); resolve(null); });
     });
   }
 }

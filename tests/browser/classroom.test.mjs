@@ -249,6 +249,12 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     assert.equal(await a.page.locator(`${slot} circle.${recorded.outcome === 'passed' ? 'pass' : 'fail'}`).count(), 1);
     assert.equal(await a.page.locator('#start .ex-progress:not([hidden])').count(), 1, 'no curve where there is no attempt');
     await a.page.locator('#start .start-card').screenshot({ path: join(SHOTS, 'start-progress.png') });
+    // "Back to my session" closes it and keeps the session
+    const kept = await a.page.evaluate(() => window.__seaarms.connection.session);
+    await a.page.click('#start-back');
+    await a.page.waitForSelector('#start', { state: 'hidden' });
+    await a.page.waitForTimeout(500);
+    assert.equal(await a.page.evaluate(() => window.__seaarms.connection.session), kept);
 
     for (const t of [a, b, instr]) assert.deepEqual(t.errors, [], 'console errors');
     for (const t of [a, b, instr]) assert.deepEqual(t.offsite, []);

@@ -60,6 +60,10 @@ const LEAD_S = 0;
 const JOINT_STILL = 0.05;
 /** A full keyboard jog of a joint (°; sim::Operator::jog at full arm speed). */
 const JOG_JOINT_DEG = 2;
+/** The hot stab's side-load readout (task panel, share of its limit) at which the operator stops
+ * pushing in and corrects first, and below which it pushes on again (a person watching a
+ * climbing gauge eases off well before the limit, and waits for it to fall back). */
+const SIDE_EASE = 0.4, SIDE_RESUME = 0.2;
 const EXERCISES = ['familiarisation', 'reach-targets', 'dual-lift', 'valve-turn', 'hot-stab', 'fault-diagnosis', 'pick-and-place'];
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -100,6 +104,7 @@ class Operator {
      * raised to what the joint shows (the wrist rotate turns at ~140 °/s at full stick). */
     this.rates = Array.from({ length: 6 }, () => ({ full: 40, slow: 12 }));
     this.held = null;
+    this.easing = false; // holding off the push while the side-load readout falls back
   }
 
   async begin() {
@@ -265,6 +270,9 @@ class Operator {
     }
   }
 
+  /** The task panel's readout whose label matches `re` ({label, value, target, unit}), or undefined. */
+  static readout(st, re) { return st.exercise?.readouts.find((x) => re.test(x.label)); }
+
   /** The task panel's lift / height readout (m), or null. */
   static liftReadout(st) {
     const r = st.exercise?.readouts.find((x) => /lift|height/i.test(x.label));
@@ -317,7 +325,9 @@ class Operator {
           const now = a.steer === 'object' ? st.object.pose.position : st.arms[a.arm].pose.position;
           const goal = sub(this.point(st, a.to), (a.offset_m ?? [0, 0, 0]).map((x) => -x));
           const { cam, v } = await this.seen(now, goal);
-          const touching = st.arms[a.arm].contact;
+          // the hot stab in its receptacle (the task panel's stab-depth readout is above 0): the
+          // receptacle lines it up, as what the jaw touches does — no turning the wrist against it
+          const touching = st.arms[a.arm].contact || Operator.readout(st, /stab depth/i)?.value > 0;
           let att = want ? rotationError(want, st.arms[a.arm].pose.rotation) : [0, 0, 0];
           // squared to within ATT_TOL_RAD; in contact the jaw is turned by what it touches:
           // a person does not fight that with the wrist
@@ -331,9 +341,19 @@ class Operator {
           const ahead = sub(v, Operator.inCamera(cam, vel).map((x) => x * LEAD_S));
           const moving = norm(vel) > 0.03;
           const lin = clampNorm(ahead.map((x) => x * MOVE_GAIN_PER_M));
+          // the side-load readout climbing (the goal says: no side load over its limit): stop
+          // pushing in and correct across the view first (or, centred, ease back out), until
+          // it has fallen back
+          const side = Operator.readout(st, /side load/i);
+          const share = side && side.target > 0 ? side.value / side.target : 0;
+          if (share >= SIDE_EASE) this.easing = true;
+          else if (share < SIDE_RESUME) this.easing = false;
+          if (this.easing) {
+            lin[2] = Math.hypot(lin[0], lin[1]) >= REST ? 0 : -SLOW;
+          }
           const ang = a.level ? Operator.level(st) : clampNorm(att.map((x) => x * ATT_GAIN_PER_RAD));
           const did = await this.act([...lin, ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed', linear: true, canTap: !moving });
-          if (process.env.TRIAL_DEBUG === '2') console.log(`move ${cam.name} ${JSON.stringify(a.to)}: vel ${Operator.inCamera(cam, vel).map((x) => (100 * x).toFixed(1))} seen ${v.map((x) => (100 * x).toFixed(1))} cm, att ${(norm(att) * 57.3).toFixed(1)}° → ${JSON.stringify(did)} side ${st.panel?.side_load_n?.toFixed(0)} N, relief ${st.exercise.counters.relief}, ${st.panel?.stab_phase ?? ''}`);
+          if (process.env.TRIAL_DEBUG === '2') console.log(`move ${cam.name} ${JSON.stringify(a.to)}: t ${st.t.toFixed(2)} jaw ${now.map((x) => x.toFixed(3))} goal ${goal.map((x) => x.toFixed(3))} q ${st.arms[a.arm].q.map((x) => (x * 57.3).toFixed(1))} vel ${Operator.inCamera(cam, vel).map((x) => (100 * x).toFixed(1))} seen ${v.map((x) => (100 * x).toFixed(1))} cm, att ${(norm(att) * 57.3).toFixed(1)}° → ${JSON.stringify(did)} side ${st.panel?.side_load_n?.toFixed(0)} N, relief ${st.exercise.counters.relief}${this.easing ? ' (easing)' : ''}, ${st.panel?.stab_phase ?? ''}`);
           return null;
         });
       }

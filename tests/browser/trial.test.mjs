@@ -75,6 +75,9 @@ const SIDE_EASE = 0.4, SIDE_RESUME = 0.2;
  * goals say "without striking the seabed", and a full push down overshoots by a few cm in a
  * decision's reaction time. */
 const SEABED_CAUTION_M = 0.15;
+/** Wall time (s) one exercise's operator may take before it gives up (below the test's timeout, so
+ * that an operator never keeps working a page the next exercise has taken over). */
+const TRIAL_WALL_S = 210;
 const EXERCISES = ['familiarisation', 'reach-targets', 'dual-lift', 'valve-turn', 'hot-stab', 'fault-diagnosis', 'pick-and-place'];
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -116,6 +119,7 @@ class Operator {
     this.rates = Array.from({ length: 6 }, () => ({ full: 40, slow: 12 }));
     this.held = null;
     this.easing = false; // holding off the push while the side-load readout falls back
+    this.deadline = Infinity; // Date.now() past which every loop stops (TRIAL_WALL_S)
   }
 
   async begin() {
@@ -300,7 +304,7 @@ class Operator {
   /** Decides every DECIDE_MS until `step(st)` returns 'done' or the time is up. */
   async loop(timeoutS, step) {
     const t0 = Date.now();
-    while (Date.now() - t0 < timeoutS * 1000) {
+    while (Date.now() - t0 < timeoutS * 1000 && Date.now() < this.deadline) {
       await this.pace();
       const st = await this.state();
       if (st.exercise?.done) return 'exercise done';
@@ -591,6 +595,7 @@ async function trial(id) {
   assert.ok(Array.isArray(plan) && plan.length, `${id}: the exercise's plan`);
   await pressReady(page);
   const op = new Operator(page);
+  op.deadline = t0 + TRIAL_WALL_S * 1000;
   await op.begin();
   op.stepAt = 0;
   const actions = [];
@@ -598,6 +603,7 @@ async function trial(id) {
   // a fault drill's goal says when the fault comes ("within 15 s"): the shuttle stops then
   const faultBy = /within (\d+) s/.exec(goal)?.[1];
   for (const a of plan) {
+    if (Date.now() > op.deadline) break;
     op.stepAt = (await op.state()).exercise.step;
     if (faultBy && a.do === 'joint' && (await op.state()).exercise.elapsed_s > +faultBy + 1) continue;
     const ta = Date.now();
@@ -641,7 +647,7 @@ async function trial(id) {
 }
 
 for (const id of (process.env.TRIAL_ONLY ? process.env.TRIAL_ONLY.split(',') : EXERCISES)) {
-  test(`trainee trial in pilot view: ${id}`, { timeout: 240000 }, async () => {
+  test(`trainee trial in pilot view: ${id}`, { timeout: (TRIAL_WALL_S + 60) * 1000 }, async () => {
     const r = await trial(id);
     console.log(JSON.stringify(r));
     assert.ok(r.maxAxes <= 2, 'two axes at a time at most');

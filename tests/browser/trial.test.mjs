@@ -76,6 +76,8 @@ const JOG_JOINT_DEG = 2;
  * pushing in and corrects first, and below which it pushes on again (a person watching a
  * climbing gauge eases off well before the limit, and waits for it to fall back). */
 const SIDE_EASE = 0.4, SIDE_RESUME = 0.2;
+/** Carrying the hot stab, within this of a plan point (m) every axis is at most slow. */
+const STAB_NEAR_M = 0.08;
 /** A jaw this close over the seabed (m) is brought down slowly (each axis at most slow): the
  * goals say "without striking the seabed", and a full push down overshoots: reach-targets'
  * marker E is 7 cm over the seabed, and a full push from 19 cm over it carried the jaw to 2.6 cm
@@ -378,9 +380,16 @@ class Operator {
           if (share >= SIDE_EASE) this.easing = true;
           else if (share < SIDE_RESUME) this.easing = false;
           if (this.easing) lin[2] = Math.min(lin[2], 0);
+          // carrying the stab (its readouts are on the task panel) the last STAB_NEAR_M to a
+          // point go slow: a full rise overshot the line-up point by 2 cm with the stab's tip at
+          // the receptacle's mouth (side load 380 N between two decisions)
+          if (depth && !home && norm(sub(goal, now)) < STAB_NEAR_M) {
+            for (let k = 0; k < 3; k++) lin[k] = Math.max(-SLOW, Math.min(SLOW, lin[k]));
+          }
           const ang = a.level ? Operator.level(st) : clampNorm(att.map((x) => x * ATT_GAIN_PER_RAD));
           const did = await this.act([...lin, ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed', linear: true, canTap: !moving });
-          if (process.env.TRIAL_DEBUG === '2') console.log(`move ${cam.name} ${JSON.stringify(a.to)}: t ${st.t.toFixed(2)} jaw ${now.map((x) => x.toFixed(3))} goal ${goal.map((x) => x.toFixed(3))} q ${st.arms[a.arm].q.map((x) => (x * 57.3).toFixed(1))} vel ${Operator.inCamera(cam, vel).map((x) => (100 * x).toFixed(1))} seen ${v.map((x) => (100 * x).toFixed(1))} cm, att ${(norm(att) * 57.3).toFixed(1)}° → ${JSON.stringify(did)} side ${st.panel?.side_load_n?.toFixed(0)} N, relief ${st.exercise.counters.relief}${this.easing ? ' (easing)' : ''}, ${st.panel?.stab_phase ?? ''}`);
+          const smax = process.env.TRIAL_DEBUG === '2' ? await this.page.evaluate(() => { if (!window.__smaxT) { window.__smax = 0; window.__smaxT = setInterval(() => { window.__smax = Math.max(window.__smax, window.__seaarms.lastState?.panel?.side_load_n ?? 0); }, 4); } const m = window.__smax; window.__smax = 0; return m; }) : 0;
+          if (process.env.TRIAL_DEBUG === '2') console.log(`smax ${smax.toFixed(0)} move ${cam.name} ${JSON.stringify(a.to)}: t ${st.t.toFixed(2)} jaw ${now.map((x) => x.toFixed(3))} goal ${goal.map((x) => x.toFixed(3))} q ${st.arms[a.arm].q.map((x) => (x * 57.3).toFixed(1))} vel ${Operator.inCamera(cam, vel).map((x) => (100 * x).toFixed(1))} seen ${v.map((x) => (100 * x).toFixed(1))} cm, att ${(norm(att) * 57.3).toFixed(1)}° → ${JSON.stringify(did)} side ${st.panel?.side_load_n?.toFixed(0)} N, relief ${st.exercise.counters.relief}${this.easing ? ' (easing)' : ''}, ${st.panel?.stab_phase ?? ''}`);
           return null;
         });
       }

@@ -26,14 +26,17 @@
 //! The operator also does what the exercise goals tell a trainee to watch: in the hot stab it
 //! reads the task panel's side-load readout, stops pushing in at 40 % of the limit and corrects
 //! across the view until it falls below 20 %, and it does not turn the wrist against the
-//! receptacle once the stab is in (the stab-depth readout above 0); near the seabed (25 cm) it
-//! brings a jaw down slowly.
+//! receptacle once the stab is in (the stab-depth readout above 0); carrying the stab it goes
+//! slow over the last 8 cm to a point; near the seabed (25 cm) it brings a jaw down slowly.
 //!
-//! Part of `bash tests/run.sh` (the shared release server). Real-time pacing: on a loaded
-//! machine the server's frames come late and in bursts; measured passing all seven with a load
-//! average of 3–7 on 2 cores. About 5–6 min for all seven. `cd tests/browser && node --test
-//! trial.test.mjs` runs it alone (`TRIAL_ONLY=a,b` for a subset; `TRIAL_DEBUG=1|2` logs each
-//! action or decision). Screenshots: artifacts/trial-valve-turn-pilot.png (jaw on the T-bar),
+//! Not yet part of `bash tests/run.sh` (not a `*.test.mjs`): it has not passed all seven twice in
+//! a row. Measured 2026-11-28 against a release build behind a shared server as tests/run.sh
+//! starts it: 6 of 7 (hot-stab 2 side-load faults, since reduced) at load average 2–3, 254 s;
+//! 2 of 7 at load 11–15 (other builds on the 2 cores), 595 s — its real-time pacing fails on a
+//! loaded machine (frames late and in bursts). When it joins the suite, rename it `trial.test.mjs`
+//! (it already works against SEAARMS_URL). `cd tests/browser && node --test trial.mjs` runs it
+//! alone (`TRIAL_ONLY=a,b` for a subset; `TRIAL_DEBUG=1|2` logs each action or decision).
+//! Screenshots: artifacts/trial-valve-turn-pilot.png (jaw on the T-bar),
 //! artifacts/trial-pick-and-place-pilot.png (jaw closed on the box's lifting point).
 
 import { test, before, after } from 'node:test';

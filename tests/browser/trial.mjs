@@ -23,10 +23,21 @@
 //! Prints and writes (artifacts/trial.json) each exercise's pass, score and time from the
 //! completion card; asserts every exercise passes.
 //!
-//! Not part of `bash tests/run.sh` (this file is not a `*.test.mjs`): it does not yet pass all
-//! seven exercises, and its real-time pacing is sensitive to a loaded machine. Run it on a
-//! quiet machine against a release build: `cd tests/browser && node --test trial.mjs`
-//! (`TRIAL_ONLY=a,b` for a subset; `TRIAL_DEBUG=1|2` logs each action or decision).
+//! The operator also does what the exercise goals tell a trainee to watch: in the hot stab it
+//! reads the task panel's side-load readout, stops pushing in at 40 % of the limit and corrects
+//! across the view until it falls below 20 %, and it does not turn the wrist against the
+//! receptacle once the stab is in (the stab-depth readout above 0); carrying the stab it goes
+//! slow over the last 8 cm to a point; near the seabed (25 cm) it brings a jaw down slowly.
+//!
+//! Not yet part of `bash tests/run.sh` (not a `*.test.mjs`): it has not passed all seven twice in
+//! a row. Measured 2026-11-28 against a release build behind a shared server as tests/run.sh
+//! starts it: 6 of 7 (hot-stab 2 side-load faults, since reduced) at load average 2–3, 254 s;
+//! 2 of 7 at load 11–15 (other builds on the 2 cores), 595 s — its real-time pacing fails on a
+//! loaded machine (frames late and in bursts). When it joins the suite, rename it `trial.test.mjs`
+//! (it already works against SEAARMS_URL). `cd tests/browser && node --test trial.mjs` runs it
+//! alone (`TRIAL_ONLY=a,b` for a subset; `TRIAL_DEBUG=1|2` logs each action or decision).
+//! Screenshots: artifacts/trial-valve-turn-pilot.png (jaw on the T-bar),
+//! artifacts/trial-pick-and-place-pilot.png (jaw closed on the box's lifting point).
 
 import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
@@ -42,8 +53,12 @@ const REST = 0.08, FULL = 0.6, SLOW = 0.3;
 /** When the strongest intent is below this (and above 0.01) the operator taps (Shift: fine). */
 const TAP = 0.25;
 /** A second axis is moved only when its intent is at least this share of the first's (a
- * person pushes one axis and adds a clearly needed second one, not every small component). */
-const SECOND = 0.4;
+ * person pushes one axis and adds a clearly needed second one, not every small component).
+ * 0.3, not 0.4: in the pilot view (tilted 18° down) a straight rise is screen-up with 0.31 of
+ * "toward"; at 0.4 that depth share was dropped, and raising the hot stab 15 cm on screen-up
+ * alone carried it 4.6 cm toward the panel, into the receptacle's mouth before it was lined up
+ * (side load 770 N). */
+const SECOND = 0.3;
 /** The plan's gains (server/core/src/exercise/autopilot.rs: full stick beyond 10 cm, 0.2 rad,
  * 10°), the intent a person forms from an error. */
 const MOVE_GAIN_PER_M = 10, ATT_GAIN_PER_RAD = 5, JOINT_GAIN_PER_DEG = 0.1, LEVEL_GAIN_PER_RAD = 5;
@@ -60,6 +75,20 @@ const LEAD_S = 0;
 const JOINT_STILL = 0.05;
 /** A full keyboard jog of a joint (°; sim::Operator::jog at full arm speed). */
 const JOG_JOINT_DEG = 2;
+/** The hot stab's side-load readout (task panel, share of its limit) at which the operator stops
+ * pushing in and corrects first, and below which it pushes on again (a person watching a
+ * climbing gauge eases off well before the limit, and waits for it to fall back). */
+const SIDE_EASE = 0.4, SIDE_RESUME = 0.2;
+/** Carrying the hot stab, within this of a plan point (m) every axis is at most slow. */
+const STAB_NEAR_M = 0.08;
+/** A jaw this close over the seabed (m) is brought down slowly (each axis at most slow): the
+ * goals say "without striking the seabed", and a full push down overshoots: reach-targets'
+ * marker E is 7 cm over the seabed, and a full push from 19 cm over it carried the jaw to 2.6 cm
+ * over it (fingers on the seabed) on a loaded machine with the caution at 15 cm. */
+const SEABED_CAUTION_M = 0.25;
+/** Wall time (s) one exercise's operator may take before it gives up (below the test's timeout, so
+ * that an operator never keeps working a page the next exercise has taken over). */
+const TRIAL_WALL_S = 210;
 const EXERCISES = ['familiarisation', 'reach-targets', 'dual-lift', 'valve-turn', 'hot-stab', 'fault-diagnosis', 'pick-and-place'];
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -100,6 +129,8 @@ class Operator {
      * raised to what the joint shows (the wrist rotate turns at ~140 °/s at full stick). */
     this.rates = Array.from({ length: 6 }, () => ({ full: 40, slow: 12 }));
     this.held = null;
+    this.easing = false; // holding off the push while the side-load readout falls back
+    this.deadline = Infinity; // Date.now() past which every loop stops (TRIAL_WALL_S)
   }
 
   async begin() {
@@ -265,6 +296,9 @@ class Operator {
     }
   }
 
+  /** The task panel's readout whose label matches `re` ({label, value, target, unit}), or undefined. */
+  static readout(st, re) { return st.exercise?.readouts.find((x) => re.test(x.label)); }
+
   /** The task panel's lift / height readout (m), or null. */
   static liftReadout(st) {
     const r = st.exercise?.readouts.find((x) => /lift|height/i.test(x.label));
@@ -281,7 +315,7 @@ class Operator {
   /** Decides every DECIDE_MS until `step(st)` returns 'done' or the time is up. */
   async loop(timeoutS, step) {
     const t0 = Date.now();
-    while (Date.now() - t0 < timeoutS * 1000) {
+    while (Date.now() - t0 < timeoutS * 1000 && Date.now() < this.deadline) {
       await this.pace();
       const st = await this.state();
       if (st.exercise?.done) return 'exercise done';
@@ -317,7 +351,9 @@ class Operator {
           const now = a.steer === 'object' ? st.object.pose.position : st.arms[a.arm].pose.position;
           const goal = sub(this.point(st, a.to), (a.offset_m ?? [0, 0, 0]).map((x) => -x));
           const { cam, v } = await this.seen(now, goal);
-          const touching = st.arms[a.arm].contact;
+          // the hot stab in its receptacle (the task panel's stab-depth readout is above 0): the
+          // receptacle lines it up, as what the jaw touches does — no turning the wrist against it
+          const touching = st.arms[a.arm].contact || Operator.readout(st, /stab depth/i)?.value > 0;
           let att = want ? rotationError(want, st.arms[a.arm].pose.rotation) : [0, 0, 0];
           // squared to within ATT_TOL_RAD; in contact the jaw is turned by what it touches:
           // a person does not fight that with the wrist
@@ -331,9 +367,32 @@ class Operator {
           const ahead = sub(v, Operator.inCamera(cam, vel).map((x) => x * LEAD_S));
           const moving = norm(vel) > 0.03;
           const lin = clampNorm(ahead.map((x) => x * MOVE_GAIN_PER_M));
+          // near the seabed (the page draws it; the hello gives its height) a push that takes
+          // the jaw down goes slow
+          const down = lin[0] * cam.right[2] + lin[1] * cam.up[2] + lin[2] * cam.fwd[2] < 0;
+          if (down && st.arms[a.arm].pose.position[2] - this.hello.seabed_z_m < SEABED_CAUTION_M) {
+            for (let k = 0; k < 3; k++) lin[k] = Math.max(-SLOW, Math.min(SLOW, lin[k]));
+          }
+          // the side-load readout climbing while the stab goes in (the goal says: no side load
+          // over its limit): stop pushing in and correct across the view first, until it has
+          // fallen back; once the stab-depth readout is home (seated) there is no pushing in
+          // to hold off (a pull back then unseated the stab)
+          const side = Operator.readout(st, /side load/i), depth = Operator.readout(st, /stab depth/i);
+          const home = depth && depth.value >= depth.target;
+          const share = side && side.target > 0 && !home ? side.value / side.target : 0;
+          if (share >= SIDE_EASE) this.easing = true;
+          else if (share < SIDE_RESUME) this.easing = false;
+          if (this.easing) lin[2] = Math.min(lin[2], 0);
+          // carrying the stab (its readouts are on the task panel) the last STAB_NEAR_M to a
+          // point go slow: a full rise overshot the line-up point by 2 cm with the stab's tip at
+          // the receptacle's mouth (side load 380 N between two decisions)
+          if (depth && !home && norm(sub(goal, now)) < STAB_NEAR_M) {
+            for (let k = 0; k < 3; k++) lin[k] = Math.max(-SLOW, Math.min(SLOW, lin[k]));
+          }
           const ang = a.level ? Operator.level(st) : clampNorm(att.map((x) => x * ATT_GAIN_PER_RAD));
           const did = await this.act([...lin, ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed', linear: true, canTap: !moving });
-          if (process.env.TRIAL_DEBUG === '2') console.log(`move ${cam.name} ${JSON.stringify(a.to)}: vel ${Operator.inCamera(cam, vel).map((x) => (100 * x).toFixed(1))} seen ${v.map((x) => (100 * x).toFixed(1))} cm, att ${(norm(att) * 57.3).toFixed(1)}° → ${JSON.stringify(did)} side ${st.panel?.side_load_n?.toFixed(0)} N, relief ${st.exercise.counters.relief}, ${st.panel?.stab_phase ?? ''}`);
+          const smax = process.env.TRIAL_DEBUG === '2' ? await this.page.evaluate(() => { if (!window.__smaxT) { window.__smax = 0; window.__smaxT = setInterval(() => { window.__smax = Math.max(window.__smax, window.__seaarms.lastState?.panel?.side_load_n ?? 0); }, 4); } const m = window.__smax; window.__smax = 0; return m; }) : 0;
+          if (process.env.TRIAL_DEBUG === '2') console.log(`smax ${smax.toFixed(0)} move ${cam.name} ${JSON.stringify(a.to)}: t ${st.t.toFixed(2)} jaw ${now.map((x) => x.toFixed(3))} goal ${goal.map((x) => x.toFixed(3))} q ${st.arms[a.arm].q.map((x) => (x * 57.3).toFixed(1))} vel ${Operator.inCamera(cam, vel).map((x) => (100 * x).toFixed(1))} seen ${v.map((x) => (100 * x).toFixed(1))} cm, att ${(norm(att) * 57.3).toFixed(1)}° → ${JSON.stringify(did)} side ${st.panel?.side_load_n?.toFixed(0)} N, relief ${st.exercise.counters.relief}${this.easing ? ' (easing)' : ''}, ${st.panel?.stab_phase ?? ''}`);
           return null;
         });
       }
@@ -554,6 +613,7 @@ async function trial(id) {
   assert.ok(Array.isArray(plan) && plan.length, `${id}: the exercise's plan`);
   await pressReady(page);
   const op = new Operator(page);
+  op.deadline = t0 + TRIAL_WALL_S * 1000;
   await op.begin();
   op.stepAt = 0;
   const actions = [];
@@ -561,6 +621,7 @@ async function trial(id) {
   // a fault drill's goal says when the fault comes ("within 15 s"): the shuttle stops then
   const faultBy = /within (\d+) s/.exec(goal)?.[1];
   for (const a of plan) {
+    if (Date.now() > op.deadline) break;
     op.stepAt = (await op.state()).exercise.step;
     if (faultBy && a.do === 'joint' && (await op.state()).exercise.elapsed_s > +faultBy + 1) continue;
     const ta = Date.now();
@@ -568,10 +629,11 @@ async function trial(id) {
     const st = await op.state();
     const line = { do: a.do, to: a.to ?? a.joint ?? a.until?.kind ?? a.s, result: r, s: +((Date.now() - ta) / 1000).toFixed(1), step: st.exercise.step };
     actions.push(line);
-    // a look at the work mid-trial: the pilot views with the jaw on the T-bar
-    if (id === 'valve-turn' && !shot && st.exercise.step >= 1) {
+    // a look at the work mid-trial, in the pilot views: the jaw on the T-bar; the jaw closed on
+    // the box's lifting point
+    if (!shot && ((id === 'valve-turn' && st.exercise.step >= 1) || (id === 'pick-and-place' && a.do === 'grip' && a.close))) {
       shot = true;
-      await page.screenshot({ path: join(ARTIFACTS, 'trial-valve-turn-pilot.png') });
+      await page.screenshot({ path: join(ARTIFACTS, `trial-${id}-pilot.png`) });
     }
     if (process.env.TRIAL_DEBUG) console.log(JSON.stringify({ ...line, q: st.arms[op.side].q.map((x) => +(x * 57.3).toFixed(1)), jaw: st.arms[op.side].pose.position.map((x) => +x.toFixed(3)), panel: st.panel, counters: st.exercise.counters }));
     if (r === 'exercise done') break;
@@ -603,7 +665,7 @@ async function trial(id) {
 }
 
 for (const id of (process.env.TRIAL_ONLY ? process.env.TRIAL_ONLY.split(',') : EXERCISES)) {
-  test(`trainee trial in pilot view: ${id}`, { timeout: 240000 }, async () => {
+  test(`trainee trial in pilot view: ${id}`, { timeout: (TRIAL_WALL_S + 60) * 1000 }, async () => {
     const r = await trial(id);
     console.log(JSON.stringify(r));
     assert.ok(r.maxAxes <= 2, 'two axes at a time at most');

@@ -638,6 +638,15 @@ async function trial(id) {
     if (process.env.TRIAL_DEBUG) console.log(JSON.stringify({ ...line, q: st.arms[op.side].q.map((x) => +(x * 57.3).toFixed(1)), jaw: st.arms[op.side].pose.position.map((x) => +x.toFixed(3)), panel: st.panel, counters: st.exercise.counters }));
     if (r === 'exercise done') break;
   }
+  // the plan ends on a hold and the task panel still counts it (a slip or a drift reset its
+  // clock): a person keeps holding while the panel says "hold", up to 30 s more
+  const last = plan.at(-1);
+  const holdUntil = Date.now() + 30000;
+  while (last?.do === 'wait' && Date.now() < Math.min(op.deadline, holdUntil) && !(await op.state()).exercise.done) {
+    const r = await op.run(last);
+    actions.push({ do: 'wait (hold on)', result: r, step: (await op.state()).exercise.step });
+    if (r === 'exercise done') break;
+  }
   await op.rest();
   // the plan is done; the last step may still be counting (a hold)
   const finished = await until(page, () => window.__seaarms.lastState.exercise.done, undefined, 15000).then(() => true, () => false);

@@ -1,6 +1,7 @@
 //! The assessment of an attempt, computed from the simulation itself at 100 Hz: counted events
 //! (strikes, drops, overloads, relief, joint-limit hits, slips), peaks (contact and internal force),
-//! smoothness (RMS tool jerk), posture (mean Yoshikawa measure and JLM of the working arms,
+//! smoothness (LDLJ and SPARC of the tool's movements, the path ratio of its reaches:
+//! [`super::smoothness`]; the RMS tool jerk, reported only), posture (mean Yoshikawa measure and JLM of the working arms,
 //! time near a singularity or a joint limit) and idle time; then the score.
 //!
 //! # Score
@@ -28,6 +29,7 @@
 use nalgebra::Vector3;
 use serde::Serialize;
 
+use super::smoothness::{MovementMeter, SmoothnessTotals};
 use super::spec::{ExerciseSpec, Obstacle, Thresholds};
 use crate::kinematics::{KinData, forward_kinematics};
 use crate::model::Model;
@@ -81,8 +83,20 @@ pub struct Metrics {
     pub relief_events: f64,
     /// Times a joint came within the hit distance of its limit.
     pub joint_limit_hits: f64,
-    /// RMS jerk of the working arms' tool points (m/s³).
+    /// RMS jerk of the working arms' tool points (m/s³). Reported, not a measure of skill:
+    /// it grows with a movement's amplitude / duration³ (issue 30; [`super::smoothness`]).
     pub jerk_rms_m_s3: f64,
+    /// Movements of the working arms' tools ([`super::smoothness`], "Segmentation").
+    pub movements: f64,
+    /// Mean SPARC (spectral arc length) of those movements' speed profiles (dimensionless,
+    /// ≤ 0, nearer 0 smoother; a minimum-jerk reach ≈ −1.40); 0 before the first.
+    pub sparc: f64,
+    /// Mean LDLJ (log dimensionless jerk) of those movements' speed profiles (dimensionless,
+    /// nearer 0 smoother; a minimum-jerk reach −5.32); 0 before the first.
+    pub ldlj: f64,
+    /// Mean path length / straight-line distance of the reaches among those movements
+    /// (≥ 1, 1 = straight); 0 before the first reach.
+    pub path_ratio: f64,
     /// Mean translational Yoshikawa measure of the working arms (m³/s-like, per unit joint rate).
     pub mean_yoshikawa: f64,
     /// Mean joint-limit measure (JLM, Jun eq. 16) of the working arms.
@@ -119,6 +133,10 @@ impl Metrics {
             "relief_events" => self.relief_events,
             "joint_limit_hits" => self.joint_limit_hits,
             "jerk_rms_m_s3" => self.jerk_rms_m_s3,
+            "movements" => self.movements,
+            "sparc" => self.sparc,
+            "ldlj" => self.ldlj,
+            "path_ratio" => self.path_ratio,
             "mean_yoshikawa" => self.mean_yoshikawa,
             "mean_jlm" => self.mean_jlm,
             "near_singularity_s" => self.near_singularity_s,
@@ -240,6 +258,8 @@ pub struct Assessor {
     relief_at_start: u64,
     side_faults_at_start: u64,
     jerk: [JerkMeter; 2],
+    moves: [MovementMeter; 2],
+    smooth: SmoothnessTotals,
     samples: u64,
     posture_samples: f64,
     yoshikawa_sum: f64,
@@ -273,6 +293,8 @@ impl Assessor {
             relief_at_start: sim.relief_events(),
             side_faults_at_start: sim.panel().map_or(0, |p| p.side_load_faults),
             jerk: Default::default(),
+            moves: Default::default(),
+            smooth: SmoothnessTotals::default(),
             samples: 0,
             posture_samples: 0.0,
             yoshikawa_sum: 0.0,
@@ -442,8 +464,12 @@ impl Assessor {
         self.samples += 1;
         for &i in &self.working {
             let arm = Arm::BOTH[i];
+            let tool = sim.end_effector(arm).translation.vector;
             if jerk_sample {
-                self.jerk[i].add(sim.end_effector(arm).translation.vector, JERK_INTERVAL_S);
+                self.jerk[i].add(tool, JERK_INTERVAL_S);
+            }
+            if let Some(mv) = self.moves[i].add(tool, dt) {
+                self.smooth.add(&mv);
             }
             let me = arm_measures(sim, arm);
             let q = sim.arm(arm).q;
@@ -474,6 +500,28 @@ impl Assessor {
             m.mean_yoshikawa = self.yoshikawa_sum / self.posture_samples;
             m.mean_jlm = self.jlm_sum / self.posture_samples;
         }
+        self.write_smoothness();
+    }
+}
+
+impl Assessor {
+    /// Ends the attempt's assessment: measures the working arms' movements still open (the
+    /// tool may still be moving as the last step completes).
+    pub fn finish(&mut self) {
+        for &i in &self.working {
+            if let Some(mv) = self.moves[i].finish(SAMPLE_INTERVAL_S) {
+                self.smooth.add(&mv);
+            }
+        }
+        self.write_smoothness();
+    }
+
+    fn write_smoothness(&mut self) {
+        let m = &mut self.metrics;
+        m.movements = f64::from(self.smooth.movements);
+        m.sparc = self.smooth.mean_sparc();
+        m.ldlj = self.smooth.mean_ldlj();
+        m.path_ratio = self.smooth.mean_path_ratio();
     }
 }
 

@@ -6,6 +6,8 @@
 //! * `spec`: [`ExerciseSpec`], the file format, and the scene's simulation parameters.
 //! * `condition`: [`Condition`], when a step is done, its progress and readouts.
 //! * `assess`: [`Metrics`] sampled at 100 Hz ([`Assessor`]), the score and pass limits.
+//! * `smoothness`: LDLJ, SPARC and the path ratio of the tool's movements, and the
+//!   segmentation into movements ([`smoothness::MovementMeter`]).
 //! * `autopilot`: [`Autopilot`], the file's script worked through the trainee's controls.
 //! * `proficiency`: benchmarks from reference operators, the learning and relapse CUSUMs, a
 //!   trainee's state on an exercise.
@@ -18,6 +20,7 @@ pub mod assess;
 pub mod autopilot;
 pub mod condition;
 pub mod proficiency;
+pub mod smoothness;
 pub mod spec;
 
 pub use assess::{Assessor, Event, JerkMeter, Metrics};
@@ -308,6 +311,7 @@ impl ExerciseRun {
         self.assessor.metrics.time_s = elapsed;
         if self.step >= self.spec.steps.len() || elapsed >= self.spec.time_limit_s {
             self.done = true;
+            self.assessor.finish();
         }
         if let Some(e) = events.last() {
             self.last_event = Some(e.clone());

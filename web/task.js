@@ -30,8 +30,8 @@ const firstSentence = (text) => text.split(/(?<=[.:])\s/)[0];
 export class TaskPanel {
   /**
    * @param panel element of the panel (#task); card: element of the completion card
-   * @param gauges the force and pressure gauges (#gauges): docked at the foot of the panel
-   *   while there is a task (next to it, not over a camera view), else back in the view
+   * @param gauges the force and pressure gauges (#gauges): docked in the panel, under the
+   *   clock, while there is a task (next to it, not over a camera view), else back in the view
    * @param ui {banner(kind, text, ms), tryAgain(), next(), choose()}
    */
   constructor(panel, card, gauges, ui) {
@@ -72,7 +72,9 @@ export class TaskPanel {
       <div class="task-counters">${COUNTERS.map(([k, label]) => `<span data-c="${k}">${label} <b>0</b></span>`).join('')}</div>
       <div class="task-costs" title="Points each penalty takes off the score so far (a completed attempt scores 100 less these)"></div>
 `;
-    this.panel.append(this.gauges);
+    // the instruments right under the clock (and the drill's answers), above the steps: in
+    // view without scrolling at 1280×800 however long the goal and the steps are
+    this.panel.querySelector('.task-steps').before(this.gauges);
     for (const b of this.panel.querySelectorAll('[data-answer]')) {
       b.addEventListener('click', () => {
         this.ui.diagnose?.(b.dataset.answer);

@@ -365,7 +365,10 @@ mod tests {
         assert!((closed - -5.32204).abs() < 1e-5);
         for (amp, dur) in [(1.0, 1.0), (0.05, 0.5), (0.8, 3.0)] {
             let l = ldlj(&min_jerk(amp, dur, 1000.0), 1000.0).expect("ldlj");
-            assert!((l - closed).abs() < 0.01, "A {amp} T {dur}: {l} vs {closed}");
+            assert!(
+                (l - closed).abs() < 0.01,
+                "A {amp} T {dur}: {l} vs {closed}"
+            );
         }
     }
 
@@ -426,7 +429,8 @@ mod tests {
     fn rms_jerk_ranks_wrongly_where_ldlj_and_sparc_rank_right() {
         use super::super::assess::{JERK_INTERVAL_S, JerkMeter};
         let fast = track(&[(0.5, 1.0, 0.6)], 2.5, 0.01);
-        let subs: Vec<(f64, f64, f64)> = (0..4).map(|i| (0.5 + 0.5 * i as f64, 0.8, 0.025)).collect();
+        let subs: Vec<(f64, f64, f64)> =
+            (0..4).map(|i| (0.5 + 0.5 * i as f64, 0.8, 0.025)).collect();
         let slow = track(&subs, 3.8, 0.01);
         let measure = |xs: &[Vector3<f64>]| {
             let mut jerk = JerkMeter::default();
@@ -498,7 +502,8 @@ mod tests {
         for k in 0..=n + 100 {
             // 1 s still, 3 s along the arc with a minimum-jerk angle, then still.
             let tau = ((k as f64 - 50.0) / n as f64).clamp(0.0, 1.0);
-            let a = std::f64::consts::PI * (10.0 * tau.powi(3) - 15.0 * tau.powi(4) + 6.0 * tau.powi(5));
+            let a = std::f64::consts::PI
+                * (10.0 * tau.powi(3) - 15.0 * tau.powi(4) + 6.0 * tau.powi(5));
             moves.extend(meter.add(Vector3::new(r * a.cos(), r * a.sin(), 0.0), 0.01));
         }
         moves.extend(meter.finish(0.01));
@@ -506,7 +511,10 @@ mod tests {
         let ratio = moves[0].path_ratio.expect("a reach");
         // The ends of the arc under the threshold are left out of the path but not of the
         // chord: slightly under π/2.
-        assert!((ratio - std::f64::consts::FRAC_PI_2).abs() < 0.01, "{ratio}");
+        assert!(
+            (ratio - std::f64::consts::FRAC_PI_2).abs() < 0.01,
+            "{ratio}"
+        );
         let back = {
             let mut meter = MovementMeter::default();
             let mut moves = Vec::new();

@@ -8,7 +8,7 @@
 mod common;
 mod records_common;
 
-use common::{TEACHER, create_at, temp_dir};
+use common::{TEACHER, create_at, get_as, temp_dir};
 use records_common::Binary;
 use seaarms::db::{Db, Write};
 use seaarms::sessions::record::{AttemptEnd, AttemptStart};
@@ -72,13 +72,8 @@ fn attempt(id: &str, session: &str, started: f64, outcome: &str) -> [Write; 2] {
 }
 
 async fn get(url: &str, token: &str) -> (u16, Value) {
-    let r = reqwest::Client::new()
-        .get(url)
-        .bearer_auth(token)
-        .send()
-        .await
-        .unwrap();
-    (r.status().as_u16(), r.json().await.unwrap_or(Value::Null))
+    let (status, text) = get_as(url, token).await;
+    (status, serde_json::from_str(&text).unwrap_or(Value::Null))
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]

@@ -108,25 +108,25 @@ export function endSession(id, token, base = '') {
   return call('DELETE', sessionPath(id, base), { token });
 }
 
-/** GET /api/sessions/{id}/progress: the session's trainee's learning curves on every
- * exercise (docs/api.md), or null. */
-export async function sessionProgress(id, token, base = '') {
+/** GET `path` with `token`: its JSON, or null when refused or unreachable. */
+async function jsonOrNull(path, token) {
   try {
-    const r = await call('GET', `${sessionPath(id, base)}/progress`, { token });
+    const r = await call('GET', path, { token });
     return r.ok ? await r.json() : null;
   } catch {
     return null;
   }
 }
 
+/** GET /api/sessions/{id}/progress: the session's trainee's learning curves on every
+ * exercise (docs/api.md), or null. */
+export function sessionProgress(id, token, base = '') {
+  return jsonOrNull(`${sessionPath(id, base)}/progress`, token);
+}
+
 /** GET /api/sessions/{id}/assessment: the session's exercise assessment, or null. */
-export async function sessionAssessment(id, token, base = '') {
-  try {
-    const r = await call('GET', `${sessionPath(id, base)}/assessment`, { token });
-    return r.ok ? await r.json() : null;
-  } catch {
-    return null;
-  }
+export function sessionAssessment(id, token, base = '') {
+  return jsonOrNull(`${sessionPath(id, base)}/assessment`, token);
 }
 
 /** Ended sessions the instructor's list asks for at first, and each "older" adds. */

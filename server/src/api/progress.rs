@@ -67,11 +67,8 @@ fn curve(trainee: &str, group: &str, spec: &ExerciseSpec, rows: &[&AttemptRow]) 
         .collect();
     let outcomes: Vec<AttemptOutcome> = attempts
         .iter()
-        .map(|p| AttemptOutcome {
-            passed: p.passed,
-            // no reference operators yet: the CUSUM alone judges
-            met_benchmark: None,
-        })
+        // no reference operators yet: the CUSUM alone judges
+        .map(|p| AttemptOutcome::without_benchmark(p.passed))
         .collect();
     let p = &spec.proficiency;
     let pr = progress(&p.cusum, p.consecutive, &outcomes);

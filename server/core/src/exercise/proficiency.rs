@@ -223,10 +223,7 @@ impl Cusum {
     pub fn run(params: &CusumParams, passed: &[bool]) -> Cusum {
         let attempts: Vec<AttemptOutcome> = passed
             .iter()
-            .map(|&passed| AttemptOutcome {
-                passed,
-                met_benchmark: None,
-            })
+            .map(|&passed| AttemptOutcome::without_benchmark(passed))
             .collect();
         progress(params, 0, &attempts).cusum
     }
@@ -239,6 +236,16 @@ pub struct AttemptOutcome {
     pub passed: bool,
     /// Met the benchmark (every benchmarked metric within its band); None without one.
     pub met_benchmark: Option<bool>,
+}
+
+impl AttemptOutcome {
+    /// An attempt judged by its pass or fail alone (no benchmark to meet).
+    pub fn without_benchmark(passed: bool) -> AttemptOutcome {
+        AttemptOutcome {
+            passed,
+            met_benchmark: None,
+        }
+    }
 }
 
 /// A trainee's state on an exercise and how it was reached.
@@ -375,10 +382,7 @@ mod tests {
         assert!((c.relapse[13] - 2.0 * 3f64.ln()).abs() < 1e-12);
         let outcomes: Vec<AttemptOutcome> = seq
             .iter()
-            .map(|&passed| AttemptOutcome {
-                passed,
-                met_benchmark: None,
-            })
+            .map(|&passed| AttemptOutcome::without_benchmark(passed))
             .collect();
         let pr = progress(&p, 3, &outcomes);
         assert_eq!(pr.state, ProficiencyState::Relapsed);

@@ -248,7 +248,8 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     assert.match(await a.page.textContent(slot), new RegExp(`practising\\s*1 attempt, last ${Math.round(recorded.score)}`));
     assert.equal(await a.page.locator(`${slot} circle.${recorded.outcome === 'passed' ? 'pass' : 'fail'}`).count(), 1);
     assert.equal(await a.page.locator('#start .ex-progress:not([hidden])').count(), 1, 'no curve where there is no attempt');
-    await a.page.locator('#start .start-card').screenshot({ path: join(SHOTS, 'start-progress.png') });
+    await a.page.locator(slot).scrollIntoViewIfNeeded();
+    await a.page.screenshot({ path: join(SHOTS, 'start-progress.png') });
     // "Back to my session" closes it and keeps the session
     const kept = await a.page.evaluate(() => window.__seaarms.connection.session);
     await a.page.click('#start-back');

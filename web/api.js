@@ -186,12 +186,26 @@ export async function attempts(filter, token) {
 }
 
 /** GET /api/progress: a class's proficiency on `exercise` (instructor; `group` optional):
- * {exercise, trainees: [curve]} (docs/api.md). */
+ * {exercise, benchmark, trainees: [curve]} (docs/api.md). */
 export async function classProgress(exercise, group, token) {
   const q = new URLSearchParams({ exercise, ...(group ? { group } : {}) });
   const r = await call('GET', `/api/progress?${q}`, { token });
   if (!r.ok) throw new Error(await errorOf(r));
   return r.json();
+}
+
+/** GET /api/reference-operators (instructor): [{trainee, group, marked_unix}]. */
+export async function referenceOperators(token) {
+  const r = await call('GET', '/api/reference-operators', { token });
+  if (!r.ok) throw new Error(await errorOf(r));
+  return (await r.json()).reference_operators || [];
+}
+
+/** PUT /api/reference-operators (instructor): marks or unmarks a trainee; the new list. */
+export async function markReference(trainee, group, reference, token) {
+  const r = await call('PUT', '/api/reference-operators', { token, body: { trainee, group, reference } });
+  if (!r.ok) throw new Error(await errorOf(r));
+  return (await r.json()).reference_operators || [];
 }
 
 /** POST /api/analysis (`body`: {robot, q, polytope?}); the analysis, or null. */

@@ -44,3 +44,30 @@ export function assessmentHtml(a, { title, frame = null, verdict = null }) {
         <td>${l.max !== null && l.max !== undefined ? `≤ ${num(l.max)}` : ''}${l.min !== null && l.min !== undefined ? ` ≥ ${num(l.min)}` : ''}</td>
         <td>${l.met ? '✓' : '✗'}</td></tr>`).join('')}</table>` : ''}`;
 }
+
+/**
+ * The attempt against the reference operators' benchmark (docs/exercises.md "Benchmarks"):
+ * each measure's reference band (mean ± SD, n) and pass line, the attempt's value and, for the
+ * measures the benchmark requires, whether it meets the line; or, while too few reference
+ * attempts exist, a line saying the exercise file's pass marks apply.
+ * @param a the assessment JSON (its metrics and `score`)
+ * @param bench an exercise's `benchmark` (GET /api/sessions/{id}/progress), or null
+ */
+export function benchmarkHtml(a, bench) {
+  if (!a || !bench) return '';
+  if (!bench.applies) {
+    return `<p class="card-bench-none" data-bench="none">No reference benchmark yet (${bench.reference_attempts} of the ${bench.min_reference_attempts} reference operators' attempts it needs): the exercise's own pass marks apply.</p>`;
+  }
+  const value = (m) => (m === 'score' ? a.score : a[m]);
+  const rows = bench.measures.filter((m) => m.benchmark && Number.isFinite(value(m.metric))).map((m) => {
+    const v = value(m.metric);
+    const b = m.benchmark;
+    const met = m.higher_is_better ? v >= m.line : v <= m.line;
+    const mark = m.required ? (met ? '✓' : '✗') : (met ? '·' : '');
+    return `<tr class="${m.required ? (met ? 'ok' : 'bad') : ''}" data-bench-metric="${esc(m.metric)}" data-met="${met}">
+      <td>${esc(metricLabel(m.metric))}${m.required ? ' *' : ''}</td><td>${num(v)}</td>
+      <td>${num(b.mean)} ± ${num(b.sd)}</td><td>${m.higher_is_better ? '≥' : '≤'} ${num(m.line)}</td><td>${mark}</td></tr>`;
+  });
+  return `<table class="card-bench" data-bench="applies"><caption>Against the reference operators (${bench.reference_attempts} attempts; line ${num(bench.k)} SD from their mean; * required)</caption>
+    <tr><th>measure</th><th>yours</th><th>reference</th><th>line</th><th></th></tr>${rows.join('')}</table>`;
+}

@@ -55,6 +55,18 @@ export function compareRows(attempts) {
   }).sort((a, b) => b.best - a.best || a.trainee.localeCompare(b.trainee));
 }
 
+/** The benchmark's line under the Compare table: what the reference operators set, or why there
+ * is none yet (docs/exercises.md "Benchmarks"). */
+export function benchmarkLine(b) {
+  if (!b) return '';
+  if (!b.applies) {
+    return `No benchmark yet: ${b.reference_attempts} finished attempt${b.reference_attempts === 1 ? '' : 's'} by reference operators, ${b.min_reference_attempts} needed — tick "reference" for experienced operators.`;
+  }
+  const req = b.measures.filter((m) => m.required && m.benchmark)
+    .map((m) => `${esc(m.metric === 'score' ? 'score' : m.metric.replaceAll('_', ' '))} ${m.higher_is_better ? '≥' : '≤'} ${fmtNum(m.line)} (${fmtNum(m.benchmark.mean)} ± ${fmtNum(m.benchmark.sd)})`);
+  return `Benchmark from ${b.reference_attempts} reference attempts (${fmtNum(b.k)} SD from their mean): ${req.join(', ')}.`;
+}
+
 /** The class ordered by proficiency: who needs the instructor first. */
 const PROFICIENCY_ORDER = { relapsed: 0, practising: 1, proficient: 2, not_started: 3 };
 
@@ -81,6 +93,7 @@ export class Classroom {
     this.groups = new Set();
     $('roster').tBodies[0].addEventListener('click', (e) => this.onRosterClick(e));
     $('compare').tBodies[0].addEventListener('click', (e) => {
+      if (e.target.matches('input.ref')) { this.markReference(e.target); return; }
       const n = e.target.closest('[data-trainee]');
       if (n) this.showHistory(n.dataset.trainee, n.dataset.group);
     });
@@ -238,13 +251,28 @@ export class Classroom {
     }).join('') || '<tr><td colspan="7">no attempts yet</td></tr>';
   }
 
+  /** The instructor ticks or unticks a trainee as a reference operator; the benchmark follows. */
+  async markReference(box) {
+    try {
+      await api.markReference(box.dataset.trainee, box.dataset.group, box.checked, this.ui.token());
+      this.setStatus(`${box.dataset.trainee || '(no name)'} ${box.checked ? 'is' : 'is no longer'} a reference operator`);
+    } catch (e) {
+      box.checked = !box.checked;
+      this.setStatus(`reference operator: ${e.message}`, true);
+    }
+    this.refreshCompare();
+  }
+
   async refreshCompare() {
     const ex = $('cmp-exercise').value;
     if (!ex || !this.ui.token()) return;
-    const [list, progress] = await Promise.all([
+    const [list, progress, refs] = await Promise.all([
       this.attempts({ exercise: ex }, this.group),
       api.classProgress(ex, this.group, this.ui.token()).catch((e) => { this.setStatus(`progress: ${e.message}`, true); return null; }),
+      api.referenceOperators(this.ui.token()).catch(() => []),
     ]);
+    const isRef = new Set(refs.map((r) => `${r.trainee}\u0000${r.group}`));
+    $('cmp-bench').innerHTML = benchmarkLine(progress?.benchmark);
     if (!list || $('cmp-exercise').value !== ex) return;
     for (const a of list) if (a.group) this.groups.add(a.group);
     // each trainee's proficiency (the server's CUSUM, docs/exercises.md), by trainee and group
@@ -257,7 +285,8 @@ export class Classroom {
         <td><button type="button" class="link" data-trainee="${esc(r.trainee)}" data-group="${esc(r.group)}">${esc(r.trainee || '(no name)')}</button></td>
         <td>${esc(r.group)}</td><td class="prof">${proficiencyText(r.progress)}</td><td class="num">${r.attempts}</td><td class="num">${r.passed}</td>
         <td class="num">${Math.round(r.best)}</td><td class="num">${r.last === null ? '—' : Math.round(r.last)}</td>
-        <td class="num">${f(r.bestTime)}</td><td class="num">${r.strikes ?? '—'}</td><td class="num">${f(r.meanW, 3)}</td><td class="num">${f(r.meanJlm, 3)}</td></tr>`).join('')
-      || '<tr><td colspan="11">no finished attempts at this exercise</td></tr>';
+        <td class="num">${f(r.bestTime)}</td><td class="num">${r.strikes ?? '—'}</td><td class="num">${f(r.meanW, 3)}</td><td class="num">${f(r.meanJlm, 3)}</td>
+        <td><input type="checkbox" class="ref" aria-label="reference operator" data-trainee="${esc(r.trainee)}" data-group="${esc(r.group)}"${isRef.has(`${r.trainee}\u0000${r.group}`) ? ' checked' : ''}${r.trainee ? '' : ' disabled'}></td></tr>`).join('')
+      || '<tr><td colspan="12">no finished attempts at this exercise</td></tr>';
   }
 }

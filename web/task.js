@@ -6,7 +6,7 @@
 // attempt's debrief (/replay/{attempt}). Every number is the server's.
 
 import { fmt, esc } from './page.js';
-import { assessmentHtml } from './assessment.js';
+import { assessmentHtml, benchmarkHtml } from './assessment.js';
 import * as api from './api.js';
 
 /** Event kinds shown as a warning banner (the rest, e.g. `step`, as information). */
@@ -163,6 +163,12 @@ export class TaskPanel {
     this.card.querySelector('[data-act="next"]')?.addEventListener('click', () => { this.card.hidden = true; this.ui.next(); });
     this.card.querySelector('[data-act="choose"]').addEventListener('click', () => { this.card.hidden = true; this.ui.choose(); });
     this.card.querySelector('[data-act="close"]').addEventListener('click', () => { this.card.hidden = true; });
+    // the reference operators' bands for this exercise (the trainee's progress carries them)
+    api.sessionProgress(s.id, s.control_token, s.base || '').then((p) => {
+      const bench = p?.exercises?.find((e) => e.exercise === this.spec.id)?.benchmark;
+      const html = benchmarkHtml(a, bench);
+      if (html && !this.card.hidden) this.card.querySelector('.card-actions')?.insertAdjacentHTML('beforebegin', html);
+    });
     // the finished attempt: the session's newest (GET /api/sessions/{id} names its attempts,
     // newest first; a new one starts only with "try again")
     try {

@@ -85,6 +85,9 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     assert.ok(attemptA, 'the session names its attempt');
     await a.page.waitForSelector('#card [data-act="debrief"]:not([hidden])', { timeout: 10000 });
     assert.equal(await a.page.getAttribute('#card [data-act="debrief"]', 'href'), `/replay/${attemptA}`);
+    // issue 30: the card says where the reference operators' benchmark stands (none marked yet)
+    await a.page.waitForSelector('#card [data-bench="none"]', { timeout: 10000 });
+    assert.match(await a.page.textContent('#card [data-bench="none"]'), /No reference benchmark yet \(\d+ of the 5 reference operators' attempts it needs\)/);
     let recorded = null; // the recorder writes each second's batch: the attempt's end follows soon
     for (let i = 0; i < 100 && !recorded?.outcome; i++) {
       if (i) await new Promise((ok) => setTimeout(ok, 200));
@@ -114,6 +117,19 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     const prof = await ip.textContent(`${cmpRow} td:nth-child(3)`);
     const chart = recorded.outcome === 'passed' ? '0.25/2.77' : '0.00/2.77';
     assert.equal(prof.replace(/\s+/g, ' ').trim(), `practising ${chart}`, prof);
+    // reference operators (issue 30 item 1): the line under the table says no benchmark yet;
+    // ticking A's "reference" box counts A's attempt toward it (and is stored: the API lists
+    // A); unticking takes it back (the shared test server's other files see no reference)
+    const benchCount = async () => +(/(\d+) finished attempts? by reference operators/.exec(await ip.textContent('#cmp-bench'))?.[1] ?? NaN);
+    await until(ip, () => /No benchmark yet/.test(document.querySelector('#cmp-bench').textContent));
+    const before = await benchCount();
+    await ip.check(`${cmpRow} input.ref`);
+    await until(ip, (n) => new RegExp(`No benchmark yet: ${n} finished attempts? by reference`).test(document.querySelector('#cmp-bench').textContent), before + 1, 10000);
+    const refs = await (await fetch(`${url}/api/reference-operators`, { headers: auth })).json();
+    assert.ok(refs.reference_operators.some((r) => r.trainee === nameA && r.group === group), JSON.stringify(refs));
+    assert.equal(await ip.isChecked(`${cmpRow} input.ref`), true);
+    await ip.uncheck(`${cmpRow} input.ref`);
+    await until(ip, (n) => new RegExp(`No benchmark yet: ${n} finished attempts? by reference`).test(document.querySelector('#cmp-bench').textContent), before, 10000);
 
     // its history lists the attempt with its outcome and a debrief link (no token in it)
     await ip.click(`${row(a)} [data-history]`);

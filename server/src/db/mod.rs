@@ -13,6 +13,7 @@
 pub mod attempt;
 mod directory;
 mod write;
+mod xapi;
 
 use std::future::Future;
 use std::path::PathBuf;
@@ -26,6 +27,7 @@ use sqlx::{AnyPool, Executor, Row};
 
 pub use directory::{LostReplica, ReplicaBeat, lost_reason};
 pub use write::Write;
+pub use xapi::{OUTBOX_CAPACITY, XapiSource};
 
 /// Which server the URL names.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -31,6 +31,7 @@ const PUBLIC: &str = "http://seaarms.test";
 fn ralph_installed() -> bool {
     Command::new("python3")
         .args(["-c", "import ralph.api, uvicorn"])
+        .env("RALPH_RUNSERVER_BACKEND", "fs")
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .status()
@@ -72,7 +73,11 @@ impl Ralph {
         );
     }
 
-    async fn start(dir: &Path, port: u16) -> Ralph {
+    /// Starts the LRS; it stores statements in `dir/statements/<file>`. Ralph 5.1's
+    /// file-system back end writes each file once (a second POST to a running LRS answers
+    /// 500, "overwrite is not allowed"), so each start takes a fresh file and each instance
+    /// here receives one attempt's statements in one request.
+    async fn start(dir: &Path, port: u16, file: &str) -> Ralph {
         let log = std::fs::OpenOptions::new()
             .create(true)
             .append(true)
@@ -83,6 +88,7 @@ impl Ralph {
             .args(["--port", &port.to_string()])
             .envs(ralph_env(dir))
             .env("RALPH_RUNSERVER_BACKEND", "fs")
+            .env("RALPH_BACKENDS__LRS__FS__DEFAULT_LRS_FILE", file)
             .current_dir(dir)
             .stdout(Stdio::null())
             .stderr(log)
@@ -122,11 +128,11 @@ impl Ralph {
         v["statements"].as_array().cloned().unwrap_or_default()
     }
 
-    /// Every statement about the activity `activity`.
-    async fn statements_about(&self, activity: &str) -> Vec<Value> {
+    /// Every statement the LRS holds (an empty list while it does not answer). Not
+    /// `?activity=…`: Ralph 5.1's file-system back end finds nothing by activity.
+    async fn all_statements(&self) -> Vec<Value> {
         let r = reqwest::Client::new()
             .get(format!("{}/xAPI/statements", self.base()))
-            .query(&[("activity", activity)])
             .basic_auth(LRS_USER, Some(LRS_PASSWORD))
             .header("X-Experience-API-Version", "1.0.3")
             .send()
@@ -175,16 +181,19 @@ async fn ghost_rad(base: &str) -> Vec<f64> {
 }
 
 /// Drives the left arm to `target` (rad per joint) with stick = 3·error (clamped to ±1,
-/// nothing within 0.3°) until the exercise reports done; returns how many state frames came
-/// meanwhile. Panics after `limit`.
+/// nothing within 0.3°) until the running exercise reports done; returns how many state
+/// frames came meanwhile. Panics after `limit`.
 async fn drive_to_done(ws: &mut Ws, seq: &mut u64, target: &[f64], limit: Duration) -> usize {
     let deadline = Instant::now() + limit;
     let mut frames = 0;
+    // Frames sent before a reset took effect still show the previous attempt done.
+    let mut running = false;
     loop {
         assert!(Instant::now() < deadline, "the exercise did not finish in {limit:?}");
         let s = next_of(ws, "state", Duration::from_secs(5)).await;
         frames += 1;
-        if s["exercise"]["done"] == true {
+        running |= s["exercise"]["done"] == false;
+        if running && s["exercise"]["done"] == true {
             send(ws, json!({"type": "input", "seq": *seq + 1, "arms": {}})).await;
             *seq += 1;
             return frames;
@@ -239,10 +248,9 @@ fn of_attempt(all: &[Value], id: &str) -> Vec<(String, Value)> {
 
 /// Waits (up to `limit`) for attempt `id`'s statements at the LRS: at least `n`.
 async fn wait_for_statements(ralph: &Ralph, id: &str, n: usize, limit: Duration) -> Vec<(String, Value)> {
-    let activity = format!("{PUBLIC}/exercises/familiarisation");
     let deadline = Instant::now() + limit;
     loop {
-        let got = of_attempt(&ralph.statements_about(&activity).await, id);
+        let got = of_attempt(&ralph.all_statements().await, id);
         if got.len() >= n {
             return got;
         }
@@ -307,7 +315,7 @@ async fn statements_reach_a_real_lrs_and_wait_out_its_downtime() {
     let lrs_dir = temp_dir("ralph");
     Ralph::make_user(&lrs_dir);
     let port = free_port();
-    let ralph = Ralph::start(&lrs_dir, port).await;
+    let ralph = Ralph::start(&lrs_dir, port, "before.jsonl").await;
 
     let data = temp_dir("xapi");
     let endpoint = format!("http://127.0.0.1:{port}/xAPI/");
@@ -331,9 +339,13 @@ async fn statements_reach_a_real_lrs_and_wait_out_its_downtime() {
         .await
         .unwrap();
     let session = c["id"].as_str().unwrap().to_string();
-    let (mut ws, _) = tokio_tungstenite::connect_async(c["ws_url"].as_str().unwrap())
-        .await
-        .unwrap();
+    // Not `ws_url`: that is built from the public URL, a name nothing resolves here.
+    let ws_url = format!(
+        "{}/ws/sessions/{session}?token={}",
+        base.replace("http://", "ws://"),
+        c["control_token"].as_str().unwrap()
+    );
+    let (mut ws, _) = tokio_tungstenite::connect_async(ws_url).await.unwrap();
     next_of(&mut ws, "hello", Duration::from_secs(5)).await;
     let mut seq = 0;
 
@@ -384,7 +396,7 @@ async fn statements_reach_a_real_lrs_and_wait_out_its_downtime() {
     println!("LRS down: {frames} frames during the second attempt; {failures} failed tries");
 
     // 3. The LRS returns: the statements arrive (within the back-off's cap and a poll).
-    let ralph = Ralph::start(&lrs_dir, port).await;
+    let ralph = Ralph::start(&lrs_dir, port, "after.jsonl").await;
     let back = Instant::now();
     let n2 = 3 + usize::from(a2["assessment"]["completed"] == true);
     let got = wait_for_statements(&ralph, &second, n2, Duration::from_secs(90)).await;
@@ -405,11 +417,9 @@ async fn statements_reach_a_real_lrs_and_wait_out_its_downtime() {
         (n1 + n2) as u64
     );
     assert_eq!(metric(&base, "seaarms_xapi_refused_total").await, 0);
-    assert_eq!(
-        ralph.statements_of(&agent).await.len(),
-        n1 + n2,
-        "each statement once"
-    );
+    // This instance holds what came after its start (its own file): the second attempt's
+    // statements, each once.
+    assert_eq!(ralph.statements_of(&agent).await.len(), n2);
     server.stop();
     let _ = std::fs::remove_dir_all(&data);
     drop(ralph);

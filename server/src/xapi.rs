@@ -104,10 +104,9 @@ impl XapiConfig {
             "--xapi-endpoint must not carry a password; set SEAARMS_XAPI_USERNAME and \
              SEAARMS_XAPI_PASSWORD"
         );
-        let credentials = match (username, password) {
-            (Some(u), Some(p)) if !u.is_empty() => Some((u.to_string(), p.to_string())),
+        let credentials = match (username.filter(|u| !u.is_empty()), password) {
+            (Some(u), Some(p)) => Some((u.to_string(), p.to_string())),
             (None, None) => None,
-            (Some(u), None) if u.is_empty() => None,
             _ => anyhow::bail!(
                 "set both SEAARMS_XAPI_USERNAME and SEAARMS_XAPI_PASSWORD, or neither"
             ),
@@ -339,11 +338,7 @@ pub fn statements(
             "extensions": {config.metrics_iri(): metrics_of(a.assessment.as_ref())},
         })),
     ));
-    out.push(statement(
-        SCORED,
-        ended,
-        Some(json!({"score": score_json})),
-    ));
+    out.push(statement(SCORED, ended, Some(json!({"score": score_json}))));
     out
 }
 
@@ -392,7 +387,8 @@ async fn post(http: &reqwest::Client, config: &XapiConfig, statements: &[Value])
     }
 }
 
-/// Sends one claimed attempt's statements and records what came of it.
+/// Sends one claimed attempt's statements and records what came of it; `Ok(false)` when
+/// the LRS did not take them now (down, erring), so the rest of the batch waits.
 async fn send_one(
     db: &Db,
     metrics: &Metrics,
@@ -400,10 +396,11 @@ async fn send_one(
     config: &XapiConfig,
     attempt: &str,
     tries: i64,
-) -> Result<()> {
+) -> Result<bool> {
     let Some(src) = db.xapi_source(attempt).await? else {
         // Deleted by retention meanwhile, or no trainee: nothing to send.
-        return db.xapi_done(attempt).await;
+        db.xapi_done(attempt).await?;
+        return Ok(true);
     };
     let exercise = src
         .attempt
@@ -412,7 +409,8 @@ async fn send_one(
         .and_then(|id| crate::catalogue::EXERCISES.get(id));
     let statements = statements(&src, exercise.as_deref(), config);
     if statements.is_empty() {
-        return db.xapi_done(attempt).await;
+        db.xapi_done(attempt).await?;
+        return Ok(true);
     }
     match post(http, config, &statements).await {
         Sent::Accepted => {
@@ -437,13 +435,15 @@ async fn send_one(
             metrics.xapi_send_failures.fetch_add(1, Ordering::Relaxed);
             db.xapi_retry(attempt, crate::clock::unix_now() + delay, &why)
                 .await?;
+            return Ok(false);
         }
     }
-    Ok(())
+    Ok(true)
 }
 
 /// The sender: every [`POLL`], claims up to [`BATCH`] due outbox rows and sends them, one
-/// request per attempt, in order; keeps `seaarms_xapi_pending` current. Runs until aborted.
+/// request per attempt, in order, stopping at the first try the LRS fails (the rest wait
+/// out their [`LEASE_S`]); keeps `seaarms_xapi_pending` current. Runs until aborted.
 pub async fn send_loop(db: Db, metrics: Arc<Metrics>, config: Arc<XapiConfig>) {
     let http = match reqwest::Client::builder()
         .timeout(REQUEST_TIMEOUT)
@@ -472,8 +472,12 @@ pub async fn send_loop(db: Db, metrics: Arc<Metrics>, config: Arc<XapiConfig>) {
             }
         };
         for (attempt, tries) in &claimed {
-            if let Err(e) = send_one(&db, &metrics, &http, &config, attempt, *tries).await {
-                tracing::warn!(%attempt, "xAPI outbox: {e:#}");
+            match send_one(&db, &metrics, &http, &config, attempt, *tries).await {
+                Ok(true) => {}
+                // The LRS is down: the batch's other rows stay claimed and are due again
+                // after the lease, not tried now one by one.
+                Ok(false) => break,
+                Err(e) => tracing::warn!(%attempt, "xAPI outbox: {e:#}"),
             }
         }
         if let Ok(n) = db.xapi_pending().await {
@@ -508,7 +512,10 @@ mod tests {
         assert_eq!(timestamp(1e9), "2001-09-09T01:46:40.000Z");
         assert_eq!(timestamp(0.0), "1970-01-01T00:00:00.000Z");
         // 2000-02-29 (a leap day of a century leap year) is day 11016 after the epoch.
-        assert_eq!(timestamp(11016.0 * 86400.0 + 0.25), "2000-02-29T00:00:00.250Z");
+        assert_eq!(
+            timestamp(11016.0 * 86400.0 + 0.25),
+            "2000-02-29T00:00:00.250Z"
+        );
         assert_eq!(duration(83.254), "PT83.25S");
         assert_eq!(duration(f64::NAN), "PT0.00S");
     }

@@ -1,5 +1,6 @@
 //! Training records in a database: trainees, sessions, attempts (with their compressed input
-//! streams) and typed events. One code path for SQLite (the default, a file in the data
+//! streams) and typed events; and the xAPI outbox (`xapi`: finished attempts waiting for
+//! the Learning Record Store). One code path for SQLite (the default, a file in the data
 //! folder) and PostgreSQL (`--database-url postgres://…`) through sqlx's `Any` driver, with
 //! the portable schema of `migrations/` applied at start-up.
 //!

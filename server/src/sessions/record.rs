@@ -938,9 +938,7 @@ fn write_session(w: &DbWrite) -> Option<&str> {
         | DbWrite::SessionEnd { id, .. } => Some(id),
         DbWrite::Event { session, .. } => Some(session),
         DbWrite::AttemptStart(a) => Some(&a.session),
-        DbWrite::AttemptInputs { .. } | DbWrite::AttemptEnd(_) | DbWrite::XapiQueue { .. } => {
-            None
-        }
+        DbWrite::AttemptInputs { .. } | DbWrite::AttemptEnd(_) | DbWrite::XapiQueue { .. } => None,
     }
 }
 

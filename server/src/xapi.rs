@@ -520,6 +520,64 @@ mod tests {
         assert_eq!(duration(f64::NAN), "PT0.00S");
     }
 
+    fn source(outcome: &str, completed: bool) -> XapiSource {
+        XapiSource {
+            attempt: crate::db::AttemptRow {
+                id: "0123456789abcdef".into(),
+                session: "fedcba9876543210".into(),
+                trainee: "Ada Lovelace".into(),
+                group: "A".into(),
+                scenario: "familiarisation".into(),
+                exercise: Some("familiarisation".into()),
+                exercise_version: Some("1".into()),
+                sim_version: "v".into(),
+                started_unix: 1e9,
+                ended_unix: Some(1e9 + 90.0),
+                sim_seconds: 90.0,
+                outcome: Some(outcome.into()),
+                score: Some(42.0),
+                assessment: Some(json!({"completed": completed, "time_s": 90.0, "exercise": "x"})),
+                init: Value::Null,
+                inputs_bytes: 0,
+            },
+            trainee_id: "00112233aabbccdd".into(),
+        }
+    }
+
+    #[test]
+    fn a_failed_attempt_is_attempted_failed_and_scored() {
+        let config = XapiConfig::new("http://lrs/xAPI", None, None, "https://sim").unwrap();
+        let st = statements(&source("failed", false), None, &config);
+        let verbs: Vec<&str> = st.iter().filter_map(|s| s["verb"]["id"].as_str()).collect();
+        assert_eq!(verbs, [ATTEMPTED, FAILED, SCORED], "no `completed`");
+        let failed = &st[1];
+        assert_eq!(failed["result"]["success"], false);
+        assert_eq!(failed["result"]["completion"], false);
+        assert_eq!(failed["result"]["score"]["scaled"], 0.42);
+        assert_eq!(failed["result"]["duration"], "PT90.00S");
+        assert_eq!(failed["timestamp"], "2001-09-09T01:48:10.000Z");
+        assert_eq!(
+            st[0]["timestamp"], "2001-09-09T01:46:40.000Z",
+            "attempted at the start"
+        );
+        // Only the metrics ride along, not the assessment's other fields.
+        let m = &failed["result"]["extensions"]["https://sim/xapi/extensions/metrics"];
+        assert_eq!(m["time_s"], 90.0);
+        assert!(m.get("exercise").is_none() && m.get("completed").is_none());
+        assert_eq!(failed["actor"]["account"]["name"], "00112233aabbccdd");
+        assert_eq!(
+            failed["object"]["id"],
+            "https://sim/exercises/familiarisation"
+        );
+        let passed = statements(&source("passed", true), None, &config);
+        let verbs: Vec<&str> = passed
+            .iter()
+            .filter_map(|s| s["verb"]["id"].as_str())
+            .collect();
+        assert_eq!(verbs, [ATTEMPTED, COMPLETED, PASSED, SCORED]);
+        assert!(statements(&source("abandoned", false), None, &config).is_empty());
+    }
+
     #[test]
     fn backoff_doubles_up_to_its_cap() {
         assert_eq!(backoff_s(0), 1.0);

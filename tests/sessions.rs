@@ -545,6 +545,13 @@ async fn openapi_lists_every_route() {
                 .send()
                 .await
                 .unwrap(),
+            "put" => http
+                .put(&url)
+                .header("content-type", "application/json")
+                .body("{}")
+                .send()
+                .await
+                .unwrap(),
             "delete" => http.delete(&url).send().await.unwrap(),
             m => panic!("method {m}"),
         };

@@ -201,6 +201,8 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/sessions/{id}/assessment"),
     ("get", "/api/sessions/{id}/progress"),
     ("get", "/api/progress"),
+    ("get", "/api/reference-operators"),
+    ("put", "/api/reference-operators"),
     ("get", "/api/results.csv"),
     ("post", "/api/signin"),
     ("get", "/api/signin"),
@@ -298,6 +300,10 @@ fn routes(state: AppState) -> Router {
             get(api::progress::of_session),
         )
         .route("/api/progress", get(api::progress::class))
+        .route(
+            "/api/reference-operators",
+            get(api::progress::references).put(api::progress::mark_reference),
+        )
         .route("/api/results.csv", get(api::results::export))
         .route(
             "/api/signin",

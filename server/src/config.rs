@@ -50,6 +50,17 @@ pub enum Command {
         /// Seed of the attempt's random draws (the fault drill's fault and time).
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// With `--human`: the operator's mean decision interval as a multiple of 0.25 s
+        /// (`exercises::HumanNoise`; with any of these three the operator varies, seeded by
+        /// `--seed`).
+        #[arg(long, requires = "human")]
+        reaction: Option<f64>,
+        /// With `--human`: largest extra share of the decision interval, drawn per decision.
+        #[arg(long, requires = "human")]
+        jitter: Option<f64>,
+        /// With `--human`: largest relative misjudgement of an axis's intent, per decision.
+        #[arg(long, requires = "human")]
+        misjudge: Option<f64>,
     },
     /// Load-test a running server: N trainee sessions with random sticks plus M observers.
     Load(crate::load::LoadArgs),

@@ -73,7 +73,7 @@ pub async fn get(Path(id): Path<String>) -> Result<Json<Arc<ExerciseSpec>>, ApiE
 }
 
 /// Who drives a headless attempt.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Driver {
     /// The exercise file's autopilot script.
     Autopilot,
@@ -81,8 +81,41 @@ pub enum Driver {
     /// every [`HUMAN_DECISION_S`], at most two axes at a time, each at rest, slow (30 %,
     /// Shift) or full — a keyboard user's choices, with a reaction time.
     HumanPaced,
+    /// [`Driver::HumanPaced`] with seeded human variation ([`HumanNoise`]): the scripted class
+    /// of operators of different skill (issue 30's benchmark tests).
+    Noisy(HumanNoise),
     /// Nobody: no input at all.
     Idle,
+}
+
+/// Seeded variation of a human-paced operator: each decision comes `reaction` ×
+/// [`HUMAN_DECISION_S`] after the last, stretched by up to `jitter` of that (uniform), and each
+/// axis's intent is misjudged by a factor drawn uniformly from 1 ± `misjudge` before it is
+/// quantised (a person under- or over-estimates how far a jaw has to go). Reaction 1, jitter
+/// and misjudge 0 is [`Driver::HumanPaced`]; a slower or less steady operator takes longer,
+/// overshoots and corrects more. Human choice reaction times spread by about ±30 % around
+/// their mean (Hick's-law studies), hence jitters of that order in the tests.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HumanNoise {
+    /// Mean decision interval as a multiple of [`HUMAN_DECISION_S`] (≥ 0.6).
+    pub reaction: f64,
+    /// Largest extra share of that interval, drawn per decision (0–1).
+    pub jitter: f64,
+    /// Largest relative misjudgement of an axis's intent, drawn per decision and axis (0–0.9).
+    pub misjudge: f64,
+    /// Seed of the draws.
+    pub seed: u64,
+}
+
+/// SplitMix64 (Steele, Lea & Flood 2014, "Fast splittable pseudorandom number generators"),
+/// the draws of [`HumanNoise`]: a uniform number in [0, 1).
+fn uniform(state: &mut u64) -> f64 {
+    *state = state.wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = *state;
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^= z >> 31;
+    (z >> 11) as f64 / (1u64 << 53) as f64
 }
 
 /// How often the human-paced operator decides (s): 0.25, a choice reaction time (Hick's
@@ -193,17 +226,33 @@ pub fn run_recorded(
         seed,
     )?;
     let mut pilot = Autopilot::new(spec.autopilot.clone(), spec.control.mode);
-    if driver == Driver::HumanPaced {
+    let noise = match driver {
+        Driver::HumanPaced => Some(HumanNoise {
+            reaction: 1.0,
+            jitter: 0.0,
+            misjudge: 0.0,
+            seed: 0,
+        }),
+        Driver::Noisy(n) => Some(HumanNoise {
+            reaction: n.reaction.clamp(0.6, 8.0),
+            jitter: n.jitter.clamp(0.0, 1.0),
+            misjudge: n.misjudge.clamp(0.0, 0.9),
+            ..n
+        }),
+        _ => None,
+    };
+    let mut draws = noise.map_or(0, |n| n.seed);
+    if noise.is_some() {
         pilot = pilot.settling();
     }
     let steps_per_tick = (PILOT_INTERVAL_S * 1000.0).round() as u64;
     let max_steps = ((spec.time_limit_s + 1.0) * 1000.0) as u64;
     let mut seq = 0;
     let mut steps = 0;
-    let decide_every = (HUMAN_DECISION_S / PILOT_INTERVAL_S).round() as u64;
+    let mut next_decision = 0;
     let mut held: Option<seaarms_core::exercise::PilotOutput> = None;
     while steps < max_steps {
-        if driver == Driver::HumanPaced {
+        if let Some(noise) = noise {
             let mut out = {
                 let run = live
                     .exercise()
@@ -219,7 +268,19 @@ pub fn run_recorded(
                     answer: answer.to_string(),
                 })?;
             }
-            if held.is_none() || (steps / steps_per_tick) % decide_every == 0 {
+            if held.is_none() || steps >= next_decision {
+                let mut interval = HUMAN_DECISION_S * noise.reaction;
+                if noise.jitter > 0.0 {
+                    interval *= 1.0 + noise.jitter * uniform(&mut draws);
+                }
+                // on the pilot's own tick grid, as its plan is evaluated
+                let ticks = (interval / PILOT_INTERVAL_S).round().max(1.0) as u64;
+                next_decision = steps + ticks * steps_per_tick;
+                if noise.misjudge > 0.0 {
+                    for v in out.axes.iter_mut().flatten().chain(out.object.iter_mut()) {
+                        *v *= 1.0 + noise.misjudge * (2.0 * uniform(&mut draws) - 1.0);
+                    }
+                }
                 if let Some((arm, axes)) = human_paced(&mut out) {
                     let side = if arm == 0 { "left" } else { "right" };
                     live.apply(&Command::jog(side, &axes, &mut Vec::new())?)?;

@@ -30,6 +30,9 @@ async fn main() -> anyhow::Result<()> {
             human,
             idle: _,
             seed,
+            reaction,
+            jitter,
+            misjudge,
         }) => {
             let spec = seaarms::catalogue::EXERCISES.get(&id).ok_or_else(|| {
                 anyhow::anyhow!(
@@ -48,6 +51,13 @@ async fn main() -> anyhow::Result<()> {
                 .ok_or_else(|| anyhow::anyhow!("no magnum model"))?;
             let driver = if autopilot {
                 seaarms::exercises::Driver::Autopilot
+            } else if human && (reaction, jitter, misjudge) != (None, None, None) {
+                seaarms::exercises::Driver::Noisy(seaarms::exercises::HumanNoise {
+                    reaction: reaction.unwrap_or(1.0),
+                    jitter: jitter.unwrap_or(0.0),
+                    misjudge: misjudge.unwrap_or(0.0),
+                    seed,
+                })
             } else if human {
                 seaarms::exercises::Driver::HumanPaced
             } else {

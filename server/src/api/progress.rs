@@ -8,6 +8,11 @@
 //!   of that live session on every exercise (`not_started` where there is no attempt), for the
 //!   start screen's learning curves.
 //!
+//! * `GET /api/reference-operators`, `PUT /api/reference-operators` (instructor): the trainees
+//!   whose finished attempts make each exercise's benchmark (issue 30 item 1). Both progress
+//!   routes carry each exercise's benchmark (the core's [`ExerciseBenchmark`]), and an attempt
+//!   that meets an applying benchmark counts toward "N in a row" proficiency.
+//!
 //! A finished attempt is one that passed or failed (abandoned, ended and interrupted ones say
 //! nothing of skill). The trainee is the session's name and group, as the records keep them.
 
@@ -19,7 +24,9 @@ use serde::{Deserialize, Serialize};
 use serde_json::{Value, json};
 
 use seaarms_core::exercise::ExerciseSpec;
-use seaarms_core::exercise::proficiency::{AttemptOutcome, ProficiencyState, progress};
+use seaarms_core::exercise::proficiency::{
+    AttemptOutcome, ExerciseBenchmark, ProficiencyState, progress,
+};
 
 use crate::api::attempts::is_instructor;
 use crate::api::sessions::{live_actor, live_session};
@@ -36,6 +43,8 @@ struct Point {
     started_unix: f64,
     score: f64,
     passed: bool,
+    /// Met the exercise's benchmark (None while it does not apply).
+    met_benchmark: Option<bool>,
 }
 
 /// One trainee's curve and state on one exercise.
@@ -52,10 +61,47 @@ struct Curve {
     attempts: Vec<Point>,
     /// The learning (LC-CUSUM) and relapse charts after each attempt, and their limit.
     cusum: Value,
+    /// The exercise's benchmark (in a trainee's own progress; the class view gives it once).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    benchmark: Option<ExerciseBenchmark>,
 }
 
-/// A curve from one trainee's finished attempts at `spec`, oldest first.
-fn curve(trainee: &str, group: &str, spec: &ExerciseSpec, rows: &[&AttemptRow]) -> Curve {
+/// An attempt's benchmarked values: its score and its assessment's metrics.
+fn values(r: &AttemptRow) -> BTreeMap<String, f64> {
+    let mut out: BTreeMap<String, f64> = r
+        .assessment
+        .as_ref()
+        .and_then(Value::as_object)
+        .map(|o| {
+            o.iter()
+                .filter_map(|(k, v)| Some((k.clone(), v.as_f64()?)))
+                .collect()
+        })
+        .unwrap_or_default();
+    out.insert("score".into(), r.score.unwrap_or(0.0));
+    out
+}
+
+/// `spec`'s benchmark from its reference operators' finished attempts.
+async fn benchmark(state: &AppState, spec: &ExerciseSpec) -> Result<ExerciseBenchmark, ApiError> {
+    let rows = state
+        .db
+        .reference_attempts(&spec.id)
+        .await
+        .map_err(db_error)?;
+    let refs: Vec<BTreeMap<String, f64>> = rows.iter().map(values).collect();
+    Ok(ExerciseBenchmark::of(spec, &refs))
+}
+
+/// A curve from one trainee's finished attempts at `spec`, oldest first, judged against
+/// `bench` where it applies (else by the CUSUM alone).
+fn curve(
+    trainee: &str,
+    group: &str,
+    spec: &ExerciseSpec,
+    bench: &ExerciseBenchmark,
+    rows: &[&AttemptRow],
+) -> Curve {
     let attempts: Vec<Point> = rows
         .iter()
         .map(|r| Point {
@@ -63,12 +109,15 @@ fn curve(trainee: &str, group: &str, spec: &ExerciseSpec, rows: &[&AttemptRow]) 
             started_unix: r.started_unix,
             score: r.score.unwrap_or(0.0),
             passed: r.outcome.as_deref() == Some("passed"),
+            met_benchmark: bench.met_by(&values(r)),
         })
         .collect();
     let outcomes: Vec<AttemptOutcome> = attempts
         .iter()
-        // no reference operators yet: the CUSUM alone judges
-        .map(|p| AttemptOutcome::without_benchmark(p.passed))
+        .map(|p| AttemptOutcome {
+            passed: p.passed,
+            met_benchmark: p.met_benchmark,
+        })
         .collect();
     let p = &spec.proficiency;
     let pr = progress(&p.cusum, p.consecutive, &outcomes);
@@ -89,6 +138,7 @@ fn curve(trainee: &str, group: &str, spec: &ExerciseSpec, rows: &[&AttemptRow]) 
             "acceptable_failure": p.cusum.acceptable_failure,
             "unacceptable_failure": p.cusum.unacceptable_failure,
         }),
+        benchmark: None,
     }
 }
 
@@ -130,6 +180,7 @@ pub async fn class(
         },
     )
     .await?;
+    let bench = benchmark(&state, &spec).await?;
     let mut by: BTreeMap<(String, String), Vec<&AttemptRow>> = BTreeMap::new();
     for r in &rows {
         by.entry((r.trainee.clone(), r.group.clone()))
@@ -138,10 +189,12 @@ pub async fn class(
     }
     let mut curves: Vec<Curve> = by
         .iter()
-        .map(|((t, g), list)| curve(t, g, &spec, list))
+        .map(|((t, g), list)| curve(t, g, &spec, &bench, list))
         .collect();
     curves.sort_by_key(|c| (rank(c.state), c.trainee.clone(), c.group.clone()));
-    Ok(Json(json!({ "exercise": spec.id, "trainees": curves })))
+    Ok(Json(
+        json!({ "exercise": spec.id, "benchmark": bench, "trainees": curves }),
+    ))
 }
 
 /// The class's order: who needs the instructor first (relapsed, practising), then proficient.
@@ -175,18 +228,86 @@ pub async fn of_session(
         },
     )
     .await?;
-    let curves: Vec<Curve> = EXERCISES
-        .all()
-        .iter()
-        .map(|spec| {
-            let list: Vec<&AttemptRow> = rows
-                .iter()
-                .filter(|r| r.exercise.as_deref() == Some(spec.id.as_str()))
-                .collect();
-            curve(&session.label, &session.group, spec, &list)
-        })
-        .collect();
+    let mut curves: Vec<Curve> = Vec::new();
+    for spec in EXERCISES.all() {
+        let bench = benchmark(&state, &spec).await?;
+        let list: Vec<&AttemptRow> = rows
+            .iter()
+            .filter(|r| r.exercise.as_deref() == Some(spec.id.as_str()))
+            .collect();
+        let mut c = curve(&session.label, &session.group, &spec, &bench, &list);
+        c.benchmark = Some(bench);
+        curves.push(c);
+    }
     Ok(Json(
         json!({ "trainee": session.label, "group": session.group, "exercises": curves }),
     ))
+}
+
+/// A reference operator as listed.
+#[derive(Debug, Serialize)]
+struct Reference {
+    trainee: String,
+    group: String,
+    marked_unix: f64,
+}
+
+/// `GET /api/reference-operators` (instructor).
+pub async fn references(
+    State(state): State<AppState>,
+    creds: crate::auth::Credentials,
+) -> Result<Json<Value>, ApiError> {
+    if !is_instructor(&state, &creds)? {
+        return Err(ApiError::forbidden("instructor token required"));
+    }
+    list_references(&state).await
+}
+
+async fn list_references(state: &AppState) -> Result<Json<Value>, ApiError> {
+    let list: Vec<Reference> = state
+        .db
+        .reference_operators()
+        .await
+        .map_err(db_error)?
+        .into_iter()
+        .map(|(trainee, group, marked_unix)| Reference {
+            trainee,
+            group,
+            marked_unix,
+        })
+        .collect();
+    Ok(Json(json!({ "reference_operators": list })))
+}
+
+/// Body of `PUT /api/reference-operators`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MarkReference {
+    trainee: String,
+    #[serde(default)]
+    group: String,
+    reference: bool,
+}
+
+/// `PUT /api/reference-operators` (instructor): marks or unmarks a trainee (by name and group,
+/// normalised as names are on entry); answers the whole list.
+pub async fn mark_reference(
+    State(state): State<AppState>,
+    creds: crate::auth::Credentials,
+    crate::json::ApiJson(body): crate::json::ApiJson<MarkReference>,
+) -> Result<Json<Value>, ApiError> {
+    if !is_instructor(&state, &creds)? {
+        return Err(ApiError::forbidden("instructor token required"));
+    }
+    let name = crate::names::display_name(&body.trainee);
+    if name.is_empty() {
+        return Err(ApiError::bad_request("`trainee` must name a trainee"));
+    }
+    let group = crate::names::display_name(&body.group);
+    state
+        .db
+        .set_reference_operator(&name, &group, body.reference)
+        .await
+        .map_err(db_error)?;
+    list_references(&state).await
 }

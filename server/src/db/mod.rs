@@ -501,6 +501,71 @@ impl Db {
         .await
     }
 
+    /// The reference operators (issue 30 item 1): (name, group, marked at, Unix s), by name.
+    pub async fn reference_operators(&self) -> Result<Vec<(String, String, f64)>> {
+        self.run(|pool| async move {
+            let rows = sqlx::query(
+                "SELECT name, grp, marked_unix FROM reference_operators ORDER BY name, grp",
+            )
+            .fetch_all(&pool)
+            .await?;
+            rows.iter()
+                .map(|r| {
+                    Ok((
+                        r.try_get("name")?,
+                        r.try_get("grp")?,
+                        r.try_get("marked_unix")?,
+                    ))
+                })
+                .collect()
+        })
+        .await
+    }
+
+    /// Marks (or unmarks) the trainee `name` of `group` as a reference operator. Marking one
+    /// already marked keeps the first time.
+    pub async fn set_reference_operator(&self, name: &str, group: &str, on: bool) -> Result<()> {
+        let (name, group) = (name.to_string(), group.to_string());
+        self.run(move |pool| async move {
+            if on {
+                sqlx::query(
+                    "INSERT INTO reference_operators (name, grp, marked_unix) VALUES ($1, $2, $3) \
+                     ON CONFLICT (name, grp) DO NOTHING",
+                )
+                .bind(name)
+                .bind(group)
+                .bind(crate::clock::unix_now())
+                .execute(&pool)
+                .await?;
+            } else {
+                sqlx::query("DELETE FROM reference_operators WHERE name = $1 AND grp = $2")
+                    .bind(name)
+                    .bind(group)
+                    .execute(&pool)
+                    .await?;
+            }
+            Ok(())
+        })
+        .await
+    }
+
+    /// The reference operators' finished (passed or failed) attempts at `exercise`, oldest
+    /// first: what its benchmark is computed from.
+    pub async fn reference_attempts(&self, exercise: &str) -> Result<Vec<AttemptRow>> {
+        let exercise = exercise.to_string();
+        self.run(|pool| async move {
+            let sql = format!(
+                "SELECT {ATTEMPT_COLUMNS} WHERE a.exercise = $1 \
+                 AND a.outcome IN ('passed', 'failed') AND EXISTS (SELECT 1 FROM \
+                 reference_operators r WHERE r.name = s.label AND r.grp = s.grp) \
+                 ORDER BY a.started_unix, a.id"
+            );
+            let rows = sqlx::query(&sql).bind(exercise).fetch_all(&pool).await?;
+            rows.iter().map(attempt_row).collect()
+        })
+        .await
+    }
+
     /// One attempt.
     pub async fn attempt(&self, id: &str) -> Result<Option<AttemptRow>> {
         let id = id.to_string();

@@ -93,8 +93,116 @@ impl Benchmark {
     }
 }
 
+/// One benchmarked measure of an exercise: its band from the reference attempts.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct MeasureBenchmark {
+    /// `score`, or a metric of [`super::assess::Metrics`] the exercise scores.
+    pub metric: String,
+    /// Better upward (the score; a scoring term whose `good` is above its `bad`).
+    pub higher_is_better: bool,
+    /// The reference operators' benchmark (None without a finite reference value).
+    pub benchmark: Option<Benchmark>,
+    /// Its pass line ([`Benchmark::pass_line`], `k` = the exercise's `benchmark_sd`).
+    pub line: Option<f64>,
+    /// Meeting the benchmark requires this measure (the exercise's `benchmark_on`).
+    pub required: bool,
+}
+
+/// An exercise's benchmark from its reference attempts (issue 30 item 1): the score and every
+/// scoring term's metric, each with its reference mean, SD and pass line.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct ExerciseBenchmark {
+    /// Reference attempts it was computed from (before outliers are removed per measure).
+    pub reference_attempts: usize,
+    /// Fewest reference attempts for the benchmark to apply (the exercise's
+    /// `min_reference_attempts`).
+    pub min_reference_attempts: usize,
+    /// Whether it applies: every required measure keeps at least `min_reference_attempts`
+    /// values after its outliers are removed. When it does not, the file's pass marks alone
+    /// apply.
+    pub applies: bool,
+    /// The pass lines' distance from the mean in reference SDs (`benchmark_sd`).
+    pub k: f64,
+    /// The measures, the score first.
+    pub measures: Vec<MeasureBenchmark>,
+}
+
+impl ExerciseBenchmark {
+    /// The measures `spec` is benchmarked on: the score, then each scoring term's metric once,
+    /// then any other metric its `benchmark_on` names (lower better).
+    pub fn measures_of(spec: &super::ExerciseSpec) -> Vec<(String, bool)> {
+        let mut out = vec![("score".to_string(), true)];
+        for t in &spec.scoring {
+            if !out.iter().any(|(m, _)| *m == t.metric) {
+                out.push((t.metric.clone(), t.good > t.bad));
+            }
+        }
+        for m in &spec.proficiency.benchmark_on {
+            if !out.iter().any(|(o, _)| o == m) {
+                out.push((m.clone(), false));
+            }
+        }
+        out
+    }
+
+    /// The benchmark of `spec` from its reference attempts' values (each a map from measure to
+    /// value: the score and the assessment's metrics).
+    pub fn of(
+        spec: &super::ExerciseSpec,
+        reference: &[std::collections::BTreeMap<String, f64>],
+    ) -> ExerciseBenchmark {
+        let p = &spec.proficiency;
+        let measures: Vec<MeasureBenchmark> = Self::measures_of(spec)
+            .into_iter()
+            .map(|(metric, higher_is_better)| {
+                let values: Vec<f64> = reference
+                    .iter()
+                    .filter_map(|r| r.get(&metric).copied())
+                    .collect();
+                let benchmark = Benchmark::from_reference(&values);
+                let line = benchmark
+                    .as_ref()
+                    .map(|b| b.pass_line(p.benchmark_sd, higher_is_better));
+                MeasureBenchmark {
+                    required: p.benchmark_on.contains(&metric),
+                    metric,
+                    higher_is_better,
+                    benchmark,
+                    line,
+                }
+            })
+            .collect();
+        let applies = !reference.is_empty()
+            && measures.iter().filter(|m| m.required).all(|m| {
+                m.benchmark
+                    .as_ref()
+                    .is_some_and(|b| b.n >= p.min_reference_attempts.max(1))
+            });
+        ExerciseBenchmark {
+            reference_attempts: reference.len(),
+            min_reference_attempts: p.min_reference_attempts,
+            applies,
+            k: p.benchmark_sd,
+            measures,
+        }
+    }
+
+    /// Whether an attempt with `values` meets the benchmark: every required measure on the
+    /// better side of its pass line (a missing value does not). None when the benchmark does
+    /// not apply.
+    pub fn met_by(&self, values: &std::collections::BTreeMap<String, f64>) -> Option<bool> {
+        self.applies.then(|| {
+            let mut required = self.measures.iter().filter(|m| m.required);
+            required.all(|m| match (&m.benchmark, values.get(&m.metric)) {
+                (Some(b), Some(&v)) => b.met_by(v, self.k, m.higher_is_better),
+                _ => false,
+            })
+        })
+    }
+}
+
 /// How proficiency is judged on an exercise (its file's `proficiency`, every field optional).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct ProficiencySpec {
     /// Attempts in a row meeting the benchmark that make a trainee proficient: 3 (the
@@ -107,6 +215,12 @@ pub struct ProficiencySpec {
     /// Fewest reference attempts (after outliers) for a benchmark: 5; with fewer, the file's
     /// pass marks alone apply.
     pub min_reference_attempts: usize,
+    /// The measures an attempt must meet for the benchmark (each on the better side of its
+    /// line): `score` and `time_s` — the overall quality and the time, the two measures every
+    /// proficiency-based progression study benchmarks (Gallagher et al. 2005: time and
+    /// errors). Every other scored metric's band is shown, not required; an exercise file
+    /// can require more.
+    pub benchmark_on: Vec<String>,
     /// The CUSUM charts.
     pub cusum: CusumParams,
 }
@@ -117,6 +231,7 @@ impl Default for ProficiencySpec {
             consecutive: 3,
             benchmark_sd: 1.0,
             min_reference_attempts: 5,
+            benchmark_on: vec!["score".into(), "time_s".into()],
             cusum: CusumParams::default(),
         }
     }
@@ -130,6 +245,13 @@ impl ProficiencySpec {
                 "proficiency.benchmark_sd must be ≥ 0 (got {})",
                 self.benchmark_sd
             ));
+        }
+        if let Some(m) = self
+            .benchmark_on
+            .iter()
+            .find(|m| *m != "score" && super::assess::Metrics::default().get(m).is_none())
+        {
+            return Err(format!("proficiency.benchmark_on: unknown metric `{m}`"));
         }
         self.cusum.check()
     }
@@ -319,6 +441,86 @@ pub fn progress(params: &CusumParams, consecutive: usize, attempts: &[AttemptOut
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    fn spec() -> crate::exercise::ExerciseSpec {
+        serde_json::from_str(
+            r#"{"id":"t","version":1,"title":"t","goal":"g","skills":[],
+            "control":{"mode":"joint","arm":"left"},
+            "steps":[{"id":"a","text":"a","done_when":{"kind":"released"}}],
+            "time_limit_s":100,"pass":{"min_score":50,"limits":[]},
+            "scoring":[{"metric":"time_s","good":20,"bad":100,"weight":3},
+                       {"metric":"mean_jlm","good":0.8,"bad":0.4,"weight":1},
+                       {"metric":"time_s","good":10,"bad":200,"weight":1}],
+            "proficiency":{"benchmark_sd":1,"min_reference_attempts":4,
+                           "benchmark_on":["score","time_s","mean_jlm"]},
+            "autopilot":[]}"#,
+        )
+        .expect("spec")
+    }
+
+    fn values(score: f64, time_s: f64, jlm: f64) -> std::collections::BTreeMap<String, f64> {
+        [("score", score), ("time_s", time_s), ("mean_jlm", jlm)]
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect()
+    }
+
+    /// An exercise's benchmark by hand: the score and each scored metric once (time_s appears
+    /// twice in the terms), lower time better (good < bad), higher JLM better. References
+    /// score 80, 84, 88, 92 → mean 86, SD √(80/3) = 5.164, line 80.836; times 30, 34, 38, 42
+    /// → line 36 + 5.164 = 41.164; JLM 0.6, 0.7, 0.7, 0.8 → mean 0.7, SD √(0.02/3) = 0.08165,
+    /// line 0.61835.
+    #[test]
+    fn exercise_benchmark_is_each_measures_band_on_its_worse_side() {
+        let spec = spec();
+        let refs = [
+            values(80.0, 30.0, 0.6),
+            values(84.0, 34.0, 0.7),
+            values(88.0, 38.0, 0.7),
+            values(92.0, 42.0, 0.8),
+        ];
+        let b = ExerciseBenchmark::of(&spec, &refs);
+        let names: Vec<(&str, bool)> = b
+            .measures
+            .iter()
+            .map(|m| (m.metric.as_str(), m.higher_is_better))
+            .collect();
+        assert_eq!(
+            names,
+            [("score", true), ("time_s", false), ("mean_jlm", true)]
+        );
+        assert!(b.applies && b.reference_attempts == 4);
+        let sd = (80.0f64 / 3.0).sqrt();
+        assert!((b.measures[0].line.unwrap() - (86.0 - sd)).abs() < 1e-9);
+        assert!((b.measures[1].line.unwrap() - (36.0 + sd)).abs() < 1e-9);
+        assert!((b.measures[2].line.unwrap() - (0.7 - (0.02f64 / 3.0).sqrt())).abs() < 1e-9);
+        // every required measure must be met (here all three)
+        assert!(b.measures.iter().all(|m| m.required));
+        assert_eq!(b.met_by(&values(81.0, 41.0, 0.62)), Some(true));
+        assert_eq!(b.met_by(&values(95.0, 41.5, 0.9)), Some(false)); // too slow
+        assert_eq!(b.met_by(&values(80.5, 20.0, 0.9)), Some(false)); // score under the line
+        let mut missing = values(95.0, 20.0, 0.9);
+        missing.remove("mean_jlm");
+        assert_eq!(b.met_by(&missing), Some(false));
+        // three references: below min_reference_attempts, the file's marks alone apply
+        let few = ExerciseBenchmark::of(&spec, &refs[..3]);
+        assert!(!few.applies);
+        assert_eq!(few.met_by(&values(95.0, 20.0, 0.9)), None);
+        assert_eq!(
+            ExerciseBenchmark::of(&spec, &[]).met_by(&values(95.0, 20.0, 0.9)),
+            None
+        );
+        // the default requires the score and the time only: a poor posture is shown, not held
+        // against the attempt; an unknown metric is refused
+        let mut default = spec.clone();
+        default.proficiency.benchmark_on = ProficiencySpec::default().benchmark_on;
+        let b = ExerciseBenchmark::of(&default, &refs);
+        let req: Vec<bool> = b.measures.iter().map(|m| m.required).collect();
+        assert_eq!(req, [true, true, false]);
+        assert_eq!(b.met_by(&values(81.0, 41.0, 0.1)), Some(true));
+        default.proficiency.benchmark_on.push("nope".into());
+        assert!(default.proficiency.check().is_err());
+    }
 
     /// Mean and SD by hand: 10, 12, 14, 16, 18 → mean 14, SD √(40/4) = √10; no value is
     /// beyond 1.96·√10 = 6.2 of 14.

@@ -53,6 +53,12 @@ hadolint Dockerfile
 command -v kubernetes-validate >/dev/null || python3 -m pip install --quiet kubernetes-validate
 kubernetes-validate --strict --quiet $(ls deploy/kubernetes/*.yaml | grep -v kustomization.yaml)
 
+# A real xAPI Learning Record Store for tests/xapi.rs: Ralph (PyPI ralph-malph; the test starts
+# it on its file-system back end and stops it). SEAARMS_TEST_RALPH makes a missing Ralph fail
+# that test instead of skipping it.
+RALPH_RUNSERVER_BACKEND=fs python3 -c 'import ralph.api, uvicorn' 2>/dev/null || python3 -m pip install --quiet 'ralph-malph[cli,lrs]'
+export SEAARMS_TEST_RALPH=1
+
 cargo test --workspace --all-targets --no-fail-fast
 
 # Browser tests: real headless Chromium against the release binary (tests/browser/).

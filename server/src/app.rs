@@ -48,6 +48,8 @@ pub struct AppState {
     pub db: crate::db::Db,
     /// This replica (name, multi-replica mode, drain).
     pub cluster: Arc<crate::cluster::Cluster>,
+    /// Where finished attempts' xAPI statements go (`--xapi-endpoint`), when set.
+    pub xapi: Option<Arc<crate::xapi::XapiConfig>>,
 }
 
 /// Checks an operator-supplied secret (instructor token, join code): it must travel intact
@@ -69,6 +71,7 @@ impl AppState {
     pub fn new(config: &ServeConfig) -> anyhow::Result<AppState> {
         let robots = Arc::new(Robots::load()?);
         let metrics = Arc::new(Metrics::default());
+        let xapi = config.xapi_config()?.map(Arc::new);
         let db = crate::db::Db::open(&config.database_url())?;
         let cluster = Arc::new(crate::cluster::Cluster::new(
             config.replica_name.as_deref(),
@@ -163,6 +166,7 @@ impl AppState {
             compute,
             db,
             cluster,
+            xapi,
         })
     }
 }

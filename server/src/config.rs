@@ -317,6 +317,14 @@ pub struct ServeConfig {
         global = true
     )]
     pub drain_seconds: u64,
+
+    // --- Results to a Learning Record Store (docs/xapi.md) ---
+    /// xAPI endpoint of a Learning Record Store (`https://lrs.example.org/xAPI/`): every
+    /// finished exercise attempt's statements are queued in the records database and sent
+    /// there. Off when unset. Credentials (HTTP Basic) by environment only:
+    /// `SEAARMS_XAPI_USERNAME`, `SEAARMS_XAPI_PASSWORD`.
+    #[arg(long, env = "SEAARMS_XAPI_ENDPOINT", global = true)]
+    pub xapi_endpoint: Option<String>,
 }
 
 fn non_negative(s: &str) -> Result<f64, String> {
@@ -344,7 +352,25 @@ impl ServeConfig {
                 max_bytes: (self.retention_max_mb * 1_048_576.0) as u64,
             },
             retention_interval: std::time::Duration::from_secs(self.retention_check_secs),
+            xapi: self.xapi_endpoint.as_deref().is_some_and(|e| !e.is_empty()),
         }
+    }
+
+    /// The xAPI sender's settings when `--xapi-endpoint` is set: the credentials from the
+    /// environment (`SEAARMS_XAPI_USERNAME`, `SEAARMS_XAPI_PASSWORD`), the public URL
+    /// (`--public-url`; else, left empty, `run` uses `http://<the address it listens on>`).
+    pub fn xapi_config(&self) -> anyhow::Result<Option<crate::xapi::XapiConfig>> {
+        let Some(endpoint) = self.xapi_endpoint.as_deref().filter(|e| !e.is_empty()) else {
+            return Ok(None);
+        };
+        let env = |k: &str| std::env::var(k).ok();
+        crate::xapi::XapiConfig::new(
+            endpoint,
+            env("SEAARMS_XAPI_USERNAME").as_deref(),
+            env("SEAARMS_XAPI_PASSWORD").as_deref(),
+            self.public_url.as_deref().unwrap_or_default(),
+        )
+        .map(Some)
     }
 }
 
@@ -380,6 +406,7 @@ impl Default for ServeConfig {
             compute_priority: crate::compute::ComputePriority::Idle,
             replica_name: None,
             drain_seconds: 0,
+            xapi_endpoint: None,
         }
     }
 }

@@ -22,6 +22,8 @@
 //! * [`csv_out`]: the one CSV writer (one number format) for every CSV the server writes.
 //! * [`cluster`]: several replicas behind a proxy: replica name, URL prefix, heartbeats,
 //!   session directory, drain.
+//! * [`xapi`]: finished attempts as xAPI statements to a Learning Record Store (outbox,
+//!   sender with back-off).
 
 pub mod api;
 pub mod app;
@@ -50,6 +52,7 @@ pub mod scenarios;
 pub mod security;
 pub mod sessions;
 pub mod studies;
+pub mod xapi;
 
 use std::future::Future;
 
@@ -74,6 +77,17 @@ pub async fn run(
         .cluster
         .multi
         .then(|| (state.db.clone(), state.cluster.name.clone()));
+    let xapi = state.xapi.as_deref().map(|config| {
+        let config = match listener.local_addr() {
+            Ok(addr) => config.clone().or_listening_on(addr),
+            Err(_) => config.clone(),
+        };
+        tokio::spawn(xapi::send_loop(
+            state.db.clone(),
+            state.metrics.clone(),
+            std::sync::Arc::new(config),
+        ))
+    });
     let expiry = tokio::spawn({
         let sessions = sessions.clone();
         async move {
@@ -95,6 +109,9 @@ pub async fn run(
         .with_graceful_shutdown(shutdown)
         .await;
     expiry.abort();
+    if let Some(h) = xapi {
+        h.abort();
+    }
     if let Some(h) = heartbeat {
         h.abort();
     }

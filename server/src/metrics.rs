@@ -48,13 +48,21 @@ pub struct Metrics {
     pub compute_deadline_exceeded: AtomicU64,
     /// 1 while this replica drains (SIGTERM: no new sessions), else 0.
     pub draining: AtomicU64,
+    /// xAPI statements the Learning Record Store accepted ([`crate::xapi`]).
+    pub xapi_statements_sent: AtomicU64,
+    /// Finished attempts whose xAPI statements wait in the outbox (at the sender's last look).
+    pub xapi_pending: AtomicU64,
+    /// Failed tries to send an attempt's xAPI statements (LRS down or erring; retried).
+    pub xapi_send_failures: AtomicU64,
+    /// Attempts whose xAPI statements the LRS refused for good (400 or 409; not retried).
+    pub xapi_refused: AtomicU64,
 }
 
 impl Metrics {
     /// The Prometheus text exposition, with the info gauge naming this replica.
     pub fn render(&self, replica: &str) -> String {
         let mut out = String::new();
-        let rows: [(&str, &str, &str, &AtomicU64); 20] = [
+        let rows: [(&str, &str, &str, &AtomicU64); 24] = [
             (
                 "seaarms_http_requests_total",
                 "counter",
@@ -174,6 +182,30 @@ impl Metrics {
                 "gauge",
                 "1 while the replica drains (SIGTERM: no new sessions)",
                 &self.draining,
+            ),
+            (
+                "seaarms_xapi_statements_sent_total",
+                "counter",
+                "xAPI statements accepted by the Learning Record Store",
+                &self.xapi_statements_sent,
+            ),
+            (
+                "seaarms_xapi_pending",
+                "gauge",
+                "Finished attempts whose xAPI statements wait to be sent",
+                &self.xapi_pending,
+            ),
+            (
+                "seaarms_xapi_send_failures_total",
+                "counter",
+                "Failed tries to send xAPI statements (retried with back-off)",
+                &self.xapi_send_failures,
+            ),
+            (
+                "seaarms_xapi_refused_total",
+                "counter",
+                "Attempts whose xAPI statements the LRS refused (400 or 409; not retried)",
+                &self.xapi_refused,
             ),
         ];
         for (name, kind, help, v) in rows {

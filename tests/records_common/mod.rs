@@ -19,6 +19,12 @@ pub(crate) struct Binary {
 
 impl Binary {
     pub(crate) fn start(dir: &Path, extra: &[&str]) -> Binary {
+        Binary::start_env(dir, extra, &[])
+    }
+
+    /// [`Binary::start`] with extra environment variables (settings read from the
+    /// environment only, such as credentials).
+    pub(crate) fn start_env(dir: &Path, extra: &[&str], env: &[(&str, &str)]) -> Binary {
         let mut child = Command::new(env!("CARGO_BIN_EXE_seaarms"))
             .args([
                 "serve",
@@ -30,6 +36,7 @@ impl Binary {
             .arg("--data-dir")
             .arg(dir)
             .args(extra)
+            .envs(env.iter().copied())
             .env("RUST_LOG", "warn")
             .stdout(Stdio::piped())
             .stderr(Stdio::null())

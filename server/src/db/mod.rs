@@ -1,5 +1,6 @@
 //! Training records in a database: trainees, sessions, attempts (with their compressed input
-//! streams) and typed events. One code path for SQLite (the default, a file in the data
+//! streams) and typed events; and the xAPI outbox (`xapi`: finished attempts waiting for
+//! the Learning Record Store). One code path for SQLite (the default, a file in the data
 //! folder) and PostgreSQL (`--database-url postgres://…`) through sqlx's `Any` driver, with
 //! the portable schema of `migrations/` applied at start-up.
 //!
@@ -13,6 +14,7 @@
 pub mod attempt;
 mod directory;
 mod write;
+mod xapi;
 
 use std::future::Future;
 use std::path::PathBuf;
@@ -26,6 +28,7 @@ use sqlx::{AnyPool, Executor, Row};
 
 pub use directory::{LostReplica, ReplicaBeat, lost_reason};
 pub use write::Write;
+pub use xapi::{OUTBOX_CAPACITY, XapiSource};
 
 /// Which server the URL names.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

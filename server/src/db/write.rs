@@ -62,6 +62,16 @@ pub enum Write {
     },
     /// An attempt ended.
     AttemptEnd(Box<AttemptEnd>),
+    /// Queue a stored attempt's xAPI statements ([`crate::xapi`], `migrations/0003`): it
+    /// follows the attempt's end in the same transaction and adds a row only for a finished
+    /// exercise attempt (`passed` or `failed`) of a named trainee, while the outbox holds
+    /// fewer than [`super::xapi::OUTBOX_CAPACITY`] rows.
+    XapiQueue {
+        /// Attempt id.
+        attempt: String,
+        /// Unix seconds.
+        queued_unix: f64,
+    },
     /// A live session's figures as of the rows on disk.
     Progress {
         /// Id.
@@ -243,6 +253,26 @@ impl Db {
                     .execute(&mut *tx)
                     .await?;
                 }
+                Write::XapiQueue {
+                    attempt,
+                    queued_unix,
+                } => {
+                    sqlx::query(
+                        "INSERT INTO xapi_outbox (attempt_id, queued_unix, tries, next_unix, \
+                         last_error, rejected) \
+                         SELECT a.id, $2, 0, $2, NULL, 0 FROM attempts a \
+                         JOIN sessions s ON s.id = a.session_id \
+                         WHERE a.id = $1 AND a.exercise IS NOT NULL \
+                         AND a.outcome IN ('passed', 'failed') AND s.trainee_id IS NOT NULL \
+                         AND (SELECT COUNT(*) FROM xapi_outbox) < $3 \
+                         ON CONFLICT (attempt_id) DO NOTHING",
+                    )
+                    .bind(attempt.as_str())
+                    .bind(*queued_unix)
+                    .bind(count(super::xapi::OUTBOX_CAPACITY))
+                    .execute(&mut *tx)
+                    .await?;
+                }
                 Write::Progress {
                     id,
                     sim_seconds,
@@ -373,6 +403,8 @@ impl Db {
         for id in ids {
             for sql in [
                 "DELETE FROM attempt_inputs WHERE attempt_id IN \
+                 (SELECT id FROM attempts WHERE session_id = $1)",
+                "DELETE FROM xapi_outbox WHERE attempt_id IN \
                  (SELECT id FROM attempts WHERE session_id = $1)",
                 "DELETE FROM events WHERE session_id = $1",
                 "DELETE FROM attempts WHERE session_id = $1",

@@ -63,6 +63,9 @@ pub struct RecordConfig {
     pub retention: Retention,
     /// How often retention runs (it also runs at start-up).
     pub retention_interval: Duration,
+    /// Queue finished exercise attempts' xAPI statements in the outbox (`--xapi-endpoint`
+    /// set; [`crate::xapi`]).
+    pub xapi: bool,
 }
 
 /// What the recorder is asked to do.
@@ -787,7 +790,16 @@ impl RecorderState {
             }
             RecordMsg::AttemptEnded(end) => {
                 self.next_piece.remove(&end.id);
+                let attempt = end.id.clone();
                 self.writes.push(DbWrite::AttemptEnd(end));
+                if self.config.xapi {
+                    // In the same transaction as the attempt's row: only stored results are
+                    // sent, and none is lost while the LRS is down.
+                    self.writes.push(DbWrite::XapiQueue {
+                        attempt,
+                        queued_unix: crate::clock::unix_now(),
+                    });
+                }
             }
             RecordMsg::Ended {
                 id,
@@ -926,7 +938,7 @@ fn write_session(w: &DbWrite) -> Option<&str> {
         | DbWrite::SessionEnd { id, .. } => Some(id),
         DbWrite::Event { session, .. } => Some(session),
         DbWrite::AttemptStart(a) => Some(&a.session),
-        DbWrite::AttemptInputs { .. } | DbWrite::AttemptEnd(_) => None,
+        DbWrite::AttemptInputs { .. } | DbWrite::AttemptEnd(_) | DbWrite::XapiQueue { .. } => None,
     }
 }
 

@@ -86,9 +86,6 @@ const STAB_NEAR_M = 0.08;
  * marker E is 7 cm over the seabed, and a full push from 19 cm over it carried the jaw to 2.6 cm
  * over it (fingers on the seabed) on a loaded machine with the caution at 15 cm. */
 const SEABED_CAUTION_M = 0.25;
-/** Pushes in a row (decisions) that must bring the goal STUCK_M nearer, else the operator is
- * caught on something and backs off for BACK_OFF_DECISIONS (1.5 s, 1 cm, 0.75 s). */
-const STUCK_DECISIONS = 6, STUCK_M = 0.01, BACK_OFF_DECISIONS = 3;
 /** Wall time (s) one exercise's operator may take before it gives up (below the test's timeout, so
  * that an operator never keeps working a page the next exercise has taken over). */
 const TRIAL_WALL_S = 210;
@@ -347,8 +344,6 @@ class Operator {
         const want = a.attitude_rotvec ? rotvecToMatrix(a.attitude_rotvec) : null;
         const tol = a.tolerance_m ?? 0.01;
         let prev = null;
-        this.pushed = [];
-        this.backoff = 0;
         const stepAt = (await this.state()).exercise.step;
         return this.loop(T, async (st) => {
           // the task panel ticked its step: what the move was for is done (a marker touched)
@@ -371,7 +366,7 @@ class Operator {
           prev = { t, p: now };
           const ahead = sub(v, Operator.inCamera(cam, vel).map((x) => x * LEAD_S));
           const moving = norm(vel) > 0.03;
-          let lin = clampNorm(ahead.map((x) => x * MOVE_GAIN_PER_M));
+          const lin = clampNorm(ahead.map((x) => x * MOVE_GAIN_PER_M));
           // near the seabed (the page draws it; the hello gives its height) a push that takes
           // the jaw down goes slow
           const down = lin[0] * cam.right[2] + lin[1] * cam.up[2] + lin[2] * cam.fwd[2] < 0;
@@ -388,23 +383,6 @@ class Operator {
           if (share >= SIDE_EASE) this.easing = true;
           else if (share < SIDE_RESUME) this.easing = false;
           if (this.easing) lin[2] = Math.min(lin[2], 0);
-          // caught: pushed for STUCK_DECISIONS decisions without coming STUCK_M nearer (the jaw
-          // or what it carries caught on the panel's face, the box, a handle) — a person backs
-          // off toward the camera and a little up for BACK_OFF_DECISIONS, then comes again.
-          // Not with the stab in its receptacle (pushing it home is the task) nor steering the
-          // box.
-          const dist = norm(sub(goal, now));
-          const inReceptacle = depth && depth.value > 0;
-          if (this.backoff > 0) {
-            this.backoff--;
-            this.pushed = [];
-            lin = [0, SLOW, -SLOW];
-            att = [0, 0, 0];
-          } else if (this.pushed.length >= STUCK_DECISIONS && this.pushed[0] - dist < STUCK_M && !inReceptacle && a.steer !== 'object') {
-            this.backoff = BACK_OFF_DECISIONS;
-            this.stats.backoffs = (this.stats.backoffs ?? 0) + 1;
-            if (process.env.TRIAL_DEBUG) console.log(`stuck ${(100 * dist).toFixed(1)} cm from ${JSON.stringify(a.to)}: backing off`);
-          }
           // carrying the stab (its readouts are on the task panel) the last STAB_NEAR_M to a
           // point go slow: a full rise overshot the line-up point by 2 cm with the stab's tip at
           // the receptacle's mouth (side load 380 N between two decisions)
@@ -412,12 +390,7 @@ class Operator {
             for (let k = 0; k < 3; k++) lin[k] = Math.max(-SLOW, Math.min(SLOW, lin[k]));
           }
           const ang = a.level ? Operator.level(st) : clampNorm(att.map((x) => x * ATT_GAIN_PER_RAD));
-          const did = await this.act([...lin, ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed', linear: true, canTap: !moving && !this.backoff });
-          // the distances of the pushes in a row (a tap, a wait or a turn of the wrist alone ends the run)
-          if (Array.isArray(did) && did.slice(0, 3).some((x) => x !== 0)) {
-            this.pushed.push(dist);
-            if (this.pushed.length > STUCK_DECISIONS) this.pushed.shift();
-          } else this.pushed = [];
+          const did = await this.act([...lin, ...Operator.inCamera(cam, ang)], { closed: st.settings.control_method === 'closed', linear: true, canTap: !moving });
           const smax = process.env.TRIAL_DEBUG === '2' ? await this.page.evaluate(() => { if (!window.__smaxT) { window.__smax = 0; window.__smaxT = setInterval(() => { window.__smax = Math.max(window.__smax, window.__seaarms.lastState?.panel?.side_load_n ?? 0); }, 4); } const m = window.__smax; window.__smax = 0; return m; }) : 0;
           if (process.env.TRIAL_DEBUG === '2') console.log(`smax ${smax.toFixed(0)} move ${cam.name} ${JSON.stringify(a.to)}: t ${st.t.toFixed(2)} jaw ${now.map((x) => x.toFixed(3))} goal ${goal.map((x) => x.toFixed(3))} q ${st.arms[a.arm].q.map((x) => (x * 57.3).toFixed(1))} vel ${Operator.inCamera(cam, vel).map((x) => (100 * x).toFixed(1))} seen ${v.map((x) => (100 * x).toFixed(1))} cm, att ${(norm(att) * 57.3).toFixed(1)}° → ${JSON.stringify(did)} side ${st.panel?.side_load_n?.toFixed(0)} N, relief ${st.exercise.counters.relief}${this.easing ? ' (easing)' : ''}, ${st.panel?.stab_phase ?? ''}`);
           return null;
@@ -680,7 +653,7 @@ async function trial(id) {
   if (!finished) {
     // the plan ran out (its actions timed out) with the attempt unfinished: say where it stands
     const ex = await op.state().then((s) => s.exercise);
-    const res = { id, goal, passed: false, score: Math.round(ex.score), time_s: +ex.elapsed_s.toFixed(1), decisions: op.stats.decisions, taps: op.stats.taps, backoffs: op.stats.backoffs ?? 0,
+    const res = { id, goal, passed: false, score: Math.round(ex.score), time_s: +ex.elapsed_s.toFixed(1), decisions: op.stats.decisions, taps: op.stats.taps,
       maxAxes: op.stats.maxAxes, minIntervalMs: Math.min(...op.stats.intervalsMs), wall_s: +((Date.now() - t0) / 1000).toFixed(1),
       failed_because: [`unfinished at step ${ex.step + 1} of ${ex.steps} ("${ex.step_text}"), counters ${JSON.stringify(ex.counters)}`], actions };
     results.push(res);
@@ -694,7 +667,7 @@ async function trial(id) {
   const title = await page.innerText('#card .card-title');
   const why = await page.$$eval('#card .card-why li', (l) => l.map((x) => x.textContent));
   const res = { id, goal, passed: verdict === 'Passed', score, time_s: +(title.match(/— ([\d.]+) s/)?.[1] ?? NaN),
-    decisions: op.stats.decisions, taps: op.stats.taps, backoffs: op.stats.backoffs ?? 0, maxAxes: op.stats.maxAxes,
+    decisions: op.stats.decisions, taps: op.stats.taps, maxAxes: op.stats.maxAxes,
     minIntervalMs: Math.min(...op.stats.intervalsMs), wall_s: +((Date.now() - t0) / 1000).toFixed(1), failed_because: why, notes: op.notes, actions };
   results.push(res);
   return res;

@@ -150,8 +150,28 @@ async fn a_full_disk_is_reported_and_refuses_new_sessions() {
     );
 
     // The session ends still marked failed; with space again, sessions start again.
+    let before_end = summary(&s.base, &id).await["sim_seconds"].as_f64().unwrap();
     end(&s.base, &id).await;
-    assert_eq!(summary(&s.base, &id).await["recording"], "failed");
+    let ended = summary(&s.base, &id).await;
+    assert_eq!(ended["recording"], "failed");
+    // its end could not be stored, yet it is listed as ended by the instructor with its real
+    // length, not "interrupted" with the last stored progress (issue 29 item 14)
+    let list = get_json(&format!("{}/api/sessions", s.base)).await;
+    let listed = list
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["id"] == id.as_str())
+        .unwrap();
+    for e in [&ended, listed] {
+        let reason = e["end_reason"].as_str().unwrap_or_default();
+        assert!(!reason.contains("interrupted"), "{e}");
+        assert!(e["ended_unix"].is_number(), "{e}");
+        assert!(
+            e["sim_seconds"].as_f64().unwrap() >= before_end,
+            "{e} vs {before_end} s before the end"
+        );
+    }
     std::fs::remove_file(&filler).unwrap();
     let (st, body) = create_at(&s.base, json!({})).await;
     assert_eq!(st, 201, "space freed: {body}");

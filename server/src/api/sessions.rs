@@ -473,10 +473,18 @@ pub(crate) fn directory_summary(state: &AppState, s: &Session) -> serde_json::Va
 }
 
 fn ended_summary(
-    r: crate::db::SessionRecord,
+    mut r: crate::db::SessionRecord,
     failed_now: bool,
     attempts: Vec<String>,
+    unstored_end: Option<crate::sessions::record::UnstoredEnd>,
 ) -> SessionSummary {
+    // ended while its end could not be stored (a full disk): the end the recorder holds,
+    // not "interrupted" with the last stored progress
+    if let (None, Some(end)) = (&r.end_reason, unstored_end) {
+        r.ended_unix = Some(end.ended_unix);
+        r.end_reason = Some(end.reason);
+        r.sim_seconds = end.sim_seconds;
+    }
     SessionSummary {
         id: r.id,
         status: "ended",
@@ -533,7 +541,7 @@ pub async fn list(
     let live: Vec<Arc<Session>> = state.sessions.all();
     // The live sessions are listed even when the database cannot be read (their summaries
     // are in memory, and say `recording: failed`); then the stored ones are left out.
-    let stored = state
+    let mut stored = state
         .db
         .sessions_page(page.before.as_deref(), limit)
         .await
@@ -545,6 +553,18 @@ pub async fn list(
     let next = (limit > 0 && stored.len() == limit)
         .then(|| stored.last().map(|r| r.id.clone()))
         .flatten();
+    // Sessions that ended while their end could not be stored (a full disk): not yet among
+    // the stored ended ones, and the newest — first on the first page.
+    if page.before.is_none() {
+        for id in state.sessions.recorder.unstored_end_ids() {
+            if stored.iter().any(|r| r.id == id) || state.sessions.get(&id).is_some() {
+                continue;
+            }
+            if let Ok(Some(r)) = state.db.session(&id).await {
+                stored.insert(0, r);
+            }
+        }
+    }
     let mut ids: Vec<String> = live.iter().map(|s| s.id.clone()).collect();
     ids.extend(stored.iter().map(|r| r.id.clone()));
     let mut attempts: std::collections::HashMap<String, Vec<String>> =
@@ -593,7 +613,8 @@ pub async fn list(
             .map(|r| {
                 let failed = recorder.recording(&r.id) == "failed";
                 let a = attempts.remove(&r.id).unwrap_or_default();
-                value(ended_summary(r, failed, a))
+                let end = recorder.unstored_end(&r.id);
+                value(ended_summary(r, failed, a, end))
             }),
     );
     let mut resp = Json(out).into_response();
@@ -660,7 +681,8 @@ pub async fn get_one(
         .ok_or_else(|| ApiError::not_found(format!("no session `{id}`")))?;
     let attempts = ids(state.db.attempt_ids(Some(&id)).await.map_err(db_error)?);
     let failed = state.sessions.recorder.recording(&id) == "failed";
-    Ok(Json(ended_summary(record, failed, attempts)))
+    let end = state.sessions.recorder.unstored_end(&id);
+    Ok(Json(ended_summary(record, failed, attempts, end)))
 }
 
 /// `DELETE /api/sessions/{id}`: end a live session (the instructor any, a trainee its own);

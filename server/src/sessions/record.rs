@@ -151,6 +151,23 @@ impl RecordSender {
 /// Ids whose recording failed in this run, with the first error (shared with handlers).
 type FailedSet = Arc<Mutex<HashMap<String, String>>>;
 
+/// Session ends the database has not stored yet (a full disk, a database down): what the
+/// session list shows for them until the end is written, rather than an unfinished row
+/// (issue 29: sessions ended during a full disk were listed as interrupted, with the
+/// duration of their last stored progress).
+type UnstoredEnds = Arc<Mutex<HashMap<String, UnstoredEnd>>>;
+
+/// A session's end as the recorder was given it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UnstoredEnd {
+    /// Unix seconds.
+    pub ended_unix: f64,
+    /// Simulated seconds at the end.
+    pub sim_seconds: f64,
+    /// Why it ended.
+    pub reason: String,
+}
+
 /// Why the records database cannot be written now, or `None` while it can (shared with the
 /// handlers: new sessions are refused while it is down).
 type DbDown = Arc<Mutex<Option<String>>>;
@@ -168,6 +185,7 @@ pub struct Recorder {
     config: RecordConfig,
     failed: FailedSet,
     db_down: DbDown,
+    unstored_ends: UnstoredEnds,
     metrics: Arc<Metrics>,
     thread: Mutex<Option<JoinHandle<()>>>,
 }
@@ -208,6 +226,7 @@ impl Recorder {
         std::fs::create_dir_all(dir.join("sessions"))?;
         let failed: FailedSet = Arc::default();
         let db_down: DbDown = Arc::default();
+        let unstored_ends: UnstoredEnds = Arc::default();
         let mut state = RecorderState::new(
             dir,
             db.clone(),
@@ -216,6 +235,7 @@ impl Recorder {
             failed.clone(),
             db_down.clone(),
         );
+        state.unstored_ends = unstored_ends.clone();
         let (tx, rx) = sync_channel(QUEUE_CAPACITY);
         let (ready_tx, ready_rx) = sync_channel(1);
         let thread = std::thread::Builder::new()
@@ -243,6 +263,7 @@ impl Recorder {
             config,
             failed,
             db_down,
+            unstored_ends,
             metrics,
             thread: Mutex::new(Some(thread)),
         })
@@ -309,6 +330,26 @@ impl Recorder {
                 sessions.display()
             )),
         }
+    }
+
+    /// Session `id`'s end if the database has not stored it yet (it is kept for retry, or
+    /// was lost with the rest of a failed batch), else None.
+    pub fn unstored_end(&self, id: &str) -> Option<UnstoredEnd> {
+        self.unstored_ends
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .get(id)
+            .cloned()
+    }
+
+    /// The sessions whose ends the database has not stored yet ([`Recorder::unstored_end`]).
+    pub fn unstored_end_ids(&self) -> Vec<String> {
+        self.unstored_ends
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+            .keys()
+            .cloned()
+            .collect()
     }
 
     /// `"failed"` when part of session `id`'s record could not be written in this run,
@@ -493,6 +534,7 @@ struct RecorderState {
     config: RecordConfig,
     failed: FailedSet,
     db_down: DbDown,
+    unstored_ends: UnstoredEnds,
     last_probe: Instant,
     live: HashMap<String, SessionRecording>,
     /// Database writes since the last commit, in arrival order.
@@ -518,6 +560,7 @@ impl RecorderState {
             config,
             failed,
             db_down,
+            unstored_ends: Arc::default(),
             last_probe: Instant::now(),
             live: HashMap::new(),
             writes: Vec::new(),
@@ -649,7 +692,14 @@ impl RecorderState {
         }
         let result = self.db.block_on(self.db.write_batch(&self.writes));
         match result {
-            Ok(()) => self.writes.clear(),
+            Ok(()) => {
+                // every end queued so far is stored now
+                self.unstored_ends
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .clear();
+                self.writes.clear();
+            }
             Err(e) => {
                 self.metrics
                     .record_write_errors
@@ -815,6 +865,17 @@ impl RecorderState {
                         .lock()
                         .unwrap_or_else(|e| e.into_inner())
                         .contains_key(&id);
+                self.unstored_ends
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner())
+                    .insert(
+                        id.clone(),
+                        UnstoredEnd {
+                            ended_unix,
+                            sim_seconds,
+                            reason: reason.clone(),
+                        },
+                    );
                 self.writes.push(DbWrite::SessionEnd {
                     id,
                     ended_unix,

@@ -294,7 +294,15 @@ async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, ApiError> {
     let bytes = state.db.attempt_inputs(&row.id).await.map_err(db_error)?;
     let entries = log::decode(&bytes).map_err(|e| conflict(ReplayError::Record(e.to_string())))?;
     let models = [state.sessions.magnum(), state.sessions.magnum()];
-    Replay::new(&models, init, entries, duration_s).map_err(conflict)
+    Replay::shared(
+        &models,
+        init,
+        entries,
+        duration_s,
+        state.replays.clone(),
+        &row.id,
+    )
+    .map_err(conflict)
 }
 
 /// Query of `GET /api/attempts/{id}/replay`.

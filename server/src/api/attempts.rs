@@ -10,7 +10,9 @@
 //! The instructor token sees every attempt; a session's control token sees that session's
 //! attempts, also after the session ended (the database keeps the token's SHA-256).
 //! Re-simulation runs on blocking threads, one request at a time per connection, and at most
-//! [`MAX_REPLAYS`] replay sockets at once.
+//! [`MAX_REPLAYS`] replay sockets at once; every replay starts its seeks from the server's
+//! shared checkpoints ([`crate::replay::checkpoints`], `AppState::replays`), so a seek
+//! re-simulates at most one checkpoint interval once an earlier replay has passed there.
 
 use std::sync::LazyLock;
 use std::time::Duration;

@@ -127,6 +127,16 @@ impl CheckpointCache {
         Some((at, checkpoint))
     }
 
+    /// The step of `key`'s latest checkpoint at or before `step` (not marked used).
+    pub fn latest_at_or_before(&self, key: &str, step: u64) -> Option<u64> {
+        self.lock()
+            .by_key
+            .get(key)?
+            .range(..=step)
+            .next_back()
+            .map(|(s, _)| *s)
+    }
+
     /// Whether `key` has a checkpoint at `step`.
     pub fn has(&self, key: &str, step: u64) -> bool {
         self.lock()

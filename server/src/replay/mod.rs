@@ -70,7 +70,8 @@ pub fn check_version(sim_version: &str) -> Result<(), ReplayError> {
 pub struct Replay {
     models: [Arc<Model>; 2],
     init: Init,
-    entries: Vec<Entry>,
+    /// The log (shared by its scouts, [`Replay::scout`]).
+    entries: Arc<Vec<Entry>>,
     live: Live,
     /// Next entry to apply.
     next: usize,
@@ -133,7 +134,7 @@ impl Replay {
         Ok(Replay {
             models: models.clone(),
             init,
-            entries,
+            entries: Arc::new(entries),
             live,
             next: 0,
             duration_steps,
@@ -253,6 +254,36 @@ impl Replay {
         self.simulated
     }
 
+    /// Steps a seek to `step` would re-simulate now (the same choice of start as
+    /// [`Replay::seek_step_checked`]: the latest checkpoint at or before it when that is ahead
+    /// or the seek goes back, else the current step, else the start).
+    pub fn seek_cost(&self, step: u64) -> u64 {
+        let step = step.min(self.duration_steps);
+        let now = self.live.sim().steps();
+        match self.cache.latest_at_or_before(&self.key, step) {
+            Some(at) if at > now || step < now => step - at,
+            _ if step < now => step,
+            _ => step - now,
+        }
+    }
+
+    /// A new replay of the same attempt at step 0, sharing the log and the checkpoints: a
+    /// long seek runs on it elsewhere (the compute pool) and leaves its checkpoints behind,
+    /// so that this replay's own seek there then costs at most one interval.
+    pub fn scout(&self) -> Result<Replay, ReplayError> {
+        Ok(Replay {
+            models: self.models.clone(),
+            init: self.init.clone(),
+            entries: self.entries.clone(),
+            live: Self::start(&self.models, &self.init)?,
+            next: 0,
+            duration_steps: self.duration_steps,
+            cache: self.cache.clone(),
+            key: self.key.clone(),
+            simulated: 0,
+        })
+    }
+
     /// The steps of this replay's checkpoints in its cache, in order.
     pub fn checkpoint_steps(&self) -> Vec<u64> {
         self.cache.steps(&self.key)
@@ -269,8 +300,13 @@ impl Replay {
         t: f64,
         keep_going: &dyn Fn() -> bool,
     ) -> Result<(), ReplayError> {
+        self.seek_step_checked(Self::step_at(t), keep_going)
+    }
+
+    /// The step of time `t` (s; the nearest, 0 for a negative or non-finite `t`).
+    pub fn step_at(t: f64) -> u64 {
         let t = if t.is_finite() { t.max(0.0) } else { 0.0 };
-        self.seek_step_checked((t * STEPS_PER_S).round() as u64, keep_going)
+        (t * STEPS_PER_S).round() as u64
     }
 
     /// The state frame now (the live session's frame format).

@@ -314,8 +314,20 @@ fn a_cancelled_seek_keeps_its_checkpoints_and_the_cache_is_bounded() {
     // Another replay's seek to 7 s starts from 6 s.
     let mut other = Replay::shared(&models, a.init.clone(), entries, 12.0, cache.clone(), "c")
         .expect("replayable");
+    assert_eq!(other.seek_cost(7000), 1000, "from the checkpoint at 6 s");
+    assert_eq!(other.seek_cost(5999), 1999, "from the checkpoint at 4 s");
+    assert_eq!(r.seek_cost(6500), 500, "from where it is");
+    assert_eq!(
+        r.seek_cost(1000),
+        1000,
+        "back, no checkpoint before: from 0"
+    );
     other.seek(7.0).expect("seek");
     assert_eq!(other.steps_simulated(), 1000);
+    // A scout starts at 0 and shares the checkpoints.
+    let scout = other.scout().expect("scout");
+    assert_eq!(scout.live().sim().steps(), 0);
+    assert_eq!(scout.seek_cost(7000), 1000);
     // 6 s was just used, 2 s and 4 s not since: going on to 12 s deposits 8 s and 10 s,
     // which evict 2 s and then 4 s.
     other.seek(12.0).expect("seek");

@@ -180,3 +180,157 @@ fn a_current_set_mid_attempt_and_at_an_attempts_start_replays_bit_for_bit() {
     assert_eq!((c.speed_m_s, c.heading_deg), (1.5, 200.0));
     check_replay(init, &inputs, &states, "current at the attempt's start");
 }
+
+/// Issue 29 item 2: seeks start from the nearest earlier checkpoint (every
+/// `CHECKPOINT_INTERVAL_STEPS` = 2 s) and give, bit for bit, the state the attempt went
+/// through (the recorded run, an independent reference) and the frame a replay stepped from
+/// step 0 without checkpoints gives (joint angles, velocities, pressures: every number of
+/// `arms`); each seek re-simulates only from that checkpoint, backward seeks included, and a
+/// second replay of the same attempt finds the first one's checkpoints in the shared cache.
+#[test]
+fn seeks_from_checkpoints_equal_the_replay_stepped_from_the_start_bit_for_bit() {
+    use seaarms::replay::checkpoints::{CHECKPOINT_INTERVAL_STEPS, CheckpointCache};
+    use seaarms::replay::synthetic;
+    use std::sync::Arc;
+    assert_eq!(
+        CHECKPOINT_INTERVAL_STEPS, 2000,
+        "the expected costs below assume 2 s"
+    );
+    let models = magnum();
+    let mut states: BTreeMap<u64, Vec<u64>> = BTreeMap::new();
+    let a = synthetic::free_play(&models, "s", 30, &mut |live| {
+        states.insert(live.sim().steps(), state_bits(live));
+    })
+    .expect("synthetic attempt");
+    assert!((a.sim_seconds - 30.0).abs() < 1e-6, "{}", a.sim_seconds);
+    let entries = log::decode(&a.inputs).expect("log decodes");
+    assert!(entries.len() > 20, "{} entries", entries.len());
+    let replay = |cache: &Arc<CheckpointCache>| {
+        Replay::shared(
+            &models,
+            a.init.clone(),
+            entries.clone(),
+            30.0,
+            cache.clone(),
+            "a",
+        )
+        .expect("replayable")
+    };
+
+    // The first replay passes every checkpoint on its way to the end and deposits them.
+    let cache = Arc::new(CheckpointCache::new(100));
+    let mut first = replay(&cache);
+    first.seek_step(30_000).expect("seek");
+    assert_eq!(first.steps_simulated(), 30_000);
+    let every_2s: Vec<u64> = (1..15).map(|i| i * 2000).collect();
+    assert_eq!(first.checkpoint_steps(), every_2s);
+
+    // The reference frames: a replay without checkpoints (a cache of none), forward only.
+    let none = Arc::new(CheckpointCache::new(0));
+    let mut plain = replay(&none);
+    // (step, steps a seek from the previous one re-simulates: from the latest checkpoint at
+    // or before it, from the current step when that is later and not past it, from 0 when
+    // no checkpoint is earlier)
+    let seeks = [
+        (29_999, 1_999),
+        (4_001, 1),
+        (17_500, 1_500),
+        (2_000, 0),
+        (1_999, 1_999),
+        (26_123, 123),
+        (26_900, 777),
+        (12_000, 0),
+        (0, 0),
+        (30_000, 2_000),
+    ];
+    let mut second = replay(&cache);
+    for (step, cost) in seeks {
+        let before = second.steps_simulated();
+        second.seek_step(step).expect("seek");
+        assert_eq!(
+            second.steps_simulated() - before,
+            cost,
+            "seek to step {step}: steps re-simulated"
+        );
+        assert_eq!(second.live().sim().steps(), step);
+        if step > 0 {
+            assert!(
+                state_bits(second.live()) == states[&step],
+                "the state at step {step} from a checkpoint differs from the recorded one"
+            );
+        }
+        let mut fresh = replay(&none);
+        fresh.seek_step(step).expect("seek");
+        assert_eq!(fresh.steps_simulated(), step, "no checkpoint: from step 0");
+        let (a, b) = (second.frame(), fresh.frame());
+        assert_eq!(a.t.to_bits(), b.t.to_bits());
+        assert_eq!(
+            serde_json::to_string(&a.arms).expect("json"),
+            serde_json::to_string(&b.arms).expect("json"),
+            "the frame at step {step} from a checkpoint differs from the one stepped from 0"
+        );
+    }
+    // The plain replay stepped forward only matches the recorded run at the end too.
+    plain.seek_step(30_000).expect("seek");
+    assert!(state_bits(plain.live()) == states[&30_000]);
+    assert_eq!(
+        cache.len(),
+        14,
+        "no duplicates: the second replay added none"
+    );
+}
+
+/// A seek cancelled half-way keeps the checkpoints it passed (the next seek goes on from
+/// there), and the cache keeps at most its size, the least recently used going first.
+#[test]
+fn a_cancelled_seek_keeps_its_checkpoints_and_the_cache_is_bounded() {
+    use seaarms::replay::ReplayError;
+    use seaarms::replay::checkpoints::CheckpointCache;
+    use seaarms::replay::synthetic;
+    use std::cell::Cell;
+    use std::sync::Arc;
+    let models = magnum();
+    let a = synthetic::free_play(&models, "s", 12, &mut |_| {}).expect("synthetic attempt");
+    let entries = log::decode(&a.inputs).expect("log decodes");
+    let cache = Arc::new(CheckpointCache::new(3));
+    let mut r = Replay::shared(
+        &models,
+        a.init.clone(),
+        entries.clone(),
+        12.0,
+        cache.clone(),
+        "c",
+    )
+    .expect("replayable");
+    // Asked every simulated second: says no at the 7th time (t = 6 s).
+    let asked = Cell::new(0);
+    let err = r.seek_checked(12.0, &|| {
+        asked.set(asked.get() + 1);
+        asked.get() < 7
+    });
+    assert!(matches!(err, Err(ReplayError::Cancelled)), "cancelled");
+    assert_eq!(r.live().sim().steps(), 6000);
+    assert_eq!(r.checkpoint_steps(), vec![2000, 4000, 6000]);
+    // Another replay's seek to 7 s starts from 6 s.
+    let mut other = Replay::shared(&models, a.init.clone(), entries, 12.0, cache.clone(), "c")
+        .expect("replayable");
+    assert_eq!(other.seek_cost(7000), 1000, "from the checkpoint at 6 s");
+    assert_eq!(other.seek_cost(5999), 1999, "from the checkpoint at 4 s");
+    assert_eq!(r.seek_cost(6500), 500, "from where it is");
+    assert_eq!(
+        r.seek_cost(1000),
+        1000,
+        "back, no checkpoint before: from 0"
+    );
+    other.seek(7.0).expect("seek");
+    assert_eq!(other.steps_simulated(), 1000);
+    // A scout starts at 0 and shares the checkpoints.
+    let scout = other.scout().expect("scout");
+    assert_eq!(scout.live().sim().steps(), 0);
+    assert_eq!(scout.seek_cost(7000), 1000);
+    // 6 s was just used, 2 s and 4 s not since: going on to 12 s deposits 8 s and 10 s,
+    // which evict 2 s and then 4 s.
+    other.seek(12.0).expect("seek");
+    assert_eq!(cache.len(), 3);
+    assert_eq!(other.checkpoint_steps(), vec![6000, 8000, 10_000]);
+}

@@ -66,6 +66,8 @@ cargo test --workspace --all-targets --no-fail-fast
 cargo build --release
 # Several replicas behind HAProxy on the PostgreSQL above (real-time physics: release only).
 cargo test --release --test cluster
+# Replay seeks under load: 20 live sessions' frame p99 and quiet seeks (real-time physics: release only).
+cargo test --release --test replay_load
 bin=target/release/seaarms
 port=$(node -e 'const s=require("net").createServer();s.listen(0,"127.0.0.1",()=>{console.log(s.address().port);s.close()})')
 data_dir=$(mktemp -d)

@@ -46,6 +46,8 @@ pub struct AppState {
     pub compute: Arc<ComputePool>,
     /// The training records database.
     pub db: crate::db::Db,
+    /// The replays' shared checkpoints (bounded; [`crate::replay::checkpoints`]).
+    pub replays: Arc<crate::replay::checkpoints::CheckpointCache>,
     /// This replica (name, multi-replica mode, drain).
     pub cluster: Arc<crate::cluster::Cluster>,
     /// Where finished attempts' xAPI statements go (`--xapi-endpoint`), when set.
@@ -165,6 +167,7 @@ impl AppState {
             join_code,
             compute,
             db,
+            replays: Arc::default(),
             cluster,
             xapi,
         })

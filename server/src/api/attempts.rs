@@ -10,9 +10,11 @@
 //! The instructor token sees every attempt; a session's control token sees that session's
 //! attempts, also after the session ended (the database keeps the token's SHA-256).
 //! Re-simulation runs on blocking threads, one request at a time per connection, and at most
-//! [`MAX_REPLAYS`] replay sockets at once.
+//! [`MAX_REPLAYS`] replay sockets at once; every replay starts its seeks from the server's
+//! shared checkpoints ([`crate::replay::checkpoints`], `AppState::replays`), so a seek
+//! re-simulates at most one checkpoint interval once an earlier replay has passed there.
 
-use std::sync::LazyLock;
+use std::sync::{Arc, LazyLock};
 use std::time::Duration;
 
 use axum::Json;
@@ -28,9 +30,11 @@ use tokio::sync::Semaphore;
 use crate::api::session_ws::{RateLimit, error_text};
 use crate::app::AppState;
 use crate::auth::{Credentials, MISSING_TOKEN_OR_QUERY, Principal, TokenFrom, WRONG_TOKEN};
+use crate::compute::{Cancel, ComputeError, ComputePool};
 use crate::db::{AttemptFilter, AttemptRow, EventRow, unavailable as db_error};
 use crate::error::ApiError;
 use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ReplayClientMessage, ReplayOut, ServerMessage};
+use crate::replay::checkpoints::CHECKPOINT_INTERVAL_STEPS;
 use crate::replay::{Init, Replay, ReplayError, check_version, log};
 
 /// Most replay WebSockets open at once (each may re-simulate on a blocking thread).
@@ -294,7 +298,15 @@ async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, ApiError> {
     let bytes = state.db.attempt_inputs(&row.id).await.map_err(db_error)?;
     let entries = log::decode(&bytes).map_err(|e| conflict(ReplayError::Record(e.to_string())))?;
     let models = [state.sessions.magnum(), state.sessions.magnum()];
-    Replay::new(&models, init, entries, duration_s).map_err(conflict)
+    Replay::shared(
+        &models,
+        init,
+        entries,
+        duration_s,
+        state.replays.clone(),
+        &row.id,
+    )
+    .map_err(conflict)
 }
 
 /// Query of `GET /api/attempts/{id}/replay`.
@@ -335,13 +347,7 @@ pub async fn replay_at(
         .run(move |cancel| {
             replay
                 .seek_checked(t, &|| cancel.check().is_ok())
-                .map_err(|e| match e {
-                    ReplayError::Cancelled => cancel
-                        .check()
-                        .err()
-                        .unwrap_or(crate::compute::ComputeError::Failed),
-                    e => ApiError::new(StatusCode::CONFLICT, e.to_string()).into(),
-                })?;
+                .map_err(|e| pool_error(e, cancel))?;
             Ok(state_text(&mut replay))
         })
         .await
@@ -351,6 +357,15 @@ pub async fn replay_at(
         json.to_string(),
     )
         .into_response())
+}
+
+/// A seek's error on the compute pool: a cancelled seek is the pool's (deadline, or the
+/// request went away), any other the record's (409).
+fn pool_error(e: ReplayError, cancel: &Cancel) -> ComputeError {
+    match e {
+        ReplayError::Cancelled => cancel.check().err().unwrap_or(ComputeError::Failed),
+        e => ApiError::new(StatusCode::CONFLICT, e.to_string()).into(),
+    }
 }
 
 fn state_text(replay: &mut Replay) -> Utf8Bytes {
@@ -396,12 +411,13 @@ pub async fn replay_ws(
     let hello = replay_hello(&state, &row, &mut replay);
     let frame_hz = state.sessions.config.frame_hz.clamp(10, 120);
     let per_second = state.sessions.config.max_messages_per_second;
+    let compute = state.compute.clone();
     Ok(ws
         .max_message_size(MAX_CLIENT_MESSAGE_BYTES)
         .on_upgrade(move |socket| async move {
             let _permit = permit;
             let _held = held;
-            serve_replay(socket, replay, hello, frame_hz, per_second).await;
+            serve_replay(socket, replay, compute, hello, frame_hz, per_second).await;
         }))
 }
 
@@ -424,6 +440,8 @@ fn replay_hello(state: &AppState, row: &AttemptRow, replay: &mut Replay) -> Utf8
 /// Playback state of one replay socket.
 struct Playback {
     replay: Replay,
+    /// Where seeks longer than a checkpoint interval run ([`Playback::seek`]).
+    compute: Arc<ComputePool>,
     playing: bool,
     speed: f64,
     /// Wall clock and replay time when playing last started or changed: playback follows
@@ -443,8 +461,29 @@ impl Playback {
     }
 
     /// Moves to `t` on a blocking thread; returns the frame there (None if the thread
-    /// failed: the socket closes).
+    /// failed: the socket closes). A seek that would re-simulate more than one checkpoint
+    /// interval (no replay has been there yet) first runs on a scout replay on the compute
+    /// pool, as the REST seek does (low priority, queue, deadline), which leaves checkpoints
+    /// up to `t`; the socket's own seek then re-simulates at most one interval. A busy pool
+    /// answers an error and the replay stays where it was.
     async fn seek(mut self, t: f64) -> Option<(Playback, Result<Utf8Bytes, String>)> {
+        if self.replay.seek_cost(Replay::step_at(t)) > CHECKPOINT_INTERVAL_STEPS {
+            let scouted = match self.replay.scout() {
+                Ok(mut scout) => self
+                    .compute
+                    .run(move |cancel| {
+                        scout
+                            .seek_checked(t, &|| cancel.check().is_ok())
+                            .map_err(|e| pool_error(e, cancel))
+                    })
+                    .await
+                    .map_err(|e| e.api_error().error),
+                Err(e) => Err(e.to_string()),
+            };
+            if let Err(e) = scouted {
+                return Some((self, Err(e)));
+            }
+        }
         tokio::task::spawn_blocking(move || {
             let r = self.replay.seek(t).map(|()| state_text(&mut self.replay));
             (self, r.map_err(|e| e.to_string()))
@@ -460,6 +499,7 @@ impl Playback {
 async fn serve_replay(
     socket: WebSocket,
     replay: Replay,
+    compute: Arc<ComputePool>,
     hello: Utf8Bytes,
     frame_hz: u32,
     per_second: u32,
@@ -467,6 +507,7 @@ async fn serve_replay(
     let (mut tx, mut rx) = socket.split();
     let mut pb = Playback {
         replay,
+        compute,
         playing: false,
         speed: 1.0,
         anchor: None,

@@ -214,6 +214,38 @@ impl Live {
         Ok(live)
     }
 
+    /// A copy of this state for a replay's checkpoint ([`crate::replay`]): everything that
+    /// steps (simulation, operator, exercise, clock and faults) cloned, so the copy continues
+    /// bit for bit as this state does; the records are not copied (a replay records nothing:
+    /// the copy has no input log and no pending records, and does not record).
+    pub fn checkpoint(&self) -> Live {
+        Live {
+            sim: self.sim.clone(),
+            operator: self.operator.clone(),
+            paused: self.paused,
+            input_seq: self.input_seq,
+            faults: self.faults.clone(),
+            steps_since_origin: self.steps_since_origin,
+            origin: self.origin,
+            frame_seq: self.frame_seq,
+            visibility_m: self.visibility_m,
+            ready_gate: self.ready_gate,
+            awaiting_ready: self.awaiting_ready,
+            next_frame: self.next_frame,
+            measures: self.measures.clone(),
+            tally: self.tally,
+            models: self.models.clone(),
+            scenario: self.scenario.clone(),
+            exercise: self.exercise.clone(),
+            next_seed: self.next_seed,
+            session_id: self.session_id.clone(),
+            attempt_id: self.attempt_id.clone(),
+            recording: false,
+            log: None,
+            pending: Vec::new(),
+        }
+    }
+
     fn build(
         session_id: &str,
         models: &[Arc<Model>; 2],

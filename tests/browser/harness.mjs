@@ -75,7 +75,9 @@ export async function startServer(extraArgs = []) {
   const args = ['--bind', `127.0.0.1:${port}`, '--data-dir', dataDir, '--instructor-token', INSTRUCTOR_TOKEN, ...extraArgs];
   const proc = spawn(bin, args, { env: { ...process.env, RUST_LOG: 'warn' }, stdio: ['ignore', 'ignore', 'inherit'] });
   proc.unref(); // a test file's process may exit while its server runs; 'exit' stops it
-  const stop = () => { proc.kill(); rmSync(dataDir, { recursive: true, force: true }); };
+  // the server shuts down gracefully on SIGTERM and may still write its records while the
+  // folder goes: retry the removal (ENOTEMPTY) rather than fail the test on that race
+  const stop = () => { proc.kill(); rmSync(dataDir, { recursive: true, force: true, maxRetries: 20, retryDelay: 100 }); };
   process.on('exit', stop);
   const url = `http://127.0.0.1:${port}`;
   await waitHealthy(url);

@@ -24,7 +24,7 @@ const SEVEN: [&str; 7] = [
 ];
 
 /// The metric names of the issue, each required in every assessment.
-const METRICS: [&str; 17] = [
+const METRICS: [&str; 21] = [
     "time_s",
     "steps_completed",
     "seabed_strikes",
@@ -36,6 +36,10 @@ const METRICS: [&str; 17] = [
     "relief_events",
     "joint_limit_hits",
     "jerk_rms_m_s3",
+    "movements",
+    "sparc",
+    "ldlj",
+    "path_ratio",
     "mean_yoshikawa",
     "mean_jlm",
     "near_singularity_s",

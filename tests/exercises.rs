@@ -24,7 +24,7 @@ const SEVEN: [&str; 7] = [
 ];
 
 /// The metric names of the issue, each required in every assessment.
-const METRICS: [&str; 17] = [
+const METRICS: [&str; 21] = [
     "time_s",
     "steps_completed",
     "seabed_strikes",
@@ -36,6 +36,10 @@ const METRICS: [&str; 17] = [
     "relief_events",
     "joint_limit_hits",
     "jerk_rms_m_s3",
+    "movements",
+    "sparc",
+    "ldlj",
+    "path_ratio",
     "mean_yoshikawa",
     "mean_jlm",
     "near_singularity_s",
@@ -202,4 +206,43 @@ fn the_costs_add_up_to_what_the_score_lost() {
         "{} vs {want}",
         strike.points
     );
+}
+
+/// Issue 30 item 2, smoothness in the score (docs/exercises.md, "Smoothness in the score"):
+/// every exercise but the fault drill scores `sparc` and none scores RMS jerk; and SPARC ranks
+/// the human-paced operator (a decision every 0.25 s, rest / slow / full sticks: intermittent
+/// by construction) rougher than the autopilot following the same plan, in every exercise, so
+/// the smoothness term costs the human-paced operator at least as much. RMS jerk ranked them
+/// the other way round in familiarisation and hot-stab (the docs' table).
+#[test]
+fn sparc_is_the_smoothness_term_and_ranks_the_human_paced_operator_rougher() {
+    for id in SEVEN {
+        let spec = EXERCISES.get(id).expect(id);
+        let metrics: Vec<&str> = spec.scoring.iter().map(|t| t.metric.as_str()).collect();
+        assert!(!metrics.contains(&"jerk_rms_m_s3"), "{id}: {metrics:?}");
+        assert_eq!(
+            metrics.contains(&"sparc"),
+            id != "fault-diagnosis",
+            "{id}: {metrics:?}"
+        );
+        let auto = run(spec.clone(), Driver::Autopilot);
+        let human = run(spec.clone(), Driver::HumanPaced);
+        let (sa, sh) = (
+            auto["sparc"].as_f64().expect("sparc"),
+            human["sparc"].as_f64().expect("sparc"),
+        );
+        assert!(sa < 0.0 && sh < 0.0, "{id}: movements measured");
+        assert!(sh < sa - 0.2, "{id}: human-paced {sh} vs autopilot {sa}");
+        let term = |a: &Value| {
+            a["terms"]
+                .as_array()
+                .expect("terms")
+                .iter()
+                .find(|t| t["metric"] == "sparc")
+                .map(|t| t["score"].as_f64().expect("score"))
+        };
+        if let (Some(ta), Some(th)) = (term(&auto), term(&human)) {
+            assert!(th < ta, "{id}: term {th} vs {ta}");
+        }
+    }
 }

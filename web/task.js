@@ -15,7 +15,7 @@ const COUNTERS = [['strikes', 'strikes'], ['slips', 'slips'], ['drops', 'drops']
 /** The scored metrics' names in the cost line (the rest by their metric name). */
 const COST_LABELS = {
   time_s: 'time', slips: 'slips', seabed_strikes: 'seabed strikes', obstacle_strikes: 'obstacle strikes',
-  joint_limit_hits: 'limit hits', jerk_rms_m_s3: 'jerky motion', mean_jlm: 'posture near limits',
+  joint_limit_hits: 'limit hits', sparc: 'unsmooth motion', path_ratio: 'indirect path', mean_jlm: 'posture near limits',
   mean_yoshikawa: 'posture (manipulability)', peak_side_load_n: 'stab side load', overloads: 'overloads',
   relief_events: 'relief valve', drops: 'drops', peak_internal_force_n: 'internal force', idle_s: 'idle time',
 };

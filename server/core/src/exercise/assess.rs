@@ -1,8 +1,9 @@
 //! The assessment of an attempt, computed from the simulation itself at 100 Hz: counted events
 //! (strikes, drops, overloads, relief, joint-limit hits, slips), peaks (contact and internal force),
 //! smoothness (LDLJ and SPARC of the tool's movements, the path ratio of its reaches:
-//! [`super::smoothness`]; the RMS tool jerk, reported only), posture (mean Yoshikawa measure and JLM of the working arms,
-//! time near a singularity or a joint limit) and idle time; then the score.
+//! [`super::smoothness`]; the RMS tool jerk; the shipped exercises score SPARC), posture (mean
+//! Yoshikawa measure and JLM of the working arms, time near a singularity or a joint limit) and
+//! idle time; then the score.
 //!
 //! # Score
 //! Each scoring term maps one metric linearly from its `bad` value (0) to its `good` value (1),
@@ -89,13 +90,15 @@ pub struct Metrics {
     /// Movements of the working arms' tools ([`super::smoothness`], "Segmentation").
     pub movements: f64,
     /// Mean SPARC (spectral arc length) of those movements' speed profiles (dimensionless,
-    /// ≤ 0, nearer 0 smoother; a minimum-jerk reach ≈ −1.40); 0 before the first.
+    /// ≤ 0, nearer 0 smoother; a minimum-jerk reach ≈ −1.40); 0 before the first. The
+    /// shipped exercises' smoothness term.
     pub sparc: f64,
     /// Mean LDLJ (log dimensionless jerk) of those movements' speed profiles (dimensionless,
-    /// nearer 0 smoother; a minimum-jerk reach −5.32); 0 before the first.
+    /// nearer 0 smoother; a minimum-jerk reach −5.32); 0 before the first. Reported only: the
+    /// shipped exercises score [`Metrics::sparc`] ([`super::smoothness`], "In the score").
     pub ldlj: f64,
     /// Mean path length / straight-line distance of the reaches among those movements
-    /// (≥ 1, 1 = straight); 0 before the first reach.
+    /// (≥ 1, 1 = straight); 0 before the first reach. Reported only, as [`Metrics::ldlj`].
     pub path_ratio: f64,
     /// Mean translational Yoshikawa measure of the working arms (m³/s-like, per unit joint rate).
     pub mean_yoshikawa: f64,

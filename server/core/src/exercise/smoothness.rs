@@ -20,6 +20,14 @@
 //! contrast, grows with amplitude / duration³ and so ranks a fast clean reach as rougher than
 //! a slow halting one (the test `rms_jerk_ranks_wrongly_where_ldlj_and_sparc_rank_right`).
 //!
+//! # In the score
+//! The shipped exercises score [`sparc`] (the attempt's mean, a term from `bad` −4.0 to
+//! `good` −1.8 at the weight the RMS jerk had); LDLJ and the path ratio are reported only:
+//! LDLJ's second difference of the 100 Hz speed sees the hydraulics' resonances, so a
+//! low-pass's cut-off would set its value, and a movement that spans several targets is not a
+//! reach. docs/exercises.md ("Smoothness in the score") gives the measurements and the
+//! per-exercise choices.
+//!
 //! # Segmentation
 //! [`MovementMeter`] cuts the tool's speed (the distance between successive positions over
 //! the sample interval, 100 Hz) into movements: a movement starts at the first sample

@@ -25,7 +25,7 @@ export function rowHtml(e) {
     : esc(STATES[e.state] ?? e.state);
   const s = e.signoff;
   const signed = s
-    ? `${esc(utc(s.signed_unix))} <span class="lb-assessor">${esc(s.assessor)}</span>${s.note ? `<br><small>${esc(s.note)}</small>` : ''}`
+    ? `${esc(utc(s.signed_unix))} by <span class="lb-assessor">${esc(s.assessor)}</span>${s.note ? `<br><small>${esc(s.note)}</small>` : ''}`
     : '';
   const act = s
     ? `<button type="button" data-revoke="${esc(e.exercise)}">Revoke</button>`

@@ -41,7 +41,7 @@ test('logbook: opened from the Classroom, signed off, printable, no token in a U
     assert.equal(await lp.textContent('#lb-name'), `${name} (${group})`);
     const cells = await lp.$$eval('#lb-table tr[data-exercise="reach-targets"] td', (tds) => tds.map((t) => t.textContent.trim()));
     assert.equal(cells[3], '0 / 1', 'one attempt, running: none finished');
-    assert.equal(cells[7], 'practising');
+    assert.equal(cells[7], 'not started', 'no finished attempt: the proficiency state is not started');
 
     // sign off reach-targets: the page shows the assessor and the note, the API has it
     await lp.fill('#lb-assessor', 'R. Assessor');

@@ -7,7 +7,13 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, createSession, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+import { server, openBrowser, createSession, INSTRUCTOR_TOKEN, ARTIFACTS, UNNAMED_CONTROLS } from './harness.mjs';
+
+/** Records every CSP violation a page reports (as csp.test.mjs). */
+const WATCH_CSP = () => {
+  window.__csp = [];
+  document.addEventListener('securitypolicyviolation', (e) => window.__csp.push(`${e.violatedDirective} ${e.blockedURI}`));
+};
 
 const SHOTS = process.env.SEAARMS_SHOTS || ARTIFACTS;
 
@@ -17,9 +23,13 @@ test('logbook: opened from the Classroom, signed off, printable, no token in a U
   const group = `log-${tag}`;
   const name = `Ada ${tag}`;
   const s = await createSession(url, { trainee: name, group, exercise: 'reach-targets' });
-  const instr = await openBrowser({ viewport: { width: 1280, height: 900 } });
+  const instr = await openBrowser({ viewport: { width: 1280, height: 900 }, initScript: WATCH_CSP });
   const urls = [];
   instr.context.on('request', (r) => urls.push(r.url()));
+  // console errors and uncaught errors of every page of the context (the logbook opens in a new tab)
+  const errors = [];
+  instr.context.on('console', (m) => { if (m.type() === 'error') errors.push(m.text()); });
+  instr.context.on('weberror', (e) => errors.push(String(e.error())));
   const ip = instr.page;
   try {
     await ip.goto(`${url}/instructor`);
@@ -39,6 +49,8 @@ test('logbook: opened from the Classroom, signed off, printable, no token in a U
     await lp.waitForLoadState();
     await lp.waitForSelector('#lb-table tr[data-exercise="reach-targets"]', { timeout: 10000 });
     assert.equal(await lp.textContent('#lb-name'), `${name} (${group})`);
+    assert.match((await lp.evaluate(() => fetch(location.href).then((r) => r.headers.get('content-security-policy')))) || '', /default-src 'self'/);
+    assert.deepEqual(await lp.evaluate(UNNAMED_CONTROLS), [], 'every control is named');
     const cells = await lp.$$eval('#lb-table tr[data-exercise="reach-targets"] td', (tds) => tds.map((t) => t.textContent.trim()));
     assert.equal(cells[3], '0 / 1', 'one attempt, running: none finished');
     assert.equal(cells[7], 'not started', 'no finished attempt: the proficiency state is not started');
@@ -74,7 +86,8 @@ test('logbook: opened from the Classroom, signed off, printable, no token in a U
     // the cookie opened everything: no token in any URL
     const leaked = urls.filter((u) => u.includes(INSTRUCTOR_TOKEN) || /[?&]token=/.test(u));
     assert.deepEqual(leaked, []);
-    assert.deepEqual(instr.errors, []);
+    assert.deepEqual(errors, []);
+    assert.deepEqual(await lp.evaluate(() => window.__csp), [], 'no CSP violation');
   } finally {
     await instr.close();
   }

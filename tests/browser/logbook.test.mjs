@@ -42,6 +42,7 @@ test('logbook: opened from the Classroom, signed off, printable, no token in a U
     await ip.waitForSelector(row, { timeout: 10000 });
     await ip.click(`${row} .cls-name button`);
     await ip.waitForSelector('#cls-history:not([hidden])');
+    await ip.screenshot({ path: join(SHOTS, 'logbook-classroom.png') });
     const href = await ip.getAttribute('#hist-logbook', 'href');
     assert.equal(href, `/logbook?${new URLSearchParams({ trainee: name, group })}`);
     // the attempt is recorded within the recorder's second; then the logbook has it

@@ -49,6 +49,10 @@ export const links = {
   debrief: (attemptId) => `/replay/${enc(attemptId)}`,
   /** The class results (CSV of finished attempts), of one group or all. */
   resultsCsv: (group) => (group ? `/api/results.csv?${new URLSearchParams({ group })}` : '/api/results.csv'),
+  /** A trainee's printable logbook page (the instructor's sign-in cookie opens its data). */
+  logbook: (trainee, group) => `/logbook?${new URLSearchParams({ trainee, group: group || '' })}`,
+  /** A trainee's logbook as CSV. */
+  logbookCsv: (trainee, group) => `/api/logbook.csv?${new URLSearchParams({ trainee, group: group || '' })}`,
 };
 
 /** GET /api/signin: what this browser's cookies are ({instructor, trainee_sessions}), or null. */
@@ -206,6 +210,29 @@ export async function markReference(trainee, group, reference, token) {
   const r = await call('PUT', '/api/reference-operators', { token, body: { trainee, group, reference } });
   if (!r.ok) throw new Error(await errorOf(r));
   return (await r.json()).reference_operators || [];
+}
+
+/** GET /api/logbook (instructor): a trainee's logbook {trainee, group, generated_unix,
+ * exercises: [entry]} (docs/api.md). */
+export async function logbook(trainee, group, token) {
+  const q = new URLSearchParams({ trainee, group: group || '' });
+  const r = await call('GET', `/api/logbook?${q}`, { token });
+  if (!r.ok) throw new Error(await errorOf(r));
+  return r.json();
+}
+
+/** PUT /api/signoffs (instructor): signs a trainee off on an exercise; the sign-off. */
+export async function signOff(body, token) {
+  const r = await call('PUT', '/api/signoffs', { token, body });
+  if (!r.ok) throw new Error(await errorOf(r));
+  return r.json();
+}
+
+/** DELETE /api/signoffs (instructor): revokes a trainee's sign-off on an exercise. */
+export async function revokeSignoff(trainee, group, exercise, token) {
+  const q = new URLSearchParams({ trainee, group: group || '', exercise });
+  const r = await call('DELETE', `/api/signoffs?${q}`, { token });
+  if (!r.ok) throw new Error(await errorOf(r));
 }
 
 /** POST /api/analysis (`body`: {robot, q, polytope?}); the analysis, or null. */

@@ -228,6 +228,7 @@ export class Classroom {
   showHistory(trainee, group) {
     this.history = { trainee, group: group || '' };
     $('hist-name').textContent = group ? `${trainee} (${group})` : trainee;
+    $('hist-logbook').href = api.links.logbook(trainee, group);
     $('cls-history').hidden = false;
     $('history').tBodies[0].innerHTML = '<tr><td colspan="7">loading…</td></tr>';
     this.refreshHistory();

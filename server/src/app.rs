@@ -8,7 +8,7 @@ use axum::Router;
 use axum::extract::{DefaultBodyLimit, Request, State};
 use axum::middleware::{self, Next};
 use axum::response::{IntoResponse, Response};
-use axum::routing::{get, post};
+use axum::routing::{get, post, put};
 
 use crate::api;
 use crate::assets;
@@ -180,6 +180,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/"),
     ("get", "/instructor"),
     ("get", "/replay/{attempt}"),
+    ("get", "/logbook"),
     ("get", "/web/{path}"),
     ("get", "/static/{path}"),
     ("get", "/healthz"),
@@ -206,6 +207,11 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/progress"),
     ("get", "/api/reference-operators"),
     ("put", "/api/reference-operators"),
+    ("get", "/api/sessions/{id}/logbook"),
+    ("get", "/api/logbook"),
+    ("get", "/api/logbook.csv"),
+    ("put", "/api/signoffs"),
+    ("delete", "/api/signoffs"),
     ("get", "/api/results.csv"),
     ("post", "/api/signin"),
     ("get", "/api/signin"),
@@ -269,6 +275,7 @@ fn routes(state: AppState) -> Router {
         .route("/", get(assets::index))
         .route("/instructor", get(assets::instructor))
         .route("/replay/{attempt}", get(assets::replay))
+        .route("/logbook", get(assets::logbook))
         .route("/web/{*path}", get(assets::web))
         .route("/static/{*path}", get(assets::vendored))
         .route("/healthz", get(healthz))
@@ -306,6 +313,13 @@ fn routes(state: AppState) -> Router {
         .route(
             "/api/reference-operators",
             get(api::progress::references).put(api::progress::mark_reference),
+        )
+        .route("/api/sessions/{id}/logbook", get(api::logbook::of_session))
+        .route("/api/logbook", get(api::logbook::get))
+        .route("/api/logbook.csv", get(api::logbook::csv))
+        .route(
+            "/api/signoffs",
+            put(api::logbook::sign).delete(api::logbook::revoke),
         )
         .route("/api/results.csv", get(api::results::export))
         .route(

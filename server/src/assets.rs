@@ -76,6 +76,12 @@ pub async fn replay(Path(_attempt): Path<String>) -> Response {
     page("replay.html")
 }
 
+/// `GET /logbook?trainee=&group=`: a trainee's printable logbook (it reads the trainee from
+/// its URL; the instructor's sign-in cookie opens the data).
+pub async fn logbook() -> Response {
+    page("logbook.html")
+}
+
 /// `GET /web/{*path}`: our own modules; revalidated on every load so a new build is seen at once.
 pub async fn web(Path(path): Path<String>) -> Response {
     serve::<Web>(&path, "no-cache")
@@ -195,6 +201,7 @@ mod tests {
             ("index.html", "trainee"),
             ("instructor.html", "instructor"),
             ("replay.html", "debrief"),
+            ("logbook.html", "logbook"),
         ] {
             let raw = String::from_utf8(Web::get(name).unwrap().data.into_owned()).unwrap();
             assert!(

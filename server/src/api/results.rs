@@ -190,10 +190,11 @@ fn row_of(out: &mut CsvOut<Vec<u8>>, a: &AttemptRow) -> std::io::Result<()> {
     }
 }
 
-/// Unix seconds as RFC 3339 UTC: `2023-11-14T22:13:20Z`, with milliseconds when not whole
-/// (`…:20.500Z`). Days to a civil date by Howard Hinnant's `civil_from_days` (proleptic
-/// Gregorian calendar).
-pub fn rfc3339(unix: f64) -> String {
+/// Unix seconds as UTC calendar fields: (year, month, day, hour, minute, second,
+/// millisecond), rounded to the millisecond. Days to a civil date by Howard Hinnant's
+/// `civil_from_days` (<https://howardhinnant.github.io/date_algorithms.html>; proleptic
+/// Gregorian calendar). Shared by every timestamp the server writes (CSV, logbook, xAPI).
+pub fn utc_fields(unix: f64) -> [i64; 7] {
     let ms_total = (unix * 1000.0).round() as i64;
     let (secs, ms) = (ms_total.div_euclid(1000), ms_total.rem_euclid(1000));
     let (days, sod) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
@@ -206,7 +207,13 @@ pub fn rfc3339(unix: f64) -> String {
     let day = doy - (153 * mp + 2) / 5 + 1;
     let month = if mp < 10 { mp + 3 } else { mp - 9 };
     let year = yoe + era * 400 + i64::from(month <= 2);
-    let (h, m, s) = (sod / 3600, sod % 3600 / 60, sod % 60);
+    [year, month, day, sod / 3600, sod % 3600 / 60, sod % 60, ms]
+}
+
+/// Unix seconds as RFC 3339 UTC: `2023-11-14T22:13:20Z`, with milliseconds when not whole
+/// (`…:20.500Z`).
+pub fn rfc3339(unix: f64) -> String {
+    let [year, month, day, h, m, s, ms] = utc_fields(unix);
     let frac = if ms == 0 {
         String::new()
     } else {

@@ -373,6 +373,47 @@ async fn a_scripted_class_gets_the_benchmark_of_its_reference_operators() {
         .unwrap();
     assert_eq!(reach["benchmark"]["applies"], true);
     assert_eq!(reach["benchmark"]["measures"], bench["measures"]);
+
+    // the exercise's pass marks are `benchmark`: an attempt started now is judged by these
+    // lines (score and time, as computed above), recorded with it
+    let (st, run) = create_at(
+        &s.base,
+        json!({"exercise": EXERCISE, "trainee": "Ann", "group": GROUP}),
+    )
+    .await;
+    assert_eq!(st, 201, "{run}");
+    let url = format!(
+        "{}/api/sessions/{}/assessment",
+        s.base,
+        run["id"].as_str().unwrap()
+    );
+    let (st, a) = get(&url, run["control_token"].as_str().unwrap()).await;
+    assert_eq!(st, 200, "{a}");
+    let marks = &a["pass_marks"];
+    assert_eq!(marks["kind"], "benchmark", "{marks}");
+    assert_eq!(marks["benchmark"]["reference_attempts"], 10, "{marks}");
+    let given: BTreeMap<String, (f64, bool)> = marks["benchmark"]["lines"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| {
+            (
+                l["metric"].as_str().unwrap().to_string(),
+                (
+                    l["line"].as_f64().unwrap(),
+                    l["higher_is_better"].as_bool().unwrap(),
+                ),
+            )
+        })
+        .collect();
+    assert_eq!(given.len(), lines.len(), "{marks}");
+    for (metric, (line, up)) in &lines {
+        let (g, gup) = given[metric];
+        assert!(
+            (g - line).abs() <= 1e-9 * (1.0 + line.abs()) && gup == *up,
+            "{metric}: {g} vs {line}"
+        );
+    }
     drop(s);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -149,7 +149,7 @@ fn check_replay(init: Init, inputs: &[u8], states: &BTreeMap<u64, Vec<u64>>, wha
 fn a_current_set_mid_attempt_and_at_an_attempts_start_replays_bit_for_bit() {
     let models = magnum();
     let scenario = Scenario::resolve("reach-targets").expect("exercise");
-    let mut live = Live::new("t", &models, &scenario, None, None, 3).expect("live");
+    let mut live = Live::new("t", &models, &scenario, None, None, 3, None).expect("live");
     assert!(
         live.sim().environment().water().is_some(),
         "exercises run in water"

@@ -35,6 +35,7 @@ export function assessmentHtml(a, { title, frame = null, verdict = null }) {
       <span class="card-verdict">${esc(verdict || (passed ? 'Passed' : 'Not passed'))}</span>
       <span class="card-score" data-score="${Math.round(score)}">${Math.round(score)}<small>/100</small></span></div>
     <p class="card-title">${esc(title)}${time ? ` — ${time}` : ''}${steps ? `, ${steps} steps` : ''}</p>
+    ${passMarksHtml(a?.pass_marks)}
     ${why.length ? `<ul class="card-why">${why.map((w) => `<li>${esc(w)}</li>`).join('')}</ul>` : ''}
     ${terms.length ? `<table class="card-terms"><tr><th>metric</th><th>yours</th><th>good</th><th>poor</th><th>points</th></tr>
       ${terms.map((t) => `<tr><td>${esc(metricLabel(t.metric))}</td><td>${num(t.value)}</td><td>${num(t.good)}</td><td>${num(t.bad)}</td>
@@ -43,6 +44,19 @@ export function assessmentHtml(a, { title, frame = null, verdict = null }) {
       ${limits.map((l) => `<tr class="${l.met ? 'ok' : 'bad'}"><td>${esc(metricLabel(l.metric))}</td><td>${num(l.value)}</td>
         <td>${l.max !== null && l.max !== undefined ? `≤ ${num(l.max)}` : ''}${l.min !== null && l.min !== undefined ? ` ≥ ${num(l.min)}` : ''}</td>
         <td>${l.met ? '✓' : '✗'}</td></tr>`).join('')}</table>` : ''}`;
+}
+
+/** What the attempt is judged by: the reference operators' lines it started with, or the
+ * exercise's pass mark (and why, when the exercise asks for the benchmark but it does not apply
+ * yet). `pm`: the assessment's `pass_marks`. */
+function passMarksHtml(pm) {
+  if (!pm) return '';
+  if (pm.kind === 'benchmark' && pm.benchmark) {
+    const b = pm.benchmark;
+    const lines = b.lines.map((l) => `${esc(metricLabel(l.metric))} ${l.higher_is_better ? '≥' : '≤'} ${num(l.line)}`).join(', ');
+    return `<p class="card-marks" data-marks="benchmark">Pass marks from the reference operators (${b.reference_attempts} attempts, ${num(b.k)} SD from their mean): ${lines}.</p>`;
+  }
+  return `<p class="card-marks" data-marks="fixed">Pass mark: score ≥ ${num(pm.min_score)}${pm.note ? ` — ${esc(pm.note)}` : ''}.</p>`;
 }
 
 /**

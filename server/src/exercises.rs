@@ -224,6 +224,7 @@ pub fn run_recorded(
         None,
         None,
         seed,
+        None,
     )?;
     let mut pilot = Autopilot::new(spec.autopilot.clone(), spec.control.mode);
     let noise = match driver {

@@ -88,6 +88,7 @@ pub async fn run(
             std::sync::Arc::new(config),
         ))
     });
+    let pass_board = tokio::spawn(api::progress::pass_board_loop(state.clone()));
     let expiry = tokio::spawn({
         let sessions = sessions.clone();
         async move {
@@ -109,6 +110,7 @@ pub async fn run(
         .with_graceful_shutdown(shutdown)
         .await;
     expiry.abort();
+    pass_board.abort();
     if let Some(h) = xapi {
         h.abort();
     }

@@ -96,6 +96,31 @@ pub(crate) async fn benchmark(
     Ok(ExerciseBenchmark::of(spec, &refs))
 }
 
+/// Reads again, for every exercise whose pass marks are `benchmark`, its benchmark's pass
+/// lines into the sessions' board ([`crate::sessions::pass_board`]); an exercise whose read
+/// fails keeps its lines (logged).
+pub async fn refresh_pass_board(state: &AppState) {
+    let board = state.sessions.pass_board();
+    for spec in EXERCISES.all() {
+        if spec.pass.marks != seaarms_core::exercise::spec::PassMarks::Benchmark {
+            continue;
+        }
+        match benchmark(state, &spec).await {
+            Ok(b) => board.set(&spec.id, b.pass_lines()),
+            Err(e) => tracing::warn!("benchmark of {}: {}", spec.id, e.error),
+        }
+    }
+}
+
+/// [`refresh_pass_board`] every [`crate::sessions::pass_board::REFRESH_INTERVAL`].
+pub async fn pass_board_loop(state: AppState) {
+    let mut tick = tokio::time::interval(crate::sessions::pass_board::REFRESH_INTERVAL);
+    loop {
+        tick.tick().await;
+        refresh_pass_board(&state).await;
+    }
+}
+
 /// A curve from one trainee's finished attempts at `spec`, oldest first, judged against
 /// `bench` where it applies (else by the CUSUM alone).
 pub(crate) fn curve(
@@ -315,5 +340,6 @@ pub async fn mark_reference(
         .set_reference_operator(&name, &group, body.reference)
         .await
         .map_err(db_error)?;
+    refresh_pass_board(&state).await;
     list_references(&state).await
 }

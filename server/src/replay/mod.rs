@@ -160,7 +160,7 @@ impl Replay {
             .map(ActiveFault::try_from)
             .collect::<Result<Vec<_>, _>>()
             .map_err(ReplayError::Record)?;
-        Live::replaying(
+        let mut live = Live::replaying(
             models,
             &scenario,
             init.settings,
@@ -169,7 +169,9 @@ impl Replay {
             init.seed,
             init.current,
         )
-        .map_err(|e| ReplayError::Record(e.to_string()))
+        .map_err(|e| ReplayError::Record(e.to_string()))?;
+        live.set_pass_lines(init.pass_lines.clone());
+        Ok(live)
     }
 
     /// Length (s).

@@ -38,7 +38,8 @@ pub fn free_play(
 ) -> Result<SyntheticAttempt, ReplayError> {
     let record = |e: &dyn std::fmt::Display| ReplayError::Record(e.to_string());
     let scenario = Scenario::resolve("training").ok_or_else(|| record(&"no `training`"))?;
-    let mut live = Live::new(session, models, &scenario, None, None, 1).map_err(|e| record(&e))?;
+    let mut live =
+        Live::new(session, models, &scenario, None, None, 1, None).map_err(|e| record(&e))?;
     let mut records = Vec::new();
     for i in 0..seconds * 4 {
         let mut axes = [0.0; 6];

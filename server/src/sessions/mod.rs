@@ -13,6 +13,7 @@
 
 pub mod admission;
 pub mod command;
+pub mod pass_board;
 pub mod physics;
 pub mod record;
 pub mod snapshot;
@@ -154,12 +155,16 @@ pub struct Live {
     log: Option<command::log::Writer>,
     /// Attempt records waiting for the recorder, oldest first ([`Live::take_records`]).
     pending: Vec<RecordMsg>,
+    /// Where a live session's attempts find their benchmark pass lines (None: the file's
+    /// marks; a replay takes the recorded lines instead, [`Live::set_pass_lines`]).
+    pass_board: Option<Arc<pass_board::PassBoard>>,
 }
 
 impl Live {
     /// A session's live state at its start: the scenario's simulation at its reset state, the
     /// settings (an exercise's own unless `mode`/`method` override them), and for an
-    /// exercise its first attempt, seeded with `seed`.
+    /// exercise its first attempt, seeded with `seed`; each attempt judged by the benchmark
+    /// lines on `pass_board` when it starts (None: by the exercise file's marks).
     pub fn new(
         session_id: &str,
         models: &[Arc<Model>; 2],
@@ -167,8 +172,12 @@ impl Live {
         mode: Option<ControlMode>,
         method: Option<ControlMethod>,
         seed: u64,
+        pass_board: Option<Arc<pass_board::PassBoard>>,
     ) -> Result<Live, seaarms_core::Error> {
-        Self::build(session_id, models, scenario, mode, method, seed, true)
+        let mut live = Self::build(session_id, models, scenario, mode, method, seed, true)?;
+        live.pass_board = pass_board;
+        live.start_attempt();
+        Ok(live)
     }
 
     /// The state at a recorded attempt's start ([`crate::replay::Init`]), recording nothing;
@@ -193,6 +202,7 @@ impl Live {
             seed,
             false,
         )?;
+        live.start_attempt();
         live.operator.set_speed(settings.arm_speed);
         live.operator
             .set_hold_orientation(settings.hold_orientation);
@@ -212,6 +222,17 @@ impl Live {
             live.sim.reset();
         }
         Ok(live)
+    }
+
+    /// Judges the running attempt by the benchmark pass `lines` (a replay: the lines its record
+    /// kept, [`crate::replay::Init::pass_lines`]).
+    pub fn set_pass_lines(
+        &mut self,
+        lines: Option<seaarms_core::exercise::proficiency::PassLines>,
+    ) {
+        if let Some(run) = self.exercise.as_mut() {
+            run.set_pass_lines(lines);
+        }
     }
 
     /// A copy of this state for a replay's checkpoint ([`crate::replay`]): everything that
@@ -243,6 +264,7 @@ impl Live {
             recording: false,
             log: None,
             pending: Vec::new(),
+            pass_board: None,
         }
     }
 
@@ -262,7 +284,7 @@ impl Live {
         operator.set_method(method.or(control.map(|c| c.method)).unwrap_or_default());
         operator.set_hold_orientation(control.and_then(|c| c.hold_orientation).unwrap_or(true));
         let now = Instant::now();
-        let mut live = Live {
+        let live = Live {
             measures: measures(&sim),
             sim,
             operator,
@@ -286,8 +308,8 @@ impl Live {
             recording,
             log: None,
             pending: Vec::new(),
+            pass_board: None,
         };
-        live.start_attempt();
         Ok(live)
     }
 
@@ -302,6 +324,9 @@ impl Live {
             .scenario
             .exercise()
             .map(|spec| ExerciseRun::new(spec.clone(), &self.sim, seed));
+        if let (Some(run), Some(board)) = (self.exercise.as_mut(), self.pass_board.as_ref()) {
+            run.set_pass_lines(board.get(&run.spec().id));
+        }
         if self.recording {
             let init = command::log::Init {
                 format: command::log::FORMAT,
@@ -316,6 +341,7 @@ impl Live {
                     .water()
                     .map(|w| w.current)
                     .filter(|c| c.speed_m_s > 0.0),
+                pass_lines: self.exercise.as_ref().and_then(|r| r.pass_lines().cloned()),
             };
             let exercise = self.scenario.exercise();
             self.pending
@@ -721,6 +747,8 @@ pub struct SessionManager {
     /// Counters.
     pub metrics: Arc<Metrics>,
     magnum: Arc<Model>,
+    /// The benchmark pass lines attempts start with.
+    pass_board: Arc<pass_board::PassBoard>,
 }
 
 /// What a new session is created with ([`SessionManager::create`]).
@@ -759,7 +787,13 @@ impl SessionManager {
             recorder,
             metrics,
             magnum,
+            pass_board: Arc::default(),
         })
+    }
+
+    /// The benchmark pass lines the sessions' attempts start with.
+    pub fn pass_board(&self) -> &Arc<pass_board::PassBoard> {
+        &self.pass_board
     }
 
     /// The arm model sessions use (both arms).
@@ -787,8 +821,16 @@ impl SessionManager {
         self.recorder.admit().map_err(CreateError::Recording)?;
         let models = [self.magnum.clone(), self.magnum.clone()];
         let id = random_hex(8);
-        let mut live = Live::new(&id, &models, &scenario, mode, method, random_seed())
-            .map_err(|e| CreateError::Sim(e.to_string()))?;
+        let mut live = Live::new(
+            &id,
+            &models,
+            &scenario,
+            mode,
+            method,
+            random_seed(),
+            Some(self.pass_board.clone()),
+        )
+        .map_err(|e| CreateError::Sim(e.to_string()))?;
         live.wait_for_ready(wait_for_ready);
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);

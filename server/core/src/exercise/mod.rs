@@ -143,6 +143,23 @@ pub struct Assessment {
     pub diagnosis: Option<DiagnosisOut>,
     /// Why it did not pass (empty when it passed or is still running).
     pub failed_because: Vec<String>,
+    /// The pass marks it is judged by.
+    pub pass_marks: PassMarksOut,
+}
+
+/// The pass marks an attempt is judged by ([`spec::PassSpec`]).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PassMarksOut {
+    /// `fixed` (the file's `min_score`) or `benchmark` (the reference operators' lines).
+    pub kind: &'static str,
+    /// The file's pass mark (the one that applies when `kind` is `fixed`).
+    pub min_score: f64,
+    /// The benchmark's lines (when `kind` is `benchmark`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub benchmark: Option<proficiency::PassLines>,
+    /// Why the file's mark applies although the exercise asks for the benchmark.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub note: Option<String>,
 }
 
 /// One attempt at an exercise.
@@ -165,6 +182,9 @@ pub struct ExerciseRun {
     assessor: Assessor,
     last_event: Option<Event>,
     events: Vec<Event>,
+    /// The benchmark's pass lines, when the exercise's marks are `benchmark` and it applied
+    /// at the start ([`Self::set_pass_lines`]).
+    pass_lines: Option<proficiency::PassLines>,
 }
 
 impl ExerciseRun {
@@ -193,8 +213,21 @@ impl ExerciseRun {
             answer: None,
             last_event: None,
             events: Vec::new(),
+            pass_lines: None,
             spec,
         }
+    }
+
+    /// Judges the attempt by the reference operators' benchmark `lines` (the benchmark as it
+    /// stands at the attempt's start; None: it does not apply). Ignored unless the exercise's
+    /// `pass.marks` is `benchmark`.
+    pub fn set_pass_lines(&mut self, lines: Option<proficiency::PassLines>) {
+        self.pass_lines = lines.filter(|_| self.spec.pass.marks == spec::PassMarks::Benchmark);
+    }
+
+    /// The benchmark's pass lines this attempt is judged by ([`Self::set_pass_lines`]).
+    pub fn pass_lines(&self) -> Option<&proficiency::PassLines> {
+        self.pass_lines.as_ref()
     }
 
     /// The exercise.
@@ -371,6 +404,26 @@ impl ExerciseRun {
         }
     }
 
+    fn pass_marks(&self) -> PassMarksOut {
+        let benchmark_asked = self.spec.pass.marks == spec::PassMarks::Benchmark;
+        PassMarksOut {
+            kind: if self.pass_lines.is_some() {
+                "benchmark"
+            } else {
+                "fixed"
+            },
+            min_score: self.spec.pass.min_score,
+            benchmark: self.pass_lines.clone(),
+            note: (benchmark_asked && self.pass_lines.is_none()).then(|| {
+                format!(
+                    "the benchmark needs {} reference attempts on each measure; until then the \
+                     exercise's pass mark applies",
+                    self.spec.proficiency.min_reference_attempts
+                )
+            }),
+        }
+    }
+
     /// The assessment (final once [`Self::done`]).
     pub fn assessment(&self) -> Assessment {
         let metrics = self.assessor.metrics;
@@ -393,11 +446,35 @@ impl ExerciseRun {
                     self.spec.time_limit_s
                 ));
             }
-            if score < self.spec.pass.min_score {
-                failed.push(format!(
+            match &self.pass_lines {
+                Some(b) => {
+                    for l in &b.lines {
+                        let value = if l.metric == "score" {
+                            score
+                        } else {
+                            metrics.get(&l.metric).unwrap_or(f64::NAN)
+                        };
+                        if !l.met_by(value) {
+                            failed.push(format!(
+                                "{} = {value:.2} is {} the benchmark line {:.2} (reference mean \
+                                 {:.2} {} {} SD of {:.2}, {} attempts)",
+                                l.metric,
+                                if l.higher_is_better { "below" } else { "above" },
+                                l.line,
+                                l.mean,
+                                if l.higher_is_better { "−" } else { "+" },
+                                b.k,
+                                l.sd,
+                                b.reference_attempts
+                            ));
+                        }
+                    }
+                }
+                None if score < self.spec.pass.min_score => failed.push(format!(
                     "score {score:.0} is below the pass mark {:.0}",
                     self.spec.pass.min_score
-                ));
+                )),
+                None => {}
             }
             for l in limits.iter().filter(|l| !l.met) {
                 failed.push(format!("{} = {} is outside its limit", l.metric, l.value));
@@ -421,6 +498,7 @@ impl ExerciseRun {
             limits,
             diagnosis,
             failed_because: failed,
+            pass_marks: self.pass_marks(),
         }
     }
 }

@@ -201,6 +201,76 @@ impl ExerciseBenchmark {
     }
 }
 
+/// One benchmark pass line of an attempt ([`PassLines`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PassLine {
+    /// `score` or a metric of [`super::assess::Metrics`].
+    pub metric: String,
+    /// Better upward.
+    pub higher_is_better: bool,
+    /// The reference mean.
+    pub mean: f64,
+    /// The reference SD.
+    pub sd: f64,
+    /// The line: `mean ∓ k·sd` on the worse side ([`Benchmark::pass_line`]).
+    pub line: f64,
+}
+
+impl PassLine {
+    /// Whether `value` is on the better side of the line (or on it).
+    pub fn met_by(&self, value: f64) -> bool {
+        value.is_finite()
+            && if self.higher_is_better {
+                value >= self.line
+            } else {
+                value <= self.line
+            }
+    }
+}
+
+/// An attempt's pass marks from the reference operators' benchmark (an exercise whose
+/// `pass.marks` is `benchmark`): the required measures' lines as they stood when the attempt
+/// started. The attempt's record keeps them, so its replay gives the same verdict however the
+/// benchmark has moved since.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct PassLines {
+    /// Reference attempts the benchmark came from.
+    pub reference_attempts: usize,
+    /// The lines' distance from the mean in reference SDs.
+    pub k: f64,
+    /// One line per required measure (the exercise's `benchmark_on`).
+    pub lines: Vec<PassLine>,
+}
+
+impl ExerciseBenchmark {
+    /// The pass lines of this benchmark's required measures; None when it does not apply.
+    pub fn pass_lines(&self) -> Option<PassLines> {
+        if !self.applies {
+            return None;
+        }
+        let lines = self
+            .measures
+            .iter()
+            .filter(|m| m.required)
+            .filter_map(|m| {
+                let b = m.benchmark.as_ref()?;
+                Some(PassLine {
+                    metric: m.metric.clone(),
+                    higher_is_better: m.higher_is_better,
+                    mean: b.mean,
+                    sd: b.sd,
+                    line: m.line?,
+                })
+            })
+            .collect();
+        Some(PassLines {
+            reference_attempts: self.reference_attempts,
+            k: self.k,
+            lines,
+        })
+    }
+}
+
 /// How proficiency is judged on an exercise (its file's `proficiency`, every field optional).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]

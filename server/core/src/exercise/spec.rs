@@ -227,15 +227,35 @@ pub struct StepSpec {
 }
 
 /// Pass criteria: every step completed within the time limit, a score of at least
-/// `min_score`, and every limit met.
+/// `min_score` (or, with `marks` = `benchmark` once the reference operators' benchmark
+/// applies, every benchmarked measure on the better side of its line instead), and every limit
+/// met.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PassSpec {
-    /// Lowest passing score (0–100).
+    /// Lowest passing score (0–100): the pass mark while the marks are fixed, or while the
+    /// benchmark does not apply yet.
     pub min_score: f64,
-    /// Limits on assessment metrics.
+    /// Limits on assessment metrics (they hold under either marks).
     #[serde(default)]
     pub limits: Vec<Limit>,
+    /// Where the pass marks come from: `fixed` (default: `min_score`) or `benchmark` (the
+    /// reference operators' benchmark, mean ∓ k·SD on each measure of
+    /// `proficiency.benchmark_on`, k = `proficiency.benchmark_sd`;
+    /// [`super::proficiency::PassLines`]).
+    #[serde(default)]
+    pub marks: PassMarks,
+}
+
+/// Where an exercise's pass marks come from ([`PassSpec::marks`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PassMarks {
+    /// The file's `min_score`.
+    #[default]
+    Fixed,
+    /// The reference operators' benchmark where it applies, else the file's `min_score`.
+    Benchmark,
 }
 
 /// A limit on one metric of the assessment.

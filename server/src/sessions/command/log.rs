@@ -55,6 +55,10 @@ pub struct Init {
     /// still water or air).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub current: Option<Current>,
+    /// The reference operators' benchmark pass lines the attempt is judged by (an exercise
+    /// whose pass marks are `benchmark`, once its benchmark applies; absent: the file's marks).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub pass_lines: Option<seaarms_core::exercise::proficiency::PassLines>,
 }
 /// Stick values are applied in steps of this size (a thousandth of full stick: finer than a
 /// proportional valve's hysteresis, coarser than a gamepad's noise).

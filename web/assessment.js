@@ -56,7 +56,7 @@ function passMarksHtml(pm) {
     const lines = b.lines.map((l) => `${esc(metricLabel(l.metric))} ${l.higher_is_better ? '≥' : '≤'} ${num(l.line)}`).join(', ');
     return `<p class="card-marks" data-marks="benchmark">Pass marks from the reference operators (${b.reference_attempts} attempts, ${num(b.k)} SD from their mean): ${lines}.</p>`;
   }
-  return `<p class="card-marks" data-marks="fixed">Pass mark: score ≥ ${num(pm.min_score)}${pm.note ? ` — ${esc(pm.note)}` : ''}.</p>`;
+  return `<p class="card-marks" data-marks="fixed"${pm.note ? ` title="${esc(pm.note)}"` : ''}>Pass mark: score ≥ ${num(pm.min_score)}${pm.note ? ' (until the reference operators\' benchmark applies)' : ''}.</p>`;
 }
 
 /**

@@ -13,9 +13,8 @@ mod common;
 mod records_common;
 
 use common::{TEACHER, create_at, get_as, temp_dir};
-use records_common::Binary;
+use records_common::{Binary, stored_attempt, stored_session};
 use seaarms::db::{Db, Write};
-use seaarms::sessions::record::{AttemptEnd, AttemptStart};
 use serde_json::{Value, json};
 
 const GROUP: &str = "ROV-log";
@@ -23,44 +22,7 @@ const T0: f64 = 1_700_000_000.0; // 2023-11-14T22:13:20Z
 const HOSTILE: &str = "=HYPERLINK(\"http://x.example\",\"y\")";
 
 fn session(id: &str, trainee: &str) -> Write {
-    Write::Session {
-        id: id.into(),
-        trainee: trainee.into(),
-        group: GROUP.into(),
-        scenario: "reach-targets".into(),
-        created_unix: T0,
-        token_sha256: "ab".repeat(32),
-    }
-}
-
-fn attempt(
-    id: &str,
-    session: &str,
-    exercise: &str,
-    started: f64,
-    outcome: &str,
-    score: Option<f64>,
-) -> [Write; 2] {
-    [
-        Write::AttemptStart(Box::new(AttemptStart {
-            id: id.into(),
-            session: session.into(),
-            scenario: exercise.into(),
-            exercise: Some(exercise.into()),
-            exercise_version: Some("1".into()),
-            sim_version: "sim-1".into(),
-            started_unix: started,
-            init: json!({}),
-        })),
-        Write::AttemptEnd(Box::new(AttemptEnd {
-            id: id.into(),
-            ended_unix: started + 30.0,
-            sim_seconds: 30.0,
-            outcome: outcome.into(),
-            score,
-            assessment: None,
-        })),
-    ]
+    stored_session(id, trainee, GROUP, "reach-targets", T0)
 }
 
 /// Ada at reach-targets, hourly from T0: P pass (score 70 + k), F fail (30), A abandoned (no
@@ -86,7 +48,7 @@ fn class() -> Vec<Write> {
         } else {
             score
         };
-        batch.extend(attempt(
+        batch.extend(stored_attempt(
             &format!("a{sid}"),
             &sid,
             exercise,

@@ -9,9 +9,8 @@ mod common;
 mod records_common;
 
 use common::{TEACHER, create_at, get_as, temp_dir};
-use records_common::Binary;
+use records_common::{Binary, stored_attempt, stored_session};
 use seaarms::db::{Db, Write};
-use seaarms::sessions::record::{AttemptEnd, AttemptStart};
 use serde_json::{Value, json};
 
 const GROUP: &str = "ROV-cusum";
@@ -33,42 +32,17 @@ const CLASS: &[(&str, &str, &str, Option<usize>)] = &[
 ];
 
 fn session(id: &str, trainee: &str) -> Write {
-    Write::Session {
-        id: id.into(),
-        trainee: trainee.into(),
-        group: GROUP.into(),
-        scenario: "reach-targets".into(),
-        created_unix: 1_700_000_000.0,
-        token_sha256: "ab".repeat(32),
-    }
+    stored_session(id, trainee, GROUP, "reach-targets", 1_700_000_000.0)
 }
 
+/// Scores 90 for a pass, 30 for a failure, none otherwise.
 fn attempt(id: &str, session: &str, started: f64, outcome: &str) -> [Write; 2] {
     let score = match outcome {
         "passed" => Some(90.0),
         "failed" => Some(30.0),
         _ => None,
     };
-    [
-        Write::AttemptStart(Box::new(AttemptStart {
-            id: id.into(),
-            session: session.into(),
-            scenario: "reach-targets".into(),
-            exercise: Some("reach-targets".into()),
-            exercise_version: Some("1".into()),
-            sim_version: "sim-1".into(),
-            started_unix: started,
-            init: json!({}),
-        })),
-        Write::AttemptEnd(Box::new(AttemptEnd {
-            id: id.into(),
-            ended_unix: started + 30.0,
-            sim_seconds: 30.0,
-            outcome: outcome.into(),
-            score,
-            assessment: None,
-        })),
-    ]
+    stored_attempt(id, session, "reach-targets", started, outcome, score)
 }
 
 async fn get(url: &str, token: &str) -> (u16, Value) {

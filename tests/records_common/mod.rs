@@ -235,3 +235,55 @@ pub(crate) async fn fresh_postgres_database(base: &str) -> String {
         .unwrap_or_else(|| panic!("{base}: no database name"));
     format!("{server}/{name}")
 }
+
+/// A stored session of `trainee` in `group` on `scenario`, created at `created_unix` (a class
+/// written straight to the database, as the recorder writes it).
+pub(crate) fn stored_session(
+    id: &str,
+    trainee: &str,
+    group: &str,
+    scenario: &str,
+    created_unix: f64,
+) -> seaarms::db::Write {
+    seaarms::db::Write::Session {
+        id: id.into(),
+        trainee: trainee.into(),
+        group: group.into(),
+        scenario: scenario.into(),
+        created_unix,
+        token_sha256: "ab".repeat(32),
+    }
+}
+
+/// A stored attempt at `exercise` (version 1) in `session`, started at `started` and ended
+/// 30 s later (30 s simulated) with `outcome` and `score`, no assessment: its start and end.
+pub(crate) fn stored_attempt(
+    id: &str,
+    session: &str,
+    exercise: &str,
+    started: f64,
+    outcome: &str,
+    score: Option<f64>,
+) -> [seaarms::db::Write; 2] {
+    use seaarms::sessions::record::{AttemptEnd, AttemptStart};
+    [
+        seaarms::db::Write::AttemptStart(Box::new(AttemptStart {
+            id: id.into(),
+            session: session.into(),
+            scenario: exercise.into(),
+            exercise: Some(exercise.into()),
+            exercise_version: Some("1".into()),
+            sim_version: "sim-1".into(),
+            started_unix: started,
+            init: json!({}),
+        })),
+        seaarms::db::Write::AttemptEnd(Box::new(AttemptEnd {
+            id: id.into(),
+            ended_unix: started + 30.0,
+            sim_seconds: 30.0,
+            outcome: outcome.into(),
+            score,
+            assessment: None,
+        })),
+    ]
+}

@@ -181,6 +181,52 @@ fn a_current_set_mid_attempt_and_at_an_attempts_start_replays_bit_for_bit() {
     check_replay(init, &inputs, &states, "current at the attempt's start");
 }
 
+/// Issue 30 item 1: an attempt judged by the reference operators' benchmark keeps the lines it
+/// started with in its record; the benchmark moving on later changes neither the running
+/// attempt nor its replay, which judges it by the same lines.
+#[test]
+fn an_attempt_judged_by_the_benchmark_keeps_its_lines_and_replays_with_them() {
+    use seaarms::sessions::pass_board::PassBoard;
+    use seaarms_core::exercise::proficiency::{PassLine, PassLines};
+    use std::sync::Arc;
+    let models = magnum();
+    let scenario = Scenario::resolve("reach-targets").expect("exercise");
+    let lines = PassLines {
+        reference_attempts: 6,
+        k: 1.0,
+        lines: vec![PassLine {
+            metric: "score".into(),
+            higher_is_better: true,
+            mean: 88.0,
+            sd: 4.0,
+            line: 84.0,
+        }],
+    };
+    let board = Arc::new(PassBoard::default());
+    board.set("reach-targets", Some(lines.clone()));
+    let mut live =
+        Live::new("t", &models, &scenario, None, None, 3, Some(board.clone())).expect("live");
+    let (mut seq, mut states) = (0, BTreeMap::new());
+    drive(&mut live, &mut seq, 0.6, 700, &mut states);
+    board.set("reach-targets", None); // the benchmark no longer applies, say
+    let marks = |live: &Live| live.exercise().expect("exercise").assessment().pass_marks;
+    assert_eq!(marks(&live).kind, "benchmark");
+    assert_eq!(marks(&live).benchmark.as_ref(), Some(&lines));
+    live.end_attempt(seaarms::sessions::AttemptStop::Left);
+    let (init, inputs) = records(&mut live);
+    assert_eq!(init.pass_lines.as_ref(), Some(&lines));
+    let last = *states.keys().next_back().expect("steps");
+    let entries = log::decode(&inputs).expect("log decodes");
+    let mut replay = Replay::new(&models, init, entries, last as f64 / 1000.0).expect("replayable");
+    replay.seek_step(last).expect("seek");
+    assert_eq!(marks(replay.live()), marks(&live));
+    assert_eq!(state_bits(replay.live()), states[&last]);
+    // the next attempt starts with the board as it is now: the file's pass mark, and why
+    live.reset();
+    assert_eq!(marks(&live).kind, "fixed");
+    assert!(marks(&live).note.is_some());
+}
+
 /// Issue 29 item 2: seeks start from the nearest earlier checkpoint (every
 /// `CHECKPOINT_INTERVAL_STEPS` = 2 s) and give, bit for bit, the state the attempt went
 /// through (the recorded run, an independent reference) and the frame a replay stepped from

@@ -123,7 +123,15 @@ async fn progression_on(database_url: Option<String>) {
     class.extend(attempts(2, "Cy", "familiarisation", "PPPPPPPPPPPPFFF", 0));
     db.write_batch(&class).await.unwrap();
     drop(db);
-    let mut extra: Vec<&str> = vec!["--progression", "on"];
+    // one loopback client creates many sessions here: lift the per-client creation limits
+    let mut extra: Vec<&str> = vec![
+        "--progression",
+        "on",
+        "--session-burst",
+        "1000",
+        "--sessions-per-minute",
+        "1000",
+    ];
     if let Some(u) = &database_url {
         extra.extend(["--database-url", u.as_str()]);
     }

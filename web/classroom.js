@@ -9,7 +9,7 @@
 // GET /api/unlocks) with a control to unlock it for them or lock it again.
 
 import { describeWarning } from './status.js';
-import { $, esc, fixed as f, note } from './page.js';
+import { $, esc, fixed as f, note, LOCK_ICON } from './page.js';
 import * as api from './api.js';
 
 /** How often an open history and the comparison are refetched (ms). */
@@ -263,9 +263,9 @@ export class Classroom {
         const m = l.missing.find((x) => x.exercise === id);
         return `${esc(name(id))}${m ? ` <span class="dim">(${esc(m.state.replace('_', ' '))})</span>` : ' ✓'}`;
       }).join(', ') : '—';
-      const status = { open: 'open', locked: '🔒 locked', unlocked: 'unlocked by instructor' }[l.status] || l.status;
+      const status = { open: 'open', locked: `${LOCK_ICON} locked`, unlocked: 'unlocked by instructor' }[l.status] || esc(l.status);
       const act = l.status === 'locked' ? ['1', 'Unlock'] : l.unlocked_unix ? ['0', 'Lock again'] : null;
-      return `<tr data-exercise="${esc(l.exercise)}" data-status="${esc(l.status)}"><td>${esc(name(l.exercise))}</td><td>${needs}</td><td>${esc(status)}</td>
+      return `<tr data-exercise="${esc(l.exercise)}" data-status="${esc(l.status)}"><td>${esc(name(l.exercise))}</td><td>${needs}</td><td>${status}</td>
         <td>${act ? `<button type="button" data-unlock="${act[0]}" data-exercise="${esc(l.exercise)}">${act[1]}</button>` : ''}</td></tr>`;
     }).join('');
   }

@@ -9,7 +9,7 @@
 // new browser has no session yet, so every exercise with requirements is shown locked until
 // the trainee has started one (the server keeps no public lookup of a trainee by name).
 
-import { esc } from './page.js';
+import { esc, LOCK_ICON } from './page.js';
 import { catalogue } from './api.js';
 
 const NAME_KEY = 'seaarms.trainee';
@@ -109,8 +109,9 @@ export class StartScreen {
       input.disabled = isLocked;
       if (isLocked) input.checked = false;
       const why = label.querySelector('.ex-lock');
-      why.textContent = lockText(lock, titles);
-      why.hidden = !why.textContent;
+      const text = lockText(lock, titles);
+      why.innerHTML = text ? `${isLocked ? LOCK_ICON : ''} ${esc(text)}` : '';
+      why.hidden = !text;
     }
     const hint = el.querySelector('#start-locked');
     if (hint) hint.hidden = !locked;
@@ -147,7 +148,7 @@ export class StartScreen {
           <span class="ex-skills">${e.skills.map((s) => `<span>${esc(s)}</span>`).join('')}</span>
           <span class="ex-progress" data-progress="${esc(e.id)}" hidden></span></label></li>`).join('')}
       </ul>
-      <p class="start-locked" id="start-locked" hidden>🔒 An exercise opens once you are proficient in the ones it needs${progress ? '' : ' (returning? start an open exercise: your record then opens the rest)'}; your instructor can also unlock one for you.</p>
+      <p class="start-locked" id="start-locked" hidden>${LOCK_ICON} An exercise opens once you are proficient in the ones it needs${progress ? '' : ' (returning? start an open exercise: your record then opens the rest)'}; your instructor can also unlock one for you.</p>
       ${this.exercises.length ? '' : '<p class="ex-none">No exercises on this server: free play only.</p>'}
       <div class="start-actions">
         <button type="submit" id="start-exercise" ${this.exercises.length ? '' : 'disabled'}>Start exercise</button>

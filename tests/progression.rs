@@ -234,7 +234,10 @@ async fn progression_on(database_url: Option<String>) {
     )
     .await;
     assert_eq!(st, 200, "{list}");
-    assert_eq!(lock(&list["exercises"], "reach-targets")["status"], "locked");
+    assert_eq!(
+        lock(&list["exercises"], "reach-targets")["status"],
+        "locked"
+    );
     let (st, _) = start(&s.base, "Neo", GROUP, "reach-targets").await;
     assert_eq!(st, 403, "locked again");
     // an unlock to keep across the restart

@@ -97,7 +97,11 @@ async fn states(
 
 /// Every exercise (in the start screen's order) as open or locked for the trainee `name` of
 /// `group` (normalised).
-pub(crate) async fn locks(state: &AppState, name: &str, group: &str) -> Result<Vec<Lock>, ApiError> {
+pub(crate) async fn locks(
+    state: &AppState,
+    name: &str,
+    group: &str,
+) -> Result<Vec<Lock>, ApiError> {
     let states = states(state, name, group).await?;
     let unlocked: BTreeMap<String, f64> = if name.is_empty() {
         BTreeMap::new()
@@ -121,7 +125,7 @@ pub(crate) async fn locks(state: &AppState, name: &str, group: &str) -> Result<V
         .iter()
         .map(|spec| {
             let unmet = if state.progression {
-                missing(spec, &state_of)
+                missing(spec, state_of)
             } else {
                 Vec::new()
             };

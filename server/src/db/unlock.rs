@@ -29,7 +29,13 @@ impl Db {
 
     /// Unlocks (`on`) or locks again `exercise` for the trainee `name` of `group`. Unlocking
     /// one already unlocked keeps the first time.
-    pub async fn set_unlock(&self, name: &str, group: &str, exercise: &str, on: bool) -> Result<()> {
+    pub async fn set_unlock(
+        &self,
+        name: &str,
+        group: &str,
+        exercise: &str,
+        on: bool,
+    ) -> Result<()> {
         let (name, group, exercise) = (name.to_string(), group.to_string(), exercise.to_string());
         self.run(move |pool| async move {
             if on {

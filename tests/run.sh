@@ -78,6 +78,9 @@ grep -q -- '--instructor-token' <<<"$help" && args+=(--instructor-token test-tok
 # Every browser test file shares this server from one loopback client: lift the per-client
 # creation limits (admission.test.mjs checks them on servers of its own).
 grep -q -- '--session-burst' <<<"$help" && args+=(--session-burst 1000 --sessions-per-minute 1000 --max-sessions-per-client 1000)
+# The browser tests start any exercise directly (progression.test.mjs starts its own server
+# with progression on).
+grep -q -- '--progression' <<<"$help" && args+=(--progression off)
 SEAARMS_INSTRUCTOR_TOKEN=test-token RUST_LOG=warn "$bin" "${args[@]}" &
 server_pid=$!
 node -e 'const u=process.argv[1];(async()=>{for(let i=0;i<200;i++){try{if((await fetch(u)).ok)return}catch{}await new Promise(r=>setTimeout(r,100))}process.exit(1)})()' \

@@ -165,15 +165,32 @@ export async function scenarios() {
   }
 }
 
-let exerciseList = null;
-/** GET /api/exercises, asked once per page and shared: the list ([] when the server has none
- * or cannot say; a failed ask is asked again next time). */
-export function exercises() {
-  exerciseList ??= call('GET', '/api/exercises')
+let catalogueBody = null;
+/** GET /api/exercises, asked once per page and shared: {exercises, progression} (no
+ * exercises when the server has none or cannot say; a failed ask is asked again next time). */
+export function catalogue() {
+  catalogueBody ??= call('GET', '/api/exercises')
     .then((r) => (r.ok ? r.json() : Promise.reject(new Error(`HTTP ${r.status}`))))
-    .then((b) => b.exercises || [])
-    .catch(() => { exerciseList = null; return []; });
-  return exerciseList;
+    .catch(() => { catalogueBody = null; return { exercises: [] }; });
+  return catalogueBody;
+}
+
+/** The exercises of GET /api/exercises ([] when none or unknown). */
+export function exercises() {
+  return catalogue().then((b) => b.exercises || []);
+}
+
+/** GET/PUT/DELETE /api/unlocks (instructor): each exercise open or locked for a trainee;
+ * `on`: unlock `exercise` (true), lock it again (false), or only read (undefined). */
+export async function unlocks(trainee, group, token, exercise, on) {
+  const q = new URLSearchParams({ trainee, group: group || '' });
+  let r;
+  if (on === undefined) r = await call('GET', `/api/unlocks?${q}`, { token });
+  else if (on) r = await call('PUT', '/api/unlocks', { token, body: { trainee, group: group || '', exercise } });
+  else { q.set('exercise', exercise); r = await call('DELETE', `/api/unlocks?${q}`, { token }); }
+  const b = await jsonOf(r);
+  if (!r.ok) throw new Error(b?.error || `HTTP ${r.status}`);
+  return b;
 }
 
 /** GET /api/attempts/{id} (metadata, assessment, events); the answer. */

@@ -49,6 +49,8 @@ const conn = new Connection({
   role: 'trainee',
   joinCode: params.get('join'),
   onJoinCode: askJoinCode,
+  // an exercise still locked for this trainee (progression): back to the choice, saying why
+  onLocked(b) { startScreen.note = b.error; chooseAndStart(); },
   onEnded(e) {
     // why the session ended (e.g. abandoned: no connection for the grace period), shown again
     // over the next session and on the start screen
@@ -104,8 +106,8 @@ const task = new TaskPanel($('task'), $('card'), $('gauges'), {
   tryAgain: () => conn.send(messages.reset()), // a new attempt (docs/exercises.md)
   diagnose: (answer) => conn.send(messages.diagnose(answer)), // fault drill
   ready: () => conn.send(messages.ready()), // the goal is read: the attempt's clock starts
-  nextTitle: () => startScreen.next(task.spec?.id)?.title,
-  next: () => { const n = startScreen.next(task.spec?.id); if (n) newSession({ exercise: n.id }); },
+  nextTitle: async () => (await nextOpen())?.title,
+  next: async () => { const n = await nextOpen(); if (n) newSession({ exercise: n.id }); else chooseAndStart(); },
   choose: () => chooseAndStart(),
 });
 /** What the page was set up for by the last hello: {scenario, exercise id or null}. */
@@ -153,6 +155,14 @@ function followScenario(s) {
 function newSession(opts) {
   const { trainee, group } = conn.createOpts || {};
   conn.restart({ ...opts, ...(trainee ? { trainee } : {}), ...(group ? { group } : {}) });
+}
+
+/** The next exercise open to the trainee (progression: their locks read again, as the attempt
+ * just finished may have opened one), or null. */
+async function nextOpen() {
+  const s = conn.session;
+  if (s?.control_token && !conn.observing) startScreen.setLocks(await sessionProgress(s.id, s.control_token, s.base || ''));
+  return startScreen.next(task.spec?.id);
 }
 
 async function chooseAndStart() {

@@ -5,9 +5,11 @@
 // with links to the debrief page and the CSV; a comparison of the trainees on one exercise
 // (GET /api/attempts?exercise=: best/last score, best time, strikes, posture from the
 // assessments' metrics); and the class results export (GET /api/results.csv?group=).
+// With a trainee's history, each exercise open or locked for them (progression,
+// GET /api/unlocks) with a control to unlock it for them or lock it again.
 
 import { describeWarning } from './status.js';
-import { $, esc, fixed as f, note } from './page.js';
+import { $, esc, fixed as f, note, LOCK_ICON } from './page.js';
 import * as api from './api.js';
 
 /** How often an open history and the comparison are refetched (ms). */
@@ -96,6 +98,10 @@ export class Classroom {
       if (e.target.matches('input.ref')) { this.markReference(e.target); return; }
       const n = e.target.closest('[data-trainee]');
       if (n) this.showHistory(n.dataset.trainee, n.dataset.group);
+    });
+    $('unlocks').tBodies[0].addEventListener('click', (e) => {
+      const b = e.target.closest('button[data-unlock]');
+      if (b) this.setUnlock(b);
     });
     $('hist-close').addEventListener('click', () => { this.history = null; $('cls-history').hidden = true; });
     this.cmpPicked = false; // until the instructor picks, the comparison follows the roster's exercise
@@ -231,12 +237,58 @@ export class Classroom {
     $('hist-logbook').href = api.links.logbook(trainee, group);
     $('cls-history').hidden = false;
     $('history').tBodies[0].innerHTML = '<tr><td colspan="7">loading…</td></tr>';
+    $('unl-name').textContent = trainee;
+    $('unlocks').tBodies[0].innerHTML = '';
     this.refreshHistory();
+  }
+
+  /** The trainee's exercises as open or locked (GET /api/unlocks), each with its control. */
+  async refreshUnlocks(h) {
+    let u;
+    try {
+      u = await api.unlocks(h.trainee, h.group, this.ui.token());
+    } catch (e) {
+      this.setStatus(`unlocks: ${e.message}`, true);
+      return;
+    }
+    if (this.history === h) this.showUnlocks(u);
+  }
+
+  showUnlocks(u) {
+    $('unl-off').hidden = u.progression !== false;
+    const titles = new Map([...$('cmp-exercise').options].map((o) => [o.value, o.textContent]));
+    const name = (id) => titles.get(id) || id;
+    $('unlocks').tBodies[0].innerHTML = u.exercises.map((l) => {
+      const needs = l.requires.length ? l.requires.map((id) => {
+        const m = l.missing.find((x) => x.exercise === id);
+        return `${esc(name(id))}${m ? ` <span class="dim">(${esc(m.state.replace('_', ' '))})</span>` : ' ✓'}`;
+      }).join(', ') : '—';
+      const status = { open: 'open', locked: `${LOCK_ICON} locked`, unlocked: 'unlocked by instructor' }[l.status] || esc(l.status);
+      const act = l.status === 'locked' ? ['1', 'Unlock'] : l.unlocked_unix ? ['0', 'Lock again'] : null;
+      return `<tr data-exercise="${esc(l.exercise)}" data-status="${esc(l.status)}"><td>${esc(name(l.exercise))}</td><td>${needs}</td><td>${status}</td>
+        <td>${act ? `<button type="button" data-unlock="${act[0]}" data-exercise="${esc(l.exercise)}">${act[1]}</button>` : ''}</td></tr>`;
+    }).join('');
+  }
+
+  /** The instructor unlocks an exercise for the trainee of the open history, or locks it again. */
+  async setUnlock(b) {
+    const h = this.history;
+    if (!h) return;
+    b.disabled = true;
+    try {
+      const u = await api.unlocks(h.trainee, h.group, this.ui.token(), b.dataset.exercise, b.dataset.unlock === '1');
+      this.setStatus(`${b.dataset.exercise} ${b.dataset.unlock === '1' ? 'unlocked' : 'locked again'} for ${h.trainee}`);
+      if (this.history === h) this.showUnlocks(u);
+    } catch (e) {
+      this.setStatus(`unlock: ${e.message}`, true);
+      b.disabled = false;
+    }
   }
 
   async refreshHistory() {
     const h = this.history;
     if (!h) return;
+    if (h.trainee) this.refreshUnlocks(h);
     const list = await this.attempts({ trainee: h.trainee }, h.group);
     if (!list || this.history !== h) return;
     $('history').tBodies[0].innerHTML = list.map((a) => {

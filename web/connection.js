@@ -149,6 +149,15 @@ export class Connection {
       this.scheduleRetry(() => this.start(this.createOpts));
       return false;
     }
+    if (resp.status === 403 && resp.headers.get('content-type')?.includes('json')) {
+      // a locked exercise (progression) is a 403 whose detail names what is missing
+      const b = await api.jsonOf(resp.clone());
+      if (b?.detail?.missing) {
+        this.status('error', b.error);
+        this.opts.onLocked?.(b);
+        return false;
+      }
+    }
     if (resp.status === 403 && this.opts.onJoinCode) {
       this.status('info', this.joinCode ? 'Wrong class join code.' : 'This server needs the class join code.');
       this.joinCode = await this.opts.onJoinCode(!!this.joinCode);

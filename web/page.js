@@ -20,6 +20,11 @@ export function fmt(v, digits = 4) {
 }
 
 /** A number to `digits` decimals, or — when absent. */
+/** A padlock (SVG, drawn in the text's colour: no emoji font needed), for locked exercises. */
+export const LOCK_ICON = '<svg class="lock-icon" viewBox="0 0 10 12" width="10" height="12" aria-hidden="true">'
+  + '<path d="M2.5 5V3.5a2.5 2.5 0 0 1 5 0V5" fill="none" stroke="currentColor" stroke-width="1.3"/>'
+  + '<rect x="1" y="5" width="8" height="6.5" rx="1" fill="currentColor"/></svg>';
+
 export function fixed(v, digits = 1) {
   return Number.isFinite(v) ? Number(v).toFixed(digits) : '—';
 }

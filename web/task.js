@@ -149,7 +149,7 @@ export class TaskPanel {
   async showCard(ex) {
     const s = this.session;
     const a = await api.sessionAssessment(s.id, s.control_token, s.base || ''); // null: shown from the frame
-    const next = this.ui.nextTitle?.();
+    const next = await this.ui.nextTitle?.();
     this.card.innerHTML = `${assessmentHtml(a, { title: this.spec.title, frame: ex })}
       <div class="card-actions">
         <button type="button" data-act="again">Try again</button>

@@ -52,6 +52,8 @@ pub struct AppState {
     pub cluster: Arc<crate::cluster::Cluster>,
     /// Where finished attempts' xAPI statements go (`--xapi-endpoint`), when set.
     pub xapi: Option<Arc<crate::xapi::XapiConfig>>,
+    /// Exercises' `requires` lock them for trainees (`--progression on`).
+    pub progression: bool,
 }
 
 /// Checks an operator-supplied secret (instructor token, join code): it must travel intact
@@ -170,6 +172,7 @@ impl AppState {
             replays: Arc::default(),
             cluster,
             xapi,
+            progression: config.progression == crate::config::Progression::On,
         })
     }
 }
@@ -212,6 +215,9 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/logbook.csv"),
     ("put", "/api/signoffs"),
     ("delete", "/api/signoffs"),
+    ("get", "/api/unlocks"),
+    ("put", "/api/unlocks"),
+    ("delete", "/api/unlocks"),
     ("get", "/api/results.csv"),
     ("post", "/api/signin"),
     ("get", "/api/signin"),
@@ -320,6 +326,12 @@ fn routes(state: AppState) -> Router {
         .route(
             "/api/signoffs",
             put(api::logbook::sign).delete(api::logbook::revoke),
+        )
+        .route(
+            "/api/unlocks",
+            get(api::unlocks::get)
+                .put(api::unlocks::unlock)
+                .delete(api::unlocks::lock),
         )
         .route("/api/results.csv", get(api::results::export))
         .route(

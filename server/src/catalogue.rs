@@ -17,6 +17,7 @@ use std::sync::{Arc, LazyLock};
 use rust_embed::RustEmbed;
 use seaarms_core::Model;
 use seaarms_core::exercise::ExerciseSpec;
+use seaarms_core::exercise::progression::check_requires;
 use seaarms_core::sim::{Medium, SimParams, Simulation};
 
 pub use seaarms_core::sim::scenario::SCENARIOS as SCRIPTED;
@@ -72,7 +73,8 @@ struct Files;
 /// Every exercise, by id, parsed and checked once.
 pub struct Exercises {
     by_id: BTreeMap<String, Arc<ExerciseSpec>>,
-    /// Files that did not parse or check (a bug in a shipped file; a test keeps this empty).
+    /// Files that did not parse or check, and a set whose `requires` do not resolve or make
+    /// a cycle (a bug in a shipped file; a test keeps this empty).
     pub errors: Vec<String>,
 }
 
@@ -116,6 +118,11 @@ impl Exercises {
                     errors.push(e);
                 }
             }
+        }
+        // the set as a whole: requirements name exercises of it, no cycles
+        if let Err(e) = check_requires(by_id.values().map(|s| &**s)) {
+            tracing::error!("exercises/: {e}");
+            errors.push(format!("exercises/: {e}"));
         }
         Exercises { by_id, errors }
     }

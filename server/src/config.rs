@@ -227,6 +227,17 @@ pub struct ServeConfig {
     /// header; 403 otherwise); none by default. The instructor token needs none.
     #[arg(long, env = "SEAARMS_JOIN_CODE", hide_env_values = true, global = true)]
     pub join_code: Option<String>,
+    /// Progression (docs/exercises.md "Progression"): `on`, a trainee starts an exercise only
+    /// once proficient in those it `requires` (or unlocked by the instructor); `off`, every
+    /// exercise is open to everyone (free practice, and tests not about progression).
+    #[arg(
+        long,
+        env = "SEAARMS_PROGRESSION",
+        value_enum,
+        default_value = "on",
+        global = true
+    )]
+    pub progression: Progression,
     /// Further origins (e.g. `https://sim.example.org`, comma-separated) allowed to open
     /// WebSockets and send POST/DELETE, besides the served host itself.
     #[arg(
@@ -327,6 +338,15 @@ pub struct ServeConfig {
     pub xapi_endpoint: Option<String>,
 }
 
+/// `--progression`: whether exercises' `requires` lock them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Progression {
+    /// Exercises open as their requirements are met (the default).
+    On,
+    /// Every exercise is open.
+    Off,
+}
+
 fn non_negative(s: &str) -> Result<f64, String> {
     match s.parse::<f64>() {
         Ok(x) if x.is_finite() && x >= 0.0 => Ok(x),
@@ -393,6 +413,7 @@ impl Default for ServeConfig {
             abandon_grace_seconds: 30,
             trusted_proxies: Vec::new(),
             join_code: None,
+            progression: Progression::On,
             allowed_origins: Vec::new(),
             allowed_hosts: Vec::new(),
             public_url: None,

@@ -27,6 +27,8 @@ pub struct ExerciseSummary {
     title: String,
     goal: String,
     skills: Vec<String>,
+    /// The exercises to be proficient in first (the file's `requires`).
+    requires: Vec<String>,
     time_limit_s: f64,
     steps: Vec<StepSummary>,
     control: seaarms_core::exercise::spec::ControlSpec,
@@ -38,8 +40,12 @@ struct StepSummary {
     text: String,
 }
 
-/// `GET /api/exercises`: every exercise with its goal and steps.
-pub async fn list() -> Json<serde_json::Value> {
+/// `GET /api/exercises`: every exercise with its goal, steps and requirements, and whether the
+/// server locks exercises by them (`progression`, `--progression`; public: which exercises a
+/// given trainee may start is theirs, [`crate::api::unlocks`]).
+pub async fn list(
+    axum::extract::State(state): axum::extract::State<crate::app::AppState>,
+) -> Json<serde_json::Value> {
     let list: Vec<ExerciseSummary> = EXERCISES
         .all()
         .iter()
@@ -48,6 +54,7 @@ pub async fn list() -> Json<serde_json::Value> {
             title: s.title.clone(),
             goal: s.goal.clone(),
             skills: s.skills.clone(),
+            requires: s.requires.clone(),
             time_limit_s: s.time_limit_s,
             steps: s
                 .steps
@@ -60,7 +67,7 @@ pub async fn list() -> Json<serde_json::Value> {
             control: s.control,
         })
         .collect();
-    Json(serde_json::json!({ "exercises": list }))
+    Json(serde_json::json!({ "exercises": list, "progression": state.progression }))
 }
 
 /// `GET /api/exercises/{id}`: the whole exercise file; 404 for an unknown id.

@@ -73,7 +73,10 @@ export async function startServer(extraArgs = []) {
   const port = await freePort();
   const dataDir = mkdtempSync(join(tmpdir(), 'seaarms-data-'));
   const args = ['--bind', `127.0.0.1:${port}`, '--data-dir', dataDir, '--instructor-token', INSTRUCTOR_TOKEN, ...extraArgs];
-  const proc = spawn(bin, args, { env: { ...process.env, RUST_LOG: 'warn' }, stdio: ['ignore', 'ignore', 'inherit'] });
+  // tests not about progression start any exercise directly; `--progression on` in extraArgs
+  // turns it back on (progression.test.mjs)
+  const env = { SEAARMS_PROGRESSION: 'off', ...process.env, RUST_LOG: 'warn' };
+  const proc = spawn(bin, args, { env, stdio: ['ignore', 'ignore', 'inherit'] });
   proc.unref(); // a test file's process may exit while its server runs; 'exit' stops it
   // the server shuts down gracefully on SIGTERM and may still write its records while the
   // folder goes: retry the removal (ENOTEMPTY) rather than fail the test on that race

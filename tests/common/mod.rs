@@ -55,9 +55,12 @@ pub async fn start_with(
 ) -> Server {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
+    // Tests not about progression start any exercise directly: `requires` does not lock
+    // (tests/progression.rs turns it on).
     let mut config = seaarms::config::ServeConfig {
         data_dir: dir,
         instructor_token: Some(TEACHER.into()),
+        progression: seaarms::config::Progression::Off,
         ..Default::default()
     };
     tweak(&mut config);

@@ -36,6 +36,9 @@ impl Binary {
             .arg("--data-dir")
             .arg(dir)
             .args(extra)
+            // tests not about progression start any exercise directly (`--progression on` in
+            // `extra`, or the variable in `env`, turns it back on: tests/progression.rs)
+            .env("SEAARMS_PROGRESSION", "off")
             .envs(env.iter().copied())
             .env("RUST_LOG", "warn")
             .stdout(Stdio::piped())

@@ -13,4 +13,5 @@ pub mod scenarios;
 pub mod session_ws;
 pub mod sessions;
 pub mod signin;
+pub mod unlocks;
 pub mod wire;

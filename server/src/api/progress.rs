@@ -6,7 +6,8 @@
 //!   the exercise (in the group, when given), by state then name.
 //! * `GET /api/sessions/{id}/progress` (the session's trainee, or the instructor): the trainee
 //!   of that live session on every exercise (`not_started` where there is no attempt), for the
-//!   start screen's learning curves.
+//!   start screen's learning curves, and each exercise open or locked for them (`locks`,
+//!   [`crate::api::unlocks`]).
 //!
 //! * `GET /api/reference-operators`, `PUT /api/reference-operators` (instructor): the trainees
 //!   whose finished attempts make each exercise's benchmark (issue 30 item 1). Both progress
@@ -270,9 +271,14 @@ pub async fn of_session(
         c.benchmark = Some(bench);
         curves.push(c);
     }
-    Ok(Json(
-        json!({ "trainee": session.label, "group": session.group, "exercises": curves }),
-    ))
+    let locks = crate::api::unlocks::locks(&state, &session.label, &session.group).await?;
+    Ok(Json(json!({
+        "trainee": session.label,
+        "group": session.group,
+        "exercises": curves,
+        "progression": state.progression,
+        "locks": locks,
+    })))
 }
 
 /// A reference operator as listed.

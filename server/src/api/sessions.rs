@@ -112,7 +112,8 @@ pub struct Created {
     pub base: String,
 }
 
-/// `POST /api/sessions`: 201; 403 without the class join code (when one is configured);
+/// `POST /api/sessions`: 201; 403 without the class join code (when one is configured), or
+/// on an exercise still locked for the trainee ([`crate::api::unlocks::check_start`]);
 /// 429 (with `Retry-After`) when this client creates sessions too fast or holds too many;
 /// 503 when the server is full. The instructor token (as a bearer) is exempt from the join
 /// code and the per-client limits.
@@ -178,6 +179,14 @@ pub async fn create(
     }
     let scenario = req.exercise.or(req.scenario);
     let label = req.trainee.or(req.label);
+    crate::api::unlocks::check_start(
+        &state,
+        instructor,
+        scenario.as_deref(),
+        &crate::names::display_name(label.as_deref().unwrap_or_default()),
+        &crate::names::display_name(req.group.as_deref().unwrap_or_default()),
+    )
+    .await?;
     let base = ws_base(&state.policy, &headers, peer.as_ref())
         .ok_or_else(|| ApiError::bad_request("missing or malformed Host header"))?;
     let sessions = state.sessions.clone();

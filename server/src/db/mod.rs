@@ -14,6 +14,7 @@
 pub mod attempt;
 mod directory;
 mod signoff;
+mod unlock;
 mod write;
 mod xapi;
 

@@ -11,6 +11,8 @@
 //! * `autopilot`: [`Autopilot`], the file's script worked through the trainee's controls.
 //! * `proficiency`: benchmarks from reference operators, the learning and relapse CUSUMs, a
 //!   trainee's state on an exercise.
+//! * `progression`: which exercises require which ([`ExerciseSpec::requires`]): the set's
+//!   check (known ids, no cycles) and what still locks an exercise for a trainee.
 //! * here: [`ExerciseRun`], one attempt: step progress, the fault drill, the verdict.
 //!
 //! The caller steps the simulation and calls [`ExerciseRun::sample`] every
@@ -20,6 +22,7 @@ pub mod assess;
 pub mod autopilot;
 pub mod condition;
 pub mod proficiency;
+pub mod progression;
 pub mod smoothness;
 pub mod spec;
 

@@ -34,6 +34,12 @@ pub struct ExerciseSpec {
     pub goal: String,
     /// Skills trained.
     pub skills: Vec<String>,
+    /// Exercises (ids) the trainee must be proficient in before this one opens (issue 30
+    /// item 4; [`super::progression`]). Checked across the whole set of files by
+    /// [`super::progression::check_requires`]: known ids, no cycles. Not part of the
+    /// assessment (no version bump when it changes).
+    #[serde(default)]
+    pub requires: Vec<String>,
     /// The controls the exercise starts with.
     pub control: ControlSpec,
     /// Scene: initial arm state, object, targets, zones, ghosts, obstacles.

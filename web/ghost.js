@@ -29,7 +29,7 @@ export class Ghost {
   /** @param view the page's View (web/view.js): the ghost draws after each of its states */
   constructor(view) {
     this.view = view;
-    this.hello = null;
+    this.hello = view.hello; // set again by every hello (View.setHello)
     this.track = null;
     this.arms = null;
     this.box = null;

@@ -89,7 +89,10 @@ test('a ghost of my best attempt is drawn during a live attempt, and the debrief
     // it moves with the clock, as the track says
     const at = async () => page.evaluate(() => window.__seaarms.ghost());
     const g1 = await at();
-    await until(page, (t) => window.__seaarms.ghost().t > t + 2, g1.t, 20000);
+    // a later time at which the track's pose differs from this one (the best attempt may
+    // pause a moment, e.g. while a jaw closes), or its end
+    const later = track.samples.find((s) => s.t > g1.t + 0.5 && maxDiff(trackQ(track, s.t), g1.q) > 0.05) || track.samples.at(-1);
+    await until(page, (t) => window.__seaarms.ghost().t > t, later.t, 60000);
     const g2 = await at();
     for (const s of [g1, g2]) {
       const d = maxDiff(s.q, trackQ(track, s.t));

@@ -8,7 +8,7 @@
 //!   draws), and the box's pose. Nothing else: no pressures, measures, names or events.
 //! * **Rounding**: lengths and positions to [`POSITION_QUANTUM_M`] (0.1 mm), angles (rad) and
 //!   rotation-matrix entries to [`VALUE_QUANTUM`] (1e-4), times to 1 ms — invisible at any
-//!   zoom the pages allow, and about 1.4 kB of JSON per sample (≈ 1.7 MB for a 120 s
+//!   zoom the pages allow, and about 1.46 kB of JSON per sample (1.76 MB for a 120 s
 //!   attempt, measured in `tests/ghosts.rs`).
 //! * **Poses** on the wire: 12 numbers, `[x, y, z, r00, r01, r02, r10, r11, r12, r20, r21,
 //!   r22]` (position m, world; row-major rotation), the frame's `PoseOut` flattened.

@@ -145,7 +145,11 @@ fn check_sample(sample: &Value, frame: &Value, what: &str) {
         let frames = f["joint_frames"].as_array().unwrap();
         assert_eq!(s["joint_frames"].as_array().unwrap().len(), frames.len());
         for (k, jf) in frames.iter().enumerate() {
-            pose(&s["joint_frames"][k], jf, &format!("{side} joint frame {k}"));
+            pose(
+                &s["joint_frames"][k],
+                jf,
+                &format!("{side} joint frame {k}"),
+            );
         }
         pose(&s["pose"], &f["pose"], &format!("{side} tool pose"));
     }
@@ -157,18 +161,30 @@ async fn tracks_follow_the_replay_and_ghosts_name_the_best_attempts() {
     let spec = EXERCISES.get(EXERCISE).unwrap();
     let models = magnum();
     // Ada's two attempts (sessions a1, a2: two days), Ben's (a reference operator) and Cy's
-    let runs: Vec<_> = [(1.0, 0.2, 11), (1.5, 0.4, 12), (1.0, 0.2, 13), (2.0, 0.5, 14)]
-        .into_iter()
-        .map(|(reaction, misjudge, seed)| {
-            let noise = HumanNoise {
-                reaction,
-                jitter: 0.3,
-                misjudge,
-                seed,
-            };
-            run_recorded(spec.clone(), &models, Driver::Noisy(noise), seed, &mut |_| {}).unwrap()
-        })
-        .collect();
+    let runs: Vec<_> = [
+        (1.0, 0.2, 11),
+        (1.5, 0.4, 12),
+        (1.0, 0.2, 13),
+        (2.0, 0.5, 14),
+    ]
+    .into_iter()
+    .map(|(reaction, misjudge, seed)| {
+        let noise = HumanNoise {
+            reaction,
+            jitter: 0.3,
+            misjudge,
+            seed,
+        };
+        run_recorded(
+            spec.clone(),
+            &models,
+            Driver::Noisy(noise),
+            seed,
+            &mut |_| {},
+        )
+        .unwrap()
+    })
+    .collect();
     let long = seaarms::replay::synthetic::free_play(&models, "s-free", 120, &mut |_| {}).unwrap();
 
     let dir = temp_dir("ghosts");
@@ -227,8 +243,15 @@ async fn tracks_follow_the_replay_and_ghosts_name_the_best_attempts() {
 
     // The ghosts of Ada's second session: her best by the stored scores (the earlier of equal
     // ones), Ben's as the reference; nothing of Cy's.
-    let best = if scores[1] > scores[0] { &ids[1] } else { &ids[0] };
-    let url = format!("{base}/api/sessions/{}/ghosts?exercise={EXERCISE}", sessions[1].0);
+    let best = if scores[1] > scores[0] {
+        &ids[1]
+    } else {
+        &ids[0]
+    };
+    let url = format!(
+        "{base}/api/sessions/{}/ghosts?exercise={EXERCISE}",
+        sessions[1].0
+    );
     let (st, g) = get(&url, "tok-ada-2").await;
     assert_eq!(st, 200, "{g}");
     println!(
@@ -274,7 +297,11 @@ async fn tracks_follow_the_replay_and_ghosts_name_the_best_attempts() {
     picks.push(samples.len() - 1);
     for i in picks {
         let t = samples[i]["t"].as_f64().unwrap();
-        let (st, frame) = get(&format!("{base}/api/attempts/{}/replay?t={t}", ids[0]), TEACHER).await;
+        let (st, frame) = get(
+            &format!("{base}/api/attempts/{}/replay?t={t}", ids[0]),
+            TEACHER,
+        )
+        .await;
         assert_eq!(st, 200, "{frame}");
         check_sample(&samples[i], &frame, &format!("sample {i} (t = {t})"));
     }
@@ -283,15 +310,36 @@ async fn tracks_follow_the_replay_and_ghosts_name_the_best_attempts() {
 
     // The reference's track: any trainee; Cy's (not a reference): 403 for Ada; her own
     // session's token without `session`: 403; unknown: 404.
-    assert_eq!(get(&track_url(&ids[2], sessions[1].0), "tok-ada-2").await.0, 200);
-    assert_eq!(get(&track_url(&ids[3], sessions[1].0), "tok-ada-2").await.0, 403);
-    assert_eq!(get(&track_url(&ids[3], sessions[3].0), "tok-ada-2").await.0, 403);
+    assert_eq!(
+        get(&track_url(&ids[2], sessions[1].0), "tok-ada-2").await.0,
+        200
+    );
+    assert_eq!(
+        get(&track_url(&ids[3], sessions[1].0), "tok-ada-2").await.0,
+        403
+    );
+    assert_eq!(
+        get(&track_url(&ids[3], sessions[3].0), "tok-ada-2").await.0,
+        403
+    );
     let no_session = format!("{base}/api/attempts/{}/track", ids[0]);
     assert_eq!(get(&no_session, "tok-ada-2").await.0, 403);
-    assert_eq!(get(&no_session, "tok-ada-1").await.0, 200, "its own session");
+    assert_eq!(
+        get(&no_session, "tok-ada-1").await.0,
+        200,
+        "its own session"
+    );
     let unknown = "0123456789abcdef";
-    assert_eq!(get(&track_url(unknown, sessions[1].0), "tok-ada-2").await.0, 404);
-    assert_eq!(get(&format!("{base}/api/attempts/{unknown}/track"), TEACHER).await.0, 404);
+    assert_eq!(
+        get(&track_url(unknown, sessions[1].0), "tok-ada-2").await.0,
+        404
+    );
+    assert_eq!(
+        get(&format!("{base}/api/attempts/{unknown}/track"), TEACHER)
+            .await
+            .0,
+        404
+    );
 
     // A 120 s attempt's track: size, cold and warm build time.
     let t0 = Instant::now();

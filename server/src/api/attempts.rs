@@ -134,7 +134,11 @@ pub(crate) async fn authorized(
 /// A trainee opens an attempt's inputs and replay once it has ended (a running drill's
 /// silent fault is in them) and while no silent fault of the instructor's acts on its live
 /// session (a `persistent` one carries over from an ended attempt); the instructor at any time.
-pub(crate) fn check_open(state: &AppState, creds: &Credentials, row: &AttemptRow) -> Result<(), ApiError> {
+pub(crate) fn check_open(
+    state: &AppState,
+    creds: &Credentials,
+    row: &AttemptRow,
+) -> Result<(), ApiError> {
     if is_instructor(state, creds)? {
         return Ok(());
     }

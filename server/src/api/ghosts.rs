@@ -48,6 +48,40 @@ pub struct TrackQuery {
     token: Option<String>,
 }
 
+/// Who `creds` are on session `id` and that session's trainee (name, group): a live session's
+/// control token or cookie (its database row may not be written yet), else the stored token
+/// hash; 403 for an invalid id or anyone else, 404 for an unknown session (the instructor).
+async fn session_principal(
+    state: &AppState,
+    creds: &Credentials,
+    id: &str,
+) -> Result<(Principal, String, String), ApiError> {
+    if !creds.presented(FROM)? {
+        return Err(ApiError::forbidden(MISSING_TOKEN_OR_QUERY));
+    }
+    if !crate::sessions::record::valid_id(id) {
+        return Err(ApiError::forbidden(WRONG_TOKEN));
+    }
+    if let Some(s) = state.sessions.get(id) {
+        let p = creds.principal(state, FROM, Some((&s.id, &s.control_token)))?;
+        if let Principal::Anonymous { .. } = p {
+            return Err(ApiError::forbidden(WRONG_TOKEN));
+        }
+        return Ok((p, s.label.clone(), s.group.clone()));
+    }
+    let p = creds.principal_stored(state, FROM, id).await?;
+    if let Principal::Anonymous { .. } = p {
+        return Err(ApiError::forbidden(WRONG_TOKEN));
+    }
+    let rec = state
+        .db
+        .session(id)
+        .await
+        .map_err(db_error)?
+        .ok_or_else(|| ApiError::not_found(format!("no session `{id}`")))?;
+    Ok((p, rec.trainee, rec.group))
+}
+
 /// The attempt `id` if `creds` may read its track (see the module docs), with the key its
 /// re-simulations are held under (`instructor`, or the asking trainee's session).
 async fn readable(
@@ -71,12 +105,8 @@ async fn readable(
         Err(e) => return Err(e),
     }
     let session = session.unwrap_or_default();
-    if !crate::sessions::record::valid_id(session)
-        || !matches!(
-            creds.principal_stored(state, FROM, session).await?,
-            Principal::Trainee { .. }
-        )
-    {
+    let (asker, name, group) = session_principal(state, creds, session).await?;
+    if !matches!(asker, Principal::Trainee { .. }) {
         return Err(ApiError::forbidden(WRONG_TOKEN));
     }
     let row = state
@@ -85,13 +115,7 @@ async fn readable(
         .await
         .map_err(db_error)?
         .ok_or_else(|| ApiError::not_found(format!("no attempt `{id}`")))?;
-    let asker = state
-        .db
-        .session(session)
-        .await
-        .map_err(db_error)?
-        .ok_or_else(|| ApiError::forbidden(WRONG_TOKEN))?;
-    let own = !asker.trainee.is_empty() && asker.trainee == row.trainee && asker.group == row.group;
+    let own = !name.is_empty() && name == row.trainee && group == row.group;
     let allowed = own
         || state
             .db
@@ -188,10 +212,11 @@ impl Candidate {
 
 /// The highest-scoring of `rows` (oldest first), the earliest of equal scores.
 fn best(rows: &[AttemptRow]) -> Option<&AttemptRow> {
-    rows.iter().fold(None, |best: Option<&AttemptRow>, r| match best {
-        Some(b) if b.score.unwrap_or(0.0) >= r.score.unwrap_or(0.0) => Some(b),
-        _ => Some(r),
-    })
+    rows.iter()
+        .fold(None, |best: Option<&AttemptRow>, r| match best {
+            Some(b) if b.score.unwrap_or(0.0) >= r.score.unwrap_or(0.0) => Some(b),
+            _ => Some(r),
+        })
 }
 
 /// `GET /api/sessions/{id}/ghosts?exercise=` (see the module docs).
@@ -201,33 +226,18 @@ pub async fn of_session(
     Path(id): Path<String>,
     Query(q): Query<GhostsQuery>,
 ) -> Result<Json<Value>, ApiError> {
-    if !creds.presented(FROM)? {
-        return Err(ApiError::forbidden(MISSING_TOKEN_OR_QUERY));
-    }
-    if !crate::sessions::record::valid_id(&id) {
-        return Err(ApiError::forbidden(WRONG_TOKEN));
-    }
-    match creds.principal_stored(&state, FROM, &id).await? {
-        Principal::Instructor | Principal::Trainee { .. } => {}
-        Principal::Anonymous { .. } => return Err(ApiError::forbidden(WRONG_TOKEN)),
-    }
-    let session = state
-        .db
-        .session(&id)
-        .await
-        .map_err(db_error)?
-        .ok_or_else(|| ApiError::not_found(format!("no session `{id}`")))?;
+    let (_, name, group) = session_principal(&state, &creds, &id).await?;
     let spec = EXERCISES
         .get(&q.exercise)
         .ok_or_else(|| ApiError::not_found(format!("no exercise `{}`", q.exercise)))?;
-    let named = !session.trainee.is_empty();
+    let named = !name.is_empty();
     let replayable = |r: &AttemptRow| check_version(&r.sim_version).is_ok();
     let mut own = finished(
         &state,
         AttemptFilter {
-            trainee: named.then(|| session.trainee.clone()),
-            group: named.then(|| session.group.clone()),
-            session: (!named).then(|| session.id.clone()),
+            trainee: named.then(|| name.clone()),
+            group: named.then(|| group.clone()),
+            session: (!named).then(|| id.clone()),
             exercise: Some(spec.id.clone()),
             limit: 0,
         },

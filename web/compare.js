@@ -29,7 +29,7 @@ function rows(a, b) {
  * @param a this attempt's assessment, b the other's (GET /api/attempts/{id} `assessment`)
  * @param names {a, b}: the columns' headings
  */
-export function compareHtml(a, b, names = { a: 'A: this attempt', b: 'B' }) {
+export function compareHtml(a, b, names = { a: 'A (this)', b: 'B' }) {
   const body = rows(a, b).map(([key, label, value, lowerBetter]) => {
     const va = value(a), vb = value(b);
     const both = Number.isFinite(va) && Number.isFinite(vb);
@@ -71,8 +71,8 @@ export async function mountCompare({ view, select, table, attempt, token }) {
     state.chosen = c;
     select.blur();
     if (!c) { ghost.clear(); table.innerHTML = ''; return; }
-    const b = c === g.reference ? 'B: reference' : 'B: other attempt';
-    table.innerHTML = compareHtml(attempt.assessment, c.assessment, { a: 'A: this attempt', b });
+    const b = c === g.reference ? 'B (reference)' : 'B (other)';
+    table.innerHTML = compareHtml(attempt.assessment, c.assessment, { a: 'A (this)', b });
     const track = await attemptTrack(c.attempt, attempt.session, token);
     if (select.value !== id) return;
     if (track) ghost.show(track); else ghost.clear();

@@ -128,6 +128,20 @@ export function sessionProgress(id, token, base = '') {
   return jsonOrNull(`${sessionPath(id, base)}/progress`, token);
 }
 
+/** GET /api/sessions/{id}/ghosts?exercise=: the attempts that may be drawn as the ghost on
+ * `exercise` and compared with ({best, reference, attempts}, docs/api.md), or null. Without a
+ * token the browser's cookie opens it. */
+export function sessionGhosts(id, exercise, token, base = '') {
+  return jsonOrNull(`${sessionPath(id, base)}/ghosts?${new URLSearchParams({ exercise })}`, token);
+}
+
+/** GET /api/attempts/{id}/track?session=: an attempt's poses at 10 Hz for drawing it as a ghost
+ * (`session`: the asking trainee's session, which opens its own attempts and the reference
+ * operators'), or null. */
+export function attemptTrack(id, session, token) {
+  return jsonOrNull(`/api/attempts/${enc(id)}/track?${new URLSearchParams({ session })}`, token);
+}
+
 /** GET /api/sessions/{id}/assessment: the session's exercise assessment, or null. */
 export function sessionAssessment(id, token, base = '') {
   return jsonOrNull(`${sessionPath(id, base)}/assessment`, token);

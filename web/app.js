@@ -8,7 +8,8 @@ import { StartScreen } from './start.js';
 import { TaskPanel } from './task.js';
 import { mountViews, followVisibility } from './viewcontrols.js';
 import { $, Banner, statusLoop } from './page.js';
-import { messages, exercises, jointNames, sessionSummary, sessionProgress } from './api.js';
+import { messages, exercises, jointNames, sessionSummary, sessionProgress, sessionGhosts, attemptTrack } from './api.js';
+import { Ghost, choiceLabel } from './ghost.js';
 import { ForceCues } from './rumble.js';
 import { jointTurnWords, frameRows } from './sticks.js';
 const SPEEDS = [0.25, 0.5, 0.75, 1];
@@ -64,6 +65,7 @@ const conn = new Connection({
     if (endedNote) { showBanner('info', `${endedNote} This is a new session.`, 8000); endedNote = null; }
     view.setHello(h);
     setExercise(h);
+    refreshGhosts();
     settings = { ...h.settings };
     syncControls();
     plots.setSession(h.session, conn.session?.base);
@@ -76,6 +78,7 @@ const conn = new Connection({
   },
   onState(s) {
     view.setState(s);
+    followAttempt(s);
     followVisibility(view, s.visibility_m);
     if (driving) cues.update(s, selectedArm);
     followScenario(s);
@@ -138,6 +141,52 @@ function setExercise(h) {
   $('sel-views').value = view.viewports.set;
   if (ex) view.frameWorkSiteSoon(); // once the first frame has placed the box and its handles
   view.viewports.dirty = true;
+}
+
+/** The ghost (web/ghost.js): none, the trainee's best or the reference operators' best attempt
+ * at this exercise (GET /api/sessions/{id}/ghosts), drawn on the attempt's clock; off by
+ * default, N toggles it. */
+const ghost = new Ghost(view);
+let ghostChoices = null;
+/** What N turns on again. */
+let ghostLast = 'best';
+/** The newest frame was waiting for "Ready" (a new attempt starts waiting). */
+let wasAwaiting = false;
+
+/** Asks which attempts may be the ghost (on each hello and each new attempt: a finished one
+ * may be the new best), then draws the chosen one. */
+async function refreshGhosts() {
+  const sel = $('sel-ghost');
+  const s = conn.session;
+  const ex = setUpFor?.exercise;
+  ghostChoices = ex && s?.control_token ? await sessionGhosts(s.id, ex, s.control_token, s.base || '') : null;
+  sel.disabled = !ghostChoices;
+  for (const kind of ['best', 'reference']) {
+    const o = sel.querySelector(`option[value="${kind}"]`);
+    o.textContent = choiceLabel(kind, ghostChoices?.[kind]);
+    o.disabled = !ghostChoices?.[kind];
+  }
+  if (!ghostChoices) sel.value = 'none';
+  await applyGhost();
+}
+
+/** Draws the ghost the menu names (its track fetched once per attempt). */
+async function applyGhost() {
+  const which = $('sel-ghost').value;
+  const c = which === 'none' ? null : ghostChoices?.[which];
+  if (!c) { ghost.clear(); return; }
+  if (ghost.attempt === c.attempt) return;
+  const s = conn.session;
+  const track = await attemptTrack(c.attempt, s.id, s.control_token);
+  if ($('sel-ghost').value !== which) return; // changed meanwhile
+  if (track) ghost.show(track);
+  else { ghost.clear(); showBanner('error', 'The ghost could not be loaded.', 5000); }
+}
+
+function followAttempt(s) {
+  const awaiting = !!s.awaiting_ready;
+  if (awaiting && !wasAwaiting && setUpFor?.exercise) refreshGhosts();
+  wasAwaiting = awaiting;
 }
 
 /** The instructor may switch the session's scenario or exercise: the frames say so, and a
@@ -210,6 +259,12 @@ const actions = {
     conn.send(paused ? messages.pause() : messages.resume());
   },
   layout: () => viewControls.layout(),
+  ghost() {
+    const sel = $('sel-ghost');
+    if (sel.disabled) return;
+    if (sel.value !== 'none') { ghostLast = sel.value; sel.value = 'none'; } else sel.value = ghostLast;
+    applyGhost();
+  },
   ellipsoids() { $('chk-ell').checked = !$('chk-ell').checked; $('chk-ell').dispatchEvent(new Event('change')); },
   workSite: () => view.frameWorkSite(),
   viewSet() {
@@ -317,6 +372,7 @@ $('btn-new').addEventListener('click', () => {
   newSession(sc ? { scenario: sc } : {});
 });
 $('btn-exercises').addEventListener('click', () => chooseAndStart());
+$('sel-ghost').addEventListener('change', (e) => { if (e.target.value !== 'none') ghostLast = e.target.value; applyGhost(); });
 // keep keyboard focus on the page after using a menu or a checkbox (web/input.js also
 // ignores focus on anything but text fields)
 for (const el of document.querySelectorAll('#toolbar select, #toolbar input[type=checkbox]')) el.addEventListener('change', () => el.blur());
@@ -434,4 +490,7 @@ window.__seaarms = view.debugHooks(() => conn, {
   get lastInput() { return input.last; },
   get selectedArm() { return selectedArm; },
   get ended() { return lastEnded; },
+  /** The ghost: its attempt, time, meshes, drawn joint angles and tool points (web/ghost.js). */
+  ghost() { return ghost.debug(); },
+  get ghostChoices() { return ghostChoices; },
 });

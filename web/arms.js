@@ -37,7 +37,7 @@ function tube(mesh, a, b, r) {
 }
 
 /** The see-through material of a ghost arm (a posture to reach). */
-const GHOST_MATERIAL = new THREE.MeshBasicMaterial({ color: 0xbfefff, transparent: true, opacity: 0.28, depthWrite: false });
+export const GHOST_MATERIAL = new THREE.MeshBasicMaterial({ color: 0xbfefff, transparent: true, opacity: 0.28, depthWrite: false });
 /** Glow of the selected arm's links (added to their lit colour). */
 const SELECTED_EMISSIVE = 0x5a2a00;
 

@@ -25,9 +25,9 @@ export const KEY_AXES = [
 ];
 /** Keys with an action in `onPress` (besides the axes and the grip). */
 const ACTION_KEYS = new Set(['Digit1', 'Digit2', 'KeyM', 'KeyL', 'Minus', 'Equal', 'KeyB', 'KeyI', 'KeyP', 'KeyV', 'KeyH',
-  'KeyO', 'KeyK', 'KeyC']);
+  'KeyO', 'KeyK', 'KeyC', 'KeyN']);
 /** Keys that change only this page's view. */
-const VIEW_KEYS = new Set(['KeyV', 'KeyH', 'KeyO', 'KeyK', 'KeyC']);
+const VIEW_KEYS = new Set(['KeyV', 'KeyH', 'KeyO', 'KeyK', 'KeyC', 'KeyN']);
 /** Keys that drive the pan-tilt camera while held: [pan +/−, tilt +/−, zoom +/−]. */
 const CAMERA_KEYS = [['ArrowLeft', 'ArrowRight'], ['ArrowUp', 'ArrowDown'], ['PageUp', 'PageDown']];
 /** Standard-mapping buttons: LB, RB (arm select; held: the right stick drives the wrist) and
@@ -71,6 +71,7 @@ const MAPPING = [
   ['Work-site view', '—', 'K'],
   ['Ellipsoids on / off', '—', 'O'],
   ['Four views ↔ one view', '—', 'V'],
+  ['Ghost (an earlier attempt) on / off', '—', 'N'],
   ['Help overlay', '—', '? or H'],
 ];
 
@@ -193,6 +194,7 @@ export class Input {
       case 'KeyO': a.ellipsoids?.(); break;
       case 'KeyK': a.workSite?.(); break;
       case 'KeyC': a.viewSet?.(); break;
+      case 'KeyN': a.ghost?.(); break;
       default:
         if (e.key === '?') a.help();
         else if (e.key === 'Escape') a.help(false);

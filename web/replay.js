@@ -10,6 +10,7 @@ import { Connection } from './connection.js';
 import { assessmentHtml } from './assessment.js';
 import { Timeline, clock } from './timeline.js';
 import { mountViews } from './viewcontrols.js';
+import { mountCompare } from './compare.js';
 import { $, esc, Banner, statusLoop } from './page.js';
 import * as api from './api.js';
 const params = new URLSearchParams(location.search);
@@ -183,9 +184,21 @@ statusLoop(view, status, () => arm);
     return;
   }
   connect();
+  showCompare();
 })();
+
+/** The second attempt: its ghost and the side-by-side table (web/compare.js). */
+let compare = null;
+async function showCompare() {
+  if (!attempt.exercise || !attempt.assessment) return;
+  compare = await mountCompare({ view, select: $('sel-compare'), table: $('rp-compare-table'), attempt, token });
+  $('rp-compare').hidden = !compare.choices;
+}
 
 window.__seaarms = view.debugHooks(() => conn, {
   get replay() { return { ...rp }; },
   get attempt() { return attempt; },
+  /** The second attempt: the ghost drawn and the one chosen (web/compare.js). */
+  ghost() { return compare ? compare.ghost.debug() : null; },
+  get compared() { return compare?.chosen ?? null; },
 });

@@ -35,6 +35,9 @@ export class View {
     const want = Number(new URLSearchParams(location.search).get('maxfps'));
     this.maxFps = want > 0 ? want : (this.world.software ? 15 : 120);
     this.polyBusy = false;
+    /** What else draws from the hello and each drawn state ({setHello(hello), update(state)}:
+     * the ghost, web/ghost.js). */
+    this.overlays = new Set();
     this.legend();
     const loop = () => {
       this.frame();
@@ -76,6 +79,7 @@ export class View {
     this.workSitePending = false;
     this.pending = null;
     for (const s of SIDES) this.ellipsoids.setPolytope(s, null);
+    for (const o of this.overlays) o.setHello(hello);
   }
 
   setState(state) { this.pending = state; }
@@ -172,6 +176,7 @@ export class View {
       if (waterText(s.current) !== waterText(this.current)) { this.current = s.current; this.legend(); }
       this.ellipsoids.update(s);
       this.markers.update(s);
+      for (const o of this.overlays) o.update(s);
       this.water.update(s);
       this.viewports.state = s;
       this.drawn = s;

@@ -48,6 +48,8 @@ pub struct AppState {
     pub db: crate::db::Db,
     /// The replays' shared checkpoints (bounded; [`crate::replay::checkpoints`]).
     pub replays: Arc<crate::replay::checkpoints::CheckpointCache>,
+    /// The ended attempts' ghost tracks (bounded; [`crate::replay::track`]).
+    pub tracks: Arc<crate::replay::track::TrackCache>,
     /// This replica (name, multi-replica mode, drain).
     pub cluster: Arc<crate::cluster::Cluster>,
     /// Where finished attempts' xAPI statements go (`--xapi-endpoint`), when set.
@@ -170,6 +172,7 @@ impl AppState {
             compute,
             db,
             replays: Arc::default(),
+            tracks: Arc::default(),
             cluster,
             xapi,
             progression: config.progression == crate::config::Progression::On,
@@ -207,6 +210,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/sessions/{id}/log.csv"),
     ("get", "/api/sessions/{id}/assessment"),
     ("get", "/api/sessions/{id}/progress"),
+    ("get", "/api/sessions/{id}/ghosts"),
     ("get", "/api/progress"),
     ("get", "/api/reference-operators"),
     ("put", "/api/reference-operators"),
@@ -229,6 +233,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/attempts/{id}"),
     ("get", "/api/attempts/{id}/inputs"),
     ("get", "/api/attempts/{id}/replay"),
+    ("get", "/api/attempts/{id}/track"),
     ("get", "/ws/replay/{id}"),
 ];
 
@@ -315,6 +320,7 @@ fn routes(state: AppState) -> Router {
             "/api/sessions/{id}/progress",
             get(api::progress::of_session),
         )
+        .route("/api/sessions/{id}/ghosts", get(api::ghosts::of_session))
         .route("/api/progress", get(api::progress::class))
         .route(
             "/api/reference-operators",
@@ -346,6 +352,7 @@ fn routes(state: AppState) -> Router {
         .route("/api/attempts/{id}", get(api::attempts::get))
         .route("/api/attempts/{id}/inputs", get(api::attempts::inputs))
         .route("/api/attempts/{id}/replay", get(api::attempts::replay_at))
+        .route("/api/attempts/{id}/track", get(api::ghosts::track))
         .route("/ws/replay/{id}", get(api::attempts::replay_ws))
         .fallback(|uri: axum::http::Uri| async move {
             ApiError::not_found(format!("no route for {}", uri.path()))

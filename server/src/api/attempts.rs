@@ -59,7 +59,7 @@ static HOLDERS: LazyLock<std::sync::Mutex<std::collections::HashMap<String, usiz
     LazyLock::new(Default::default);
 
 /// One principal's hold on a replay socket or a seek; released when dropped.
-struct Held(String);
+pub(crate) struct Held(String);
 
 impl Drop for Held {
     fn drop(&mut self) {
@@ -74,7 +74,7 @@ impl Drop for Held {
 }
 
 /// Takes one of `key`'s at most `max` holds (429 beyond).
-fn hold(key: &str, max: usize, what: &str) -> Result<Held, ApiError> {
+pub(crate) fn hold(key: &str, max: usize, what: &str) -> Result<Held, ApiError> {
     let mut h = HOLDERS.lock().unwrap_or_else(|e| e.into_inner());
     let n = h.entry(key.to_string()).or_insert(0);
     if *n >= max {
@@ -97,7 +97,7 @@ fn holder_key(state: &AppState, creds: &Credentials, row: &AttemptRow) -> Result
 }
 
 /// The attempts routes read the token from the header, else the query.
-const FROM: TokenFrom = TokenFrom::BearerOrQuery;
+pub(crate) const FROM: TokenFrom = TokenFrom::BearerOrQuery;
 
 pub(crate) fn is_instructor(state: &AppState, creds: &Credentials) -> Result<bool, ApiError> {
     Ok(creds.principal(state, FROM, None)?.is_instructor())
@@ -106,7 +106,7 @@ pub(crate) fn is_instructor(state: &AppState, creds: &Credentials) -> Result<boo
 /// The attempt, if `creds` may see it (the instructor, or the trainee of its session): 403
 /// for a wrong token, 404 for an unknown id (after the token check for the instructor, so
 /// ids are not probed without one).
-async fn authorized(
+pub(crate) async fn authorized(
     state: &AppState,
     creds: &Credentials,
     id: &str,
@@ -134,7 +134,11 @@ async fn authorized(
 /// A trainee opens an attempt's inputs and replay once it has ended (a running drill's
 /// silent fault is in them) and while no silent fault of the instructor's acts on its live
 /// session (a `persistent` one carries over from an ended attempt); the instructor at any time.
-fn check_open(state: &AppState, creds: &Credentials, row: &AttemptRow) -> Result<(), ApiError> {
+pub(crate) fn check_open(
+    state: &AppState,
+    creds: &Credentials,
+    row: &AttemptRow,
+) -> Result<(), ApiError> {
     if is_instructor(state, creds)? {
         return Ok(());
     }
@@ -273,7 +277,7 @@ pub async fn inputs(
 }
 
 /// Builds the replay of an attempt (409 when it cannot be replayed here).
-async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, ApiError> {
+pub(crate) async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, ApiError> {
     let conflict = |e: ReplayError| ApiError::new(StatusCode::CONFLICT, e.to_string());
     check_version(&row.sim_version).map_err(conflict)?;
     let init: Init = serde_json::from_value(row.init.clone())
@@ -361,7 +365,7 @@ pub async fn replay_at(
 
 /// A seek's error on the compute pool: a cancelled seek is the pool's (deadline, or the
 /// request went away), any other the record's (409).
-fn pool_error(e: ReplayError, cancel: &Cancel) -> ComputeError {
+pub(crate) fn pool_error(e: ReplayError, cancel: &Cancel) -> ComputeError {
     match e {
         ReplayError::Cancelled => cancel.check().err().unwrap_or(ComputeError::Failed),
         e => ApiError::new(StatusCode::CONFLICT, e.to_string()).into(),

@@ -3,6 +3,7 @@
 
 pub mod analysis;
 pub mod attempts;
+pub mod ghosts;
 pub mod logbook;
 pub mod openapi;
 pub mod optimize;

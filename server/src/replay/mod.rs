@@ -24,6 +24,7 @@ use log::{Entry, Logged};
 
 pub mod checkpoints;
 pub mod synthetic;
+pub mod track;
 
 /// The record's format, written by the live state (it lives with the commands it logs).
 pub use crate::sessions::command::log::{self, Init, SIM_VERSION};

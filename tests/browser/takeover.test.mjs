@@ -45,9 +45,10 @@ test('take over from here: the live practice attempt starts at the debrief frame
     await until(page, () => window.__seaarms?.hello && window.__seaarms.replay.duration_s > 0, undefined, 30000);
     await until(page, () => !document.getElementById('rp-takeover').disabled);
     await page.keyboard.press('ArrowRight');
-    await until(page, () => window.__seaarms.replay.t === 1 && window.__seaarms.lastState?.t === 1, undefined, 30000);
+    // (the simulation's clock sums 1 ms steps: 1 s within rounding)
+    await until(page, () => Math.abs(window.__seaarms.replay.t - 1) < 1e-6 && Math.abs(window.__seaarms.lastState?.t - 1) < 1e-6, undefined, 30000);
     await page.keyboard.press('ArrowRight');
-    await until(page, () => window.__seaarms.replay.t === 2 && window.__seaarms.lastState?.t === 2, undefined, 30000);
+    await until(page, () => Math.abs(window.__seaarms.replay.t - 2) < 1e-6 && Math.abs(window.__seaarms.lastState?.t - 2) < 1e-6, undefined, 30000);
     const atT = await page.evaluate(() => window.__seaarms.lastState);
     assert.notDeepEqual(atT.arms.left.q, [0, 0, 0, 0, 0, 0]);
     await page.screenshot({ path: join(SHOTS, 'takeover-debrief.png') });

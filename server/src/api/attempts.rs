@@ -36,9 +36,9 @@ use crate::db::{AttemptFilter, AttemptRow, EventRow, unavailable as db_error};
 use crate::error::ApiError;
 use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ReplayClientMessage, ReplayOut, ServerMessage};
 use crate::replay::checkpoints::CHECKPOINT_INTERVAL_STEPS;
+use crate::replay::{Init, MAX_TAKE_OVERS, Replay, ReplayError, check_version, log, splice};
 use crate::security::ws_base;
 use crate::sessions::admission::Peer;
-use crate::replay::{Init, MAX_TAKE_OVERS, Replay, ReplayError, check_version, log, splice};
 
 /// Most replay WebSockets open at once (each may re-simulate on a blocking thread).
 pub const MAX_REPLAYS: usize = 32;
@@ -226,6 +226,7 @@ pub async fn list(
         exercise: q.exercise,
         session: q.session,
         limit: q.limit.unwrap_or(MAX_LIST).clamp(1, MAX_LIST),
+        without_practice: false,
     };
     let rows = state.db.attempts(&filter).await.map_err(db_error)?;
     let out: Vec<AttemptOut> = rows.into_iter().map(|r| AttemptOut::new(r, None)).collect();

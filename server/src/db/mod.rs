@@ -23,10 +23,10 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
+use attempt::TakenOver;
 use serde::Serialize;
 use sqlx::any::{AnyPoolOptions, AnyRow};
 use sqlx::{AnyPool, Executor, Row};
-use attempt::TakenOver;
 
 pub use directory::{LostReplica, ReplicaBeat, lost_reason};
 pub use signoff::Signoff;

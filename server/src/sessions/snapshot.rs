@@ -156,10 +156,13 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
         input_seq: live.input_seq,
         paused: live.paused(),
         awaiting_ready: live.awaiting_ready(),
-        practice: live.practice.as_ref().map(|f| crate::protocol::PracticeOut {
-            attempt: f.attempt.clone(),
-            t: f.step as f64 / crate::replay::STEPS_PER_S,
-        }),
+        practice: live
+            .practice
+            .as_ref()
+            .map(|f| crate::protocol::PracticeOut {
+                attempt: f.attempt.clone(),
+                t: f.step as f64 / crate::replay::STEPS_PER_S,
+            }),
         paused_by: live.paused_by(),
         settings: live.settings(),
         arms: ArmsFrame { left, right },

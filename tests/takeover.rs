@@ -177,6 +177,9 @@ async fn a_take_over_starts_at_the_replayed_frame_and_replays_bit_for_bit() {
         (at_t["t"].as_f64().unwrap() - 1.235).abs() < 1e-9,
         "the nearest step"
     );
+    // (not the start's state: the arms moved by then)
+    let at_0 = replay_at(&base, &src, &token, 0.0).await;
+    assert!(state_bits(&at_0)[..12] != state_bits(&at_t)[..12]);
     let (st, created, cookie) = take_over(&base, &src, &token, json!({"t": t})).await;
     assert_eq!(st, 201, "{created}");
     assert!(

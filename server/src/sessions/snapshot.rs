@@ -161,7 +161,7 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
             .as_ref()
             .map(|f| crate::protocol::PracticeOut {
                 attempt: f.attempt.clone(),
-                t: f.step as f64 / crate::replay::STEPS_PER_S,
+                t: f.t_s(),
             }),
         paused_by: live.paused_by(),
         settings: live.settings(),

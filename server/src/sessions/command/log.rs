@@ -73,6 +73,14 @@ pub struct Source {
     /// start; the source's log entries before it were applied, none at or after it).
     pub step: u64,
 }
+
+impl Source {
+    /// The step's time: seconds since the source's start (1 ms steps).
+    pub fn t_s(&self) -> f64 {
+        self.step as f64 / 1000.0
+    }
+}
+
 /// Stick values are applied in steps of this size (a thousandth of full stick: finer than a
 /// proportional valve's hysteresis, coarser than a gamepad's noise).
 pub const INPUT_QUANTUM: f64 = 1e-3;

@@ -212,6 +212,12 @@ export function attempt(id, token) {
   return call('GET', `/api/attempts/${enc(id)}`, { token });
 }
 
+/** POST /api/attempts/{id}/take-over {t}: a new session whose first attempt is a practice
+ * attempt from the attempt's replayed state at `t` s; the answer (as `createSession`'s). */
+export function takeOver(id, t, token) {
+  return call('POST', `/api/attempts/${enc(id)}/take-over`, { token, body: { t } });
+}
+
 /** GET /api/attempts filtered by `filter` ({trainee, exercise, group, limit}); the list, or
  * throws with the server's reason. */
 export async function attempts(filter, token) {

@@ -101,7 +101,7 @@ const conn = new Connection({
   },
 });
 
-statusLoop(view, status, () => selectedArm, (s) => task.update(s.exercise, s.awaiting_ready));
+statusLoop(view, status, () => selectedArm, (s) => task.update(s.exercise, s.awaiting_ready, s.practice));
 
 const startScreen = new StartScreen($('start'));
 const task = new TaskPanel($('task'), $('card'), $('gauges'), {

@@ -73,6 +73,15 @@ export class Connection {
     try { return JSON.parse(localStorage.getItem(STORE_KEY) || 'null'); } catch { return null; }
   }
 
+  /** Keeps the created session `s` (the answer of POST /api/sessions or of a take-over:
+   * {id, control_token, ws_url, base}) as this browser's trainee session, which the trainee
+   * page resumes; returns what it stored. */
+  static store(s) {
+    const session = { id: s.id, control_token: s.control_token, ws_url: s.ws_url, base: s.base || '' };
+    localStorage.setItem(STORE_KEY, JSON.stringify(session));
+    return session;
+  }
+
   /** Reconnects to the same session (a fresh hello, e.g. after the instructor changed its
    * scenario). */
   reconnect() { this.setObserving(this.observing); }
@@ -179,10 +188,9 @@ export class Connection {
       return false;
     }
     const s = await resp.json();
-    this.session = { id: s.id, control_token: s.control_token, ws_url: s.ws_url, base: s.base || '' };
+    this.session = Connection.store(s);
     this.resuming = false;
     this.observing = false; // a new session is this tab's to drive
-    localStorage.setItem(STORE_KEY, JSON.stringify(this.session));
     return true;
   }
 

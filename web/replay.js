@@ -68,6 +68,10 @@ function showAttempt(a, title) {
     : `<div class="card-head"><span class="card-verdict">${esc(outcome)}</span></div>
        <p class="card-title">${esc(title)}${a.sim_seconds ? ` — ${a.sim_seconds.toFixed(1)} s` : ''}. No assessment (not an exercise, or not finished).</p>`;
   $('rp-card').insertAdjacentHTML('beforeend', `<p class="rp-meta">Started ${esc(when)} · attempt ${esc(a.id)} · session ${esc(a.session)}</p>`);
+  if (a.practice) {
+    const from = a.taken_over_from;
+    $('rp-card').insertAdjacentHTML('beforeend', `<p class="rp-meta rp-practice">Practice attempt, taken over from attempt ${esc(from?.attempt || '?')} at ${(from?.t ?? 0).toFixed(1)} s: not counted in progress.</p>`);
+  }
   $('rp-card').dataset.outcome = a.outcome || '';
   plots.setSession(a.session);
 }
@@ -139,6 +143,34 @@ function setArm(side) {
   $('sel-arm').value = side;
 }
 
+/** "Take over from here": the replayed state at the time shown becomes a new live practice
+ * attempt (POST /api/attempts/{id}/take-over), stored as this browser's trainee session, and
+ * the trainee page opens on it. */
+async function takeOver() {
+  const b = $('rp-takeover');
+  b.disabled = true;
+  if (rp.playing) send(api.messages.pause());
+  try {
+    const r = await api.takeOver(attemptId, rp.t, token);
+    if (!r.ok) throw new Error((await api.jsonOf(r))?.error || `HTTP ${r.status}`);
+    Connection.store(await r.json());
+    location.href = '/';
+  } catch (e) {
+    banner.show('error', `Cannot take over: ${e.message}`, 6000);
+    b.disabled = false;
+  }
+}
+
+/** The take-over button: enabled for a replayable exercise attempt, else says why not. */
+function enableTakeOver(a) {
+  const b = $('rp-takeover');
+  const why = a.replayable === false ? 'This attempt cannot be replayed here, so it cannot be taken over'
+    : !a.exercise ? 'Only an exercise attempt can be taken over' : '';
+  b.disabled = !!why;
+  if (why) b.title = why;
+}
+
+$('rp-takeover').addEventListener('click', takeOver);
 $('rp-play').addEventListener('click', togglePlay);
 $('rp-speed').addEventListener('change', (e) => { send(api.messages.speed(+e.target.value)); e.target.blur(); });
 $('sel-arm').addEventListener('change', (e) => { setArm(e.target.value); plots.reset(); e.target.blur(); });
@@ -176,6 +208,7 @@ statusLoop(view, status, () => arm);
     if (ex?.title) title = ex.title;
   }
   showAttempt(attempt, title);
+  enableTakeOver(attempt);
   rp.duration_s = attempt.sim_seconds || 0;
   timeline.set(attempt.events || [], rp.duration_s);
   renderTime();

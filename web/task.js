@@ -61,6 +61,7 @@ export class TaskPanel {
     this.panel.innerHTML = `<h3 class="task-title">${esc(spec.title)}</h3>
       ${spec.fault_drill ? `<details class="task-goal" open><summary>${esc(firstSentence(spec.goal))}</summary>${esc(spec.goal.slice(firstSentence(spec.goal).length).trim())}</details>`
         : `<p class="task-goal">${esc(spec.goal)}</p>`}
+      <p class="task-practice" hidden></p>
       <button type="button" class="task-ready" data-act="ready" hidden title="Start the attempt's clock (Enter)">Ready — start</button>
       <div class="task-bar"><span class="task-fill"></span></div>
       <div class="task-time"><span class="k">time</span> <b data-t="elapsed">0.0</b> / ${Math.round(spec.time_limit_s)} s
@@ -93,10 +94,18 @@ export class TaskPanel {
     this.costsText = '';
   }
 
-  /** A state frame's `exercise` (null outside exercises) and whether the attempt waits for
-   * the trainee's "Ready" (`awaiting_ready`: its clock reads 0 until then). */
-  update(ex, awaitingReady = false) {
+  /** A state frame's `exercise` (null outside exercises), whether the attempt waits for
+   * the trainee's "Ready" (`awaiting_ready`: its clock stands until then), and `practice`
+   * ({attempt, t} of a practice attempt taken over from a debrief, else absent). */
+  update(ex, awaitingReady = false, practice = null) {
     if (!this.spec || !ex) return;
+    const note = practice ? `Practice from attempt ${practice.attempt} at ${practice.t.toFixed(1)} s: the exercise goes on from there (steps done stay done, the clock runs on); not counted in your progress.` : '';
+    const p = this.panel.querySelector('.task-practice');
+    if (p && p.textContent !== note) {
+      p.textContent = note;
+      p.hidden = !note;
+    }
+    this.practice = practice;
     if (this.readyBtn.hidden === awaitingReady) {
       this.readyBtn.hidden = !awaitingReady;
       this.panel.classList.toggle('awaiting-ready', awaitingReady);
@@ -150,7 +159,8 @@ export class TaskPanel {
     const s = this.session;
     const a = await api.sessionAssessment(s.id, s.control_token, s.base || ''); // null: shown from the frame
     const next = await this.ui.nextTitle?.();
-    this.card.innerHTML = `${assessmentHtml(a, { title: this.spec.title, frame: ex })}
+    const practice = this.practice ? `<p class="card-practice">Practice attempt (taken over at ${this.practice.t.toFixed(1)} s): not counted in your progress.</p>` : '';
+    this.card.innerHTML = `${assessmentHtml(a, { title: this.spec.title, frame: ex })}${practice}
       <div class="card-actions">
         <button type="button" data-act="again">Try again</button>
         ${next ? `<button type="button" data-act="next">Next: ${esc(next)}</button>` : ''}

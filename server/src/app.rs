@@ -234,6 +234,7 @@ pub const ROUTES: &[(&str, &str)] = &[
     ("get", "/api/attempts/{id}/inputs"),
     ("get", "/api/attempts/{id}/replay"),
     ("get", "/api/attempts/{id}/track"),
+    ("post", "/api/attempts/{id}/take-over"),
     ("get", "/ws/replay/{id}"),
 ];
 
@@ -353,6 +354,10 @@ fn routes(state: AppState) -> Router {
         .route("/api/attempts/{id}/inputs", get(api::attempts::inputs))
         .route("/api/attempts/{id}/replay", get(api::attempts::replay_at))
         .route("/api/attempts/{id}/track", get(api::ghosts::track))
+        .route(
+            "/api/attempts/{id}/take-over",
+            post(api::attempts::take_over),
+        )
         .route("/ws/replay/{id}", get(api::attempts::replay_ws))
         .fallback(|uri: axum::http::Uri| async move {
             ApiError::not_found(format!("no route for {}", uri.path()))

@@ -683,6 +683,15 @@ pub struct ObjectFrame {
     pub velocity: [f64; 3],
 }
 
+/// Where a practice attempt was taken over from ([`StateFrame::practice`]).
+#[derive(Debug, Clone, Serialize)]
+pub struct PracticeOut {
+    /// The source attempt's id.
+    pub attempt: String,
+    /// Seconds since the source's start.
+    pub t: f64,
+}
+
 /// A state frame (server → client at the frame rate).
 #[derive(Debug, Clone, Serialize)]
 pub struct StateFrame {
@@ -699,6 +708,10 @@ pub struct StateFrame {
     /// The exercise attempt waits for the trainee's `ready` (the session was created with
     /// `wait_for_ready`): no steps pass and its clock reads 0.
     pub awaiting_ready: bool,
+    /// The running attempt is a practice attempt taken over from another attempt's replay
+    /// ("take over from here"); absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub practice: Option<PracticeOut>,
     /// Current settings.
     pub settings: Settings,
     /// Left and right arm.

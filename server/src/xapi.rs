@@ -518,6 +518,8 @@ mod tests {
                 assessment: Some(json!({"completed": completed, "time_s": 90.0, "exercise": "x"})),
                 init: Value::Null,
                 inputs_bytes: 0,
+                practice: false,
+                taken_over_from: None,
             },
             trainee_id: "00112233aabbccdd".into(),
         }

@@ -20,7 +20,7 @@ use std::time::Duration;
 use axum::Json;
 use axum::extract::ws::{Message, Utf8Bytes, WebSocket, WebSocketUpgrade};
 use axum::extract::{Path, Query, State};
-use axum::http::{StatusCode, header};
+use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response};
 use futures_util::{SinkExt, StreamExt};
 use serde::{Deserialize, Serialize};
@@ -28,6 +28,7 @@ use serde_json::{Value, json};
 use tokio::sync::Semaphore;
 
 use crate::api::session_ws::{RateLimit, error_text};
+use crate::api::sessions::{admit, create_error, created};
 use crate::app::AppState;
 use crate::auth::{Credentials, MISSING_TOKEN_OR_QUERY, Principal, TokenFrom, WRONG_TOKEN};
 use crate::compute::{Cancel, ComputeError, ComputePool};
@@ -35,7 +36,9 @@ use crate::db::{AttemptFilter, AttemptRow, EventRow, unavailable as db_error};
 use crate::error::ApiError;
 use crate::protocol::{MAX_CLIENT_MESSAGE_BYTES, ReplayClientMessage, ReplayOut, ServerMessage};
 use crate::replay::checkpoints::CHECKPOINT_INTERVAL_STEPS;
-use crate::replay::{Init, Replay, ReplayError, check_version, log};
+use crate::replay::{Init, MAX_TAKE_OVERS, Replay, ReplayError, check_version, log, splice};
+use crate::security::ws_base;
+use crate::sessions::admission::Peer;
 
 /// Most replay WebSockets open at once (each may re-simulate on a blocking thread).
 pub const MAX_REPLAYS: usize = 32;
@@ -227,6 +230,7 @@ pub async fn list(
         exercise: q.exercise,
         session: q.session,
         limit: q.limit.unwrap_or(MAX_LIST).clamp(1, MAX_LIST),
+        without_practice: false,
     };
     let rows = state.db.attempts(&filter).await.map_err(db_error)?;
     let out: Vec<AttemptOut> = rows.into_iter().map(|r| AttemptOut::new(r, None)).collect();
@@ -278,10 +282,12 @@ pub async fn inputs(
 
 /// Builds the replay of an attempt (409 when it cannot be replayed here).
 pub(crate) async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, ApiError> {
+    Ok(load_chain(state, row).await?.0)
+}
+
+/// [`load`], with the number of take-overs between the attempt and the first of its chain.
+async fn load_chain(state: &AppState, row: &AttemptRow) -> Result<(Replay, usize), ApiError> {
     let conflict = |e: ReplayError| ApiError::new(StatusCode::CONFLICT, e.to_string());
-    check_version(&row.sim_version).map_err(conflict)?;
-    let init: Init = serde_json::from_value(row.init.clone())
-        .map_err(|e| conflict(ReplayError::Record(format!("initial conditions: {e}"))))?;
     // A running attempt: what the recorder has written so far (whole seconds).
     let duration_s = if row.ended_unix.is_some() {
         row.sim_seconds
@@ -299,10 +305,9 @@ pub(crate) async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, A
             }
         })
     };
-    let bytes = state.db.attempt_inputs(&row.id).await.map_err(db_error)?;
-    let entries = log::decode(&bytes).map_err(|e| conflict(ReplayError::Record(e.to_string())))?;
+    let (init, entries, links) = record(state, row).await?;
     let models = [state.sessions.magnum(), state.sessions.magnum()];
-    Replay::shared(
+    let replay = Replay::shared(
         &models,
         init,
         entries,
@@ -310,7 +315,72 @@ pub(crate) async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, A
         state.replays.clone(),
         &row.id,
     )
-    .map_err(conflict)
+    .map_err(conflict)?;
+    Ok((replay, links))
+}
+
+/// What replays `row` (409 when it cannot be replayed here): its initial conditions and log,
+/// or for a practice attempt its source's, followed to the first attempt of the chain
+/// ([`crate::replay::splice`]; at most [`MAX_TAKE_OVERS`] take-overs).
+/// Also the number of take-overs followed.
+async fn record(
+    state: &AppState,
+    row: &AttemptRow,
+) -> Result<(Init, Vec<log::Entry>, usize), ApiError> {
+    let conflict = |e: ReplayError| ApiError::new(StatusCode::CONFLICT, e.to_string());
+    check_version(&row.sim_version).map_err(conflict)?;
+    let mut init = parse_init(row)?;
+    let mut entries = inputs_of(state, &row.id).await?;
+    let mut links = 0;
+    while let Some(from) = init.from.take() {
+        links += 1;
+        if links > MAX_TAKE_OVERS {
+            return Err(conflict(ReplayError::Record(format!(
+                "it is more than {MAX_TAKE_OVERS} take-overs from an attempt started afresh"
+            ))));
+        }
+        let source = state
+            .db
+            .attempt(&from.attempt)
+            .await
+            .map_err(db_error)?
+            .ok_or_else(|| {
+                conflict(ReplayError::Record(format!(
+                    "it was taken over from attempt `{}`, whose record is gone",
+                    from.attempt
+                )))
+            })?;
+        check_version(&source.sim_version).map_err(conflict)?;
+        init = parse_init(&source)?;
+        entries = splice(inputs_of(state, &source.id).await?, from.step, entries);
+    }
+    Ok((init, entries, links))
+}
+
+/// An attempt's initial conditions (409 when unreadable or of another log format).
+fn parse_init(row: &AttemptRow) -> Result<Init, ApiError> {
+    let conflict = |e: ReplayError| ApiError::new(StatusCode::CONFLICT, e.to_string());
+    let init: Init = serde_json::from_value(row.init.clone())
+        .map_err(|e| conflict(ReplayError::Record(format!("initial conditions: {e}"))))?;
+    if init.format != log::FORMAT {
+        return Err(conflict(ReplayError::Record(format!(
+            "log format {} (this server reads {})",
+            init.format,
+            log::FORMAT
+        ))));
+    }
+    Ok(init)
+}
+
+/// An attempt's decoded input log (409 when damaged).
+async fn inputs_of(state: &AppState, id: &str) -> Result<Vec<log::Entry>, ApiError> {
+    let bytes = state.db.attempt_inputs(id).await.map_err(db_error)?;
+    log::decode(&bytes).map_err(|e| {
+        ApiError::new(
+            StatusCode::CONFLICT,
+            ReplayError::Record(e.to_string()).to_string(),
+        )
+    })
 }
 
 /// Query of `GET /api/attempts/{id}/replay`.
@@ -361,6 +431,106 @@ pub async fn replay_at(
         json.to_string(),
     )
         .into_response())
+}
+
+/// Body of `POST /api/attempts/{id}/take-over`.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TakeOverRequest {
+    /// Seconds since the attempt's start (0 to its length; the nearest step).
+    t: f64,
+}
+
+/// `POST /api/attempts/{id}/take-over` `{"t": s}` ("take over from here", issue 30 item 5):
+/// a new session for the attempt's trainee (name and group) whose first attempt is a
+/// practice attempt starting from the attempt's replayed state at `t`, waiting for `ready`;
+/// answered like `POST /api/sessions` (201, the trainee's cookie). Who may: whoever may
+/// replay the attempt (the instructor, or its session's trainee once it ended). 400 for a
+/// `t` that is not in [0, length]; 409 for an attempt that cannot be replayed here, or that
+/// is not an exercise (free play has no `ready` to wait for, so its first frame would not be
+/// the state at `t`, and no assessment to practise); the admission limits of
+/// `POST /api/sessions` (429, 503); the seek's of `GET …/replay` (503 busy, 504 too long).
+pub async fn take_over(
+    State(state): State<AppState>,
+    Peer(peer): Peer,
+    creds: Credentials,
+    headers: HeaderMap,
+    Path(id): Path<String>,
+    body: axum::body::Bytes,
+) -> Result<Response, ApiError> {
+    let req: TakeOverRequest = crate::json::parse(&body)?;
+    if !req.t.is_finite() || req.t < 0.0 {
+        return Err(ApiError::bad_request(
+            "`t` must be a finite, non-negative number of seconds",
+        ));
+    }
+    let row = authorized(&state, &creds, &id).await?;
+    check_open(&state, &creds, &row)?;
+    if row.exercise.is_none() {
+        return Err(ApiError::new(
+            StatusCode::CONFLICT,
+            "only an exercise attempt can be taken over (free play has no exercise to practise)",
+        ));
+    }
+    let source_init = parse_init(&row)?;
+    let (mut replay, links) = load_chain(&state, &row).await?;
+    if links >= MAX_TAKE_OVERS {
+        return Err(ApiError::new(
+            StatusCode::CONFLICT,
+            format!(
+                "this practice attempt is already {links} take-overs from an attempt started \
+                 afresh, the most that replay follows; take over from an earlier one"
+            ),
+        ));
+    }
+    if Replay::step_at(req.t) > Replay::step_at(replay.duration_s()) {
+        return Err(ApiError::bad_request(format!(
+            "`t` = {} s is beyond the attempt's length, {} s",
+            req.t,
+            replay.duration_s()
+        )));
+    }
+    let step = Replay::step_at(req.t);
+    let base = ws_base(&state.policy, &headers, peer.as_ref())
+        .ok_or_else(|| ApiError::bad_request("missing or malformed Host header"))?;
+    let instructor = is_instructor(&state, &creds)?;
+    let client = match admit(&state, peer.as_ref(), &headers, instructor) {
+        Ok(client) => client,
+        Err(resp) => return Ok(*resp),
+    };
+    let key = holder_key(&state, &creds, &row)?;
+    let _held = if instructor {
+        None
+    } else {
+        Some(hold(&format!("{key}:seek"), 1, "replay seeks")?)
+    };
+    // The seek runs on the compute pool, as `GET …/replay` does (its checkpoints shared).
+    let start = state
+        .compute
+        .run(move |cancel| {
+            replay
+                .seek_step_checked(step, &|| cancel.check().is_ok())
+                .map_err(|e| pool_error(e, cancel))?;
+            Ok(replay.live().checkpoint())
+        })
+        .await
+        .map_err(|e| e.api_error())?;
+    let init = Init {
+        from: Some(log::Source {
+            attempt: row.id.clone(),
+            step,
+        }),
+        ..source_init
+    };
+    let sessions = state.sessions.clone();
+    let (label, group) = (row.trainee.clone(), row.group.clone());
+    let session = tokio::task::spawn_blocking(move || {
+        sessions.create_taking_over(client, start, &init, &label, &group)
+    })
+    .await
+    .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
+    .map_err(create_error)?;
+    created(&state, &session, &base).await
 }
 
 /// A seek's error on the compute pool: a cancelled seek is the pool's (deadline, or the

@@ -240,6 +240,7 @@ pub async fn of_session(
             session: (!named).then(|| id.clone()),
             exercise: Some(spec.id.clone()),
             limit: 0,
+            without_practice: true,
         },
     )
     .await?;

@@ -142,6 +142,7 @@ async fn of_query(
             trainee: Some(name.clone()),
             group: Some(group.clone()),
             limit: 0,
+            without_practice: true,
             ..AttemptFilter::default()
         })
         .await
@@ -287,6 +288,7 @@ pub async fn of_session(
             group: named.then(|| session.group.clone()),
             session: (!named).then(|| session.id.clone()),
             limit: 0,
+            without_practice: true,
             ..AttemptFilter::default()
         })
         .await

@@ -171,11 +171,16 @@ pub(crate) fn curve(
     }
 }
 
-/// Finished (passed or failed) attempts matching `filter`, oldest first.
+/// Finished (passed or failed) attempts matching `filter`, oldest first; practice attempts
+/// ("take over from here") are left out.
 pub(crate) async fn finished(
     state: &AppState,
     filter: AttemptFilter,
 ) -> Result<Vec<AttemptRow>, ApiError> {
+    let filter = AttemptFilter {
+        without_practice: true,
+        ..filter
+    };
     let mut rows = state.db.attempts(&filter).await.map_err(db_error)?;
     rows.retain(|r| matches!(r.outcome.as_deref(), Some("passed" | "failed")));
     rows.reverse();

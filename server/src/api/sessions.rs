@@ -132,23 +132,10 @@ pub async fn create(
     let instructor = creds
         .principal(&state, TokenFrom::Bearer, None)?
         .is_instructor();
-    let client = if instructor {
-        ClientKey::Exempt
-    } else {
-        let ip = client_ip(peer.as_ref(), &headers, &state.policy.trusted_proxies)
-            .unwrap_or(std::net::Ipv4Addr::UNSPECIFIED.into());
-        ClientKey::from_ip(ip)
+    let client = match admit(&state, peer.as_ref(), &headers, instructor) {
+        Ok(client) => client,
+        Err(resp) => return Ok(*resp),
     };
-    if let Err(wait) = state.creation_limiter.check(client) {
-        return Ok(too_many(
-            format!(
-                "too many new sessions from this client: at most {} at once, then {} per minute",
-                state.creation_limiter.burst(),
-                state.creation_limiter.per_minute()
-            ),
-            wait,
-        ));
-    }
     if let (Some(code), false) = (&state.join_code, instructor) {
         let presented = req
             .join_code
@@ -167,15 +154,6 @@ pub async fn create(
     }
     if req.trainee.is_some() && req.label.is_some() {
         return Err(ApiError::bad_request("give `trainee` or `label`, not both"));
-    }
-    if state.cluster.draining() {
-        return Err(ApiError::new(
-            StatusCode::SERVICE_UNAVAILABLE,
-            format!(
-                "replica `{}` is draining (shutting down); try again",
-                state.cluster.name
-            ),
-        ));
     }
     let scenario = req.exercise.or(req.scenario);
     let label = req.trainee.or(req.label);
@@ -205,7 +183,54 @@ pub async fn create(
     })
     .await
     .map_err(|e| ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()))?
-    .map_err(|e| match e {
+    .map_err(create_error)?;
+    created(&state, &session, &base).await
+}
+
+/// Who creates a session, by the same admission rules for every way of creating one
+/// (`POST /api/sessions`, a take-over): the instructor is exempt, anyone else is a client by
+/// address, limited by the creation limiter (429); a draining replica creates none (503).
+pub(crate) fn admit(
+    state: &AppState,
+    peer: Option<&axum::extract::ConnectInfo<std::net::SocketAddr>>,
+    headers: &HeaderMap,
+    instructor: bool,
+) -> Result<ClientKey, Box<Response>> {
+    let client = if instructor {
+        ClientKey::Exempt
+    } else {
+        let ip = client_ip(peer, headers, &state.policy.trusted_proxies)
+            .unwrap_or(std::net::Ipv4Addr::UNSPECIFIED.into());
+        ClientKey::from_ip(ip)
+    };
+    if let Err(wait) = state.creation_limiter.check(client) {
+        return Err(Box::new(too_many(
+            format!(
+                "too many new sessions from this client: at most {} at once, then {} per minute",
+                state.creation_limiter.burst(),
+                state.creation_limiter.per_minute()
+            ),
+            wait,
+        )));
+    }
+    if state.cluster.draining() {
+        return Err(Box::new(
+            ApiError::new(
+                StatusCode::SERVICE_UNAVAILABLE,
+                format!(
+                    "replica `{}` is draining (shutting down); try again",
+                    state.cluster.name
+                ),
+            )
+            .into_response(),
+        ));
+    }
+    Ok(client)
+}
+
+/// The answer to a refused creation.
+pub(crate) fn create_error(e: CreateError) -> ApiError {
+    match e {
         CreateError::Full(_) | CreateError::Recording(_) => {
             ApiError::new(StatusCode::SERVICE_UNAVAILABLE, e.to_string())
         }
@@ -216,7 +241,17 @@ pub async fn create(
             }))
         }
         CreateError::Sim(_) => ApiError::new(StatusCode::INTERNAL_SERVER_ERROR, e.to_string()),
-    })?;
+    }
+}
+
+/// 201 with [`Created`] and the trainee's cookie for a new `session` (`base`: the
+/// WebSocket URL's scheme and host); with several replicas, the session directory learns
+/// where it lives first.
+pub(crate) async fn created(
+    state: &AppState,
+    session: &Session,
+    base: &str,
+) -> Result<Response, ApiError> {
     let prefix = state.cluster.base();
     let ws_url = format!(
         "{base}{prefix}/ws/sessions/{}?token={}",
@@ -224,7 +259,7 @@ pub async fn create(
     );
     if state.cluster.multi {
         // Other replicas learn where it lives now, not at the next heartbeat.
-        let summary = directory_summary(&state, &session).to_string();
+        let summary = directory_summary(state, session).to_string();
         let put = state.db.directory_put(
             session.id.clone(),
             state.cluster.name.clone(),
@@ -240,7 +275,7 @@ pub async fn create(
         &crate::auth::trainee_cookie_name(&session.id),
         &session.control_token,
         TRAINEE_COOKIE_S,
-        crate::api::signin::secure_cookies(&state),
+        crate::api::signin::secure_cookies(state),
     );
     let body = Created {
         id: session.id.clone(),

@@ -30,6 +30,27 @@ pub struct AttemptStart {
     pub init: serde_json::Value,
 }
 
+impl AttemptStart {
+    /// A practice attempt's source ("take over from here"), from its initial conditions'
+    /// `from` (`{"attempt": id, "step": k}`); None for every other attempt.
+    pub fn taken_over_from(&self) -> Option<TakenOver> {
+        let from = self.init.get("from")?;
+        Some(TakenOver {
+            attempt: from.get("attempt")?.as_str()?.to_string(),
+            t: from.get("step")?.as_u64()? as f64 / 1000.0,
+        })
+    }
+}
+
+/// The attempt and time a practice attempt was taken over from (`migrations/0006`).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct TakenOver {
+    /// The source attempt's id.
+    pub attempt: String,
+    /// Seconds since the source's start.
+    pub t: f64,
+}
+
 /// An attempt ended (a new start, or its session ended).
 #[derive(Debug, Clone, Serialize)]
 pub struct AttemptEnd {

@@ -24,6 +24,7 @@ use std::sync::Arc;
 use std::time::Duration;
 
 use anyhow::{Context, Result, anyhow};
+use attempt::TakenOver;
 use serde::Serialize;
 use sqlx::any::{AnyPoolOptions, AnyRow};
 use sqlx::{AnyPool, Executor, Row};
@@ -190,6 +191,8 @@ pub struct AttemptFilter {
     pub session: Option<String>,
     /// Most rows (newest first).
     pub limit: usize,
+    /// Leave out practice attempts ([`AttemptRow::practice`]): what counts towards progress.
+    pub without_practice: bool,
 }
 
 /// One attempt as stored.
@@ -227,6 +230,12 @@ pub struct AttemptRow {
     pub init: serde_json::Value,
     /// Bytes of its compressed input stream.
     pub inputs_bytes: i64,
+    /// A practice attempt ("take over from here"): left out of learning curves, proficiency,
+    /// benchmarks, the logbook and xAPI.
+    pub practice: bool,
+    /// The attempt and time a practice attempt was taken over from.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub taken_over_from: Option<TakenOver>,
 }
 
 /// One typed event of an attempt.
@@ -283,7 +292,7 @@ pub const INTERRUPTED: &str = "interrupted (server stopped)";
 const ATTEMPT_COLUMNS: &str = "a.id, a.session_id, COALESCE(s.label, '') AS label, \
      COALESCE(s.grp, '') AS grp, a.scenario, a.exercise, a.exercise_version, a.sim_version, \
      a.started_unix, a.ended_unix, a.sim_seconds, a.outcome, a.score, a.assessment, a.init, \
-     (SELECT CAST(COALESCE(SUM(LENGTH(i.data)), 0) AS BIGINT) FROM attempt_inputs i \
+     a.taken_over_from, a.taken_over_t, (SELECT CAST(COALESCE(SUM(LENGTH(i.data)), 0) AS BIGINT) FROM attempt_inputs i \
       WHERE i.attempt_id = a.id) AS inputs_bytes \
      FROM attempts a LEFT JOIN sessions s ON s.id = a.session_id";
 
@@ -292,7 +301,7 @@ const ATTEMPT_COLUMNS: &str = "a.id, a.session_id, COALESCE(s.label, '') AS labe
 const RESULT_COLUMNS: &str = "a.id, a.session_id, COALESCE(s.label, '') AS label, \
      COALESCE(s.grp, '') AS grp, a.scenario, a.exercise, a.exercise_version, a.sim_version, \
      a.started_unix, a.ended_unix, a.sim_seconds, a.outcome, a.score, a.assessment, \
-     'null' AS init, CAST(0 AS BIGINT) AS inputs_bytes \
+     'null' AS init, a.taken_over_from, a.taken_over_t, CAST(0 AS BIGINT) AS inputs_bytes \
      FROM attempts a LEFT JOIN sessions s ON s.id = a.session_id";
 
 const SESSION_COLUMNS: &str = "id, label, grp, scenario, created_unix, ended_unix, end_reason, \
@@ -303,6 +312,8 @@ fn json_or_null(text: Option<String>) -> Option<serde_json::Value> {
 }
 
 fn attempt_row(r: &AnyRow) -> Result<AttemptRow> {
+    let from: Option<String> = r.try_get("taken_over_from")?;
+    let t: Option<f64> = r.try_get("taken_over_t")?;
     Ok(AttemptRow {
         id: r.try_get("id")?,
         session: r.try_get("session_id")?,
@@ -320,6 +331,11 @@ fn attempt_row(r: &AnyRow) -> Result<AttemptRow> {
         assessment: json_or_null(r.try_get("assessment")?),
         init: json_or_null(Some(r.try_get("init")?)).unwrap_or(serde_json::Value::Null),
         inputs_bytes: r.try_get("inputs_bytes")?,
+        practice: from.is_some(),
+        taken_over_from: from.map(|attempt| TakenOver {
+            attempt,
+            t: t.unwrap_or(0.0),
+        }),
     })
 }
 
@@ -484,6 +500,7 @@ impl Db {
                 "SELECT {ATTEMPT_COLUMNS} WHERE ($1 IS NULL OR s.label = $1) \
                  AND ($2 IS NULL OR s.grp = $2) AND ($3 IS NULL OR a.exercise = $3) \
                  AND ($4 IS NULL OR a.session_id = $4) \
+                 AND ($6 = 0 OR a.taken_over_from IS NULL) \
                  ORDER BY a.started_unix DESC, a.id DESC LIMIT $5"
             );
             let limit = if f.limit == 0 {
@@ -497,6 +514,7 @@ impl Db {
                 .bind(f.exercise)
                 .bind(f.session)
                 .bind(limit)
+                .bind(i64::from(f.without_practice))
                 .fetch_all(&pool)
                 .await?;
             rows.iter().map(attempt_row).collect()
@@ -559,7 +577,8 @@ impl Db {
         self.run(|pool| async move {
             let sql = format!(
                 "SELECT {ATTEMPT_COLUMNS} WHERE a.exercise = $1 \
-                 AND a.outcome IN ('passed', 'failed') AND EXISTS (SELECT 1 FROM \
+                 AND a.outcome IN ('passed', 'failed') AND a.taken_over_from IS NULL \
+                 AND EXISTS (SELECT 1 FROM \
                  reference_operators r WHERE r.name = s.label AND r.grp = s.grp) \
                  ORDER BY a.started_unix, a.id"
             );
@@ -747,7 +766,7 @@ impl Db {
         self.inner.handle.spawn(async move {
             let sql = format!(
                 "SELECT {RESULT_COLUMNS} WHERE a.exercise IS NOT NULL \
-                 AND a.outcome IN ('passed', 'failed') \
+                 AND a.outcome IN ('passed', 'failed') AND a.taken_over_from IS NULL \
                  AND ($1 IS NULL OR s.grp = $1) AND ($2 IS NULL OR a.exercise = $2) \
                  ORDER BY COALESCE(s.label, ''), a.exercise, a.started_unix, a.id"
             );

@@ -64,7 +64,7 @@ pub enum Write {
     AttemptEnd(Box<AttemptEnd>),
     /// Queue a stored attempt's xAPI statements ([`crate::xapi`], `migrations/0003`): it
     /// follows the attempt's end in the same transaction and adds a row only for a finished
-    /// exercise attempt (`passed` or `failed`) of a named trainee, while the outbox holds
+    /// exercise attempt (`passed` or `failed`, not practice) of a named trainee, while the outbox holds
     /// fewer than [`super::xapi::OUTBOX_CAPACITY`] rows.
     XapiQueue {
         /// Attempt id.
@@ -198,9 +198,9 @@ impl Db {
                     sqlx::query(
                         "INSERT INTO attempts (id, session_id, scenario, exercise, \
                          exercise_version, sim_version, started_unix, ended_unix, sim_seconds, \
-                         outcome, score, assessment, init) \
-                         VALUES ($1, $2, $3, $4, $5, $6, $7, NULL, $8, NULL, NULL, NULL, $9) \
-                         ON CONFLICT (id) DO NOTHING",
+                         outcome, score, assessment, init, taken_over_from, taken_over_t) \
+                         VALUES ($1, $2, $3, $4, $5, $6, $7, NULL, $8, NULL, NULL, NULL, $9, \
+                         $10, $11) ON CONFLICT (id) DO NOTHING",
                     )
                     .bind(a.id.as_str())
                     .bind(a.session.as_str())
@@ -211,6 +211,8 @@ impl Db {
                     .bind(a.started_unix)
                     .bind(0.0_f64)
                     .bind(a.init.to_string())
+                    .bind(a.taken_over_from().map(|f| f.attempt))
+                    .bind(a.taken_over_from().map(|f| f.t))
                     .execute(&mut *tx)
                     .await?;
                 }
@@ -264,6 +266,7 @@ impl Db {
                          JOIN sessions s ON s.id = a.session_id \
                          WHERE a.id = $1 AND a.exercise IS NOT NULL \
                          AND a.outcome IN ('passed', 'failed') AND s.trainee_id IS NOT NULL \
+                         AND a.taken_over_from IS NULL \
                          AND (SELECT COUNT(*) FROM xapi_outbox) < $3 \
                          ON CONFLICT (attempt_id) DO NOTHING",
                     )

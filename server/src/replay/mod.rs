@@ -10,6 +10,12 @@
 //!
 //! An attempt recorded by another simulator ([`SIM_VERSION`] differs) is not replayed: the
 //! same inputs would no longer give the same states, so the attempt says so instead.
+//!
+//! A practice attempt taken over from another attempt's replay at step `s` ([`Init::from`],
+//! "take over from here") started from that replay's state: its replay is its source's
+//! (initial conditions and log entries before `s`, [`splice`]) followed by its own log, whose
+//! entries are stamped from `s` on (the simulation's clock carried over). A chain of
+//! take-overs is followed to its first attempt, at most [`MAX_TAKE_OVERS`] links.
 
 use std::sync::Arc;
 
@@ -53,6 +59,19 @@ pub enum ReplayError {
     /// The seek was given up (its request went away or ran out of time).
     #[error("the seek was cancelled")]
     Cancelled,
+}
+
+/// Most take-overs between a practice attempt and the attempt its chain starts from (a
+/// take-over of a take-over of … ); a longer chain is not replayed, nor taken over again.
+pub const MAX_TAKE_OVERS: usize = 8;
+
+/// The log a practice attempt taken over at step `step` of a source whose (spliced) log is
+/// `source` is replayed with: the source's entries applied before `step` (stamped before it),
+/// then the attempt's own (`own`, stamped at `step` or later).
+pub fn splice(mut source: Vec<Entry>, step: u64, own: Vec<Entry>) -> Vec<Entry> {
+    source.retain(|e| e.k < step);
+    source.extend(own);
+    source
 }
 
 /// Whether an attempt stamped `sim_version` can be replayed here.
@@ -151,6 +170,12 @@ impl Replay {
                 "log format {} (this server reads {})",
                 init.format,
                 log::FORMAT
+            )));
+        }
+        if let Some(from) = &init.from {
+            return Err(ReplayError::Record(format!(
+                "a practice attempt starts from attempt `{}`'s replay: splice its source first",
+                from.attempt
             )));
         }
         let scenario = Scenario::resolve(&init.scenario)

@@ -149,6 +149,9 @@ pub struct Live {
     session_id: String,
     /// The current attempt's id (records; a new one at every start).
     attempt_id: String,
+    /// Where the running attempt was taken over from, when it is a practice attempt
+    /// ([`Live::taking_over`]; a new attempt starts afresh and is not).
+    practice: Option<command::log::Source>,
     /// Whether attempts are recorded (a replay records nothing).
     recording: bool,
     /// The running attempt's input log (when recording).
@@ -261,6 +264,7 @@ impl Live {
             next_seed: self.next_seed,
             session_id: self.session_id.clone(),
             attempt_id: self.attempt_id.clone(),
+            practice: self.practice.clone(),
             recording: false,
             log: None,
             pending: Vec::new(),
@@ -305,6 +309,7 @@ impl Live {
             next_seed: seed,
             session_id: session_id.to_string(),
             attempt_id: String::new(),
+            practice: None,
             recording,
             log: None,
             pending: Vec::new(),
@@ -317,6 +322,7 @@ impl Live {
     /// state).
     fn start_attempt(&mut self) {
         self.attempt_id = random_hex(8);
+        self.practice = None;
         self.awaiting_ready = self.ready_gate && self.scenario.exercise().is_some();
         let seed = self.next_seed;
         self.next_seed = random_seed();
@@ -342,21 +348,62 @@ impl Live {
                     .map(|w| w.current)
                     .filter(|c| c.speed_m_s > 0.0),
                 pass_lines: self.exercise.as_ref().and_then(|r| r.pass_lines().cloned()),
+                from: None,
             };
-            let exercise = self.scenario.exercise();
-            self.pending
-                .push(RecordMsg::AttemptStarted(Box::new(record::AttemptStart {
-                    id: self.attempt_id.clone(),
-                    session: self.session_id.clone(),
-                    scenario: self.scenario.name().to_string(),
-                    exercise: exercise.map(|e| e.id.clone()),
-                    exercise_version: exercise.map(|e| format!("{}", e.version)),
-                    sim_version: command::log::SIM_VERSION.to_string(),
-                    started_unix: unix_now(),
-                    init: serde_json::to_value(&init).unwrap_or_default(),
-                })));
-            self.log = Some(command::log::Writer::new());
+            self.record_start(&init);
         }
+    }
+
+    /// Records the running attempt's start with its initial conditions `init`, and opens its
+    /// input log.
+    fn record_start(&mut self, init: &command::log::Init) {
+        let exercise = self.scenario.exercise();
+        self.pending
+            .push(RecordMsg::AttemptStarted(Box::new(record::AttemptStart {
+                id: self.attempt_id.clone(),
+                session: self.session_id.clone(),
+                scenario: self.scenario.name().to_string(),
+                exercise: exercise.map(|e| e.id.clone()),
+                exercise_version: exercise.map(|e| format!("{}", e.version)),
+                sim_version: command::log::SIM_VERSION.to_string(),
+                started_unix: unix_now(),
+                init: serde_json::to_value(init).unwrap_or_default(),
+            })));
+        self.log = Some(command::log::Writer::new());
+    }
+
+    /// A new session's live state that continues `state` (an attempt's replayed state,
+    /// [`Live::checkpoint`]) as a practice attempt ("take over from here", issue 30 item 5):
+    /// everything that steps carries over bit for bit (the simulation, the operator with its
+    /// sticks, the exercise's run with its clock, assessment and steps done, the faults); the
+    /// session's own parts are new (its id, a new attempt id and seed for later attempts, the
+    /// wall clock, recording). The attempt waits for the trainee's `ready`, so its first
+    /// frames show the state it starts from, and each later attempt does too (the page's
+    /// sessions do). `init` is recorded as its initial conditions (with `from` naming the
+    /// source attempt and step: its replay replays the source there first).
+    pub fn taking_over(session_id: &str, state: Live, init: &command::log::Init) -> Live {
+        let now = Instant::now();
+        let mut live = Live {
+            paused: None,
+            input_seq: 0,
+            steps_since_origin: 0,
+            origin: now,
+            frame_seq: 0,
+            visibility_m: None,
+            ready_gate: true,
+            awaiting_ready: true,
+            next_frame: now,
+            next_seed: random_seed(),
+            session_id: session_id.to_string(),
+            attempt_id: random_hex(8),
+            practice: init.from.clone(),
+            recording: true,
+            log: None,
+            pending: Vec::new(),
+            ..state
+        };
+        live.record_start(init);
+        live
     }
 
     /// Ends the running attempt's record: its log's last piece and its outcome
@@ -832,6 +879,47 @@ impl SessionManager {
         )
         .map_err(|e| CreateError::Sim(e.to_string()))?;
         live.wait_for_ready(wait_for_ready);
+        self.launch(client, id, live, label, group)
+    }
+
+    /// Creates a session for `client` whose first attempt continues `state` as a practice
+    /// attempt recorded with `init` ([`Live::taking_over`]; "take over from here"), for the
+    /// trainee `label` of `group`; the same caps as [`SessionManager::create`].
+    pub fn create_taking_over(
+        &self,
+        client: ClientKey,
+        state: Live,
+        init: &command::log::Init,
+        label: &str,
+        group: &str,
+    ) -> Result<Arc<Session>, CreateError> {
+        self.check_caps(&self.map(), client)?;
+        self.recorder.admit().map_err(CreateError::Recording)?;
+        let id = random_hex(8);
+        let mut live = Live::taking_over(&id, state, init);
+        // Its later attempts (a reset) start judged as any session's.
+        live.pass_board = Some(self.pass_board.clone());
+        self.launch(
+            client,
+            id,
+            live,
+            Some(label.to_string()),
+            Some(group.to_string()),
+        )
+    }
+
+    /// Adds session `id` running `live` (caps checked again under the lock), records its
+    /// creation and starts stepping it.
+    fn launch(
+        &self,
+        client: ClientKey,
+        id: String,
+        live: Live,
+        label: Option<String>,
+        group: Option<String>,
+    ) -> Result<Arc<Session>, CreateError> {
+        let models = live.models().clone();
+        let scenario = live.scenario().name().to_string();
         let (frames, _) = watch::channel(None);
         let (notices, _) = tokio::sync::broadcast::channel(16);
         let label = crate::names::display_name(&label.unwrap_or_default());
@@ -864,7 +952,7 @@ impl SessionManager {
             id: session.id.clone(),
             label: session.label.clone(),
             group: session.group.clone(),
-            scenario: scenario.name().to_string(),
+            scenario,
             created_unix: session.created_unix,
             token_sha256: sha256_hex(&session.control_token),
         });

@@ -156,6 +156,13 @@ pub fn build_frame(live: &mut Live) -> StateFrame {
         input_seq: live.input_seq,
         paused: live.paused(),
         awaiting_ready: live.awaiting_ready(),
+        practice: live
+            .practice
+            .as_ref()
+            .map(|f| crate::protocol::PracticeOut {
+                attempt: f.attempt.clone(),
+                t: f.t_s(),
+            }),
         paused_by: live.paused_by(),
         settings: live.settings(),
         arms: ArmsFrame { left, right },

@@ -59,7 +59,32 @@ pub struct Init {
     /// whose pass marks are `benchmark`, once its benchmark applies; absent: the file's marks).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub pass_lines: Option<seaarms_core::exercise::proficiency::PassLines>,
+    /// A practice attempt taken over from another attempt's replay ("take over from here",
+    /// issue 30 item 5): it starts from that attempt's replayed state at a step, not from the
+    /// fields above (which are the source's initial conditions, copied). Absent: an attempt
+    /// started from its scenario's reset state.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub from: Option<Source>,
 }
+
+/// Where a practice attempt's state comes from: the attempt `attempt`'s replay at step
+/// `step` (its `Init::from` may name another; [`crate::replay`] follows the chain).
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Source {
+    /// The source attempt's id.
+    pub attempt: String,
+    /// The step of the source whose state the attempt starts from (ms since the source's
+    /// start; the source's log entries before it were applied, none at or after it).
+    pub step: u64,
+}
+
+impl Source {
+    /// The step's time: seconds since the source's start (1 ms steps).
+    pub fn t_s(&self) -> f64 {
+        self.step as f64 / 1000.0
+    }
+}
+
 /// Stick values are applied in steps of this size (a thousandth of full stick: finer than a
 /// proportional valve's hysteresis, coarser than a gamepad's noise).
 pub const INPUT_QUANTUM: f64 = 1e-3;

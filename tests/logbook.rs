@@ -13,7 +13,7 @@ mod common;
 mod records_common;
 
 use common::{TEACHER, create_at, get_as, temp_dir};
-use records_common::{Binary, stored_attempt, stored_session};
+use records_common::{Binary, send_json, stored_attempt, stored_session};
 use seaarms::db::{Db, Write};
 use serde_json::{Value, json};
 
@@ -70,26 +70,6 @@ fn class() -> Vec<Write> {
 async fn get(url: &str, token: &str) -> (u16, Value) {
     let (status, text) = get_as(url, token).await;
     (status, serde_json::from_str(&text).unwrap_or(Value::Null))
-}
-
-async fn send(
-    method: reqwest::Method,
-    url: &str,
-    token: &str,
-    body: Option<Value>,
-) -> (u16, Value) {
-    let mut r = reqwest::Client::new()
-        .request(method, url)
-        .bearer_auth(token);
-    if let Some(b) = body {
-        r = r.json(&b);
-    }
-    let r = r.send().await.unwrap();
-    let st = r.status().as_u16();
-    (
-        st,
-        serde_json::from_str(&r.text().await.unwrap()).unwrap_or(Value::Null),
-    )
 }
 
 fn entry<'a>(book: &'a Value, exercise: &str) -> &'a Value {
@@ -177,7 +157,8 @@ async fn logbook_on(database_url: Option<String>) {
     let signoffs = format!("{}/api/signoffs", s.base);
     let body = json!({"trainee": "Ada", "group": GROUP, "exercise": "reach-targets",
         "assessor": "  R. Assessor ", "note": "steady\ncontrol"});
-    let (st, signed) = send(reqwest::Method::PUT, &signoffs, TEACHER, Some(body.clone())).await;
+    let (st, signed) =
+        send_json(reqwest::Method::PUT, &signoffs, TEACHER, Some(body.clone())).await;
     assert_eq!(st, 200, "{signed}");
     assert_eq!(signed["assessor"], "R. Assessor");
     assert_eq!(signed["note"], "steady control");
@@ -188,15 +169,15 @@ async fn logbook_on(database_url: Option<String>) {
     assert_eq!(so["signed_unix"], signed["signed_unix"]);
     assert_eq!(entry(&book, "dual-lift")["signoff"], Value::Null);
     // refused: no instructor token, an unknown exercise, no assessor
-    let (st, _) = send(reqwest::Method::PUT, &signoffs, "wrong", Some(body.clone())).await;
+    let (st, _) = send_json(reqwest::Method::PUT, &signoffs, "wrong", Some(body.clone())).await;
     assert_eq!(st, 403);
     let mut bad = body.clone();
     bad["exercise"] = json!("nope");
-    let (st, _) = send(reqwest::Method::PUT, &signoffs, TEACHER, Some(bad)).await;
+    let (st, _) = send_json(reqwest::Method::PUT, &signoffs, TEACHER, Some(bad)).await;
     assert_eq!(st, 404);
     let mut bad = body.clone();
     bad["assessor"] = json!("   ");
-    let (st, _) = send(reqwest::Method::PUT, &signoffs, TEACHER, Some(bad)).await;
+    let (st, _) = send_json(reqwest::Method::PUT, &signoffs, TEACHER, Some(bad)).await;
     assert_eq!(st, 400);
 
     // the CSV: the header, one row per exercise, ISO 8601 UTC dates, the sign-off
@@ -252,13 +233,13 @@ async fn logbook_on(database_url: Option<String>) {
 
     // revoke: 204, then it is gone (404 a second time)
     let revoke = format!("{signoffs}?{}&exercise=reach-targets", q("Ada"));
-    let (st, _) = send(reqwest::Method::DELETE, &revoke, TEACHER, None).await;
+    let (st, _) = send_json(reqwest::Method::DELETE, &revoke, TEACHER, None).await;
     assert_eq!(st, 204);
     let (_, book) = get(&book_url, TEACHER).await;
     assert_eq!(entry(&book, "reach-targets")["signoff"], Value::Null);
-    let (st, _) = send(reqwest::Method::DELETE, &revoke, TEACHER, None).await;
+    let (st, _) = send_json(reqwest::Method::DELETE, &revoke, TEACHER, None).await;
     assert_eq!(st, 404);
-    let (st, _) = send(reqwest::Method::DELETE, &revoke, "wrong", None).await;
+    let (st, _) = send_json(reqwest::Method::DELETE, &revoke, "wrong", None).await;
     assert_eq!(st, 403);
 
     // a hostile name is written with OWASP's leading `'` in the CSV

@@ -14,9 +14,8 @@ mod common;
 mod records_common;
 
 use common::{TEACHER, create_at, get_as, temp_dir};
-use records_common::Binary;
+use records_common::{Binary, send_json, stored_attempt, stored_session};
 use seaarms::db::{Db, Write};
-use seaarms::sessions::record::{AttemptEnd, AttemptStart};
 use serde_json::{Value, json};
 
 const GROUP: &str = "ROV-prog";
@@ -35,32 +34,15 @@ fn attempts(tag: u8, trainee: &str, exercise: &str, outcomes: &str, first: usize
         } else {
             ("failed", 30.0)
         };
-        out.push(Write::Session {
-            id: sid.clone(),
-            trainee: trainee.into(),
-            group: GROUP.into(),
-            scenario: exercise.into(),
-            created_unix: started,
-            token_sha256: "ab".repeat(32),
-        });
-        out.push(Write::AttemptStart(Box::new(AttemptStart {
-            id: format!("a{sid}"),
-            session: sid.clone(),
-            scenario: exercise.into(),
-            exercise: Some(exercise.into()),
-            exercise_version: Some("2".into()),
-            sim_version: "sim-1".into(),
-            started_unix: started,
-            init: json!({}),
-        })));
-        out.push(Write::AttemptEnd(Box::new(AttemptEnd {
-            id: format!("a{sid}"),
-            ended_unix: started + 30.0,
-            sim_seconds: 30.0,
-            outcome: outcome.into(),
-            score: Some(score),
-            assessment: None,
-        })));
+        out.push(stored_session(&sid, trainee, GROUP, exercise, started));
+        out.extend(stored_attempt(
+            &format!("a{sid}"),
+            &sid,
+            exercise,
+            started,
+            outcome,
+            Some(score),
+        ));
     }
     out
 }
@@ -73,26 +55,6 @@ async fn start(base: &str, trainee: &str, group: &str, exercise: &str) -> (u16, 
         json!({"trainee": trainee, "group": group, "exercise": exercise}),
     )
     .await
-}
-
-async fn send(
-    method: reqwest::Method,
-    url: &str,
-    token: &str,
-    body: Option<Value>,
-) -> (u16, Value) {
-    let mut r = reqwest::Client::new()
-        .request(method, url)
-        .bearer_auth(token);
-    if let Some(b) = body {
-        r = r.json(&b);
-    }
-    let r = r.send().await.unwrap();
-    let st = r.status().as_u16();
-    (
-        st,
-        serde_json::from_str(&r.text().await.unwrap()).unwrap_or(Value::Null),
-    )
 }
 
 /// One exercise's lock in an answer's `exercises` (the unlocks routes) or `locks` (progress).
@@ -192,7 +154,7 @@ async fn progression_on(database_url: Option<String>) {
     assert_eq!(reach["requires"], json!(["familiarisation"]));
 
     // the instructor's token starts anything, for anyone
-    let (st, ok) = send(
+    let (st, ok) = send_json(
         reqwest::Method::POST,
         &format!("{}/api/sessions", s.base),
         TEACHER,
@@ -204,9 +166,9 @@ async fn progression_on(database_url: Option<String>) {
     // the instructor unlocks reach-targets for Neo of GROUP: Neo only
     let unlocks = format!("{}/api/unlocks", s.base);
     let body = json!({"trainee": "Neo", "group": GROUP, "exercise": "reach-targets"});
-    let (st, _) = send(reqwest::Method::PUT, &unlocks, "wrong", Some(body.clone())).await;
+    let (st, _) = send_json(reqwest::Method::PUT, &unlocks, "wrong", Some(body.clone())).await;
     assert_eq!(st, 403, "a trainee cannot unlock");
-    let (st, _) = send(
+    let (st, _) = send_json(
         reqwest::Method::PUT,
         &unlocks,
         TEACHER,
@@ -214,7 +176,7 @@ async fn progression_on(database_url: Option<String>) {
     )
     .await;
     assert_eq!(st, 404);
-    let (st, list) = send(reqwest::Method::PUT, &unlocks, TEACHER, Some(body)).await;
+    let (st, list) = send_json(reqwest::Method::PUT, &unlocks, TEACHER, Some(body)).await;
     assert_eq!(st, 200, "{list}");
     let reach = lock(&list["exercises"], "reach-targets");
     assert_eq!(reach["status"], "unlocked", "{reach}");
@@ -226,7 +188,7 @@ async fn progression_on(database_url: Option<String>) {
     let (st, _) = start(&s.base, "Neo", "other-group", "reach-targets").await;
     assert_eq!(st, 403, "the same name in another group");
     // and locks it again
-    let (st, list) = send(
+    let (st, list) = send_json(
         reqwest::Method::DELETE,
         &format!("{unlocks}?trainee=Neo&group={GROUP}&exercise=reach-targets"),
         TEACHER,
@@ -241,7 +203,7 @@ async fn progression_on(database_url: Option<String>) {
     let (st, _) = start(&s.base, "Neo", GROUP, "reach-targets").await;
     assert_eq!(st, 403, "locked again");
     // an unlock to keep across the restart
-    let (st, _) = send(
+    let (st, _) = send_json(
         reqwest::Method::PUT,
         &unlocks,
         TEACHER,
@@ -260,7 +222,7 @@ async fn progression_on(database_url: Option<String>) {
     let s = Binary::start(&dir, &extra);
     let (st, ok) = start(&s.base, "Eve", GROUP, "reach-targets").await;
     assert_eq!(st, 201, "{ok}");
-    let (st, list) = send(
+    let (st, list) = send_json(
         reqwest::Method::GET,
         &format!("{}/api/unlocks?trainee=Neo&group={GROUP}", s.base),
         TEACHER,

@@ -290,3 +290,25 @@ pub(crate) fn stored_attempt(
         })),
     ]
 }
+
+/// `method` on `url` with bearer `token` and an optional JSON body: the status and the body as
+/// JSON (Null when it is not JSON).
+pub(crate) async fn send_json(
+    method: reqwest::Method,
+    url: &str,
+    token: &str,
+    body: Option<Value>,
+) -> (u16, Value) {
+    let mut r = reqwest::Client::new()
+        .request(method, url)
+        .bearer_auth(token);
+    if let Some(b) = body {
+        r = r.json(&b);
+    }
+    let r = r.send().await.unwrap();
+    let st = r.status().as_u16();
+    (
+        st,
+        serde_json::from_str(&r.text().await.unwrap()).unwrap_or(Value::Null),
+    )
+}

@@ -254,7 +254,29 @@ async fn a_take_over_starts_at_the_replayed_frame_and_replays_bit_for_bit() {
     let inputs = get_json(&format!("{base}/api/attempts/{a3id}/inputs")).await;
     assert_eq!(inputs["init"]["from"]["attempt"], p.as_str());
 
-    // (d) What the route refuses.
+    // (d) What the route refuses. A chain of take-overs stops at MAX_TAKE_OVERS (8) links from
+    // the attempt started afresh: `a3` is two links deep (src → p → a3); six more take-overs
+    // reach eight, and taking over the eighth is refused with 409, its chain still replayable.
+    let mut last = a3id.to_string();
+    for depth in 3..=seaarms::replay::MAX_TAKE_OVERS {
+        let length = ended(&base, &last).await["sim_seconds"].as_f64().unwrap();
+        let (st, c, _) = take_over(&base, &last, TEACHER, json!({"t": length})).await;
+        assert_eq!(st, 201, "take-over {depth}: {c}");
+        let id = c["id"].as_str().unwrap();
+        end(&base, id, c["control_token"].as_str().unwrap()).await;
+        last = attempts_of(&base, id, 1).await.remove(0)["id"]
+            .as_str()
+            .unwrap()
+            .to_string();
+    }
+    let (st, b, _) = take_over(&base, &last, TEACHER, json!({"t": 0.1})).await;
+    assert_eq!(st, 409, "a ninth link: {b}");
+    assert!(b["error"].as_str().unwrap().contains("take-overs"), "{b}");
+    let deepest = replay_at(&base, &last, TEACHER, 0.5).await;
+    assert!(
+        state_bits(&deepest) == state_bits(&replay_at(&base, &src, TEACHER, 0.5).await),
+        "the eighth link replays from the first attempt's start"
+    );
     let url_src = src.as_str();
     for (body, why) in [
         (json!({"t": -1}), "negative"),

@@ -13,7 +13,7 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
 import { readFile } from 'node:fs/promises';
-import { server, startServer, openBrowser, until, untilDrawn, FAKE_GAMEPAD, workDualLift, INSTRUCTOR_TOKEN, ARTIFACTS, pressReady } from './harness.mjs';
+import { server, startServer, openBrowser, until, untilDrawn, FAKE_GAMEPAD, workDualLift, INSTRUCTOR_TOKEN, ARTIFACTS, pressReady, openClassroom } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || ARTIFACTS;
 const auth = { authorization: `Bearer ${INSTRUCTOR_TOKEN}` };
@@ -62,12 +62,7 @@ test('classroom: named roster, attempt history â†’ debrief (seek to a marker, 4Ã
     assert.equal(await a.page.evaluate(() => localStorage.getItem('seaarms.trainee')), nameA, 'the name is remembered');
 
     // the instructor's Classroom tab lists both by name, in their group
-    await ip.goto(`${url}/instructor`);
-    await ip.fill('#token', INSTRUCTOR_TOKEN);
-    await ip.click('#token-form button');
-    await ip.click('#instr-tabs [data-tab="classroom"]');
-    await ip.fill('#cls-group', group);
-    await ip.dispatchEvent('#cls-group', 'change');
+    await openClassroom(ip, url, group);
     const row = (t) => `#roster tr[data-id="${t.id}"]`;
     await ip.waitForSelector(row(a), { timeout: 10000 });
     await ip.waitForSelector(row(b), { timeout: 10000 });

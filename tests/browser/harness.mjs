@@ -210,6 +210,16 @@ export function classify(rgb) {
 }
 
 /** Creates a trainee session over the REST API (as the page does). */
+/** The instructor page signed in with the instructor token, on the Classroom tab for `group`. */
+export async function openClassroom(page, url, group) {
+  await page.goto(`${url}/instructor`);
+  await page.fill('#token', INSTRUCTOR_TOKEN);
+  await page.click('#token-form button');
+  await page.click('#instr-tabs [data-tab="classroom"]');
+  await page.fill('#cls-group', group);
+  await page.dispatchEvent('#cls-group', 'change');
+}
+
 export async function createSession(url, body = {}) {
   const r = await fetch(`${url}/api/sessions`, { method: 'POST', headers: { 'content-type': 'application/json' }, body: JSON.stringify(body) });
   if (!r.ok) throw new Error(`POST /api/sessions: ${r.status} ${await r.text()}`);

@@ -7,7 +7,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { server, openBrowser, createSession, INSTRUCTOR_TOKEN, ARTIFACTS, UNNAMED_CONTROLS } from './harness.mjs';
+import { server, openBrowser, createSession, INSTRUCTOR_TOKEN, ARTIFACTS, UNNAMED_CONTROLS, openClassroom } from './harness.mjs';
 
 /** Records every CSP violation a page reports (as csp.test.mjs). */
 const WATCH_CSP = () => {
@@ -32,12 +32,7 @@ test('logbook: opened from the Classroom, signed off, printable, no token in a U
   instr.context.on('weberror', (e) => errors.push(String(e.error())));
   const ip = instr.page;
   try {
-    await ip.goto(`${url}/instructor`);
-    await ip.fill('#token', INSTRUCTOR_TOKEN);
-    await ip.click('#token-form button');
-    await ip.click('#instr-tabs [data-tab="classroom"]');
-    await ip.fill('#cls-group', group);
-    await ip.dispatchEvent('#cls-group', 'change');
+    await openClassroom(ip, url, group);
     const row = `#roster tr[data-id="${s.id}"]`;
     await ip.waitForSelector(row, { timeout: 10000 });
     await ip.click(`${row} .cls-name button`);

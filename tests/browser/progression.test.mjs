@@ -10,7 +10,7 @@
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { join } from 'node:path';
-import { startServer, openBrowser, until, untilDrawn, INSTRUCTOR_TOKEN, ARTIFACTS } from './harness.mjs';
+import { startServer, openBrowser, until, untilDrawn, ARTIFACTS, openClassroom } from './harness.mjs';
 
 const SHOTS = process.env.SEAARMS_SHOTS || ARTIFACTS;
 const ex = (id) => `#start .ex[data-id="${id}"]`;
@@ -56,12 +56,7 @@ test('progression: locks and reasons on the start screen; the instructor unlocks
 
     // the instructor unlocks reach-targets for this trainee in the Classroom
     const ip = instr.page;
-    await ip.goto(`${url}/instructor`);
-    await ip.fill('#token', INSTRUCTOR_TOKEN);
-    await ip.click('#token-form button');
-    await ip.click('#instr-tabs [data-tab="classroom"]');
-    await ip.fill('#cls-group', group);
-    await ip.dispatchEvent('#cls-group', 'change');
+    await openClassroom(ip, url, group);
     const nameButton = `#roster button[data-history="${name}"]`;
     await ip.waitForSelector(nameButton, { timeout: 15000 });
     await ip.click(nameButton);

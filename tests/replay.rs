@@ -326,6 +326,82 @@ fn seeks_from_checkpoints_equal_the_replay_stepped_from_the_start_bit_for_bit() 
     );
 }
 
+/// Issue 29 item 2, the first seek: a live session deposits its running attempt's checkpoints
+/// as it passes each 2 s (after the step, before that step's commands: an input applied at
+/// step 2000 is logged there and applied after the checkpoint, as the replay does), and files
+/// them under the finished log's key at the attempt's end; the attempt's first replay then
+/// seeks from them (at most one interval re-simulated), to the state the session went through
+/// bit for bit, and to the whole frame a replay stepped from step 0 gives (the session's own
+/// parts, such as its input and frame numbers, as a replay has them).
+#[test]
+fn a_live_sessions_checkpoints_serve_its_first_replay_bit_for_bit() {
+    use seaarms::replay::checkpoints::CheckpointCache;
+    use std::sync::Arc;
+    let models = magnum();
+    let scenario = Scenario::resolve("pick-and-place").expect("exercise");
+    let cache = Arc::new(CheckpointCache::new(100));
+    let mut live = Live::new("t", &models, &scenario, None, None, 5, None).expect("live");
+    live.keep_checkpoints(cache.clone());
+    let (mut seq, mut states) = (0, BTreeMap::new());
+    drive(&mut live, &mut seq, 0.6, 2000, &mut states);
+    // an input at the checkpoint's step (2000), then a logged instructor command
+    drive(&mut live, &mut seq, -0.4, 2000, &mut states);
+    live.apply(&Command::current(0.8, 45.0).expect("current"))
+        .expect("set");
+    drive(&mut live, &mut seq, 0.3, 3500, &mut states);
+    let attempt = live.attempt_id().to_string();
+    assert_eq!(
+        cache.steps(&CheckpointCache::live_key(&attempt)),
+        [2000, 4000, 6000],
+        "deposited as the session ran"
+    );
+    live.end_attempt(seaarms::sessions::AttemptStop::Left);
+    let (init, inputs) = records(&mut live);
+    let entries = log::decode(&inputs).expect("log decodes");
+    assert!(cache.steps(&CheckpointCache::live_key(&attempt)).is_empty());
+    assert_eq!(
+        cache.steps(&CheckpointCache::key(&attempt, entries.len())),
+        [2000, 4000, 6000],
+        "filed under the finished log's key ({} entries)",
+        entries.len()
+    );
+    let mut replay = Replay::shared(
+        &models,
+        init.clone(),
+        entries.clone(),
+        7.5,
+        cache.clone(),
+        &attempt,
+    )
+    .expect("replayable");
+    // (step, steps re-simulated: from the latest checkpoint at or before it)
+    for (step, cost) in [(7_500, 1_500), (2_000, 0), (5_999, 1_999), (4_000, 0)] {
+        let before = replay.steps_simulated();
+        replay.seek_step(step).expect("seek");
+        assert_eq!(
+            replay.steps_simulated() - before,
+            cost,
+            "seek to step {step}"
+        );
+        assert!(
+            state_bits(replay.live()) == states[&step],
+            "the state at step {step} from the session's checkpoint differs from the session's"
+        );
+        let mut fresh =
+            Replay::new(&models, init.clone(), entries.clone(), 7.5).expect("replayable");
+        fresh.seek_step(step).expect("seek");
+        assert_eq!(fresh.steps_simulated(), step, "from step 0");
+        let (a, b) = (replay.frame(), fresh.frame());
+        let json = |f: &seaarms::protocol::StateFrame| serde_json::to_value(f).expect("json");
+        assert_eq!(json(&a), json(&b), "the frame at step {step}");
+    }
+    assert_eq!(
+        cache.len(),
+        3,
+        "the replay found every checkpoint it needed: it added none"
+    );
+}
+
 /// A seek cancelled half-way keeps the checkpoints it passed (the next seek goes on from
 /// there), and the cache keeps at most its size, the least recently used going first.
 #[test]

@@ -17,6 +17,10 @@
 //! ≤ 50 ms (to the end, and to the worst times: just before a checkpoint).
 //!
 //! It needs `--release` (tests/run.sh runs it so; real-time physics) and skips in a debug build.
+//!
+//! And the first seek of an attempt a live session ran: the session leaves its checkpoints
+//! as it runs, filed under the attempt's log when it ends, so the debrief's first seek
+//! re-simulates at most one interval (this one runs in any build).
 
 #![allow(clippy::unwrap_used)]
 
@@ -24,7 +28,9 @@ mod common;
 
 use std::time::{Duration, Instant};
 
-use common::{TEACHER, create_at, next_of, temp_dir};
+use common::{
+    TEACHER, create_at, get_as, hold_sticks, next_of, start_with_state, temp_dir, trainee,
+};
 use futures_util::StreamExt;
 use seaarms::replay::checkpoints::CHECKPOINT_INTERVAL_STEPS;
 use seaarms::sessions::record::RecordMsg;
@@ -255,4 +261,86 @@ async fn seeks_started_and_dropped_by_one_trainee_do_not_slow_20_live_sessions()
     eprintln!("quiet seeks: the slowest {worst:.1} ms");
     let _ = stop.send(());
     let _ = server.await;
+}
+
+/// A live session's attempt leaves a checkpoint every 2 s of its simulated time in the
+/// server's shared cache while it runs (under its provisional key), filed under its finished
+/// log's key when it ends; the attempt's first REST seek, to its end, then adds no checkpoint:
+/// it started from the session's last one.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_live_attempt_leaves_its_checkpoints_for_its_first_seek() {
+    use seaarms::replay::checkpoints::CheckpointCache;
+    let dir = temp_dir("replay-live");
+    let (s, state) = start_with_state(dir.clone(), |_| {}).await;
+    let (st, c) = create_at(&s.base, json!({"exercise": "reach-targets"})).await;
+    assert_eq!(st, 201, "{c}");
+    let (id, token) = (
+        c["id"].as_str().unwrap(),
+        c["control_token"].as_str().unwrap(),
+    );
+    let mut ws = trainee(&s, id, token).await;
+    // 110 inputs 40 ms apart: about 4.4 s of the arms moving
+    let arms = json!({"left": {"axes": [0.4, 0.3, 0, 0, 0, 0.5], "grip": 0}, "right": {"axes": [-0.4, 0.3, 0, 0, 0, 0], "grip": 0}});
+    hold_sticks(&mut ws, 1, 110, arms).await;
+    let (st, summary) = get_as(&format!("{}/api/sessions/{id}", s.base), token).await;
+    assert_eq!(st, 200, "{summary}");
+    let summary: serde_json::Value = serde_json::from_str(&summary).unwrap();
+    let attempt = summary["attempt"].as_str().unwrap().to_string();
+    let live = state.replays.steps(&CheckpointCache::live_key(&attempt));
+    assert!(
+        live.len() >= 2 && live[..2] == [2000, 4000],
+        "the running attempt's checkpoints: {live:?}"
+    );
+    // The session ends, and its attempt with it.
+    let r = reqwest::Client::new()
+        .delete(format!("{}/api/sessions/{id}", s.base))
+        .bearer_auth(token)
+        .send()
+        .await
+        .unwrap();
+    assert!(r.status().is_success(), "{}", r.status());
+    let ended = loop {
+        let (_, a) = get_as(&format!("{}/api/attempts/{attempt}", s.base), TEACHER).await;
+        let a: serde_json::Value = serde_json::from_str(&a).unwrap();
+        if a["outcome"].is_string() {
+            break a;
+        }
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    };
+    let (_, inputs) = get_as(
+        &format!("{}/api/attempts/{attempt}/inputs", s.base),
+        TEACHER,
+    )
+    .await;
+    let inputs: serde_json::Value = serde_json::from_str(&inputs).unwrap();
+    let entries = inputs["entries"].as_array().unwrap().len();
+    assert!(
+        state
+            .replays
+            .steps(&CheckpointCache::live_key(&attempt))
+            .is_empty()
+    );
+    let filed = state
+        .replays
+        .steps(&CheckpointCache::key(&attempt, entries));
+    assert!(
+        filed.starts_with(&[2000, 4000]),
+        "filed under the log of {entries} entries: {filed:?}"
+    );
+    let kept = state.replays.len();
+    let end = ended["sim_seconds"].as_f64().unwrap();
+    let (st, frame) = get_as(
+        &format!("{}/api/attempts/{attempt}/replay?t={end}", s.base),
+        token,
+    )
+    .await;
+    assert_eq!(st, 200, "{frame}");
+    assert_eq!(
+        state.replays.len(),
+        kept,
+        "the first seek to the end ({end} s) started from the session's last checkpoint ({:?}): it passed none",
+        filed.last()
+    );
+    s.stop().await;
+    let _ = std::fs::remove_dir_all(&dir);
 }

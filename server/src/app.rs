@@ -157,6 +157,7 @@ impl AppState {
             },
             metrics.clone(),
         )?);
+        let replays = sessions.checkpoints().clone();
         Ok(AppState {
             robots,
             sessions,
@@ -171,7 +172,7 @@ impl AppState {
             join_code,
             compute,
             db,
-            replays: Arc::default(),
+            replays,
             tracks: Arc::default(),
             cluster,
             xapi,

@@ -53,6 +53,14 @@ pub async fn start_with(
     dir: PathBuf,
     tweak: impl FnOnce(&mut seaarms::config::ServeConfig),
 ) -> Server {
+    start_with_state(dir, tweak).await.0
+}
+
+/// [`start_with`], with the server's state (to look inside it).
+pub async fn start_with_state(
+    dir: PathBuf,
+    tweak: impl FnOnce(&mut seaarms::config::ServeConfig),
+) -> (Server, seaarms::app::AppState) {
     let listener = tokio::net::TcpListener::bind("127.0.0.1:0").await.unwrap();
     let addr = listener.local_addr().unwrap();
     // Tests not about progression start any exercise directly: `requires` does not lock
@@ -66,18 +74,22 @@ pub async fn start_with(
     tweak(&mut config);
     let state = seaarms::app::AppState::new(&config).unwrap();
     let (tx, rx) = tokio::sync::oneshot::channel::<()>();
-    let done = tokio::spawn(async move {
-        seaarms::run(listener, state, async {
-            let _ = rx.await;
-        })
-        .await
-        .unwrap();
+    let done = tokio::spawn({
+        let state = state.clone();
+        async move {
+            seaarms::run(listener, state, async {
+                let _ = rx.await;
+            })
+            .await
+            .unwrap();
+        }
     });
-    Server {
+    let server = Server {
         base: format!("http://{addr}"),
         stop: Some(tx),
         done: Some(done),
-    }
+    };
+    (server, state)
 }
 
 pub async fn start() -> Server {

@@ -30,8 +30,9 @@ use serde_json::{Value, json};
 
 use crate::api::attempts::{FROM, authorized, check_open, hold, load, pool_error};
 use crate::api::progress::finished;
+use crate::api::sessions::session_actor;
 use crate::app::AppState;
-use crate::auth::{Credentials, MISSING_TOKEN_OR_QUERY, Principal, WRONG_TOKEN};
+use crate::auth::{Actor, Credentials, WRONG_TOKEN};
 use crate::catalogue::EXERCISES;
 use crate::db::{AttemptFilter, AttemptRow, unavailable as db_error};
 use crate::error::ApiError;
@@ -46,40 +47,6 @@ pub struct TrackQuery {
     /// Read by [`Credentials`]; listed so that it is a known field.
     #[allow(dead_code)]
     token: Option<String>,
-}
-
-/// Who `creds` are on session `id` and that session's trainee (name, group): a live session's
-/// control token or cookie (its database row may not be written yet), else the stored token
-/// hash; 403 for an invalid id or anyone else, 404 for an unknown session (the instructor).
-async fn session_principal(
-    state: &AppState,
-    creds: &Credentials,
-    id: &str,
-) -> Result<(Principal, String, String), ApiError> {
-    if !creds.presented(FROM)? {
-        return Err(ApiError::forbidden(MISSING_TOKEN_OR_QUERY));
-    }
-    if !crate::sessions::record::valid_id(id) {
-        return Err(ApiError::forbidden(WRONG_TOKEN));
-    }
-    if let Some(s) = state.sessions.get(id) {
-        let p = creds.principal(state, FROM, Some((&s.id, &s.control_token)))?;
-        if let Principal::Anonymous { .. } = p {
-            return Err(ApiError::forbidden(WRONG_TOKEN));
-        }
-        return Ok((p, s.label.clone(), s.group.clone()));
-    }
-    let p = creds.principal_stored(state, FROM, id).await?;
-    if let Principal::Anonymous { .. } = p {
-        return Err(ApiError::forbidden(WRONG_TOKEN));
-    }
-    let rec = state
-        .db
-        .session(id)
-        .await
-        .map_err(db_error)?
-        .ok_or_else(|| ApiError::not_found(format!("no session `{id}`")))?;
-    Ok((p, rec.trainee, rec.group))
 }
 
 /// The attempt `id` if `creds` may read its track (see the module docs), with the key its
@@ -105,8 +72,8 @@ async fn readable(
         Err(e) => return Err(e),
     }
     let session = session.unwrap_or_default();
-    let (asker, name, group) = session_principal(state, creds, session).await?;
-    if !matches!(asker, Principal::Trainee { .. }) {
+    let (asker, name, group) = session_actor(state, creds, FROM, session).await?;
+    if asker != Actor::Trainee {
         return Err(ApiError::forbidden(WRONG_TOKEN));
     }
     let row = state
@@ -226,7 +193,7 @@ pub async fn of_session(
     Path(id): Path<String>,
     Query(q): Query<GhostsQuery>,
 ) -> Result<Json<Value>, ApiError> {
-    let (_, name, group) = session_principal(&state, &creds, &id).await?;
+    let (_, name, group) = session_actor(&state, &creds, FROM, &id).await?;
     let spec = EXERCISES
         .get(&q.exercise)
         .ok_or_else(|| ApiError::not_found(format!("no exercise `{}`", q.exercise)))?;

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 use serde_json::Value;
 
 use crate::app::AppState;
-use crate::auth::{Actor, Credentials, MISSING_TOKEN, TokenFrom, token_eq};
+use crate::auth::{Actor, Credentials, MISSING_TOKEN, MISSING_TOKEN_OR_QUERY, TokenFrom, token_eq};
 use crate::db::unavailable as db_error;
 use crate::error::ApiError;
 use crate::json::ApiJson;
@@ -34,6 +34,14 @@ impl From<CommandError> for ApiError {
     }
 }
 
+/// The 403 message when no token is presented where `from` says to look.
+fn missing(from: TokenFrom) -> &'static str {
+    match from {
+        TokenFrom::Bearer => MISSING_TOKEN,
+        _ => MISSING_TOKEN_OR_QUERY,
+    }
+}
+
 /// Who `creds` (read from `from`) act as on the live session `s`: its trainee or the
 /// instructor, else 403.
 pub(crate) fn live_actor(
@@ -44,7 +52,7 @@ pub(crate) fn live_actor(
 ) -> Result<Actor, ApiError> {
     creds
         .principal(state, from, Some((&s.id, &s.control_token)))?
-        .actor(MISSING_TOKEN)
+        .actor(missing(from))
 }
 
 /// Who `creds` (read from `from`) act as on session `id`, which is not live: the instructor,
@@ -58,7 +66,34 @@ async fn ended_actor(
     creds
         .principal_stored(state, from, id)
         .await?
-        .actor(MISSING_TOKEN)
+        .actor(missing(from))
+}
+
+/// Who `creds` (read from `from`) act as on session `id`, live or ended ([`live_actor`],
+/// [`ended_actor`]), with its trainee's name and group (a live session's own: its database row
+/// may not be written yet); 421 naming the replica a session is live on, 404 for an unknown
+/// session.
+pub(crate) async fn session_actor(
+    state: &AppState,
+    creds: &Credentials,
+    from: TokenFrom,
+    id: &str,
+) -> Result<(Actor, String, String), ApiError> {
+    if let Some(s) = state.sessions.get(id) {
+        let actor = live_actor(state, creds, from, &s)?;
+        return Ok((actor, s.label.clone(), s.group.clone()));
+    }
+    if let Some(e) = crate::cluster::elsewhere(state, id).await {
+        return Err(e);
+    }
+    let actor = ended_actor(state, creds, from, id).await?;
+    let rec = state
+        .db
+        .session(id)
+        .await
+        .map_err(db_error)?
+        .ok_or_else(|| ApiError::not_found(format!("no session `{id}`")))?;
+    Ok((actor, rec.trainee, rec.group))
 }
 
 /// Body of `POST /api/sessions` (every field optional).
@@ -817,15 +852,8 @@ pub async fn log_csv(
     if !valid_id(&id) {
         return Err(ApiError::not_found(format!("no session `{id}`")));
     }
-    let from = TokenFrom::BearerOrQuery;
-    match state.sessions.get(&id) {
-        Some(live) => live_actor(&state, &creds, from, &live)?,
-        None => match crate::cluster::elsewhere(&state, &id).await {
-            // live on another replica: 421 naming it (docs/api.md), as its other routes
-            Some(e) => return Err(e),
-            None => ended_actor(&state, &creds, from, &id).await?,
-        },
-    };
+    // live on another replica: 421 naming it (docs/api.md), as its other routes
+    session_actor(&state, &creds, TokenFrom::BearerOrQuery, &id).await?;
     let path = state
         .sessions
         .recorder

@@ -4,21 +4,32 @@
 //! re-simulates at most one interval from the nearest earlier checkpoint instead of the whole
 //! attempt from its start.
 //!
-//! * **Where they come from**: a replay that steps past a multiple of the interval deposits
-//!   the state there (if the cache has none), so the first seek of an attempt costs the full
-//!   re-simulation up to its target (about 13 ms per simulated second, on the compute pool,
-//!   cancellable) and fills the cache on the way; every later seek, by anyone, to any time up
-//!   to there costs at most one interval. A seek cancelled half-way keeps what it deposited.
+//! * **Where they come from**:
+//!   - a live session deposits its running attempt's state as it passes each interval
+//!     ([`CheckpointCache::live_key`]), and at the attempt's end they are filed under the
+//!     final log's key ([`CheckpointCache::settle`]): the first seek of a debrief opened after
+//!     an attempt already finds them (a copy every 2 s, ~35 KB/s per session);
+//!   - a replay that steps past a multiple of the interval deposits the state there (if the
+//!     cache has none): an attempt whose checkpoints are gone (evicted, or recorded before the
+//!     server started) costs its first seek the re-simulation up to its target (about 13 ms
+//!     per simulated second, on the compute pool, cancellable) and fills the cache on the way;
+//!     every later seek, by anyone, to any time up to there costs at most one interval. A seek
+//!     cancelled half-way keeps what it deposited.
 //! * **What a checkpoint is**: [`Live::checkpoint`] (the simulation, operator, exercise run and
-//!   clock, records excluded) and the replay's position in the input log (`next`, the first
-//!   entry not yet applied). Restoring clones it again, so the cached one is never stepped;
-//!   the step is deterministic and the clone is deep, so the restored replay continues bit
-//!   for bit as the uninterrupted one (`tests/replay.rs`).
+//!   clock, records excluded, the session's own parts as a replay has them) and the replay's
+//!   position in the input log (`next`, the first entry not yet applied). Restoring clones it
+//!   again, so the cached one is never stepped; the step is deterministic and the clone is
+//!   deep, so the restored replay continues bit for bit as the uninterrupted one
+//!   (`tests/replay.rs`, for replays' and live sessions' checkpoints).
 //! * **Keys**: the attempt id and the number of log entries read. An ended attempt's log
 //!   never changes; a running attempt's log grows, and a longer log is another key, so a
-//!   checkpoint always belongs to exactly the entries it was computed from.
+//!   checkpoint always belongs to exactly the entries it was computed from. A live session's
+//!   go under a provisional key until its attempt ends and the log's length is known.
 //! * **Memory**: at most [`MAX_CHECKPOINTS`] over all attempts, the least recently used
-//!   evicted first; [`CHECKPOINT_BYTES`] each (measured), so about 280 MB at most.
+//!   evicted first; [`CHECKPOINT_BYTES`] each (measured), so about 280 MB at most. With live
+//!   sessions depositing, the cache holds the last ~400 s of 20 sessions' attempts (or the
+//!   ones replayed since), so a debrief soon after its attempt seeks at once; an older one
+//!   pays its first seek as above.
 
 use std::collections::{BTreeMap, HashMap};
 use std::sync::{Arc, Mutex, MutexGuard};
@@ -112,6 +123,37 @@ impl CheckpointCache {
     /// The cache key of an attempt's replay that read `entries` log entries.
     pub fn key(attempt: &str, entries: usize) -> String {
         format!("{attempt}#{entries}")
+    }
+
+    /// The provisional key of `attempt`'s checkpoints while a live session runs it (its log
+    /// still growing): [`CheckpointCache::settle`] files them under the final key.
+    pub fn live_key(attempt: &str) -> String {
+        format!("{attempt}#live")
+    }
+
+    /// Files the checkpoints a live session deposited for `attempt` under the key of its
+    /// finished log of `entries` entries (where its replays look), keeping their use order;
+    /// a step that key already has keeps its own.
+    pub fn settle(&self, attempt: &str, entries: usize) {
+        let from = Self::live_key(attempt);
+        let to = Self::key(attempt, entries);
+        let mut guard = self.lock();
+        let inner = &mut *guard;
+        let Some(deposited) = inner.by_key.remove(&from) else {
+            return;
+        };
+        let target = inner.by_key.entry(to.clone()).or_default();
+        for (step, slot) in deposited {
+            match target.entry(step) {
+                std::collections::btree_map::Entry::Occupied(_) => {
+                    inner.lru.remove(&slot.used);
+                }
+                std::collections::btree_map::Entry::Vacant(v) => {
+                    inner.lru.insert(slot.used, (to.clone(), step));
+                    v.insert(slot);
+                }
+            }
+        }
     }
 
     /// The latest checkpoint of `key` at or before `step`, with its step (marked used).

@@ -37,6 +37,7 @@ use crate::clock::unix_now;
 use crate::ids::{random_hex, random_seed};
 use crate::metrics::Metrics;
 use crate::protocol::{ControlMethod, ControlMode, EndReason, Settings};
+use crate::replay::checkpoints::{CHECKPOINT_INTERVAL_STEPS, Checkpoint, CheckpointCache};
 use admission::ClientKey;
 use command::fault::log_form::FaultEntry;
 use command::{ActiveFault, SettingsChange, StickInput};
@@ -161,6 +162,9 @@ pub struct Live {
     /// Where a live session's attempts find their benchmark pass lines (None: the file's
     /// marks; a replay takes the recorded lines instead, [`Live::set_pass_lines`]).
     pass_board: Option<Arc<pass_board::PassBoard>>,
+    /// Where a live session deposits its running attempt's replay checkpoints
+    /// ([`crate::replay::checkpoints`]; None: a replay's own state, a headless run).
+    checkpoints: Option<Arc<CheckpointCache>>,
 }
 
 impl Live {
@@ -241,20 +245,23 @@ impl Live {
     /// A copy of this state for a replay's checkpoint ([`crate::replay`]): everything that
     /// steps (simulation, operator, exercise, clock and faults) cloned, so the copy continues
     /// bit for bit as this state does; the records are not copied (a replay records nothing:
-    /// the copy has no input log and no pending records, and does not record).
+    /// the copy has no input log and no pending records, and does not record). The session's
+    /// own parts that no log entry sets are as a replay has them (input and frame numbers 0,
+    /// not paused, the default visibility, no Ready gate), so a live session's checkpoint and
+    /// a replay's at the same step are the same state.
     pub fn checkpoint(&self) -> Live {
         Live {
             sim: self.sim.clone(),
             operator: self.operator.clone(),
-            paused: self.paused,
-            input_seq: self.input_seq,
+            paused: None,
+            input_seq: 0,
             faults: self.faults.clone(),
             steps_since_origin: self.steps_since_origin,
             origin: self.origin,
-            frame_seq: self.frame_seq,
-            visibility_m: self.visibility_m,
-            ready_gate: self.ready_gate,
-            awaiting_ready: self.awaiting_ready,
+            frame_seq: 0,
+            visibility_m: None,
+            ready_gate: false,
+            awaiting_ready: false,
             next_frame: self.next_frame,
             measures: self.measures.clone(),
             tally: self.tally,
@@ -262,14 +269,43 @@ impl Live {
             scenario: self.scenario.clone(),
             exercise: self.exercise.clone(),
             next_seed: self.next_seed,
-            session_id: self.session_id.clone(),
+            session_id: "replay".to_string(),
             attempt_id: self.attempt_id.clone(),
-            practice: self.practice.clone(),
+            practice: None,
             recording: false,
             log: None,
             pending: Vec::new(),
             pass_board: None,
+            checkpoints: None,
         }
+    }
+
+    /// Deposits the running attempt's state as its replay checkpoint at this step when the
+    /// step is one ([`CHECKPOINT_INTERVAL_STEPS`]; a live session that keeps checkpoints, a
+    /// recorded attempt that is not a practice attempt, whose replay log begins in its
+    /// source's). Called after a step, where a replay takes its checkpoint before applying
+    /// the log's next entries: this step's commands come after.
+    fn deposit_checkpoint(&self) {
+        let (Some(cache), Some(log)) = (self.checkpoints.as_ref(), self.log.as_ref()) else {
+            return;
+        };
+        let k = self.sim.steps();
+        if k == 0 || k % CHECKPOINT_INTERVAL_STEPS != 0 || self.practice.is_some() {
+            return;
+        }
+        cache.insert(
+            &CheckpointCache::live_key(&self.attempt_id),
+            k,
+            Checkpoint {
+                live: self.checkpoint(),
+                next: log.entries(),
+            },
+        );
+    }
+
+    /// Keeps the running and later attempts' replay checkpoints in `cache` as they run.
+    pub fn keep_checkpoints(&mut self, cache: Arc<CheckpointCache>) {
+        self.checkpoints = Some(cache);
     }
 
     fn build(
@@ -314,6 +350,7 @@ impl Live {
             log: None,
             pending: Vec::new(),
             pass_board: None,
+            checkpoints: None,
         };
         Ok(live)
     }
@@ -412,6 +449,9 @@ impl Live {
         let Some(mut log) = self.log.take() else {
             return;
         };
+        if let Some(cache) = &self.checkpoints {
+            cache.settle(&self.attempt_id, log.entries());
+        }
         let last = log.finish();
         if !last.is_empty() {
             self.pending.push(RecordMsg::AttemptInputs {
@@ -796,6 +836,8 @@ pub struct SessionManager {
     magnum: Arc<Model>,
     /// The benchmark pass lines attempts start with.
     pass_board: Arc<pass_board::PassBoard>,
+    /// The replay checkpoints live sessions deposit and replays share.
+    checkpoints: Arc<CheckpointCache>,
 }
 
 /// What a new session is created with ([`SessionManager::create`]).
@@ -835,12 +877,19 @@ impl SessionManager {
             metrics,
             magnum,
             pass_board: Arc::default(),
+            checkpoints: Arc::default(),
         })
     }
 
     /// The benchmark pass lines the sessions' attempts start with.
     pub fn pass_board(&self) -> &Arc<pass_board::PassBoard> {
         &self.pass_board
+    }
+
+    /// The replay checkpoints: the sessions' attempts deposit theirs as they run, and every
+    /// replay of the server shares them ([`crate::replay::checkpoints`]).
+    pub fn checkpoints(&self) -> &Arc<CheckpointCache> {
+        &self.checkpoints
     }
 
     /// The arm model sessions use (both arms).
@@ -878,6 +927,7 @@ impl SessionManager {
             Some(self.pass_board.clone()),
         )
         .map_err(|e| CreateError::Sim(e.to_string()))?;
+        live.keep_checkpoints(self.checkpoints.clone());
         live.wait_for_ready(wait_for_ready);
         self.launch(client, id, live, label, group)
     }
@@ -897,8 +947,10 @@ impl SessionManager {
         self.recorder.admit().map_err(CreateError::Recording)?;
         let id = random_hex(8);
         let mut live = Live::taking_over(&id, state, init);
-        // Its later attempts (a reset) start judged as any session's.
+        // Its later attempts (a reset) start judged as any session's, and leave their
+        // checkpoints (the practice attempt's replay log begins in its source's: none).
         live.pass_board = Some(self.pass_board.clone());
+        live.keep_checkpoints(self.checkpoints.clone());
         self.launch(
             client,
             id,

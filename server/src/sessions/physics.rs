@@ -176,7 +176,8 @@ impl Live {
     /// One 1 ms step of the session: the core's operator turns the latest commands into the
     /// simulation's input and the simulation steps ([`seaarms_core::sim::Operator::step`]);
     /// the step's events go to the records ([`Live::record_events`]); every
-    /// [`RECORD_EVERY_STEPS`] steps the exercise attempt takes an assessment sample.
+    /// [`RECORD_EVERY_STEPS`] steps the exercise attempt takes an assessment sample; a live
+    /// session's attempt leaves its replay checkpoints ([`Live::deposit_checkpoint`]).
     /// Returns whether a record row is due (the same cadence). The real-time worker,
     /// headless attempts and replays all step through here.
     pub fn advance(&mut self) -> bool {
@@ -189,6 +190,7 @@ impl Live {
                 run.sample(&mut self.sim, idle);
             }
         }
+        self.deposit_checkpoint();
         due
     }
 

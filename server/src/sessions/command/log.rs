@@ -137,6 +137,8 @@ pub struct Writer {
     last_input: Option<Vec<i32>>,
     /// Uncompressed bytes written.
     raw_bytes: u64,
+    /// Entries written (inputs equal to the last one are not).
+    entries: usize,
 }
 
 impl Default for Writer {
@@ -153,6 +155,7 @@ impl Writer {
             last_step: 0,
             last_input: None,
             raw_bytes: 0,
+            entries: 0,
         }
     }
 
@@ -192,6 +195,7 @@ impl Writer {
         line.push('\n');
         self.last_step = entry.k;
         self.raw_bytes += line.len() as u64;
+        self.entries += 1;
         // Writing into a Vec does not fail.
         let _ = self.enc.write_all(line.as_bytes());
     }
@@ -212,6 +216,11 @@ impl Writer {
     /// Uncompressed bytes so far.
     pub fn raw_bytes(&self) -> u64 {
         self.raw_bytes
+    }
+
+    /// Entries written so far: the length of [`decode`]'s list for this log.
+    pub fn entries(&self) -> usize {
+        self.entries
     }
 }
 

@@ -106,6 +106,7 @@ statusLoop(view, status, () => selectedArm, (s) => task.update(s.exercise, s.awa
 const startScreen = new StartScreen($('start'));
 const task = new TaskPanel($('task'), $('card'), $('gauges'), {
   banner: showBanner,
+  withdraw: (text) => banner.withdraw(text),
   tryAgain: () => conn.send(messages.reset()), // a new attempt (docs/exercises.md)
   diagnose: (answer) => conn.send(messages.diagnose(answer)), // fault drill
   ready: () => conn.send(messages.ready()), // the goal is read: the attempt's clock starts

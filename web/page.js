@@ -60,6 +60,11 @@ export class Banner {
     this.el.hidden = false;
     if (ms) this.timer = setTimeout(() => { this.el.hidden = true; }, ms);
   }
+
+  /** Hides the banner if it still shows `text` (a notice that no longer applies). */
+  withdraw(text) {
+    if (!this.el.hidden && this.el.textContent === text) this.show(null, '');
+  }
 }
 
 /** How often the status bar is refreshed (Hz). */

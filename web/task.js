@@ -32,7 +32,7 @@ export class TaskPanel {
    * @param panel element of the panel (#task); card: element of the completion card
    * @param gauges the force and pressure gauges (#gauges): docked in the panel, under the
    *   clock, while there is a task (next to it, not over a camera view), else back in the view
-   * @param ui {banner(kind, text, ms), tryAgain(), next(), choose()}
+   * @param ui {banner(kind, text, ms), withdraw(text), tryAgain(), next(), choose()}
    */
   constructor(panel, card, gauges, ui) {
     this.panel = panel;
@@ -196,6 +196,8 @@ export class TaskPanel {
   /** After "try again" (the same session restarts the attempt). */
   restarted() {
     this.shownDone = false;
+    // the last attempt's notice ("Done: …") does not carry into the new one
+    if (this.lastEvent) this.ui.withdraw?.(this.lastEvent.text);
     this.lastEvent = null;
     this.step = -1;
     this.card.hidden = true;

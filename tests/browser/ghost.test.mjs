@@ -52,8 +52,15 @@ test('a ghost of my best attempt is drawn during a live attempt, and the debrief
     const first = g.best.attempt;
     console.log(`first attempt ${first}: score ${g.best.score.toFixed(1)}, ${g.best.sim_seconds.toFixed(1)} s`);
 
-    // try again: a new attempt, waiting for Ready; the menu now offers "my best"
+    // try again: a new attempt, waiting for Ready; the menu now offers "my best"; the last
+    // attempt's notice (e.g. "Done: …", shown 4 s) does not carry over into it
+    const notice = await page.evaluate(() => { const e = document.getElementById('banner'); return e.hidden ? null : e.textContent; });
     await page.click('#card [data-act="again"]');
+    // the task panel has taken the new attempt (its Ready button is back)
+    await page.waitForSelector('#task .task-ready:not([hidden])', { timeout: 5000 });
+    const left = await page.evaluate(() => { const e = document.getElementById('banner'); return e.hidden ? null : e.textContent; });
+    console.log(`notice when trying again: ${JSON.stringify(notice)}; after: ${JSON.stringify(left)}`);
+    assert.ok(left === null || left !== notice, `the finished attempt's notice ${JSON.stringify(notice)} is withdrawn (shown: ${JSON.stringify(left)})`);
     await pressReady(page);
     await until(page, (a) => window.__seaarms.ghostChoices?.best?.attempt === a, first);
     await page.uncheck('#chk-ell').catch(() => {});

@@ -3,8 +3,9 @@
 //! box pose equal the REST replay's frame at t bit for bit (the reference is the replay route
 //! of the source, a different path from the take-over's own seek and session) —, is itself
 //! replayed bit for bit (its replay at its end equals the last live frame), a take-over of a
-//! take-over replays too, the route refuses what it should (400, 403, 404, 409), and practice
-//! attempts are left out of the learning curves and the logbook's counts.
+//! take-over replays too, the route refuses what it should (400, 403, 404, 409, and 429 past a
+//! client's cap of live sessions, as `POST /api/sessions`), and practice attempts are left out
+//! of the learning curves and the logbook's counts.
 
 #![allow(clippy::unwrap_used)]
 
@@ -321,6 +322,58 @@ async fn a_take_over_starts_at_the_replayed_frame_and_replays_bit_for_bit() {
     .await;
     assert_eq!(st, 409, "free play: {b}");
     let _ = ended(&base, &src).await;
+    s.stop().await;
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// A take-over creates a session, so it is admitted as `POST /api/sessions` is
+/// (`api::sessions::admit`): past a client's cap of live sessions (here 2) it gets 429 naming
+/// the cap; the instructor's token is not capped.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn take_overs_count_against_a_clients_live_sessions() {
+    let dir = temp_dir("takeover-cap");
+    let s = start_with(dir.clone(), |c| c.max_sessions_per_client = 2).await;
+    let base = s.base.clone();
+    let (st, c) = create(
+        &s,
+        json!({"trainee": "Ada", "group": "T", "exercise": "reach-targets"}),
+    )
+    .await;
+    assert_eq!(st, 201, "{c}");
+    let (sid, token) = (
+        c["id"].as_str().unwrap(),
+        c["control_token"].as_str().unwrap(),
+    );
+    let mut ws = trainee(&s, sid, token).await;
+    drive(&mut ws, &mut 0, 40, 0.0).await;
+    end(&base, sid, token).await;
+    let src = attempts_of(&base, sid, 1).await.remove(0)["id"]
+        .as_str()
+        .unwrap()
+        .to_string();
+    for k in 1..=2 {
+        let (st, b, _) = take_over(&base, &src, token, json!({"t": 0.5})).await;
+        assert_eq!(st, 201, "take-over {k}: {b}");
+    }
+    let r = reqwest::Client::new()
+        .post(format!("{base}/api/attempts/{src}/take-over"))
+        .bearer_auth(token)
+        .json(&json!({"t": 0.5}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(
+        r.status().as_u16(),
+        429,
+        "a third live session for this client"
+    );
+    let b: Value = r.json().await.unwrap();
+    assert!(
+        b["error"].as_str().unwrap().contains("live sessions"),
+        "{b}"
+    );
+    let (st, b, _) = take_over(&base, &src, TEACHER, json!({"t": 0.5})).await;
+    assert_eq!(st, 201, "the instructor: {b}");
     s.stop().await;
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -136,6 +136,17 @@ async fn end(base: &str, id: &str, token: &str) {
     assert!(r.status().is_success(), "{}", r.status());
 }
 
+/// Drives the session `created` (as `POST /api/sessions` answered) for `messages` × 20 ms over
+/// its trainee socket, ends it, and returns its one attempt once it has ended.
+async fn drive_and_end(s: &Server, created: &Value, messages: u64) -> Value {
+    let id = created["id"].as_str().unwrap();
+    let token = created["control_token"].as_str().unwrap();
+    let mut ws = trainee(s, id, token).await;
+    drive(&mut ws, &mut 0, messages, 0.0).await;
+    end(&s.base, id, token).await;
+    attempts_of(&s.base, id, 1).await.remove(0)
+}
+
 /// A new session's first state frame, from its trainee socket.
 async fn first_frame(s: &Server, created: &Value) -> (Ws, Value) {
     let id = created["id"].as_str().unwrap();
@@ -158,13 +169,8 @@ async fn a_take_over_starts_at_the_replayed_frame_and_replays_bit_for_bit() {
     )
     .await;
     assert_eq!(st, 201, "{c}");
-    let sid = c["id"].as_str().unwrap().to_string();
     let token = c["control_token"].as_str().unwrap().to_string();
-    let mut ws = trainee(&s, &sid, &token).await;
-    let mut seq = 0;
-    drive(&mut ws, &mut seq, 80, 0.0).await;
-    end(&base, &sid, &token).await;
-    let source = attempts_of(&base, &sid, 1).await.remove(0);
+    let source = drive_and_end(&s, &c, 80).await;
     let src = source["id"].as_str().unwrap().to_string();
     assert_eq!(source["practice"], false);
     let length = source["sim_seconds"].as_f64().unwrap();
@@ -305,14 +311,8 @@ async fn a_take_over_starts_at_the_replayed_frame_and_replays_bit_for_bit() {
     let (st, _, _) = take_over(&base, "0123456789abcdef", TEACHER, json!({"t": 1})).await;
     assert_eq!(st, 404, "an unknown attempt");
     // free play is not taken over (409)
-    let (oid, otoken) = (
-        other["id"].as_str().unwrap(),
-        other["control_token"].as_str().unwrap(),
-    );
-    let mut wso = trainee(&s, oid, otoken).await;
-    drive(&mut wso, &mut 0, 10, 0.0).await;
-    end(&base, oid, otoken).await;
-    let free = attempts_of(&base, oid, 1).await.remove(0);
+    let otoken = other["control_token"].as_str().unwrap();
+    let free = drive_and_end(&s, &other, 10).await;
     let (st, b, _) = take_over(
         &base,
         free["id"].as_str().unwrap(),
@@ -340,14 +340,8 @@ async fn take_overs_count_against_a_clients_live_sessions() {
     )
     .await;
     assert_eq!(st, 201, "{c}");
-    let (sid, token) = (
-        c["id"].as_str().unwrap(),
-        c["control_token"].as_str().unwrap(),
-    );
-    let mut ws = trainee(&s, sid, token).await;
-    drive(&mut ws, &mut 0, 40, 0.0).await;
-    end(&base, sid, token).await;
-    let src = attempts_of(&base, sid, 1).await.remove(0)["id"]
+    let token = c["control_token"].as_str().unwrap();
+    let src = drive_and_end(&s, &c, 40).await["id"]
         .as_str()
         .unwrap()
         .to_string();

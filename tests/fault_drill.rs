@@ -65,12 +65,30 @@ fn autopilot_names_every_fault_and_passes() {
     }
 }
 
+/// An idle attempt fails (no answer). Its first step, the jaw to marker A, is not reached
+/// and ends at the fault window's end all the same (version 4: a fault that came first can
+/// make A unreachable), and the stop step follows after its hold; each at its time whatever
+/// the fault's moment.
 #[test]
 fn idle_attempt_fails_and_runs_are_deterministic() {
     let idle = attempt(Driver::Idle, 3);
     assert!(idle.done && !idle.passed, "{idle:?}");
     assert!(!idle.completed);
     assert_eq!(idle.diagnosis.as_ref().map(|d| d.answer.as_str()), Some(""));
+    let spec = EXERCISES.get("fault-diagnosis").expect("exercise");
+    let window_end = spec.fault_drill.as_ref().expect("drill").window_s[1];
+    let hold = spec.steps[1].hold_s;
+    assert_eq!(idle.step_times_s.len(), 2, "{:?}", idle.step_times_s);
+    assert!(
+        (idle.step_times_s[0] - window_end).abs() <= 0.05,
+        "the reach step ended at {:.2} s, not at the window's end {window_end} s",
+        idle.step_times_s[0]
+    );
+    assert!(
+        (idle.step_times_s[1] - hold).abs() <= 0.05,
+        "{:?}",
+        idle.step_times_s
+    );
     let a = attempt(Driver::Autopilot, 6);
     let b = attempt(Driver::Autopilot, 6);
     assert_eq!(a, b);

@@ -513,7 +513,7 @@ class Operator {
    *    nameplate 6.89 MPa is a supply drop; a spin-up slower than the healthy motor's (65 % of
    *    the steady speed within 40 ms of the first motion) is air;
    * 2b. jog the wrist pitch out and back at full stick (0.5 s each) and let go: a joint that
-   *    keeps creeping after the stick is centred is air (the goal's "sway after a stop"). Read
+   *    keeps creeping after the stick is centred is air (the goal's "creep on after a stop"). Read
    *    off any drawn frame while it slows: the coast still to come over the speed then, a time
    *    constant, is 23–28 ms with healthy oil (the spool's 25 ms: leak and supply drop alike)
    *    and 75–146 ms with air (bulk modulus × 0.03 and × 0.02), from a core probe of the drill's

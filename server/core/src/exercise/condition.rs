@@ -100,6 +100,11 @@ pub enum Condition {
         /// Conditions.
         of: Vec<Condition>,
     },
+    /// At least one of `of` (its progress: the furthest along).
+    Any {
+        /// Conditions.
+        of: Vec<Condition>,
+    },
 }
 
 /// A live readout for the task panel.
@@ -313,6 +318,13 @@ impl Condition {
                     },
                 }
             }
+            Condition::Any { of } => {
+                let v: Vec<Verdict> = of.iter().map(|c| c.evaluate(sim, facts)).collect();
+                Verdict {
+                    met: v.iter().any(|v| v.met),
+                    fraction: v.iter().map(|v| v.fraction).fold(0.0, f64::max),
+                }
+            }
         }
     }
 
@@ -411,7 +423,7 @@ impl Condition {
                     });
                 }
             }
-            Condition::All { of } => {
+            Condition::All { of } | Condition::Any { of } => {
                 for c in of {
                     c.readouts(sim, facts, out);
                 }
@@ -493,7 +505,9 @@ impl Condition {
                 item: Item::Valve | Item::Stab,
                 ..
             } if !scene.panel => Err("holding the valve or stab needs the scene's panel".into()),
-            Condition::All { of } => of.iter().try_for_each(|c| c.check(scene)),
+            Condition::All { of } | Condition::Any { of } => {
+                of.iter().try_for_each(|c| c.check(scene))
+            }
             Condition::StabSeated
             | Condition::Holding { .. }
             | Condition::Released

@@ -147,6 +147,19 @@ async fn drive_and_end(s: &Server, created: &Value, messages: u64) -> Value {
     attempts_of(&s.base, id, 1).await.remove(0)
 }
 
+/// Ada's reach-targets session driven for `messages` × 20 ms and ended: its control token and
+/// its one (ended) attempt, the source the tests take over from.
+async fn ada_source(s: &Server, messages: u64) -> (String, Value) {
+    let (st, c) = create(
+        s,
+        json!({"trainee": "Ada", "group": "T", "exercise": "reach-targets"}),
+    )
+    .await;
+    assert_eq!(st, 201, "{c}");
+    let token = c["control_token"].as_str().unwrap().to_string();
+    (token, drive_and_end(s, &c, messages).await)
+}
+
 /// A new session's first state frame, from its trainee socket.
 async fn first_frame(s: &Server, created: &Value) -> (Ws, Value) {
     let id = created["id"].as_str().unwrap();
@@ -163,14 +176,7 @@ async fn a_take_over_starts_at_the_replayed_frame_and_replays_bit_for_bit() {
     let base = s.base.clone();
 
     // The source: an exercise attempt driven over the socket, abandoned by ending the session.
-    let (st, c) = create(
-        &s,
-        json!({"trainee": "Ada", "group": "T", "exercise": "reach-targets"}),
-    )
-    .await;
-    assert_eq!(st, 201, "{c}");
-    let token = c["control_token"].as_str().unwrap().to_string();
-    let source = drive_and_end(&s, &c, 80).await;
+    let (token, source) = ada_source(&s, 80).await;
     let src = source["id"].as_str().unwrap().to_string();
     assert_eq!(source["practice"], false);
     let length = source["sim_seconds"].as_f64().unwrap();
@@ -334,24 +340,15 @@ async fn take_overs_count_against_a_clients_live_sessions() {
     let dir = temp_dir("takeover-cap");
     let s = start_with(dir.clone(), |c| c.max_sessions_per_client = 2).await;
     let base = s.base.clone();
-    let (st, c) = create(
-        &s,
-        json!({"trainee": "Ada", "group": "T", "exercise": "reach-targets"}),
-    )
-    .await;
-    assert_eq!(st, 201, "{c}");
-    let token = c["control_token"].as_str().unwrap();
-    let src = drive_and_end(&s, &c, 40).await["id"]
-        .as_str()
-        .unwrap()
-        .to_string();
+    let (token, source) = ada_source(&s, 40).await;
+    let src = source["id"].as_str().unwrap().to_string();
     for k in 1..=2 {
-        let (st, b, _) = take_over(&base, &src, token, json!({"t": 0.5})).await;
+        let (st, b, _) = take_over(&base, &src, &token, json!({"t": 0.5})).await;
         assert_eq!(st, 201, "take-over {k}: {b}");
     }
     let r = reqwest::Client::new()
         .post(format!("{base}/api/attempts/{src}/take-over"))
-        .bearer_auth(token)
+        .bearer_auth(&token)
         .json(&json!({"t": 0.5}))
         .send()
         .await

@@ -203,8 +203,7 @@ function followScenario(s) {
 
 /** A new session (keeps the trainee's name and group; the old session is ended). */
 function newSession(opts) {
-  const { trainee, group } = conn.createOpts || {};
-  conn.restart({ ...opts, ...(trainee ? { trainee } : {}), ...(group ? { group } : {}) });
+  conn.restart({ ...opts, ...conn.who });
 }
 
 /** The next exercise open to the trainee (progression: their locks read again, as the attempt
@@ -461,7 +460,7 @@ async function start() {
       const runs = r?.ok ? (await r.json()).scenario : null;
       if (runs && runs !== wanted) {
         conn.session = stored;
-        conn.restart(named);
+        newSession(named);
         return;
       }
     }

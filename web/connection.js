@@ -75,11 +75,24 @@ export class Connection {
 
   /** Keeps the created session `s` (the answer of POST /api/sessions or of a take-over:
    * {id, control_token, ws_url, base}) as this browser's trainee session, which the trainee
-   * page resumes; returns what it stored. */
-  static store(s) {
-    const session = { id: s.id, control_token: s.control_token, ws_url: s.ws_url, base: s.base || '' };
+   * page resumes, with the trainee's name and group (`who`) it was created for; returns what
+   * it stored. */
+  static store(s, who = {}) {
+    const session = { id: s.id, control_token: s.control_token, ws_url: s.ws_url, base: s.base || '', ...Connection.whoOf(who) };
     localStorage.setItem(STORE_KEY, JSON.stringify(session));
     return session;
+  }
+
+  /** The trainee's name and group in `o` (a stored session or a creation body), those given. */
+  static whoOf(o) {
+    return { ...(o?.trainee ? { trainee: o.trainee } : {}), ...(o?.group ? { group: o.group } : {}) };
+  }
+
+  /** The trainee's name and group this page's sessions are for: those it created its session
+   * with, or those stored with the session it resumed (so a link, "Next" or "New session"
+   * after a reload still records under the trainee's name). */
+  get who() {
+    return { ...Connection.whoOf(this.session), ...Connection.whoOf(this.createOpts) };
   }
 
   /** Reconnects to the same session (a fresh hello, e.g. after the instructor changed its
@@ -188,7 +201,7 @@ export class Connection {
       return false;
     }
     const s = await resp.json();
-    this.session = Connection.store(s);
+    this.session = Connection.store(s, body);
     this.resuming = false;
     this.observing = false; // a new session is this tab's to drive
     return true;

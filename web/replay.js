@@ -153,7 +153,8 @@ async function takeOver() {
   try {
     const r = await api.takeOver(attemptId, rp.t, token);
     if (!r.ok) throw new Error((await api.jsonOf(r))?.error || `HTTP ${r.status}`);
-    Connection.store(await r.json());
+    // the practice session is the attempt's trainee's (the server names it so)
+    Connection.store(await r.json(), { trainee: attempt?.trainee, group: attempt?.group });
     location.href = '/';
   } catch (e) {
     banner.show('error', `Cannot take over: ${e.message}`, 6000);

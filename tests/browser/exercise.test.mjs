@@ -161,11 +161,17 @@ test('fault drill: the page offers the four answers and the server records the o
   }
 });
 
-test('a link to another exercise starts that exercise, not the stored session (found by the trainee trial)', { timeout: 60000 }, async () => {
+test('a link to another exercise starts that exercise, not the stored session (found by the trainee trial), for the same trainee', { timeout: 60000 }, async () => {
   const url = await server();
   const b = await openBrowser();
   try {
-    await b.page.goto(`${url}/?exercise=reach-targets`);
+    // the trainee types name and group on the start screen
+    await b.page.goto(`${url}/`);
+    await b.page.waitForSelector('#start .ex[data-id="reach-targets"]', { timeout: 15000 });
+    await b.page.fill('#start-name', 'Grace Hopper');
+    await b.page.fill('#start-group', 'link-test');
+    await b.page.click('#start .ex[data-id="reach-targets"]');
+    await b.page.click('#start-exercise');
     await until(b.page, () => window.__seaarms?.lastState?.exercise?.id === 'reach-targets', undefined, 20000);
     const first = await b.page.evaluate(() => JSON.parse(localStorage.getItem('seaarms.session')).id);
     await b.page.goto(`${url}/?exercise=valve-turn`);
@@ -174,6 +180,9 @@ test('a link to another exercise starts that exercise, not the stored session (f
     assert.notEqual(second, first, 'a new session');
     const r = await fetch(`${url}/api/sessions/${first}`, { headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } });
     assert.equal((await r.json()).status, 'ended', 'the stored one was ended, not left live and empty');
+    // the new page load knew the trainee only from the stored session: the new one is theirs
+    const s2 = await (await fetch(`${url}/api/sessions/${second}`, { headers: { authorization: `Bearer ${INSTRUCTOR_TOKEN}` } })).json();
+    assert.deepEqual([s2.trainee, s2.group], ['Grace Hopper', 'link-test'], 'recorded under the trainee who followed the link');
     // the same link again resumes it
     await b.page.goto(`${url}/?exercise=valve-turn`);
     await until(b.page, () => window.__seaarms?.lastState?.exercise?.id === 'valve-turn', undefined, 20000);

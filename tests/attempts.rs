@@ -23,22 +23,6 @@ async fn get_with(url: &str, token: &str) -> (u16, Value) {
     )
 }
 
-/// Drives the left arm and the right jaw with changing sticks for `messages` × 20 ms.
-async fn drive(ws: &mut Ws, seq: &mut u64, messages: u64, phase: f64) {
-    for i in 0..messages {
-        *seq += 1;
-        let a = (phase + i as f64 * 0.07).sin();
-        send(
-            ws,
-            json!({"type": "input", "seq": *seq, "arms": {
-                "left": {"axes": [0.8 * a, 0.6, -0.4 * a, 0.3, 0.0, 0.2], "grip": 0},
-                "right": {"axes": [0, 0, 0.5, 0, 0, 0], "grip": -a}}}),
-        )
-        .await;
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
-}
-
 /// Columns of the CSV header.
 fn columns(header: &str) -> Vec<String> {
     header.split(',').map(str::to_string).collect()

@@ -98,22 +98,6 @@ async fn attempts_of(base: &str, session: &str, n: usize) -> Vec<Value> {
     panic!("session {session}: not {n} ended attempts");
 }
 
-/// Drives both arms with changing sticks for `messages` × 20 ms.
-async fn drive(ws: &mut Ws, seq: &mut u64, messages: u64, phase: f64) {
-    for i in 0..messages {
-        *seq += 1;
-        let a = (phase + i as f64 * 0.07).sin();
-        send(
-            ws,
-            json!({"type": "input", "seq": *seq, "arms": {
-                "left": {"axes": [0.8 * a, 0.6, -0.4 * a, 0.3, 0.0, 0.2], "grip": 0},
-                "right": {"axes": [0.5 * a, -0.5, 0.5, 0, 0, 0], "grip": -a}}}),
-        )
-        .await;
-        tokio::time::sleep(Duration::from_millis(20)).await;
-    }
-}
-
 /// Pauses the session and returns its first paused frame: the state its attempt ends in.
 async fn pause_and_read(ws: &mut Ws) -> Value {
     send(ws, json!({"type": "pause"})).await;

@@ -254,6 +254,23 @@ pub async fn send(ws: &mut Ws, v: Value) {
     ws.send(Message::Text(v.to_string().into())).await.unwrap();
 }
 
+/// Drives the left arm and the right jaw with changing sticks for `messages` × 20 ms (`seq`
+/// numbers the inputs on; `phase` shifts the sine they follow).
+pub async fn drive(ws: &mut Ws, seq: &mut u64, messages: u64, phase: f64) {
+    for i in 0..messages {
+        *seq += 1;
+        let a = (phase + i as f64 * 0.07).sin();
+        send(
+            ws,
+            serde_json::json!({"type": "input", "seq": *seq, "arms": {
+                "left": {"axes": [0.8 * a, 0.6, -0.4 * a, 0.3, 0.0, 0.2], "grip": 0},
+                "right": {"axes": [0, 0, 0.5, 0, 0, 0], "grip": -a}}}),
+        )
+        .await;
+        tokio::time::sleep(Duration::from_millis(20)).await;
+    }
+}
+
 /// Holds the sticks: sends `count` input messages 40 ms apart (seq `first_seq`, …) with the
 /// `arms` given (e.g. `{"left": {"axes": [1, 0, 0, 0, 0, 0]}}`).
 pub async fn hold_sticks(ws: &mut Ws, first_seq: u64, count: u64, arms: Value) {

@@ -280,6 +280,11 @@ pub async fn inputs(
     })))
 }
 
+/// 409: the attempt cannot be replayed here, and why.
+fn conflict(e: ReplayError) -> ApiError {
+    ApiError::new(StatusCode::CONFLICT, e.to_string())
+}
+
 /// Builds the replay of an attempt (409 when it cannot be replayed here).
 pub(crate) async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, ApiError> {
     Ok(load_chain(state, row).await?.0)
@@ -287,7 +292,6 @@ pub(crate) async fn load(state: &AppState, row: &AttemptRow) -> Result<Replay, A
 
 /// [`load`], with the number of take-overs between the attempt and the first of its chain.
 async fn load_chain(state: &AppState, row: &AttemptRow) -> Result<(Replay, usize), ApiError> {
-    let conflict = |e: ReplayError| ApiError::new(StatusCode::CONFLICT, e.to_string());
     // A running attempt: what the recorder has written so far (whole seconds).
     let duration_s = if row.ended_unix.is_some() {
         row.sim_seconds
@@ -327,7 +331,6 @@ async fn record(
     state: &AppState,
     row: &AttemptRow,
 ) -> Result<(Init, Vec<log::Entry>, usize), ApiError> {
-    let conflict = |e: ReplayError| ApiError::new(StatusCode::CONFLICT, e.to_string());
     check_version(&row.sim_version).map_err(conflict)?;
     let mut init = parse_init(row)?;
     let mut entries = inputs_of(state, &row.id).await?;
@@ -359,7 +362,6 @@ async fn record(
 
 /// An attempt's initial conditions (409 when unreadable or of another log format).
 fn parse_init(row: &AttemptRow) -> Result<Init, ApiError> {
-    let conflict = |e: ReplayError| ApiError::new(StatusCode::CONFLICT, e.to_string());
     let init: Init = serde_json::from_value(row.init.clone())
         .map_err(|e| conflict(ReplayError::Record(format!("initial conditions: {e}"))))?;
     if init.format != log::FORMAT {
@@ -375,12 +377,7 @@ fn parse_init(row: &AttemptRow) -> Result<Init, ApiError> {
 /// An attempt's decoded input log (409 when damaged).
 async fn inputs_of(state: &AppState, id: &str) -> Result<Vec<log::Entry>, ApiError> {
     let bytes = state.db.attempt_inputs(id).await.map_err(db_error)?;
-    log::decode(&bytes).map_err(|e| {
-        ApiError::new(
-            StatusCode::CONFLICT,
-            ReplayError::Record(e.to_string()).to_string(),
-        )
-    })
+    log::decode(&bytes).map_err(|e| conflict(ReplayError::Record(e.to_string())))
 }
 
 /// Query of `GET /api/attempts/{id}/replay`.
@@ -538,7 +535,7 @@ pub async fn take_over(
 pub(crate) fn pool_error(e: ReplayError, cancel: &Cancel) -> ComputeError {
     match e {
         ReplayError::Cancelled => cancel.check().err().unwrap_or(ComputeError::Failed),
-        e => ApiError::new(StatusCode::CONFLICT, e.to_string()).into(),
+        e => conflict(e).into(),
     }
 }
 
